@@ -1,0 +1,19 @@
+# Shared by scripts/test and scripts/demo: create or refresh .venv with the given extras.
+# Usage: source scripts/_venv.sh EXTRAS   (e.g. "test" or "")
+set -euo pipefail
+repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+venv="$repo/.venv"
+extras="${1:-}"
+if [[ ! -x "$venv/bin/python" ]]; then
+    python3 -m venv "$venv"
+fi
+stamp="$venv/.installed-${extras:-base}"
+# Reinstall only when pyproject changed since the last install with these extras.
+if [[ ! -f "$stamp" || "$repo/pyproject.toml" -nt "$stamp" ]]; then
+    "$venv/bin/python" -m pip install --quiet --upgrade pip
+    spec="$repo"
+    [[ -n "$extras" ]] && spec="$repo[$extras]"
+    "$venv/bin/python" -m pip install --quiet -e "$spec"
+    touch "$stamp"
+fi
+export PATH="$venv/bin:$PATH"

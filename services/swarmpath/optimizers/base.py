@@ -1,0 +1,165 @@
+"""The steppable optimizer: state arrays shaped (runs, agents, dim), one iteration per ``step``.
+
+Subclasses implement ``_initialize`` (draw and evaluate the first population) and ``_iterate`` (one
+iteration of the algorithm). Every objective evaluation goes through :meth:`Optimizer.evaluate`,
+which counts it and keeps the best point ever evaluated per run: that record, not an algorithm's
+internal leader, is what ``best_fitness``/``best_position`` report (see docs/algorithms.md, COOT).
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarmpath.optimizers.problem import Problem
+from swarmpath.optimizers.streams import RunStreams
+
+Array = NDArray[np.float64]
+ParamValue = float | int | bool | str
+
+
+class ParameterError(ValueError):
+    """A bad algorithm parameter; the message names it and lists what is valid."""
+
+
+class Optimizer(ABC):
+    #: Registered name (exact, as users type it).
+    name: ClassVar[str]
+    #: One line for catalogues.
+    summary: ClassVar[str] = ""
+    #: Paper and equation numbers.
+    reference: ClassVar[str] = ""
+    #: Parameter defaults; the keys are the only parameters accepted.
+    defaults: ClassVar[Mapping[str, ParamValue]] = {}
+    #: Allowed values for string-valued (choice) parameters.
+    choices: ClassVar[Mapping[str, tuple[str, ...]]] = {}
+    #: Smallest population the algorithm works with.
+    min_agents: ClassVar[int] = 2
+
+    def __init__(
+        self,
+        problem: Problem,
+        agents: int,
+        iterations: int,
+        streams: RunStreams,
+        params: Mapping[str, Any] | None = None,
+    ):
+        if streams.runs != problem.runs:
+            raise ValueError(f"{streams.runs} random streams for {problem.runs} runs")
+        if agents < self.min_agents:
+            raise ParameterError(f"{self.name} needs agents >= {self.min_agents}, got {agents}")
+        if iterations < 1:
+            raise ParameterError(f"iterations must be >= 1, got {iterations}")
+        self.problem = problem
+        self.N = int(agents)
+        self.T = int(iterations)
+        self.R = problem.runs
+        self.d = problem.dim
+        self.rng = streams
+        self.p: dict[str, ParamValue] = self.resolve_params(params)
+        self.t = 0  # iterations completed
+        self.evaluations = np.zeros(self.R, dtype=np.int64)
+        self.best_fitness = np.full(self.R, np.inf)
+        self.best_position = np.zeros((self.R, self.d))
+        self.lb = problem.lower[:, None, :]  # (R, 1, d): broadcasts over agents
+        self.ub = problem.upper[:, None, :]
+        self._initialized = False
+
+    # ----------------------------------------------------------------------------------- params
+    @classmethod
+    def resolve_params(cls, params: Mapping[str, Any] | None) -> dict[str, ParamValue]:
+        merged: dict[str, ParamValue] = dict(cls.defaults)
+        for key, value in (params or {}).items():
+            if key not in cls.defaults:
+                valid = ", ".join(sorted(cls.defaults)) or "none"
+                raise ParameterError(f"{cls.name} has no parameter {key!r}; valid: {valid}")
+            default = cls.defaults[key]
+            if isinstance(default, bool):
+                if not isinstance(value, bool):
+                    raise ParameterError(f"{cls.name}.{key} must be true or false, got {value!r}")
+            elif isinstance(default, str):
+                allowed = cls.choices.get(key, ())
+                if not isinstance(value, str) or (allowed and value not in allowed):
+                    raise ParameterError(
+                        f"{cls.name}.{key} must be one of {', '.join(allowed)}; got {value!r}"
+                    )
+            elif isinstance(default, int):
+                if isinstance(value, bool) or not isinstance(value, int | float) or (
+                    float(value) != int(value)
+                ):
+                    raise ParameterError(f"{cls.name}.{key} must be an integer, got {value!r}")
+                value = int(value)
+            else:
+                if isinstance(value, bool) or not isinstance(value, int | float) or not np.isfinite(
+                    value
+                ):
+                    raise ParameterError(f"{cls.name}.{key} must be a finite number, got {value!r}")
+                value = float(value)
+            merged[key] = value
+        cls.check_params(merged)
+        return merged
+
+    @classmethod
+    def check_params(cls, p: Mapping[str, ParamValue]) -> None:
+        """Range checks of a subclass; raise ParameterError naming the parameter."""
+
+    # ---------------------------------------------------------------------------- stepping API
+    def initialize(self) -> None:
+        if self._initialized:
+            raise RuntimeError("already initialized")
+        self._initialize()
+        self._initialized = True
+
+    def step(self) -> None:
+        """Run one iteration (initializing first if needed)."""
+        if not self._initialized:
+            self.initialize()
+        if self.t >= self.T:
+            raise RuntimeError(f"all {self.T} iterations are done")
+        self.t += 1
+        self._iterate()
+
+    @property
+    def done(self) -> bool:
+        return self.t >= self.T
+
+    @abstractmethod
+    def _initialize(self) -> None: ...
+
+    @abstractmethod
+    def _iterate(self) -> None:
+        """One iteration; ``self.t`` is its 1-based index (1..T)."""
+
+    # ----------------------------------------------------------------------------------- tools
+    def evaluate(self, X: Array, mask: NDArray[np.bool_] | None = None) -> Array:
+        """Objective at X (R, m, d) -> (R, m), counted; updates the best ever evaluated.
+
+        With ``mask`` (R, m), only the masked points count as evaluated: the others get +inf and are
+        not counted (for algorithms whose number of evaluations differs per agent).
+        """
+        F = np.asarray(self.problem.objective(X, self.rng), dtype=float)
+        if mask is not None:
+            F = np.where(mask, F, np.inf)
+            self.evaluations += mask.sum(axis=1)
+        else:
+            self.evaluations += X.shape[1]
+        F = np.where(np.isnan(F), np.inf, F)
+        idx = np.argmin(F, axis=1)
+        rows = np.arange(self.R)
+        cand = F[rows, idx]
+        better = cand < self.best_fitness
+        self.best_fitness = np.where(better, cand, self.best_fitness)
+        self.best_position = np.where(better[:, None], X[rows, idx], self.best_position)
+        return F
+
+    def clip(self, X: Array) -> Array:
+        return np.clip(X, self.lb, self.ub)
+
+    def random_population(self, m: int | None = None) -> Array:
+        """Uniform positions in the box: (R, m, d)."""
+        m = self.N if m is None else m
+        return self.lb + (self.ub - self.lb) * self.rng.random(m, self.d)

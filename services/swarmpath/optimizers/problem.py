@@ -1,0 +1,99 @@
+"""A batch of minimisation problems, one per run, evaluated together.
+
+The objective maps positions shaped (runs, m, dim) to values shaped (runs, m). Bounds are shaped
+(runs, dim) so that each run may have its own box (the planners search around each robot).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarmpath.functions import BenchmarkFunction
+from swarmpath.optimizers.streams import SHIFT, RunStreams, run_generator
+
+Array = NDArray[np.float64]
+Objective = Callable[[Array, RunStreams], Array]
+
+
+@dataclass
+class Problem:
+    objective: Objective
+    lower: Array  # (runs, dim)
+    upper: Array  # (runs, dim)
+
+    def __post_init__(self) -> None:
+        self.lower = np.atleast_2d(np.asarray(self.lower, dtype=float))
+        self.upper = np.atleast_2d(np.asarray(self.upper, dtype=float))
+        if self.lower.shape != self.upper.shape:
+            raise ValueError("lower and upper bounds must have the same shape (runs, dim)")
+        if np.any(self.upper <= self.lower):
+            raise ValueError("every upper bound must exceed its lower bound")
+
+    @property
+    def runs(self) -> int:
+        return int(self.lower.shape[0])
+
+    @property
+    def dim(self) -> int:
+        return int(self.lower.shape[1])
+
+    @property
+    def span(self) -> Array:
+        return self.upper - self.lower
+
+
+@dataclass
+class BenchmarkProblem(Problem):
+    """F1-F13 on its box for each run, optionally shifted per run (shift drawn from the run's seed)."""
+
+    function: BenchmarkFunction | None = None
+    shifts: Array | None = None  # (runs, dim) or None
+
+    @classmethod
+    def build(
+        cls,
+        function: BenchmarkFunction,
+        dim: int,
+        run_ids: list[int],
+        seed: int,
+        shifted: bool,
+    ) -> BenchmarkProblem:
+        runs = len(run_ids)
+        lower = np.full((runs, dim), function.lower)
+        upper = np.full((runs, dim), function.upper)
+        shifts = None
+        if shifted:
+            shifts = np.stack(
+                [function.random_shift(dim, run_generator(seed, r, SHIFT)) for r in run_ids]
+            )
+        problem = cls(objective=_unset, lower=lower, upper=upper, function=function, shifts=shifts)
+        problem.objective = problem._evaluate
+        return problem
+
+    def _evaluate(self, X: Array, streams: RunStreams) -> Array:
+        f = self.function
+        assert f is not None
+        x = X
+        if self.shifts is not None:
+            x = X - self.shifts[:, None, :]
+            if f.wrap_shifted:
+                x = np.mod(x - f.lower, f.upper - f.lower) + f.lower
+        value = f.kernel(x)
+        if f.noisy:
+            value = value + streams.random(*value.shape[1:])
+        return value
+
+    def optimum(self) -> Array:
+        """(runs, dim) minimisers."""
+        f = self.function
+        assert f is not None
+        base = np.full((self.runs, self.dim), f.optimum_coordinate)
+        return base if self.shifts is None else base + self.shifts
+
+
+def _unset(X: Array, streams: RunStreams) -> Array:  # replaced in BenchmarkProblem.build
+    raise RuntimeError("objective not set")

@@ -1,0 +1,130 @@
+"""The contract every registered optimizer keeps (parametrized over the registry)."""
+
+import numpy as np
+import pytest
+
+from swarmpath.functions import get_function
+from swarmpath.optimizers import (
+    ParameterError,
+    Problem,
+    RunStreams,
+    create,
+    get_optimizer,
+    list_optimizers,
+    minimize,
+)
+
+REGISTERED = [
+    "PSO", "SSA", "FDO", "GWO", "BA", "MFB", "HPSO-MFB", "COOT", "mCOOT", "ICOOT", "HPO", "IHPO",
+    "RFO",
+]
+
+
+def test_registered_names_are_exactly_the_thirteen():
+    assert sorted(list_optimizers()) == sorted(REGISTERED)
+
+
+@pytest.fixture(scope="module", params=list_optimizers())
+def algo(request):
+    return request.param
+
+
+@pytest.mark.parametrize("function", ["F1", "F5", "F8", "F10"])
+def test_shapes_finite_bounded_monotone(algo, function):
+    res = minimize(algo, function, dim=7, agents=12, iterations=25, runs=3, seed=5)
+    f = get_function(function)
+    assert res.best_fitness.shape == (3,)
+    assert res.best_position.shape == (3, 7)
+    assert res.curve.shape == (3, 25)
+    assert res.evaluations.shape == (3,)
+    assert np.all(np.isfinite(res.best_fitness)) and np.all(np.isfinite(res.curve))
+    assert np.all(res.best_position >= f.lower) and np.all(res.best_position <= f.upper)
+    assert np.all(np.diff(res.curve, axis=1) <= 0)
+    assert np.array_equal(res.curve[:, -1], res.best_fitness)
+    # the reported best really is the objective at the reported position
+    assert np.allclose(f.evaluate(res.best_position), res.best_fitness, rtol=1e-12, atol=1e-12)
+    assert np.all(res.evaluations >= 12 * 25)
+
+
+def test_positions_stay_in_the_box_every_iteration(algo):
+    f = get_function("F2")
+    seen: list[np.ndarray] = []
+
+    def objective(X, streams):
+        seen.append(X.copy())
+        return f.kernel(X)
+
+    problem = Problem(objective, np.full((2, 4), f.lower), np.full((2, 4), f.upper))
+    opt = create(algo, problem, agents=10, iterations=30, streams=RunStreams.for_runs(3, 2))
+    while not opt.done:
+        opt.step()
+    X = np.concatenate([x.reshape(2, -1, 4) for x in seen], axis=1)
+    assert np.all(X >= f.lower) and np.all(X <= f.upper)
+    # every evaluated point was counted
+    assert int(opt.evaluations.sum()) == sum(x.shape[1] for x in seen) * 2
+
+
+def test_same_seed_same_numbers_other_seed_differs(algo):
+    kw = dict(dim=6, agents=10, iterations=20, runs=3)
+    a = minimize(algo, "F9", seed=7, **kw)
+    b = minimize(algo, "F9", seed=7, **kw)
+    c = minimize(algo, "F9", seed=8, **kw)
+    assert np.array_equal(a.curve, b.curve) and np.array_equal(a.best_position, b.best_position)
+    assert not np.array_equal(a.curve, c.curve)
+
+
+def test_batch_prefix_and_order_invariance(algo):
+    kw = dict(dim=5, agents=10, iterations=15, seed=7)
+    five = minimize(algo, "F7", runs=5, **kw)  # noisy: the noise is per-run too
+    two = minimize(algo, "F7", runs=2, **kw)
+    assert np.array_equal(five.curve[:2], two.curve)
+    assert np.array_equal(five.best_position[:2], two.best_position)
+    picked = minimize(algo, "F7", run_ids=[4, 1], **kw)
+    assert np.array_equal(picked.curve, five.curve[[4, 1]])
+
+
+def test_shifted_is_reproducible_and_shift_shared_across_algorithms(algo):
+    a = minimize(algo, "F1", dim=4, agents=8, iterations=5, runs=2, seed=3, shifted=True)
+    b = minimize("GWO", "F1", dim=4, agents=8, iterations=5, runs=2, seed=3, shifted=True)
+    assert a.shifts is not None and np.array_equal(a.shifts, b.shifts)
+
+
+def test_converges_on_2d_sphere(algo):
+    res = minimize(algo, "F1", dim=2, agents=20, iterations=200, runs=4, seed=1)
+    # F1 starts around 1e3-1e4 on [-100, 100]^2; every algorithm must get close to 0.
+    assert np.all(res.best_fitness < 1e-2), res.best_fitness
+
+
+def test_bad_parameter_names_the_valid_ones(algo):
+    cls = get_optimizer(algo)
+    with pytest.raises(ParameterError, match="no parameter 'bogus'"):
+        minimize(algo, "F1", dim=2, agents=10, iterations=2, runs=1, params={"bogus": 1})
+    for key, default in cls.defaults.items():
+        if isinstance(default, bool | str):
+            continue
+        with pytest.raises(ParameterError, match=key):
+            minimize(algo, "F1", dim=2, agents=10, iterations=2, runs=1, params={key: "x"})
+
+
+def test_steppable_equals_minimize(algo):
+    res = minimize(algo, "F3", dim=3, agents=9, iterations=6, runs=2, seed=4)
+    f = get_function("F3")
+    problem = Problem(lambda X, s: f.kernel(X), np.full((2, 3), f.lower), np.full((2, 3), f.upper))
+    opt = create(algo, problem, agents=9, iterations=6, streams=RunStreams.for_runs(4, 2))
+    opt.initialize()
+    curve = []
+    while not opt.done:
+        opt.step()
+        curve.append(opt.best_fitness.copy())
+    assert np.array_equal(np.array(curve).T, res.curve)
+
+
+def test_unknown_names_list_valid_ones():
+    with pytest.raises(KeyError, match="valid: .*GWO"):
+        minimize("NOPE", "F1")
+    with pytest.raises(KeyError, match="valid: F1"):
+        minimize("GWO", "F99")
+    with pytest.raises(ParameterError, match="dim"):
+        minimize("GWO", "F1", dim=0)
+    with pytest.raises(ParameterError, match="agents"):
+        minimize("GWO", "F1", agents=5000)
