@@ -1,0 +1,701 @@
+"""The messages of the swarmpath service and the Zenoh key expressions they travel on.
+
+Every message is UTF-8 JSON of one of the pydantic models below (unknown fields are rejected). The
+protocol itself - who sends what on which key, leases, fencing, acknowledgements, cancellation - is
+documented for implementers in other languages in ``schemas/README.md``; the JSON Schemas exported
+from these models by :mod:`swarmpath.service.schemas` are next to it.
+
+Job specs are validated here, completely: unknown algorithm / function / planner / map names,
+unknown or out-of-range algorithm parameters, and the size limits all fail with a
+:class:`pydantic.ValidationError` whose error location names the field (FastAPI turns that into a
+422 with the same location). Use :func:`parse_job_spec` (or :data:`JOB_SPEC_ADAPTER`).
+
+A job expands into *cells* (benchmark: algorithm x function x dim; map: planner x map), each with
+``runs`` runs numbered 0..runs-1. Run ``r`` of cell ``c`` has the job-wide ``run_id = c * runs +
+r``. A run is fully determined by (cell spec, job seed, run index): whichever worker executes it,
+it gives the same numbers.
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+import math
+import re
+from collections.abc import Mapping, Sequence
+from typing import Annotated, Any, Literal, TypeVar
+
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    TypeAdapter,
+    ValidationInfo,
+    field_validator,
+)
+
+# ----------------------------------------------------------------------------------------- limits
+MAX_DIM = 1000
+MAX_AGENTS = 1000
+MAX_ITERATIONS = 100_000
+MAX_RUNS_PER_CELL = 10_000
+MAX_RUNS_PER_JOB = 1_000_000
+MAX_BODY_BYTES = 1_000_000  # REST bodies and Zenoh payloads a coordinator accepts
+MAX_SEED = 2**63 - 1
+MAX_LEASE_RUNS = MAX_RUNS_PER_CELL
+
+PROTOCOL_VERSION = 1
+DEFAULT_PREFIX = "swarmpath"
+
+# Identifiers that appear inside key expressions: one chunk, none of the reserved characters.
+ID_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,127}$"
+_ID_RE = re.compile(ID_PATTERN)
+
+ParamValue = bool | int | float | str
+Scalar = bool | int | float | str | None
+JobState = Literal["queued", "running", "done", "failed", "cancelled"]
+RunState = Literal["queued", "leased", "done", "failed", "cancelled"]
+AckStatus = Literal["accepted", "duplicate", "stale"]
+LeaseState = Literal["active", "done", "expired", "released", "cancelled", "unknown"]
+
+Identifier = Annotated[str, Field(pattern=ID_PATTERN)]
+
+
+class Model(BaseModel):
+    """Base of every message: unknown fields are an error; NaN and infinities travel as the JSON
+    extensions ``NaN``, ``Infinity`` and ``-Infinity`` (Python's json and pydantic read them)."""
+
+    model_config = ConfigDict(
+        extra="forbid",
+        ser_json_inf_nan="constants",
+        json_schema_serialization_defaults_required=True,
+    )
+
+
+# ------------------------------------------------------------------------------------ validation
+def _unique(values: Sequence[Any], what: str) -> None:
+    seen: set[Any] = set()
+    for v in values:
+        key = json.dumps(v, sort_keys=True) if isinstance(v, dict) else v
+        if key in seen:
+            raise ValueError(f"duplicate {what} {v!r}")
+        seen.add(key)
+
+
+def _check_total(info: ValidationInfo, runs: int, axes: Sequence[str]) -> int:
+    """The 1,000,000-runs-per-job limit, raised on ``runs`` (a field the user can change)."""
+    sizes = []
+    for axis in axes:
+        value = info.data.get(axis)
+        if value is None:  # that field failed its own validation: its error is reported already
+            return runs
+        sizes.append(len(value))
+    total = runs * math.prod(sizes)
+    if total > MAX_RUNS_PER_JOB:
+        shape = " x ".join(f"{n} {axis}" for n, axis in zip(sizes, axes, strict=True))
+        raise ValueError(
+            f"{shape} x {runs} runs = {total} runs; a job may have at most {MAX_RUNS_PER_JOB}"
+        )
+    return runs
+
+
+def _planner_registry() -> Any:
+    """``swarmpath.planners`` (imported lazily: it is optional for benchmark-only installs)."""
+    try:
+        planners = importlib.import_module("swarmpath.planners")
+    except ImportError as exc:
+        raise ValueError(f"planners are not available in this installation ({exc})") from None
+    if not hasattr(planners, "list_planners"):
+        raise ValueError("planners are not available in this installation (no list_planners)")
+    return planners
+
+
+def _map_names() -> list[str]:
+    try:
+        from swarmpath.world.presets import list_maps
+    except ImportError as exc:
+        raise ValueError(f"preset maps are not available in this installation ({exc})") from None
+    return list(list_maps())
+
+
+def _check_inline_scenario(scenario: Mapping[str, Any]) -> None:
+    """Full validation by the world layer's JSON reader when it is installed (lazy import)."""
+    try:
+        from swarmpath.world import scenario_io
+    except ImportError:
+        return  # the basic shape was checked by the caller; workers validate again before running
+    reader = getattr(scenario_io, "scenario_from_dict", None) or getattr(
+        scenario_io, "from_dict", None
+    )
+    if reader is None:
+        return
+    try:
+        reader(dict(scenario))
+    except (ValueError, TypeError, KeyError) as exc:
+        raise ValueError(f"scenario {scenario.get('name')!r}: {exc}") from None
+
+
+# -------------------------------------------------------------------------------------- job specs
+class BenchmarkJobSpec(Model):
+    """Optimizer benchmark: every algorithm on every function at every dimension, ``runs`` runs
+    each. The field order matters for validation (later fields are checked against earlier ones)."""
+
+    kind: Literal["benchmark"]
+    algorithms: list[str] = Field(min_length=1, description="registered optimizer names")
+    functions: list[str] = Field(
+        min_length=1, description="function names; ranges such as 'F1-F13' are expanded"
+    )
+    dims: list[Annotated[int, Field(ge=1, le=MAX_DIM)]] = Field(default=[30], min_length=1)
+    runs: int = Field(default=30, ge=1, le=MAX_RUNS_PER_CELL, description="runs per cell")
+    agents: int = Field(default=30, ge=1, le=MAX_AGENTS)
+    iterations: int = Field(default=500, ge=1, le=MAX_ITERATIONS)
+    seed: int = Field(default=1, ge=0, le=MAX_SEED)
+    shifted: bool = False
+    params: dict[str, dict[str, ParamValue]] = Field(
+        default_factory=dict, description="{algorithm: {parameter: value}}"
+    )
+
+    @field_validator("algorithms")
+    @classmethod
+    def _known_algorithms(cls, v: list[str]) -> list[str]:
+        from swarmpath.optimizers import list_optimizers
+
+        valid = list_optimizers()
+        for name in v:
+            if name not in valid:
+                raise ValueError(f"unknown algorithm {name!r}; valid: {', '.join(valid)}")
+        _unique(v, "algorithm")
+        return v
+
+    @field_validator("functions")
+    @classmethod
+    def _known_functions(cls, v: list[str]) -> list[str]:
+        from swarmpath.functions import expand_function_names
+
+        names: list[str] = []
+        for item in v:
+            try:
+                names.extend(expand_function_names(item))
+            except KeyError as exc:
+                raise ValueError(str(exc.args[0]) if exc.args else str(exc)) from None
+        if not names:
+            raise ValueError("no function names given")
+        _unique(names, "function")
+        return names
+
+    @field_validator("dims")
+    @classmethod
+    def _unique_dims(cls, v: list[int], info: ValidationInfo) -> list[int]:
+        _unique(v, "dim")
+        from swarmpath.functions import get_function
+
+        for name in info.data.get("functions") or ():
+            low = int(getattr(get_function(name), "min_dim", 1))
+            bad = [d for d in v if d < low]
+            if bad:
+                raise ValueError(f"{name} needs dim >= {low}, got {bad[0]}")
+        return v
+
+    @field_validator("runs")
+    @classmethod
+    def _total_runs(cls, v: int, info: ValidationInfo) -> int:
+        return _check_total(info, v, ("algorithms", "functions", "dims"))
+
+    @field_validator("agents")
+    @classmethod
+    def _enough_agents(cls, v: int, info: ValidationInfo) -> int:
+        from swarmpath.optimizers import get_optimizer
+
+        for name in info.data.get("algorithms") or ():
+            low = get_optimizer(name).min_agents
+            if v < low:
+                raise ValueError(f"{name} needs agents >= {low}, got {v}")
+        return v
+
+    @field_validator("params")
+    @classmethod
+    def _known_params(
+        cls, v: dict[str, dict[str, ParamValue]], info: ValidationInfo
+    ) -> dict[str, dict[str, ParamValue]]:
+        from swarmpath.optimizers import ParameterError, get_optimizer
+
+        algorithms = info.data.get("algorithms")
+        if algorithms is None:
+            return v
+        for name, params in v.items():
+            if name not in algorithms:
+                raise ValueError(
+                    f"params for {name!r}, which is not one of the job's algorithms "
+                    f"({', '.join(algorithms)})"
+                )
+            try:
+                get_optimizer(name).resolve_params(params)
+            except ParameterError as exc:
+                raise ValueError(str(exc)) from None
+        return v
+
+
+MapEntry = str | dict[str, Any]
+
+
+def map_name(entry: MapEntry) -> str:
+    """The name of a map entry: a preset name, or an inline scenario's ``name``."""
+    return entry if isinstance(entry, str) else str(entry["name"])
+
+
+class MapJobSpec(Model):
+    """Path-planning study: every planner on every map (preset name or inline scenario object)."""
+
+    kind: Literal["map"]
+    planners: list[str] = Field(min_length=1, description="registered planner names")
+    maps: list[MapEntry] = Field(
+        min_length=1, description="preset map names or inline scenario objects (with a 'name')"
+    )
+    runs: int = Field(default=10, ge=1, le=MAX_RUNS_PER_CELL, description="runs per cell")
+    seed: int = Field(default=1, ge=0, le=MAX_SEED)
+    params: dict[str, dict[str, Any]] = Field(
+        default_factory=dict, description="{planner: {parameter: value}}"
+    )
+
+    @field_validator("planners")
+    @classmethod
+    def _known_planners(cls, v: list[str]) -> list[str]:
+        planners = _planner_registry()
+        valid = list(planners.list_planners())
+        for name in v:
+            if name not in valid:
+                raise ValueError(f"unknown planner {name!r}; valid: {', '.join(valid)}")
+        _unique(v, "planner")
+        return v
+
+    @field_validator("maps")
+    @classmethod
+    def _known_maps(cls, v: list[MapEntry]) -> list[MapEntry]:
+        presets: list[str] | None = None
+        for entry in v:
+            if isinstance(entry, str):
+                if presets is None:
+                    presets = _map_names()
+                if entry not in presets:
+                    raise ValueError(f"unknown map {entry!r}; valid: {', '.join(presets)}")
+            else:
+                name = entry.get("name")
+                if not isinstance(name, str) or not _ID_RE.match(name):
+                    raise ValueError(
+                        "an inline scenario needs a 'name' of letters, digits, '_', '.', '-'"
+                    )
+                _check_inline_scenario(entry)
+        _unique([map_name(e) for e in v], "map name")
+        return v
+
+    @field_validator("runs")
+    @classmethod
+    def _total_runs(cls, v: int, info: ValidationInfo) -> int:
+        return _check_total(info, v, ("planners", "maps"))
+
+    @field_validator("params")
+    @classmethod
+    def _known_params(
+        cls, v: dict[str, dict[str, Any]], info: ValidationInfo
+    ) -> dict[str, dict[str, Any]]:
+        planners = info.data.get("planners")
+        if planners is None:
+            return v
+        for name, params in v.items():
+            if name not in planners:
+                raise ValueError(
+                    f"params for {name!r}, which is not one of the job's planners "
+                    f"({', '.join(planners)})"
+                )
+            registry = _planner_registry()
+            getter = getattr(registry, "get_planner", None)
+            resolve = getattr(getter(name), "resolve_params", None) if getter else None
+            if resolve is not None:
+                try:
+                    resolve(params)
+                except (ValueError, TypeError, KeyError) as exc:
+                    raise ValueError(str(exc)) from None
+        return v
+
+
+JobSpec = Annotated[BenchmarkJobSpec | MapJobSpec, Field(discriminator="kind")]
+JOB_SPEC_ADAPTER: TypeAdapter[BenchmarkJobSpec | MapJobSpec] = TypeAdapter(JobSpec)
+
+
+def parse_job_spec(data: Mapping[str, Any] | str | bytes) -> BenchmarkJobSpec | MapJobSpec:
+    """Validate a job spec (a dict, or JSON text). Raises :class:`pydantic.ValidationError`."""
+    if isinstance(data, str | bytes):
+        return JOB_SPEC_ADAPTER.validate_json(data)
+    return JOB_SPEC_ADAPTER.validate_python(data)
+
+
+def load_job_spec(data: Mapping[str, Any] | str | bytes) -> BenchmarkJobSpec | MapJobSpec:
+    """A spec this service stored earlier (validated and normalized then): rebuilt without
+    registry lookups, so stored jobs stay readable when the registries change."""
+    obj = json.loads(data) if isinstance(data, str | bytes) else dict(data)
+    cls: type[BenchmarkJobSpec] | type[MapJobSpec] = (
+        BenchmarkJobSpec if obj.get("kind") == "benchmark" else MapJobSpec
+    )
+    return cls.model_construct(**obj)
+
+
+# ---------------------------------------------------------------------------------------- cells
+class BenchmarkCell(Model):
+    """Everything a worker needs to run one benchmark cell (besides the job seed and run index):
+    ``minimize(algorithm, function, dim, agents, iterations, seed=seed, params=params,
+    shifted=shifted, run_ids=[...])``."""
+
+    kind: Literal["benchmark"] = "benchmark"
+    algorithm: str
+    function: str
+    dim: int
+    agents: int
+    iterations: int
+    shifted: bool = False
+    params: dict[str, ParamValue] = Field(default_factory=dict)
+
+    @property
+    def key(self) -> str:
+        return f"{self.algorithm}/{self.function}/{self.dim}"
+
+
+class MapCell(Model):
+    """One planner on one map. ``scenario`` is the inline scenario object, or null for a preset."""
+
+    kind: Literal["map"] = "map"
+    planner: str
+    map: str
+    scenario: dict[str, Any] | None = None
+    params: dict[str, Any] = Field(default_factory=dict)
+
+    @property
+    def key(self) -> str:
+        return f"{self.planner}/{self.map}"
+
+
+CellSpec = Annotated[BenchmarkCell | MapCell, Field(discriminator="kind")]
+CELL_ADAPTER: TypeAdapter[BenchmarkCell | MapCell] = TypeAdapter(CellSpec)
+
+
+def expand_cells(spec: BenchmarkJobSpec | MapJobSpec) -> list[BenchmarkCell | MapCell]:
+    """The job's cells in table order (algorithm-major / planner-major); index = position."""
+    if isinstance(spec, BenchmarkJobSpec):
+        return [
+            BenchmarkCell(
+                algorithm=a,
+                function=f,
+                dim=d,
+                agents=spec.agents,
+                iterations=spec.iterations,
+                shifted=spec.shifted,
+                params=dict(spec.params.get(a, {})),
+            )
+            for a in spec.algorithms
+            for f in spec.functions
+            for d in spec.dims
+        ]
+    return [
+        MapCell(
+            planner=p,
+            map=map_name(m),
+            scenario=None if isinstance(m, str) else dict(m),
+            params=dict(spec.params.get(p, {})),
+        )
+        for p in spec.planners
+        for m in spec.maps
+    ]
+
+
+def runs_total(spec: BenchmarkJobSpec | MapJobSpec) -> int:
+    if isinstance(spec, BenchmarkJobSpec):
+        return len(spec.algorithms) * len(spec.functions) * len(spec.dims) * spec.runs
+    return len(spec.planners) * len(spec.maps) * spec.runs
+
+
+def run_key(job_id: str, run_id: int) -> str:
+    """A run's name across jobs, as listed in ``WorkerStatus.current_runs``."""
+    return f"{job_id}:{run_id}"
+
+
+# ------------------------------------------------------------------------------------ messages
+class RunRequest(Model):
+    """One run: what a lease expands into."""
+
+    job_id: Identifier
+    cell: str = Field(description="cell key, e.g. 'GWO/F1/30' or 'ICOOT/mfb-static'")
+    cell_index: int = Field(ge=0)
+    run: int = Field(ge=0, description="run index within the cell")
+    run_id: int = Field(ge=0, description="cell_index * runs_per_cell + run")
+    seed: int = Field(ge=0, le=MAX_SEED, description="the job seed")
+    spec: CellSpec
+
+
+class LeaseRequest(Model):
+    """Payload of a query on ``<prefix>/work``: a worker asks for up to ``max_runs`` runs."""
+
+    worker: Identifier
+    max_runs: int = Field(default=1, ge=1, le=MAX_LEASE_RUNS)
+    host: str = ""
+    pid: int = 0
+    slots: int = Field(default=1, ge=1)
+    version: str = ""
+    protocol: int = PROTOCOL_VERSION
+
+
+class Lease(Model):
+    """Reply to a LeaseRequest: several runs of one cell, owned by ``worker`` until ``deadline``.
+
+    ``deadline`` is the coordinator's Unix time; workers on other clocks use ``lease_seconds``
+    (measured from receipt) and renew with RunProgress at least every ``heartbeat_seconds``."""
+
+    kind: Literal["lease"] = "lease"
+    lease_id: Identifier
+    worker: Identifier
+    job_id: Identifier
+    cell: str
+    cell_index: int = Field(ge=0)
+    runs_per_cell: int = Field(ge=1)
+    seed: int = Field(ge=0, le=MAX_SEED)
+    runs: list[int] = Field(min_length=1, description="run indices within the cell")
+    spec: CellSpec
+    deadline: float
+    lease_seconds: float = Field(gt=0)
+    heartbeat_seconds: float = Field(gt=0)
+
+    def run_ids(self) -> list[int]:
+        return [self.cell_index * self.runs_per_cell + r for r in self.runs]
+
+    def requests(self) -> list[RunRequest]:
+        return [
+            RunRequest(
+                job_id=self.job_id,
+                cell=self.cell,
+                cell_index=self.cell_index,
+                run=r,
+                run_id=self.cell_index * self.runs_per_cell + r,
+                seed=self.seed,
+                spec=self.spec,
+            )
+            for r in self.runs
+        ]
+
+
+class NoWork(Model):
+    """Reply to a LeaseRequest when nothing is leasable; ask again after ``retry_after`` s."""
+
+    kind: Literal["no_work"] = "no_work"
+    retry_after: float = Field(default=1.0, ge=0)
+    reason: str = "empty"
+
+
+WorkReply = Annotated[Lease | NoWork, Field(discriminator="kind")]
+WORK_REPLY_ADAPTER: TypeAdapter[Lease | NoWork] = TypeAdapter(WorkReply)
+
+
+class RunProgress(Model):
+    """Published on ``<prefix>/progress/<job_id>`` while a lease runs; renews the lease."""
+
+    lease_id: Identifier
+    job_id: Identifier
+    worker: Identifier
+    cell: str
+    runs: list[int] = Field(description="run indices still running")
+    iteration: int = Field(default=0, ge=0, description="iterations (or planner steps) done")
+    iterations: int = Field(default=0, ge=0, description="total iterations, 0 if unknown")
+    best_fitness: list[float] | None = Field(default=None, description="per run, benchmark only")
+
+
+class RunResult(Model):
+    """One finished run. ``status`` 'failed' (with ``failure``, the exception text) is a run that
+    raised: it counts as finished and is not retried. Benchmark metrics: best_fitness and
+    evaluations (more are kept); map metrics: the fields of ``swarmpath plan --json`` (success,
+    collisions, length, error, smoothness, ...) without the path, which goes in ``path``.
+    """
+
+    lease_id: Identifier
+    job_id: Identifier
+    cell: str
+    run: int = Field(ge=0)
+    worker: Identifier
+    status: Literal["ok", "failed"] = "ok"
+    failure: str | None = Field(default=None, max_length=20_000)
+    seconds: float = Field(ge=0, description="wall seconds of this run (its share of a batch)")
+    metrics: dict[str, Scalar] = Field(default_factory=dict)
+    curve: list[float] | None = Field(
+        default=None, max_length=MAX_ITERATIONS, description="best fitness after each iteration"
+    )
+    best_position: list[float] | None = Field(default=None, max_length=MAX_DIM)
+    path: list[tuple[float, float, float]] | None = Field(
+        default=None, description="executed trajectory rows [x, y, t] (map runs)"
+    )
+
+
+class ResultBatch(Model):
+    """Published on ``<prefix>/results/<job_id>``: one or more results of one worker."""
+
+    worker: Identifier
+    results: list[RunResult] = Field(min_length=1, max_length=MAX_LEASE_RUNS)
+
+
+class RunAck(Model):
+    lease_id: str
+    job_id: str
+    cell: str
+    run: int
+    status: AckStatus
+
+
+class Ack(Model):
+    """Published on ``<prefix>/ack/<worker>`` after the results are durably stored.
+
+    ``drop_leases``: leases the worker must abandon (cancelled, expired, unknown); it stops their
+    unfinished runs and stops retrying their results."""
+
+    worker: Identifier
+    results: list[RunAck] = Field(default_factory=list)
+    drop_leases: list[str] = Field(default_factory=list)
+
+
+class Cancel(Model):
+    """Published on ``<prefix>/cancel``: workers drop every run of ``job_id``."""
+
+    job_id: Identifier
+
+
+class WorkerStatus(Model):
+    """One entry of ``GET /workers``."""
+
+    id: Identifier
+    host: str = ""
+    pid: int = 0
+    slots: int = 1
+    current_runs: list[str] = Field(default_factory=list, description="'<job_id>:<run_id>'")
+    runs_done: int = 0
+    last_seen: float = 0.0
+    alive: bool = True
+
+
+class JobStatus(Model):
+    """``GET /jobs/{id}``."""
+
+    id: str
+    kind: Literal["benchmark", "map"]
+    state: JobState
+    runs_total: int
+    runs_done: int
+    runs_failed: int
+    created: float
+    started: float | None = None
+    finished: float | None = None
+
+
+# ------------------------------------------------------------------------------- key expressions
+class Keys:
+    """The key expressions, all under one prefix (default ``swarmpath``)."""
+
+    def __init__(self, prefix: str = DEFAULT_PREFIX):
+        if not prefix or prefix.startswith("/") or prefix.endswith("/") or any(
+            c in prefix for c in "*$#?"
+        ):
+            raise ValueError(f"bad key prefix {prefix!r}")
+        self.prefix = prefix
+
+    @property
+    def work(self) -> str:
+        """Queryable: LeaseRequest -> Lease | NoWork."""
+        return f"{self.prefix}/work"
+
+    def results(self, job_id: str) -> str:
+        return f"{self.prefix}/results/{_chunk(job_id)}"
+
+    def progress(self, job_id: str) -> str:
+        return f"{self.prefix}/progress/{_chunk(job_id)}"
+
+    def ack(self, worker: str) -> str:
+        return f"{self.prefix}/ack/{_chunk(worker)}"
+
+    def worker_token(self, worker: str) -> str:
+        """Liveliness token of a worker."""
+        return f"{self.prefix}/workers/{_chunk(worker)}"
+
+    @property
+    def cancel(self) -> str:
+        return f"{self.prefix}/cancel"
+
+    # subscriptions of the coordinator
+    @property
+    def all_results(self) -> str:
+        return f"{self.prefix}/results/*"
+
+    @property
+    def all_progress(self) -> str:
+        return f"{self.prefix}/progress/*"
+
+    @property
+    def all_workers(self) -> str:
+        return f"{self.prefix}/workers/*"
+
+    @staticmethod
+    def last_chunk(key: str) -> str:
+        return key.rsplit("/", 1)[-1]
+
+
+def _chunk(value: str) -> str:
+    if not _ID_RE.match(value):
+        raise ValueError(f"{value!r} is not a valid identifier ({ID_PATTERN})")
+    return value
+
+
+# ----------------------------------------------------------------------------------- encoding
+M = TypeVar("M", bound=BaseModel)
+
+
+def encode(message: BaseModel) -> bytes:
+    """The wire form of a message: compact UTF-8 JSON."""
+    return message.model_dump_json(exclude_none=False).encode()
+
+
+def decode(model: type[M], payload: bytes | str) -> M:
+    """Parse and validate a message (raises :class:`pydantic.ValidationError`)."""
+    if isinstance(payload, bytes | bytearray) and len(payload) > MAX_BODY_BYTES:
+        raise ValueError(f"payload of {len(payload)} bytes exceeds {MAX_BODY_BYTES}")
+    return model.model_validate_json(payload)
+
+
+def decode_work_reply(payload: bytes | str) -> Lease | NoWork:
+    return WORK_REPLY_ADAPTER.validate_json(payload)
+
+
+def error_fields(exc: Exception) -> list[str]:
+    """Dotted locations of a ValidationError's errors (``['benchmark.dims.0', ...]``)."""
+    errors = getattr(exc, "errors", None)
+    if errors is None:
+        return []
+    return [".".join(str(p) for p in e["loc"]) for e in errors()]
+
+
+# The models exported to schemas/ (file stem -> model or adapter); see swarmpath.service.schemas.
+# Messages the coordinator sends are exported as it writes them (every field present); those it
+# receives (from users and workers) as it reads them (fields with defaults may be left out).
+SENT_BY_COORDINATOR = frozenset(
+    {"cell_spec", "run_request", "work_reply", "lease", "no_work", "ack", "cancel",
+     "worker_status", "job_status"}
+)
+SCHEMA_MODELS: dict[str, Any] = {
+    "job_spec": JOB_SPEC_ADAPTER,
+    "benchmark_job_spec": BenchmarkJobSpec,
+    "map_job_spec": MapJobSpec,
+    "cell_spec": CELL_ADAPTER,
+    "run_request": RunRequest,
+    "lease_request": LeaseRequest,
+    "work_reply": WORK_REPLY_ADAPTER,
+    "lease": Lease,
+    "no_work": NoWork,
+    "run_progress": RunProgress,
+    "run_result": RunResult,
+    "result_batch": ResultBatch,
+    "ack": Ack,
+    "cancel": Cancel,
+    "worker_status": WorkerStatus,
+    "job_status": JobStatus,
+}

@@ -1,0 +1,427 @@
+"""The per-job MCAP: contents, Foxglove schemas, indexes, flushing, crash recovery."""
+
+from __future__ import annotations
+
+import importlib
+import json
+import shutil
+import signal
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+from mcap.reader import NonSeekingReader, make_reader
+
+from swarmpath import __version__
+from swarmpath.service import foxglove as fg
+from swarmpath.service.protocol import MapJobSpec, RunResult
+from swarmpath.service.recorder import (
+    OWN_SCHEMAS,
+    JobRecorder,
+    Recorders,
+    final_path,
+    part_path,
+    salvage_messages,
+)
+from swarmpath.service.store import Store
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_store import SPEC, T0, drain, execute
+
+
+def importable(module: str, attr: str) -> bool:
+    try:
+        return hasattr(importlib.import_module(module), attr)
+    except ImportError:
+        return False
+
+
+HAVE_WORLD = importable("swarmpath.world.scenario_io", "scenario_from_dict") and importable(
+    "swarmpath.world.raster", "rasterize_scenario"
+)
+
+
+def read_all(path: Path):
+    with open(path, "rb") as f:
+        reader = make_reader(f, validate_crcs=True)
+        summary = reader.get_summary()
+        metadata = {m.name: m.metadata for m in reader.iter_metadata()}
+        messages = [
+            (schema, channel, json.loads(msg.data), msg.log_time)
+            for schema, channel, msg in reader.iter_messages(log_time_order=False)
+        ]
+    return summary, metadata, messages
+
+
+def check_indexed(summary) -> None:
+    assert summary is not None and summary.statistics is not None
+    assert summary.chunk_indexes, "no chunk indexes"
+    for ci in summary.chunk_indexes:
+        assert ci.message_index_offsets, "chunk index without message indexes"
+        assert ci.compression == "zstd"
+    assert summary.statistics.message_count == sum(
+        summary.statistics.channel_message_counts.values()
+    )
+
+
+def check_data_crc(path: Path) -> None:
+    """The streaming reader validates chunk CRCs and the data section CRC."""
+    with open(path, "rb") as f:
+        n = sum(1 for _ in NonSeekingReader(f, validate_crcs=True).iter_messages(
+            log_time_order=False))
+    assert n > 0
+
+
+@pytest.fixture
+def store(tmp_path):
+    s = Store(tmp_path / "data")
+    yield s
+    s.close()
+
+
+# ------------------------------------------------------------------------------- benchmark
+def test_benchmark_job_file(store):
+    job = store.create_job(SPEC, now=T0)
+    recorders = Recorders(store)
+    recorders.open(job)
+    assert part_path(store.data_dir, job).exists() and not recorders.ready(job)
+    while (lease := store.lease("w1", 3, now=T0)) is not None:
+        for run_id, status in zip(lease.run_ids(), store.accept_results(execute(lease), T0),
+                                  strict=True):
+            assert status == "accepted"
+            assert recorders.record_run(job, run_id)
+    path = recorders.finish(job)
+    assert path == final_path(store.data_dir, job) and recorders.ready(job)
+    assert not part_path(store.data_dir, job).exists()
+
+    summary, metadata, messages = read_all(path)
+    check_indexed(summary)
+    check_data_crc(path)
+    results = [m for _s, c, m, _t in messages if c.topic == "/results"]
+    curves = [m for _s, c, m, _t in messages if c.topic == "/curves"]
+    assert sorted(m["run_id"] for m in results) == list(range(20))  # exactly one per run
+    assert sorted(m["run_id"] for m in curves) == list(range(20))
+    by_run = {m["run_id"]: m for m in results}
+    for item in store.runs(job, limit=100):
+        assert by_run[item["run_id"]]["best_fitness"] == item["best_fitness"]
+        assert by_run[item["run_id"]]["algorithm"] == item["algorithm"]
+    assert all(len(c["best_fitness"]) == c["iterations"] == 8 for c in curves)
+    names = {s.name: s for s in summary.schemas.values()}
+    assert set(names) == {"swarmpath.BenchmarkRunResult", "swarmpath.ConvergenceCurve"}
+    assert all(s.encoding == "jsonschema" for s in names.values())
+    assert all(c.message_encoding == "json" for c in summary.channels.values())
+    for s in names.values():
+        assert fg.check_foxglove_rules(json.loads(s.data)) == []
+    for _s, _c, m, _t in messages:
+        assert fg.check_message(m) == []
+    job_meta = metadata["swarmpath.job"]
+    assert job_meta["job_id"] == job and job_meta["swarmpath_version"] == __version__
+    assert json.loads(job_meta["spec"])["functions"] == ["F1", "F9"]
+    final_meta = metadata["swarmpath.summary"]
+    assert final_meta["state"] == "done" and final_meta["runs_written"] == "20"
+    assert len(json.loads(final_meta["summary"])["rows"]) == 4
+    assert summary.statistics.metadata_count == 2
+
+
+def test_a_run_is_written_once(store, tmp_path):
+    job = store.create_job(SPEC, now=T0)
+    drain(store)
+    rec = JobRecorder(tmp_path / "x.mcap", job, "benchmark", SPEC, T0)
+    record = store.run_record(job, 3)
+    assert rec.add(record) is True
+    assert rec.add(record) is False
+    rec.finish()
+    _summary, _meta, messages = read_all(tmp_path / "x.mcap")
+    assert [m["run_id"] for _s, c, m, _t in messages if c.topic == "/results"] == [3]
+
+
+def test_non_finite_curve_values_are_clamped(store, tmp_path):
+    job = store.create_job({**SPEC, "runs": 1}, now=T0)
+    drain(store)
+    record = store.run_record(job, 0)
+    record["curve"] = [float("inf"), 1.0]
+    record["metrics"]["best_fitness"] = float("nan")
+    rec = JobRecorder(tmp_path / "x.mcap", job, "benchmark", SPEC, T0)
+    rec.add(record)
+    rec.finish()
+    _summary, _meta, messages = read_all(tmp_path / "x.mcap")
+    result = next(m for _s, c, m, _t in messages if c.topic == "/results")
+    curve = next(m for _s, c, m, _t in messages if c.topic == "/curves")
+    assert "best_fitness" not in result  # left out rather than invalid JSON
+    assert curve["best_fitness"][0] > 1e300
+
+
+# ------------------------------------------------------------------------------------- flush
+def test_flush_about_once_a_second_and_truncated_file_salvage(store, tmp_path):
+    job = store.create_job({**SPEC, "runs": 5}, now=T0)
+    drain(store)
+    now = [0.0]
+    rec = JobRecorder(tmp_path / "x.mcap", job, "benchmark", SPEC, T0, clock=lambda: now[0])
+    records = list(store.iter_run_records(job))
+    for r in records[:6]:
+        now[0] += 0.3
+        rec.add(r)  # flushes once 1 s passed: after the 4th (t = 1.2)
+    assert not rec.flush_if_due()  # only 0.6 s since that flush
+    now[0] += 0.5
+    assert rec.flush_if_due()  # idle flush by the timer
+    assert not rec.flush_if_due()  # nothing new
+    rec.add(records[6])  # written to the open chunk only: lost by a crash
+    crashed = tmp_path / "crashed.mcap"
+    shutil.copy(rec.part, crashed)  # what a killed process leaves behind
+    data = crashed.read_bytes()
+    crashed.write_bytes(data + b"\x05garbage-after-the-cut")  # a torn tail
+    with pytest.raises(Exception):  # noqa: B017 - the seeking reader needs a footer
+        with open(crashed, "rb") as f:
+            make_reader(f).get_summary()
+    got = salvage_messages(crashed, topics=["/results"])
+    assert [m["run_id"] for _t, m in got] == [r["run_id"] for r in records[:6]]
+    rec.finish()
+
+
+# -------------------------------------------------------------------------------- recovery
+def test_recorder_rebuilds_from_the_store_after_a_coordinator_restart(tmp_path):
+    data = tmp_path / "data"
+    store = Store(data)
+    job = store.create_job(SPEC, now=T0)
+    recorders = Recorders(store)
+    lease = store.lease("w1", 3, now=T0)
+    for run_id, _ in zip(lease.run_ids(), store.accept_results(execute(lease), T0), strict=True):
+        recorders.record_run(job, run_id)
+    recorders.tick()
+    lease = store.lease("w1", 3, now=T0)  # accepted, but the coordinator dies before recording
+    assert lease.runs == [3, 4]
+    store.accept_results(execute(lease), T0)
+    # "crash": drop everything without closing or finishing
+    del recorders
+    store.close()
+
+    store = Store(data)
+    recorders = Recorders(store)
+    assert recorders.recover() == [job]  # fresh .part from the store
+    rec = recorders.open(job)
+    assert rec.written == set(range(5))
+    for run_id in range(5):  # a replay of the live path writes nothing twice
+        assert not recorders.record_run(job, run_id)
+    while (lease := store.lease("w2", 4, now=T0)) is not None:
+        store.accept_results(execute(lease), T0)
+        for run_id in lease.run_ids():
+            recorders.record_run(job, run_id)
+    recorders.finish(job)
+    _summary, _meta, messages = read_all(final_path(data, job))
+    ids = [m["run_id"] for _s, c, m, _t in messages if c.topic == "/results"]
+    assert sorted(ids) == list(range(20))
+    store.close()
+
+
+def test_finished_job_without_file_is_finalized_on_recover(store):
+    job = store.create_job({**SPEC, "runs": 1}, now=T0)
+    drain(store)
+    cancelled = store.create_job(SPEC, now=T0)
+    store.cancel(cancelled)
+    recorders = Recorders(store)
+    assert sorted(recorders.recover()) == sorted([job, cancelled])
+    assert recorders.ready(job) and recorders.ready(cancelled)
+    _summary, metadata, messages = read_all(recorders.path(cancelled))
+    assert metadata["swarmpath.summary"]["state"] == "cancelled" and messages == []
+    assert recorders.recover() == []
+
+
+KILLED = textwrap.dedent(
+    """
+    import os, signal, sys
+    sys.path.insert(0, {tests!r})
+    from swarmpath.service.store import Store
+    from swarmpath.service.recorder import Recorders
+    from test_store import SPEC, T0, execute
+    store = Store({data!r})
+    job = store.create_job(SPEC, now=T0)
+    recorders = Recorders(store, flush_interval=0.0)
+    recorded = []
+    for _ in range(3):
+        lease = store.lease("w1", 3, now=T0)
+        store.accept_results(execute(lease), T0)
+        for run_id in lease.run_ids():
+            recorders.record_run(job, run_id)
+            recorded.append(run_id)
+    print(job, *recorded, flush=True)
+    os.kill(os.getpid(), signal.SIGKILL)
+    """
+)
+
+
+def test_sigkill_mid_job_then_restart_gives_each_result_once(tmp_path):
+    data = tmp_path / "data"
+    code = KILLED.format(tests=str(Path(__file__).parent), data=str(data))
+    proc = subprocess.run([sys.executable, "-c", code], timeout=120, capture_output=True)
+    assert proc.returncode == -signal.SIGKILL, proc.stderr.decode()[-2000:]
+    job, *recorded = proc.stdout.decode().split()
+    assert len(recorded) == 8
+    salvaged = salvage_messages(part_path(data, job), topics=["/results"])
+    # flushed after each message (interval 0): everything recorded before the kill is readable
+    assert [m["run_id"] for _t, m in salvaged] == [int(r) for r in recorded]
+    with Store(data) as store:
+        recorders = Recorders(store)
+        recorders.recover()
+        drain(store, "w2")
+        for item in store.runs(job, limit=100):
+            recorders.record_run(job, item["run_id"])
+        recorders.finish(job)
+        summary, _meta, messages = read_all(final_path(data, job))
+        check_indexed(summary)
+        ids = [m["run_id"] for _s, c, m, _t in messages if c.topic == "/results"]
+        assert sorted(ids) == list(range(20))
+
+
+# ------------------------------------------------------------------------------------ maps
+def test_foxglove_schemas_have_the_published_layout():
+    scene = fg.scene_update_schema()
+    assert scene["title"] == "foxglove.SceneUpdate"
+    entity = scene["properties"]["entities"]["items"]
+    assert entity["title"] == "foxglove.SceneEntity"
+    assert list(entity["properties"]) == [
+        "timestamp", "frame_id", "id", "lifetime", "frame_locked", "metadata", "arrows", "cubes",
+        "spheres", "cylinders", "lines", "triangles", "texts", "models",
+    ]
+    cyl = entity["properties"]["cylinders"]["items"]["properties"]
+    assert list(cyl) == ["pose", "size", "bottom_scale", "top_scale", "color"]
+    line = entity["properties"]["lines"]["items"]["properties"]
+    assert list(line) == ["type", "pose", "thickness", "scale_invariant", "points", "color",
+                          "colors", "indices"]
+    assert [o["const"] for o in line["type"]["oneOf"]] == [0, 1, 2]
+    poses = fg.poses_in_frame_schema()
+    assert list(poses["properties"]) == ["timestamp", "frame_id", "poses"]
+    assert list(poses["properties"]["poses"]["items"]["properties"]["orientation"][
+        "properties"]) == ["x", "y", "z", "w"]
+    grid = fg.grid_schema()
+    assert list(grid["properties"]) == [
+        "timestamp", "frame_id", "pose", "column_count", "cell_size", "row_stride", "cell_stride",
+        "fields", "data",
+    ]
+    assert grid["properties"]["data"]["contentEncoding"] == "base64"
+    for schema in (scene, poses, grid, *OWN_SCHEMAS.values()):
+        assert fg.check_foxglove_rules(schema) == []
+    assert fg.check_foxglove_rules({"type": ["number", "null"]})
+    assert fg.check_foxglove_rules({"type": "array", "items": {"type": "array"}})
+    assert fg.check_message({"a": [[1, 2]]}) and fg.check_message({"a": None})
+
+
+SCENARIO = {
+    "name": "demo", "size": [10, 10], "start": [0, 0], "goal": [10, 10],
+    "robot": {"model": "omni", "radius": 0.3},
+    "obstacles": [
+        {"shape": "circle", "center": [2, 2.3], "radius": 0.5},
+        {"shape": "circle", "center": [4, 2], "radius": 0.3, "speed": 0.3, "heading_deg": 111.8},
+        {"shape": "polygon", "points": [[1, 5], [2, 5], [2, 6.5]]},
+    ],
+}
+
+
+def map_record(job: str, run: int, created: float, scenario=SCENARIO) -> dict:
+    path = [[0.0, 0.0, 0.0], [3.0, 4.0, 5.0], [10.0, 10.0, 12.0]]
+    return {
+        "job_id": job, "kind": "map", "run_id": run, "cell_index": 0, "cell": "P/demo",
+        "spec": {"kind": "map", "planner": "P", "map": "demo", "scenario": scenario,
+                 "params": {}},
+        "run": run, "seed": 1, "worker": "w", "lease_id": "l", "status": "ok", "failure": None,
+        "seconds": 0.5, "created": created,
+        "metrics": {"success": True, "collisions": 0, "length": 14.9, "error": 0.1,
+                    "steps": 2, "optimum": None, "gap": None, "reason": "goal reached"},
+        "path": path,
+    }
+
+
+@pytest.mark.skipif(not HAVE_WORLD, reason="swarmpath.world not available")
+def test_map_job_file_opens_in_foxglove(tmp_path):
+    spec = {"kind": "map", "planners": ["P"], "maps": [SCENARIO], "runs": 2, "seed": 1}
+    rec = JobRecorder(tmp_path / "m.mcap", "job1", "map", spec, T0)
+    for run in range(2):
+        assert rec.add(map_record("job1", run, T0 + 1 + run))
+    rec.finish()
+    summary, metadata, messages = read_all(tmp_path / "m.mcap")
+    check_indexed(summary)
+    check_data_crc(tmp_path / "m.mcap")
+    names = {s.name for s in summary.schemas.values()}
+    assert {"foxglove.SceneUpdate", "foxglove.PosesInFrame", "foxglove.Grid",
+            "swarmpath.MapRunResult"} <= names
+    for s in summary.schemas.values():
+        assert s.encoding == "jsonschema"
+        assert fg.check_foxglove_rules(json.loads(s.data)) == []
+    topics = {c.topic: c for c in summary.channels.values()}
+    assert {"/results", "/map/demo/occupancy", "/map/demo/obstacles", "/scene/P/demo",
+            "/paths/P/demo"} <= set(topics)
+    assert summary.schemas[topics["/map/demo/occupancy"].schema_id].name == "foxglove.Grid"
+    assert summary.schemas[topics["/paths/P/demo"].schema_id].name == "foxglove.PosesInFrame"
+    for _s, _c, m, _t in messages:
+        assert fg.check_message(m) == [], m
+    by_topic: dict[str, list] = {}
+    for _s, c, m, t in messages:
+        by_topic.setdefault(c.topic, []).append((m, t))
+    results = [m for m, _t in by_topic["/results"]]
+    assert sorted(r["run_id"] for r in results) == [0, 1]
+    assert results[0]["length"] == 14.9 and results[0]["success"] is True
+    assert "gap" not in results[0] and results[0]["reason"] == "goal reached"
+    (grid, t), = by_topic["/map/demo/occupancy"]
+    assert t == round(T0 * 1e9)
+    import base64
+
+    cells = base64.b64decode(grid["data"])
+    assert len(cells) % grid["column_count"] == 0 and set(cells) <= {0, 100}
+    assert 100 in cells and grid["fields"][0]["type"] == fg.UINT8
+    (obstacles, _t), = by_topic["/map/demo/obstacles"]
+    ents = {e["id"]: e for e in obstacles["entities"]}
+    assert len(ents["obstacles"]["cylinders"]) == 2 and len(ents["obstacles"]["lines"]) == 1
+    assert {"start", "goal", "world"} <= set(ents)
+    paths = by_topic["/paths/P/demo"]
+    assert len(paths) == 2 and len(paths[0][0]["poses"]) == 3
+    assert paths[0][1] == round(T0 * 1e9) + 12 * 10**9  # base + t_end
+    scene = by_topic["/scene/P/demo"]
+    ids = {e["id"] for m, _t in scene for e in m["entities"]}
+    assert {"run-0/robot", "run-0/path", "run-0/obstacles", "run-0/goal", "run-1/robot"} <= ids
+    # the moving obstacle is drawn where the world puts it at t = 5 s
+    from swarmpath.service.recorder import world_for
+    from swarmpath.world.scenario_io import scenario_from_dict
+
+    world = world_for(scenario_from_dict(SCENARIO), 1, 0)
+    at5 = next(e for m, t in scene for e in m["entities"]
+               if e["id"] == "run-0/obstacles" and t == round(T0 * 1e9) + 5 * 10**9)
+    expect = world.obstacles_at(5.0).circles
+    got = sorted((c["pose"]["position"]["x"], c["pose"]["position"]["y"])
+                 for c in at5["cylinders"])
+    want = sorted((float(x), float(y)) for x, y, _r in expect)
+    assert [v for xy in got for v in xy] == pytest.approx([v for xy in want for v in xy])
+    assert want != sorted((x, y) for x, y, _r in world.obstacles_at(0.0).circles)  # it moved
+    assert json.loads(metadata["swarmpath.job"]["spec"])["maps"][0]["name"] == "demo"
+
+
+@pytest.mark.skipif(not HAVE_WORLD, reason="swarmpath.world not available")
+def test_map_job_through_the_store(store):
+    spec = MapJobSpec.model_construct(kind="map", planners=["P"], maps=[SCENARIO], runs=2,
+                                      seed=1, params={})
+    job = store.create_job(spec, now=T0)
+    recorders = Recorders(store)
+    while (lease := store.lease("w", 2, now=T0)) is not None:
+        results = [
+            RunResult(lease_id=lease.lease_id, job_id=job, cell=lease.cell, run=r, worker="w",
+                      seconds=0.5, metrics=map_record(job, r, T0)["metrics"],
+                      path=[tuple(p) for p in map_record(job, r, T0)["path"]])
+            for r in lease.runs
+        ]
+        store.accept_results(results, T0)
+        for run_id in lease.run_ids():
+            recorders.record_run(job, run_id)
+    path = recorders.finish(job)
+    summary, _meta, messages = read_all(path)
+    assert sorted(m["run_id"] for _s, c, m, _t in messages if c.topic == "/results") == [0, 1]
+    assert any(c.topic == "/paths/P/demo" for c in summary.channels.values())
+
+
+def test_map_runs_without_geometry_still_record_results(tmp_path):
+    rec = JobRecorder(tmp_path / "m.mcap", "job1", "map", {}, T0)
+    record = map_record("job1", 0, T0, scenario=None)
+    record["spec"]["map"] = "no-such-map"
+    rec.add(record)
+    rec.finish()
+    _summary, _meta, messages = read_all(tmp_path / "m.mcap")
+    assert [c.topic for _s, c, _m, _t in messages if c.topic == "/results"] == ["/results"]

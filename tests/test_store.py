@@ -1,0 +1,484 @@
+"""The SQLite job store: leasing, fencing, requeues, cancellation, crash safety, summaries."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import threading
+from pathlib import Path
+
+import pytest
+
+from swarmpath.optimizers import minimize
+from swarmpath.service.protocol import Lease, MapJobSpec, RunResult, parse_job_spec
+from swarmpath.service.store import Store, StoreError
+from swarmpath.stats import describe, rank
+
+SPEC = {
+    "kind": "benchmark", "algorithms": ["GWO", "PSO"], "functions": ["F1", "F9"], "dims": [4],
+    "runs": 5, "agents": 6, "iterations": 8, "seed": 7,
+}
+T0 = 1_000_000.0
+
+
+@pytest.fixture
+def store(tmp_path):
+    s = Store(tmp_path / "data")
+    yield s
+    s.close()
+
+
+def execute(lease: Lease, worker: str | None = None) -> list[RunResult]:
+    """What a worker does with a benchmark lease."""
+    c = lease.spec
+    res = minimize(c.algorithm, c.function, c.dim, c.agents, c.iterations, seed=lease.seed,
+                   params=c.params, shifted=c.shifted, run_ids=lease.runs)
+    return [
+        RunResult(
+            lease_id=lease.lease_id, job_id=lease.job_id, cell=lease.cell, run=r,
+            worker=worker or lease.worker, seconds=res.seconds / len(lease.runs),
+            metrics={"best_fitness": float(res.best_fitness[i]),
+                     "evaluations": int(res.evaluations[i])},
+            curve=res.curve[i].tolist(), best_position=res.best_position[i].tolist(),
+        )
+        for i, r in enumerate(lease.runs)
+    ]
+
+
+def drain(store: Store, worker: str = "w1", max_runs: int = 3, now: float = T0) -> int:
+    n = 0
+    while (lease := store.lease(worker, max_runs, now=now)) is not None:
+        statuses = store.accept_results(execute(lease), now=now)
+        assert set(statuses) == {"accepted"}
+        n += len(statuses)
+    return n
+
+
+def direct_values(spec: dict) -> dict[tuple[str, str, int], list[float]]:
+    out = {}
+    for a in spec["algorithms"]:
+        for f in spec["functions"]:
+            for d in spec["dims"]:
+                res = minimize(a, f, d, spec["agents"], spec["iterations"], runs=spec["runs"],
+                               seed=spec["seed"])
+                out[(a, f, d)] = res.best_fitness.tolist()
+    return out
+
+
+def check_summary_against(summary: dict, spec: dict) -> None:
+    values = direct_values(spec)
+    rows = {(r["algorithm"], r["function"], r["dim"]): r for r in summary["rows"]}
+    assert set(rows) == set(values)
+    for key, vals in values.items():
+        expect = describe(vals)
+        for stat in ("min", "max", "avg", "std", "median"):
+            assert rows[key][stat] == pytest.approx(expect[stat], rel=1e-12, abs=0)
+        assert rows[key]["runs"] == len(vals)
+    for f in spec["functions"]:
+        for d in spec["dims"]:
+            ranks = rank({a: describe(values[(a, f, d)])["avg"] for a in spec["algorithms"]})
+            for a in spec["algorithms"]:
+                assert rows[(a, f, d)]["rank"] == ranks[a]
+
+
+# ------------------------------------------------------------------------------------ basics
+def test_create_job_and_status(store):
+    job = store.create_job(parse_job_spec(SPEC), now=T0)
+    st = store.job_status(job)
+    assert (st.state, st.runs_total, st.runs_done, st.runs_failed) == ("queued", 20, 0, 0)
+    assert st.created == T0 and st.started is None
+    assert store.job_status("nope") is None
+    assert [c["key"] for c in store.cells(job)] == ["GWO/F1/4", "GWO/F9/4", "PSO/F1/4",
+                                                    "PSO/F9/4"]
+    assert store.job_spec(job).functions == ["F1", "F9"]
+    assert store.queue_depth() == 20
+    assert [j.id for j in store.list_jobs()] == [job]
+    assert store.list_jobs("done") == []
+    with pytest.raises(ValueError):
+        store.list_jobs("bogus")
+
+
+def test_a_whole_job_runs_to_done_with_exact_statistics(store):
+    job = store.create_job(SPEC, now=T0)
+    assert drain(store) == 20
+    st = store.job_status(job)
+    assert (st.state, st.runs_done, st.finished) == ("done", 20, T0)
+    summary = store.summary(job)
+    assert summary["partial"] is False
+    check_summary_against(summary, SPEC)
+    rows = list(csv.DictReader(io.StringIO(store.summary_csv(job))))
+    assert len(rows) == 4 and float(rows[0]["avg"]) == summary["rows"][0]["avg"]
+    assert store.lease("w1", 5, now=T0) is None
+    assert store.queue_depth() == 0
+
+
+def test_lease_is_several_runs_of_one_cell(store):
+    store.create_job(SPEC, now=T0)
+    lease = store.lease("w1", 3, now=T0, lease_seconds=30)
+    assert (lease.cell, lease.runs, lease.cell_index, lease.runs_per_cell) == (
+        "GWO/F1/4", [0, 1, 2], 0, 5
+    )
+    assert lease.deadline == T0 + 30 and lease.heartbeat_seconds == 10
+    assert lease.seed == 7 and lease.spec.agents == 6
+    nxt = store.lease("w1", 3, now=T0)
+    assert (nxt.cell, nxt.runs) == ("GWO/F1/4", [3, 4])  # never crosses a cell
+    assert store.job_status(lease.job_id).state == "running"
+
+
+def test_results_equal_a_direct_minimize_run_for_run(store):
+    job = store.create_job(SPEC, now=T0)
+    drain(store, max_runs=2)
+    direct = direct_values(SPEC)
+    for item in store.runs(job, limit=100):
+        key = (item["algorithm"], item["function"], item["dim"])
+        assert item["best_fitness"] == direct[key][item["run"]]
+
+
+# ------------------------------------------------------------------------------------ fencing
+def test_duplicate_results_are_ignored(store):
+    job = store.create_job(SPEC, now=T0)
+    lease = store.lease("w1", 2, now=T0)
+    results = execute(lease)
+    assert store.accept_results(results, now=T0) == ["accepted", "accepted"]
+    assert store.accept_results(results, now=T0) == ["duplicate", "duplicate"]
+    assert store.job_status(job).runs_done == 2
+    assert store.counters()["duplicates"] == 2
+
+
+def test_stale_results_are_rejected(store):
+    job = store.create_job(SPEC, now=T0)
+    lease = store.lease("w1", 2, now=T0)
+    good = execute(lease)[0]
+    assert store.accept_result(good.model_copy(update={"lease_id": "unknown"}), T0) == "stale"
+    assert store.accept_result(good.model_copy(update={"worker": "w2"}), T0) == "stale"
+    assert store.accept_result(good.model_copy(update={"run": 4}), T0) == "stale"  # not leased
+    assert store.accept_result(good.model_copy(update={"cell": "PSO/F1/4"}), T0) == "stale"
+    assert store.accept_result(good.model_copy(update={"job_id": "other"}), T0) == "stale"
+    assert store.job_status(job).runs_done == 0
+    assert store.accept_result(good, T0) == "accepted"
+    assert store.counters()["stale"] == 5
+
+
+def test_requeue_on_expiry_and_late_result_of_the_old_lease(store):
+    job = store.create_job({**SPEC, "runs": 3}, now=T0)
+    old = store.lease("w1", 3, now=T0, lease_seconds=10)
+    late = execute(old)
+    assert store.requeue_expired(now=T0 + 5) == 0  # not yet
+    assert store.requeue_expired(now=T0 + 11) == 3
+    assert store.heartbeat(old.lease_id, "w1", now=T0 + 11) == "expired"
+    new = store.lease("w2", 5, now=T0 + 12)
+    assert (new.cell, new.runs) == (old.cell, old.runs)  # requeued runs first
+    # the old worker's late result for run 0 arrives first: accepted once (runs are deterministic)
+    assert store.accept_result(late[0], now=T0 + 13) == "accepted"
+    statuses = store.accept_results(execute(new), now=T0 + 14)
+    assert statuses == ["duplicate", "accepted", "accepted"]
+    assert store.accept_results(late[1:], now=T0 + 15) == ["duplicate", "duplicate"]
+    st = store.job_status(job)
+    assert st.runs_done == 3
+    assert store.active_leases() == []  # the new lease completed
+    assert store.counters()["requeued_runs"] == 3
+
+
+def test_expired_lease_only_requeues_runs_without_results(store):
+    store.create_job(SPEC, now=T0)
+    lease = store.lease("w1", 3, now=T0, lease_seconds=10)
+    results = execute(lease)
+    store.accept_result(results[0], now=T0 + 1)
+    assert store.requeue_expired(now=T0 + 20) == 2
+    again = store.lease("w2", 5, now=T0 + 21)
+    assert again.runs == [1, 2]
+
+
+def test_heartbeat_extends_the_deadline(store):
+    store.create_job(SPEC, now=T0)
+    lease = store.lease("w1", 2, now=T0, lease_seconds=10)
+    assert store.heartbeat(lease.lease_id, "w1", now=T0 + 8, lease_seconds=10) == "active"
+    assert store.requeue_expired(now=T0 + 15) == 0
+    assert store.requeue_expired(now=T0 + 19) == 2
+    assert store.heartbeat("nope", "w1", now=T0) == "unknown"
+    assert store.heartbeat(lease.lease_id, "w2", now=T0) == "unknown"
+
+
+def test_requeue_on_worker_loss(store):
+    job = store.create_job(SPEC, now=T0)
+    a = store.lease("w1", 2, now=T0, lease_seconds=1000)
+    b = store.lease("w2", 2, now=T0, lease_seconds=1000)
+    activity = store.worker_activity()
+    assert activity["w1"]["current_runs"] == [f"{job}:0", f"{job}:1"]
+    assert store.requeue_worker("w1", now=T0 + 1) == 2
+    assert store.requeue_worker("w1", now=T0 + 1) == 0
+    assert [x["lease_id"] for x in store.active_leases()] == [b.lease_id]
+    c = store.lease("w3", 5, now=T0 + 2)
+    assert c.runs == a.runs
+    assert store.heartbeat(a.lease_id, "w1", now=T0 + 2) == "released"
+
+
+def test_release_returns_a_lease(store):
+    store.create_job(SPEC, now=T0)
+    a = store.lease("w1", 2, now=T0)
+    assert store.release(a.lease_id, "w2", now=T0) == 0  # not its lease
+    assert store.release(a.lease_id, "w1", now=T0) == 2
+    assert store.lease("w1", 5, now=T0).runs == [0, 1]
+
+
+def test_cancel(store):
+    job = store.create_job(SPEC, now=T0)
+    lease = store.lease("w1", 2, now=T0, lease_seconds=5)
+    results = execute(lease)
+    store.accept_result(results[0], now=T0)
+    store.requeue_expired(now=T0 + 10)  # run 1 requeued
+    assert store.cancel(job, now=T0 + 11) == "cancelled"
+    assert store.lease("w1", 5, now=T0 + 12) is None  # never leases cancelled jobs
+    assert store.accept_result(results[1], now=T0 + 12) == "stale"
+    st = store.job_status(job)
+    assert (st.state, st.runs_done, st.finished) == ("cancelled", 1, T0 + 11)
+    assert store.cancel(job) == "cancelled"
+    assert store.cancel("nope") is None
+    assert store.queue_depth() == 0
+    states = {i["state"] for i in store.runs(job, limit=100)}
+    assert states == {"done", "cancelled"}
+    assert store.summary(job)["partial"] is True
+
+
+def test_cancel_of_a_finished_job_changes_nothing(store):
+    job = store.create_job({**SPEC, "runs": 1}, now=T0)
+    drain(store)
+    assert store.cancel(job) == "done"
+
+
+def test_failed_runs(store):
+    job = store.create_job({**SPEC, "algorithms": ["GWO"], "functions": ["F1"], "runs": 2}, T0)
+    lease = store.lease("w1", 2, now=T0)
+    ok, bad = execute(lease)
+    bad = bad.model_copy(update={"status": "failed", "failure": "boom", "metrics": {},
+                                 "curve": None, "best_position": None})
+    assert store.accept_results([ok, bad], now=T0) == ["accepted", "accepted"]
+    st = store.job_status(job)
+    assert (st.state, st.runs_done, st.runs_failed) == ("done", 1, 1)
+    item = store.run(job, 1)
+    assert (item["state"], item["failure"]) == ("failed", "boom")
+    row = store.summary(job)["rows"][0]
+    assert (row["runs"], row["failed"]) == (1, 1)
+
+
+def test_a_job_whose_runs_all_fail_is_failed(store):
+    job = store.create_job({**SPEC, "algorithms": ["GWO"], "functions": ["F1"], "runs": 1}, T0)
+    lease = store.lease("w1", 1, now=T0)
+    r = execute(lease)[0].model_copy(update={"status": "failed", "failure": "x"})
+    store.accept_result(r, now=T0)
+    assert store.job_status(job).state == "failed"
+    row = store.summary(job)["rows"][0]
+    assert row["avg"] is None and row["rank"] is None
+
+
+# --------------------------------------------------------------------------------- scheduling
+def test_fair_across_jobs_and_fifo(store):
+    a = store.create_job(SPEC, now=T0)
+    b = store.create_job(SPEC, now=T0 + 1)
+    order = [store.lease("w", 1, now=T0).job_id for _ in range(6)]
+    assert order == [a, b, a, b, a, b]
+    c = store.create_job(SPEC, now=T0 + 2)  # a new job gets the next turn
+    assert store.lease("w", 1, now=T0).job_id == c
+
+
+def test_finished_jobs_leave_the_rotation(store):
+    small = store.create_job({**SPEC, "algorithms": ["GWO"], "functions": ["F1"], "runs": 1}, T0)
+    big = store.create_job(SPEC, now=T0)
+    first = store.lease("w", 5, now=T0)
+    assert first.job_id == small
+    store.accept_results(execute(first), now=T0)
+    assert {store.lease("w", 1, now=T0).job_id for _ in range(3)} == {big}
+
+
+# ---------------------------------------------------------------------------------- run views
+def test_runs_pages_and_single_run(store):
+    job = store.create_job(SPEC, now=T0)
+    lease = store.lease("w1", 2, now=T0)
+    store.accept_result(execute(lease)[0], now=T0)
+    page = store.runs(job, limit=4, offset=0)
+    assert [i["run_id"] for i in page] == [0, 1, 2, 3]
+    assert [i["state"] for i in page] == ["done", "leased", "queued", "queued"]
+    assert page[0]["worker"] == "w1" and page[1]["worker"] == "w1" and page[2]["worker"] is None
+    assert page[0]["algorithm"] == "GWO" and page[0]["function"] == "F1" and page[0]["dim"] == 4
+    assert isinstance(page[0]["best_fitness"], float) and page[0]["evaluations"] > 0
+    assert "best_fitness" not in page[1]
+    tail = store.runs(job, limit=10, offset=15)
+    assert [i["run_id"] for i in tail] == [15, 16, 17, 18, 19]
+    assert (tail[0]["cell"], tail[0]["run"]) == ("PSO/F9/4", 0)
+    assert store.runs(job, limit=10, offset=20) == []
+    assert store.runs("nope") is None
+    one = store.run(job, 0)
+    assert len(one["curve"]) == 8 and len(one["best_position"]) == 4
+    assert one["curve"][-1] == one["best_fitness"]
+    assert store.run(job, 1)["state"] == "leased" and "curve" not in store.run(job, 1)
+    assert store.run(job, 20) is None and store.run("nope", 0) is None
+
+
+def test_partial_summary_while_running(store):
+    job = store.create_job(SPEC, now=T0)
+    lease = store.lease("w1", 3, now=T0)
+    store.accept_results(execute(lease), now=T0)
+    s = store.summary(job)
+    assert s["partial"] is True and s["state"] == "running"
+    rows = s["rows"]
+    assert rows[0]["runs"] == 3 and rows[0]["rank"] == 1
+    assert rows[1]["runs"] == 0 and rows[1]["avg"] is None
+
+
+def test_map_summary(store):
+    spec = MapJobSpec.model_construct(kind="map", planners=["A", "B"], maps=["m"], runs=3,
+                                      seed=1, params={})
+    job = store.create_job(spec, now=T0)
+    metrics = {
+        "A": [{"success": True, "length": 10.0, "error": 0.1, "seconds": 1.0, "gap": 0.1,
+               "collisions": 0},
+              {"success": True, "length": 12.0, "error": 0.2, "seconds": 2.0, "gap": 0.3,
+               "collisions": 0},
+              {"success": False, "length": 3.0, "error": 5.0, "seconds": 3.0, "gap": None,
+               "collisions": 1}],
+        "B": [{"success": True, "length": 11.0, "error": 0.0, "seconds": 0.5, "gap": None,
+               "collisions": 0}] * 3,
+    }
+    while (lease := store.lease("w", 3, now=T0)) is not None:
+        planner = lease.spec.planner
+        store.accept_results([
+            RunResult(lease_id=lease.lease_id, job_id=job, cell=lease.cell, run=r, worker="w",
+                      seconds=1.0, metrics=metrics[planner][r],
+                      path=[(0.0, 0.0, 0.0), (1.0, 1.0, 1.0)])
+            for r in lease.runs
+        ], now=T0)
+    s = store.summary(job)
+    assert s["state"] == "done" and s["columns"][:2] == ["planner", "map"]
+    a, b = s["rows"]
+    assert a["success_rate"] == pytest.approx(2 / 3)
+    assert a["length_mean"] == pytest.approx(11.0)
+    assert a["length_std"] == pytest.approx(describe([10.0, 12.0])["std"])
+    assert a["error_mean"] == pytest.approx((0.1 + 0.2 + 5.0) / 3)
+    assert a["seconds_mean"] == pytest.approx(2.0)
+    assert a["gap_mean"] == pytest.approx(0.2)
+    assert a["collisions"] == 1
+    assert b["success_rate"] == 1.0 and b["gap_mean"] is None and b["length_std"] == 0.0
+    item = store.run(job, 0)
+    assert item["planner"] == "A" and item["map"] == "m" and item["length"] == 10.0
+    assert item["path"] == [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]]
+    assert "planner,map,runs" in store.summary_csv(job)
+
+
+def test_non_finite_values_are_json_safe(store):
+    job = store.create_job({**SPEC, "algorithms": ["GWO"], "functions": ["F1"], "runs": 2}, T0)
+    lease = store.lease("w", 2, now=T0)
+    rs = [r.model_copy(update={"metrics": {**r.metrics, "best_fitness": float("inf")}})
+          for r in execute(lease)]
+    store.accept_results(rs, now=T0)
+    row = store.summary(job)["rows"][0]
+    assert row["avg"] == "inf" and row["std"] == 0.0
+    json.dumps(store.summary(job), allow_nan=False)
+    json.dumps(store.runs(job), allow_nan=False)
+
+
+# --------------------------------------------------------------------------------- concurrency
+def test_threads_share_a_store(store):
+    job = store.create_job({**SPEC, "runs": 25}, now=T0)
+    errors = []
+
+    def worker(name: str) -> None:
+        try:
+            while (lease := store.lease(name, 4, now=T0)) is not None:
+                results = execute(lease)
+                store.accept_results(results, now=T0)
+                store.accept_results(results[:1], now=T0)  # a retry: duplicate
+        except Exception as exc:  # pragma: no cover - reported below
+            errors.append(exc)
+
+    threads = [threading.Thread(target=worker, args=(f"w{i}",)) for i in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=120)
+    assert not errors
+    st = store.job_status(job)
+    assert (st.state, st.runs_done) == ("done", 100)
+    assert len(store.runs(job, limit=1000)) == 100
+
+
+# --------------------------------------------------------------------------------- durability
+CRASHER = textwrap.dedent(
+    """
+    import os, signal, sys, json
+    from swarmpath.service.store import Store
+    sys.path.insert(0, {tests!r})
+    from test_store import SPEC, T0, execute
+    store = Store({data!r})
+    job = store.create_job(SPEC, now=T0)
+    first = store.lease("w1", 3, now=T0, lease_seconds=10)
+    store.accept_results(execute(first), now=T0)          # acknowledged: must survive
+    second = store.lease("w1", 2, now=T0, lease_seconds=10)  # outstanding at the crash
+    unacked = execute(second)
+    with open({out!r}, "w") as f:
+        json.dump({{"job": job, "late": [r.model_dump_json() for r in unacked]}}, f)
+    os.kill(os.getpid(), signal.SIGKILL)                     # no close, no cleanup
+    """
+)
+
+
+def test_crash_and_reopen_loses_nothing_and_duplicates_nothing(tmp_path):
+    data, out = tmp_path / "data", tmp_path / "out.json"
+    code = CRASHER.format(tests=str(Path(__file__).parent), data=str(data), out=str(out))
+    proc = subprocess.run([sys.executable, "-c", code], timeout=120, capture_output=True)
+    assert proc.returncode == -signal.SIGKILL, proc.stderr.decode()[-2000:]
+    info = json.loads(out.read_text())
+    job = info["job"]
+    with Store(data) as store:
+        st = store.job_status(job)
+        assert (st.state, st.runs_total, st.runs_done) == ("running", 20, 3)
+        # the outstanding lease is requeued only once its deadline passes
+        assert store.requeue_expired(now=T0 + 5) == 0
+        fresh = store.lease("w2", 3, now=T0 + 5)
+        assert fresh.cell == "GWO/F9/4"
+        store.accept_results(execute(fresh), now=T0 + 5)
+        assert store.requeue_expired(now=T0 + 11) == 2
+        # a late result of the pre-crash lease is still accepted once
+        late = [RunResult.model_validate_json(r) for r in info["late"]]
+        assert store.accept_result(late[0], now=T0 + 12) == "accepted"
+        drain(store, "w2", now=T0 + 12)
+        assert store.accept_results(late, now=T0 + 13) == ["duplicate", "duplicate"]
+        st = store.job_status(job)
+        assert (st.state, st.runs_done, st.runs_failed) == ("done", 20, 0)
+        assert len(store.runs(job, limit=1000)) == 20
+        assert sum(1 for _ in store.iter_run_records(job)) == 20
+        check_summary_against(store.summary(job), SPEC)
+
+
+def test_reopen_keeps_everything(tmp_path):
+    with Store(tmp_path) as s:
+        job = s.create_job(SPEC, now=T0)
+        drain(s)
+        before = s.summary(job)
+    with Store(tmp_path) as s:
+        assert s.summary(job) == before
+        assert s.counters()["results_accepted"] == 20
+
+
+def test_schema_version_is_checked(tmp_path):
+    Store(tmp_path).close()
+    import sqlite3
+
+    db = sqlite3.connect(tmp_path / "swarmpath.sqlite3")
+    db.execute("UPDATE meta SET value = '999' WHERE key = 'schema_version'")
+    db.commit()
+    db.close()
+    with pytest.raises(StoreError, match="schema version 999"):
+        Store(tmp_path)
+
+
+def test_wal_mode_and_data_dir(tmp_path):
+    with Store(tmp_path / "nested" / "dir") as s:
+        mode = s._db.execute("PRAGMA journal_mode").fetchone()[0]
+        assert mode == "wal"
+        assert s.path.exists() and os.path.dirname(s.path).endswith("dir")
