@@ -1,0 +1,67 @@
+"""Summary statistics of a study's runs, as the papers' tables report them.
+
+``describe`` gives min, max, avg, std and median of the best fitness of the runs; ``std`` is the
+sample standard deviation (ddof=1, MATLAB's ``std``). ``rank`` orders algorithms by their average.
+
+Infinite values (a run that never evaluated a finite point) are handled without NaN or warnings:
+any infinite value makes ``avg`` infinite and ``std`` infinite, unless every value is identical
+(then ``std`` is 0). Only +inf and -inf together leave ``avg`` undefined (NaN); NaN input is not
+expected (the optimizers report NaN objective values as +inf).
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from collections.abc import Mapping
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+__all__ = ["describe", "rank"]
+
+
+def describe(values: ArrayLike) -> dict[str, float]:
+    """min, max, avg, std (ddof=1; 0.0 for one value) and median of ``values`` (any shape)."""
+    x = np.asarray(values, dtype=float).ravel()
+    if x.size == 0:
+        raise ValueError("describe() needs at least one value")
+    if np.isnan(x).any():
+        raise ValueError("describe() got NaN values")
+    lo, hi = float(x.min()), float(x.max())
+    if lo == hi:  # identical values (incl. all inf): exact, no rounding noise in avg or std
+        return {"min": lo, "max": hi, "avg": lo, "std": 0.0, "median": lo}
+    finite = np.isfinite(x)
+    if finite.all():
+        with np.errstate(over="ignore", invalid="ignore"):
+            avg = float(np.mean(x))
+            std = float(np.std(x, ddof=1))
+        if not (math.isfinite(avg) and math.isfinite(std)):
+            # The sum or the squares overflowed (values near 1e308): compute on a scaled copy.
+            scale = max(abs(lo), abs(hi))
+            avg = float(np.mean(x / scale)) * scale
+            std = float(np.std(x / scale, ddof=1)) * scale
+    else:
+        has_pos, has_neg = bool(np.any(x == np.inf)), bool(np.any(x == -np.inf))
+        avg = math.nan if has_pos and has_neg else (math.inf if has_pos else -math.inf)
+        std = math.inf
+    with np.errstate(over="ignore", invalid="ignore"):  # median of {-inf, +inf} is NaN
+        median = float(np.median(x))
+    if not math.isfinite(median) and finite.all():  # the two middle values overflowed their sum
+        middle = np.sort(x)[(x.size - 1) // 2 : x.size // 2 + 1]
+        median = float(middle[0] / 2 + middle[-1] / 2)
+    return {"min": lo, "max": hi, "avg": avg, "std": std, "median": median}
+
+
+def rank(avgs: Mapping[str, float]) -> dict[str, int]:
+    """Competition ranks of the averages: 1 = lowest; equal values share the smaller rank
+    (1, 2, 2, 4). NaN ranks after everything else. Keys keep the order of ``avgs``."""
+    values = {k: float(v) for k, v in avgs.items()}
+    ordered = sorted(v for v in values.values() if not math.isnan(v))
+    out: dict[str, int] = {}
+    for key, v in values.items():
+        if math.isnan(v):
+            out[key] = len(ordered) + 1
+        else:
+            out[key] = 1 + bisect.bisect_left(ordered, v)  # how many are strictly lower
+    return out
