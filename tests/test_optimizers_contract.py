@@ -60,8 +60,14 @@ def test_positions_stay_in_the_box_every_iteration(algo):
         opt.step()
     X = np.concatenate([x.reshape(2, -1, 4) for x in seen], axis=1)
     assert np.all(X >= f.lower) and np.all(X <= f.upper)
-    # every evaluated point was counted
-    assert int(opt.evaluations.sum()) == sum(x.shape[1] for x in seen) * 2
+    # Counted evaluations are the points whose values the algorithm used: never more than the
+    # objective computed (masked trials are computed for the whole batch but not all are used),
+    # at least the initial population, and exactly all of them for single-trial algorithms.
+    computed = sum(x.shape[1] for x in seen) * 2
+    used = int(opt.evaluations.sum())
+    assert 2 * 10 <= used <= computed
+    if not getattr(opt, "masked_evaluation", False):
+        assert used == computed
 
 
 def test_same_seed_same_numbers_other_seed_differs(algo):

@@ -68,6 +68,8 @@ class Optimizer(ABC):
         self.lb = problem.lower[:, None, :]  # (R, 1, d): broadcasts over agents
         self.ub = problem.upper[:, None, :]
         self._initialized = False
+        #: True once a masked evaluation happened (some computed points were not used).
+        self.masked_evaluation = False
 
     # ----------------------------------------------------------------------------------- params
     @classmethod
@@ -143,6 +145,7 @@ class Optimizer(ABC):
         """
         F = np.asarray(self.problem.objective(X, self.rng), dtype=float)
         if mask is not None:
+            self.masked_evaluation = True
             F = np.where(mask, F, np.inf)
             self.evaluations += mask.sum(axis=1)
         else:
