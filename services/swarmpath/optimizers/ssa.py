@@ -1,0 +1,83 @@
+"""Salp Swarm Algorithm (salp chains; not the sparrow search algorithm that shares the acronym).
+
+Mirjalili, Gandomi, Mirjalili, Saremi, Faris & Mirjalili, "Salp Swarm Algorithm: A bio-inspired
+optimizer for engineering design problems", Adv. Eng. Softw. 114 (2017) 163-191, eqs (3.1)-(3.4)
+of the single-objective SSA; semantics of the authors' ``SSA.m`` (v1.0):
+
+* Leaders (eq 3.1): x_ij = F_j + c1((ub_j - lb_j) c2 + lb_j) if c3 < 0.5, else
+  F_j - c1((ub_j - lb_j) c2 + lb_j), with c2, c3 ~ U(0, 1) per component and F the food source
+  (the best point found so far). The paper branches on c3 >= 0, which is always true for
+  c3 in [0, 1]; the code's 0.5 threshold is used.
+* c1 = 2 exp(-(4 t / T)^2) (eq 3.2) for iterations t = 1..T (``SSA.m`` runs l = 2..T because it
+  counts the initial evaluation as iteration 1; the frame counts it separately, see the docs).
+* Followers (eq 3.4): x_i = (x_i + x_{i-1}) / 2 where x_{i-1} has *already* moved in this
+  iteration (the code's in-place sweep). The sweep is computed exactly, without a loop over
+  agents, as a prefix scan of affine maps (``ops.linear_chain``).
+* Who leads: the code makes the first half of the population leaders (i <= N/2, 1-based); the
+  paper has a single leader (the first salp). ``leaders = "half"`` (default, code) or ``"one"``
+  (paper).
+* No greedy selection: every salp takes its new position. The food source is the best point ever
+  evaluated (strict <, first index on ties: the code's sequential update), i.e. the frame's
+  record.
+
+Bounds: all salps are moved first (followers average with *unclipped* predecessors, as in the
+code), then every position is clipped to the box and evaluated; the clipped positions are kept.
+Evaluations: ``agents`` at initialization and ``agents`` per iteration, ``agents * (T + 1)``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import ClassVar
+
+import numpy as np
+
+from swarmpath.optimizers.base import Optimizer
+from swarmpath.optimizers.ops import linear_chain
+from swarmpath.optimizers.registry import register
+
+
+@register
+class SSA(Optimizer):
+    name = "SSA"
+    summary = "Salp Swarm Algorithm (Mirjalili et al. 2017), authors' SSA.m (half the chain leads)"
+    reference = (
+        "Mirjalili et al., Adv. Eng. Softw. 114 (2017) 163-191, eqs 3.1-3.4 (single-objective SSA)"
+    )
+    defaults: ClassVar = {"leaders": "half"}
+    choices: ClassVar = {"leaders": ("half", "one")}
+    min_agents = 2
+
+    @staticmethod
+    def c1(t: int, T: int) -> float:
+        """Eq (3.2): the exploration/exploitation coefficient at iteration t of T."""
+        return 2.0 * math.exp(-((4.0 * t / T) ** 2))
+
+    def _initialize(self) -> None:
+        self.n_leaders = self.N // 2 if self.p["leaders"] == "half" else 1
+        self.X = self.random_population()
+        self.evaluate(self.X)
+        # follower chain coefficients: y_0 = last leader (a = 0), y_k = y_{k-1}/2 + x_k/2
+        k = self.N - self.n_leaders + 1
+        self._chain_a = np.full((self.R, k), 0.5)
+        self._chain_a[:, 0] = 0.0
+        self._span = self.ub - self.lb
+
+    def _iterate(self) -> None:
+        NL, X = self.n_leaders, self.X
+        c1 = self.c1(self.t, self.T)
+        r = self.rng.random(2, NL, self.d)  # c2, c3: (R, 2, NL, d)
+        lead = r[:, 0]
+        lead *= self._span
+        lead += self.lb  # (ub - lb) c2 + lb
+        lead *= c1
+        np.negative(lead, out=lead, where=r[:, 1] >= 0.5)
+        lead += self.best_position[:, None, :]
+        X[:, :NL] = lead
+        # followers: the chain starts at the last (moved, unclipped) leader
+        b = X[:, NL - 1 :].copy()
+        b[:, 1:] *= 0.5
+        X[:, NL:] = linear_chain(self._chain_a, b)[:, 1:]
+        np.maximum(X, self.lb, out=X)
+        np.minimum(X, self.ub, out=X)
+        self.evaluate(X)
