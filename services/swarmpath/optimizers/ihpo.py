@@ -1,0 +1,142 @@
+"""Improved Hunter-Prey Optimizer (IHPO).
+
+Abdulsaheb & Kadhim, "Multi-Objective Robot Path Planning Using an Improved Hunter Prey
+Optimization Algorithm", IJIES 16(2) 2023 (seed 001), eqs 11-14, on top of HPO (eqs 1-10, see
+:mod:`swarmpath.optimizers.hpo`, whose decisions all carry over: synchronous update, no greedy
+selection, clip before evaluation, N (T + 1) evaluations).
+
+The paper adds beta = 2 rand - 1 (eq 11), CP = sin(C - t/T) (eq 12) and alpha = beta CP (eq 13),
+and prints the update (eq 14) as
+
+    hunter (14a): x' = x + 0.5 [(alpha 2 C Z P - x) + (2 (1 - C) Z mu - x)]
+    prey   (14b): x' = T + alpha C Z cos(2 pi r4) (T - x)
+
+It leaves open what C is inside CP, how often beta is drawn and, read together with its prose
+("randomization factor", "changing the direction of the search"), what alpha really scales. Our
+readings, as parameters:
+
+* ``alpha_on`` - what alpha multiplies in the branches it applies to:
+    - ``"step"`` (default): the random step of each rule about its own anchor. Prey: eq 14b as
+      printed, x' = T + alpha C Z cos(2 pi r4)(T - x); hunter: x' = x + alpha (h - x), h the HPO
+      hunter position. alpha adds no pull toward the origin (HPO's own remains, see
+      ``hunter``).
+    - ``"displacement"``: x' = x + alpha (x'_HPO - x) for both rules.
+    - ``"literal"``: eq 14 exactly as printed; in 14a alpha scales the prey position P itself,
+      x' = Z (alpha C P + (1 - C) mu), which pulls hunters toward the origin.
+    - ``"position"``: x' = alpha x'_HPO, the whole new position (strongest origin bias: every
+      move lands on a point of the segment from the origin through x'_HPO, or its mirror).
+* ``alpha_branches``: ``"both"`` (eq 14, default), ``"hunter"`` or ``"prey"`` only.
+* ``beta_draw``: beta per ``"agent"`` and iteration (default), per ``"iteration"`` (one for the
+  population) or per ``"dimension"`` (one per component).
+* ``cp_c``: C inside CP is HPO's C = 1 - 0.98 t/T (``"hpo"``, default: the same symbol in the
+  same paper), so CP = sin(1 - 1.98 t/T) falls from sin 1 = 0.84 through 0 at t ~ 0.505 T to
+  sin(-0.98) = -0.83; or ``"one"``, a constant C = 1: CP = sin(1 - t/T) falls from 0.84 to 0.
+  Since beta is symmetric about 0, only |CP| matters for the law of alpha.
+* ``hunter``: HPO's hunter rule, inherited unchanged (``"paper"``) so that IHPO and HPO differ
+  only by alpha. That rule is itself origin-biased (see :mod:`swarmpath.optimizers.hpo`): default
+  IHPO therefore does much better on plain F1 than on shifted F1, exactly as HPO does; the alpha
+  reading adds no bias of its own. ``"relative"`` removes HPO's bias, and then only ``literal``
+  and ``position`` still show one (tests/test_opt_hpo_rfo.py, docs).
+
+``alpha_on="literal"`` is eq 14 word for word.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, ClassVar
+
+import numpy as np
+
+from swarmpath.optimizers.base import Array
+from swarmpath.optimizers.hpo import HPO, hpo_c, hpo_kbest
+from swarmpath.optimizers.registry import register
+
+
+@register
+class IHPO(HPO):
+    name = "IHPO"
+    summary = "Improved Hunter-Prey Optimizer (Abdulsaheb & Kadhim 2023), alpha = beta CP"
+    reference = (
+        "Abdulsaheb & Kadhim, IJIES 16(2) 2023, eqs 11-14, on HPO (Naruei et al., Soft Computing "
+        "26 (2022) 1279-1314)"
+    )
+    defaults: ClassVar[dict[str, Any]] = {
+        **HPO.defaults,
+        "alpha_on": "step",
+        "alpha_branches": "both",
+        "beta_draw": "agent",
+        "cp_c": "hpo",
+    }
+    choices: ClassVar[dict[str, tuple[str, ...]]] = {
+        **HPO.choices,
+        "alpha_on": ("step", "displacement", "literal", "position"),
+        "alpha_branches": ("both", "hunter", "prey"),
+        "beta_draw": ("agent", "iteration", "dimension"),
+        "cp_c": ("hpo", "one"),
+    }
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        per_dim = self.p["beta_draw"] == "dimension"
+        self.extra_slabs = 1 if per_dim else 0
+        self.extra_rows = 0 if per_dim else 1
+
+    def _alpha(self, cp: float, slabs: Array, rows: Array) -> Array:
+        """alpha = (2 u - 1) CP, broadcastable to (R, N, d)."""
+        how = self.p["beta_draw"]
+        if how == "dimension":
+            u = slabs[:, 0]  # (R, N, d)
+        elif how == "agent":
+            u = rows[:, 0, :, None]  # (R, N, 1)
+        else:
+            u = rows[:, 0, :1, None]  # (R, 1, 1): the first agent's number serves everyone
+        return (2.0 * u - 1.0) * cp
+
+    def _iterate(self) -> None:
+        C = hpo_c(self.t, self.T)
+        kbest = hpo_kbest(C, self.N)
+        cc = C if self.p["cp_c"] == "hpo" else 1.0
+        cp = math.sin(cc - self.t / self.T)
+        draw = self._draw(C)
+        alpha = self._alpha(cp, draw.slabs, draw.rows)
+        branches = self.p["alpha_branches"]
+        on = self.p["alpha_on"]
+        P, mu = self._hunter_anchor(C, kbest)
+        r, i = draw.hunters
+        X = self.X
+
+        # hunters (a few rows): HPO's move h, then alpha
+        z, x = draw.CZ[r, i] / C, X[r, i]
+        a = np.broadcast_to(alpha, X.shape)[r, i]  # (h, d)
+        if branches == "prey":
+            hunt = self._hunter_move(z, x, C * P[r] + (1.0 - C) * mu[r], r)
+        elif on == "literal":  # eq 14a: alpha scales the prey position
+            hunt = self._hunter_move(z, x, a * (C * P[r]) + (1.0 - C) * mu[r], r)
+        else:
+            h = self._hunter_move(z, x, C * P[r] + (1.0 - C) * mu[r], r)
+            hunt = a * h if on == "position" else x + a * (h - x)
+
+        # prey, in place on the whole population (hunter rows are overwritten below)
+        T = self.best_position[:, None, :]
+        S = draw.S
+        if branches == "hunter" or on in ("step", "literal"):
+            if branches != "hunter":
+                S *= alpha  # eq 14b: T + alpha C Z cos(2 pi r4) (T - x)
+            np.subtract(T, X, out=X)
+            X *= S
+            X += T
+        elif on == "displacement":  # x + alpha (T + S (T - x) - x) = x + alpha (1 + S)(T - x)
+            S += 1.0
+            S *= alpha
+            D = T - X
+            D *= S
+            X += D
+        else:  # position: alpha (T + S (T - x))
+            np.subtract(T, X, out=X)
+            X *= S
+            X += T
+            X *= alpha
+        X[r, i] = hunt
+        self._clip_inplace(X)
+        self.evaluate(X)

@@ -1,0 +1,227 @@
+"""HPO, IHPO and RFO: published numbers, origin bias, parameter readings, small-N guards.
+
+Decisions and measured tables: docs/_parts/algorithms-hpo-rfo.md.
+"""
+
+import numpy as np
+import pytest
+
+from swarmpath.functions import get_function
+from swarmpath.optimizers import Problem, RunStreams, create, get_optimizer, minimize
+from swarmpath.optimizers.hpo import hpo_c, hpo_kbest, matlab_round
+
+PAPER = dict(dim=30, agents=30, iterations=500)
+
+
+def paper_run(algo, function, runs=10, params=None, shifted=False, **kw):
+    """The papers' setting: 30 dims, 30 agents, 500 iterations."""
+    return minimize(algo, function, runs=runs, seed=1, params=params, shifted=shifted,
+                    **{**PAPER, **kw})
+
+
+# ------------------------------------------------------------------------------ HPO vs Table 2
+# HPO column of Table 2 in Abdulsaheb & Kadhim, IJIES 16(2) 2023 (seed 001): average best.
+PUBLISHED_HPO = {
+    "F1": 0.0, "F2": 5.8110e-183, "F3": 1.5673e-293, "F4": 1.3881e-153, "F5": 21.8228,
+    "F6": 1.5478e-11, "F7": 1.0961e-04, "F8": -9362.2, "F9": 0.0, "F10": 8.8818e-16,
+    "F11": 0.0, "F12": 6.5451e-06, "F13": 0.1053,
+}
+# Same order of magnitude as published (a factor 10 either way), or both exactly 0 / <= 1e-15.
+REPRODUCED = ["F5", "F7", "F8", "F9", "F10", "F11"]
+# Exceptions, with what we get instead (docs: "HPO against Table 2"):
+# * F1-F4: published values are 0 or 1e-153 .. 1e-293; ours are astronomically small too but with
+#   other exponents (F1 ~1e-250, not exactly 0). The authors' sequential sweep gives 0 on F1
+#   (scratch port, docs); our synchronous update is slower on this kind of collapse.
+# * F6, F12, F13 (optima at -0.5, -1, 1, off the origin): the synchronous update loses the
+#   authors' immediate target update, the prey rule C Z cos(.) collapses on the target and the
+#   run stalls: ~3, ~0.3, ~2.5 instead of 1e-11, 1e-5, 0.1.
+ASTRONOMICAL = ["F1", "F2", "F3", "F4"]
+STALLS = {"F6": (0.3, 30.0), "F12": (0.01, 3.0), "F13": (0.3, 5.0)}
+
+
+def test_exceptions_cover_table_2():
+    assert sorted(REPRODUCED + ASTRONOMICAL + list(STALLS)) == sorted(PUBLISHED_HPO)
+
+
+@pytest.mark.parametrize("function", REPRODUCED)
+def test_hpo_reproduces_published_order_of_magnitude(function):
+    mean = paper_run("HPO", function).best_fitness.mean()
+    published = PUBLISHED_HPO[function]
+    if abs(published) <= 1e-15:
+        assert 0.0 <= mean <= 1e-15, mean
+    else:
+        assert 0.1 <= mean / published <= 10.0, (mean, published)
+
+
+@pytest.mark.parametrize("function", ASTRONOMICAL)
+def test_hpo_astronomically_small_where_published_so(function):
+    best = paper_run("HPO", function).best_fitness
+    assert np.all(best < 1e-100), best
+
+
+@pytest.mark.parametrize("function", sorted(STALLS))
+def test_hpo_synchronous_stalls_off_origin(function):
+    low, high = STALLS[function]
+    mean = paper_run("HPO", function).best_fitness.mean()
+    assert low <= mean <= high, mean
+    assert mean > 10.0 * abs(PUBLISHED_HPO[function])
+
+
+# --------------------------------------------------------------------------------- origin bias
+def plain_and_shifted(algo, params, runs=6):
+    plain = paper_run(algo, "F1", runs=runs, params=params).best_fitness
+    shifted = paper_run(algo, "F1", runs=runs, params=params, shifted=True).best_fitness
+    return float(np.median(plain)), float(np.median(shifted))
+
+
+def test_rfo_default_is_not_origin_biased_literal_eq9_is():
+    plain, shifted = plain_and_shifted("RFO", None)
+    assert plain < 1.0 and shifted < 1.0
+    assert shifted / plain < 10.0, (plain, shifted)
+    # literal eq 9, x = kappa H: new foxes between the origin and the habitat centre
+    plain, shifted = plain_and_shifted("RFO", {"reproduction": "scaled_centre"})
+    assert plain < 1e-12 and shifted > 1e-3, (plain, shifted)
+
+
+def test_hpo_hunter_rule_is_origin_biased():
+    # The published hunter rule Z (C P + (1 - C) mu) is HPO's engine and pulls to the origin.
+    plain, shifted = plain_and_shifted("HPO", None)
+    assert plain < 1e-100 and shifted > 100.0, (plain, shifted)
+    # The code's prey rule (step 2 Z) keeps the population from collapsing: shifted F1 works.
+    plain_code, shifted_code = plain_and_shifted(
+        "HPO", {"prey_step": "2Z", "prey_angle": "from_z"}
+    )
+    assert plain_code < 1e-100 and shifted_code < 1e-3 * shifted
+
+
+def test_ihpo_alpha_reading_adds_no_origin_bias_literal_and_position_do():
+    # With HPO's own bias removed (translation-invariant hunter), only alpha can pull to 0.
+    base = {"hunter": "relative"}
+    plain, shifted = plain_and_shifted("IHPO", base)
+    assert shifted / plain < 10.0 and plain > 1.0, (plain, shifted)
+    for on in ("literal", "position"):
+        plain, shifted = plain_and_shifted("IHPO", {**base, "alpha_on": on})
+        assert plain < 1e-50 and shifted > 100.0, (on, plain, shifted)
+
+
+def test_ihpo_default_inherits_hpo_bias_only():
+    plain, shifted = plain_and_shifted("IHPO", None)
+    assert plain < 1e-20 and shifted > 100.0, (plain, shifted)
+    # literal eq 14 reaches exact zeros on F1 like the published IHPO column
+    plain_lit, _ = plain_and_shifted("IHPO", {"alpha_on": "literal"})
+    assert plain_lit == 0.0
+
+
+# -------------------------------------------------------------------------- parameter readings
+ALTERNATIVES = [
+    ("HPO", "prey_step", "2Z"), ("HPO", "prey_angle", "from_z"), ("HPO", "hunter", "relative"),
+    ("IHPO", "alpha_on", "displacement"), ("IHPO", "alpha_on", "literal"),
+    ("IHPO", "alpha_on", "position"), ("IHPO", "alpha_branches", "hunter"),
+    ("IHPO", "alpha_branches", "prey"), ("IHPO", "beta_draw", "iteration"),
+    ("IHPO", "beta_draw", "dimension"), ("IHPO", "cp_c", "one"), ("IHPO", "hunter", "relative"),
+    ("IHPO", "prey_step", "2Z"), ("IHPO", "prey_angle", "from_z"),
+    ("RFO", "alpha_draw", "fox"), ("RFO", "kappa_draw", "fox"),
+    ("RFO", "reproduction", "scaled_centre"), ("RFO", "local_greedy", True),
+]
+
+
+def test_alternatives_list_every_choice():
+    listed = {(a, k, v) for a, k, v in ALTERNATIVES}
+    for algo in ("HPO", "IHPO", "RFO"):
+        cls = get_optimizer(algo)
+        for key, values in cls.choices.items():
+            for v in values:
+                assert v == cls.defaults[key] or (algo, key, v) in listed or (
+                    key, v) == ("hunter", "centre"), (algo, key, v)  # centre: test below
+
+
+@pytest.mark.parametrize(("algo", "key", "value"), ALTERNATIVES)
+def test_alternative_changes_the_run(algo, key, value):
+    kw = dict(dim=6, agents=30, iterations=30, runs=2, seed=3)  # RFO: 2 new foxes per iteration
+    base = minimize(algo, "F5", **kw)
+    alt = minimize(algo, "F5", params={key: value}, **kw)
+    assert not np.array_equal(base.curve, alt.curve)
+
+
+def boxed_problem(lower, upper, runs=2):
+    f = get_function("F1")
+    return Problem(lambda X, s: f.kernel(X - 3.0), np.full((runs, 5), lower),
+                   np.full((runs, 5), upper))
+
+
+def test_hpo_centre_hunter_is_the_paper_rule_on_symmetric_boxes_only():
+    def curve(problem, hunter):
+        opt = create("HPO", problem, agents=10, iterations=40, streams=RunStreams.for_runs(2, 2),
+                     params={"hunter": hunter})
+        out = []
+        while not opt.done:
+            opt.step()
+            out.append(opt.best_fitness.copy())
+        return np.array(out)
+
+    sym = boxed_problem(-10.0, 10.0)
+    assert np.array_equal(curve(sym, "paper"), curve(sym, "centre"))
+    shifted_box = boxed_problem(-2.0, 18.0)
+    assert not np.array_equal(curve(shifted_box, "paper"), curve(shifted_box, "centre"))
+
+
+def test_rfo_local_greedy_keeps_the_population_best_monotone():
+    def population_best(params):
+        problem = boxed_problem(-10.0, 10.0, runs=4)
+        opt = create("RFO", problem, agents=10, iterations=60, streams=RunStreams.for_runs(5, 4),
+                     params=params)
+        out = []
+        while not opt.done:
+            opt.step()
+            out.append(opt.F.min(axis=1))
+        return np.array(out)
+
+    greedy = population_best({"local_greedy": True})
+    assert np.all(np.diff(greedy, axis=0) <= 0.0)
+    # the paper's unconditional local move can lose the population's best point
+    assert np.any(np.diff(population_best(None), axis=0) > 0.0)
+
+
+# ------------------------------------------------------------------------ rounding and guards
+def test_matlab_round_is_half_away_from_zero():
+    assert [matlab_round(x) for x in (0.5, 1.5, 2.5, -0.5, -2.5, 0.49, 2.4999)] == [
+        1, 2, 3, -1, -3, 0, 2,
+    ]
+
+
+def test_kbest_schedule_and_guard_for_small_populations():
+    T = 500
+    assert hpo_kbest(hpo_c(1, T), 30) == 30
+    assert hpo_kbest(hpo_c(T, T), 30) == 1  # round(0.6) = 1
+    # N = 10: C N < 0.5 late in the run (the authors' code would index 0); guard keeps 1
+    late = [t for t in range(1, T + 1) if 10 * hpo_c(t, T) < 0.5]
+    assert late and all(hpo_kbest(hpo_c(t, T), 10) == 1 for t in late)
+    assert [hpo_kbest(c, 10) for c in (0.25, 0.35, 0.15)] == [3, 4, 2]  # 2.5 -> 3, 3.5 -> 4
+
+
+@pytest.mark.parametrize("algo", ["HPO", "IHPO"])
+def test_small_population_runs_to_the_end_and_hunts_the_nearest(algo):
+    res = minimize(algo, "F1", dim=5, agents=10, iterations=200, runs=3, seed=2)
+    assert np.all(np.isfinite(res.best_fitness))
+    assert np.array_equal(res.evaluations, np.full(3, 10 * 201))
+    # kbest picks the kbest-th nearest agent to the mean; kbest = 1 at the end: the nearest
+    problem = boxed_problem(-10.0, 10.0, runs=1)
+    opt = create(algo, problem, agents=4, iterations=5, streams=RunStreams.for_runs(1, 1))
+    opt.initialize()
+    opt.X = np.array([[[5.0] * 5, [0.1] * 5, [-1.0] * 5, [3.0] * 5]])  # mean 1.775
+    for k, expected in ((1, 3), (2, 1), (3, 2), (4, 0)):  # distances: 3.2, 1.7, 2.8, 1.2 (x sqrt 5)
+        P, mu = opt._hunter_anchor(0.5, k)
+        assert np.allclose(mu, 1.775) and np.array_equal(P[0], opt.X[0, expected])
+
+
+def test_rfo_counts_and_small_populations():
+    res = minimize("RFO", "F1", dim=4, agents=30, iterations=20, runs=2, seed=1)
+    # N init + per iteration: N - 1 (global), round(0.25 N) = 8 (local), round(0.05 N) = 2 (new)
+    assert np.array_equal(res.evaluations, np.full(2, 30 + 20 * (29 + 8 + 2)))
+    for n, rep, move in ((2, 0, 1), (3, 1, 1), (10, 1, 3), (30, 2, 8), (50, 3, 13)):
+        opt = create("RFO", boxed_problem(-1.0, 1.0), agents=n, iterations=3,
+                     streams=RunStreams.for_runs(1, 2))
+        assert (opt.replaced(), opt.movers()) == (rep, move)
+        while not opt.done:
+            opt.step()
+        assert np.all(np.isfinite(opt.best_fitness))
