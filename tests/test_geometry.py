@@ -10,6 +10,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 from shapely.geometry import LineString, Point, Polygon
 
+from swarmpath.world import geometry
 from swarmpath.world.geometry import (
     ObstacleSet,
     collides,
@@ -274,3 +275,28 @@ def test_invalid_inputs() -> None:
         ObstacleSet(np.array([[0.0, 0.0, -1.0]]), ())
     with pytest.raises(ValueError):
         ObstacleSet(np.zeros((0, 3)), (np.zeros((2, 2)),))
+
+
+def test_large_queries_are_batched_consistently(monkeypatch: pytest.MonkeyPatch) -> None:
+    # with a small batch size every query below is split: results must not depend on it
+    monkeypatch.setattr(geometry, "_CHUNK_ELEMS", 1000)
+    rng = np.random.default_rng(2)
+    star = np.array(
+        [[3 * math.cos(a) * (1 + (i % 2)), 3 * math.sin(a) * (1 + (i % 2))]
+         for i, a in enumerate(np.linspace(0, 2 * math.pi, 9, endpoint=False))]
+    )  # fmt: skip
+    sq = np.array([[5, 5], [6, 5], [6, 6], [5, 6]], dtype=float)
+    obs = ObstacleSet(np.array([[-5.0, 5.0, 1.0], [4.0, -4.0, 0.5]]), (star, sq))
+    P = rng.uniform(-8, 8, (40, 50, 2))
+    B = rng.uniform(-8, 8, (50, 2))
+    pc, sc = obs.point_clearance(P), obs.segment_clearance(P, B)
+    inside, signed = points_in_polygon(P, star), point_polygon_distance(P, star)
+    seg = segment_polygon_distance(P, B, star)
+    assert pc.shape == sc.shape == inside.shape == signed.shape == seg.shape == (40, 50)
+    idx = rng.integers(0, 40, 30), rng.integers(0, 50, 30)
+    for i, j in zip(*idx, strict=True):
+        assert pc[i, j] == obs.point_clearance(P[i, j])
+        assert sc[i, j] == obs.segment_clearance(P[i, j], B[j])
+        assert inside[i, j] == points_in_polygon(P[i, j], star)
+        assert signed[i, j] == point_polygon_distance(P[i, j], star)
+        assert seg[i, j] == segment_polygon_distance(P[i, j], B[j], star)

@@ -29,7 +29,9 @@ Conventions
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -48,8 +50,27 @@ __all__ = [
 ]
 
 
+_CHUNK_ELEMS = 1 << 20  # points x edges per batch: bounds the temporaries of big queries
+
+
 def _f(x: ArrayLike) -> Array:
     return np.asarray(x, dtype=np.float64)
+
+
+def _chunked(
+    fn: Callable[..., NDArray[Any]], arrays: tuple[Array, ...], width: int, dtype: type
+) -> NDArray[Any]:
+    """Apply ``fn`` (flat (n, 2) inputs -> (n,)) to broadcast point arrays in bounded batches."""
+    shape = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
+    flat = [np.broadcast_to(a, (*shape, 2)).reshape(-1, 2) for a in arrays]
+    n = flat[0].shape[0]
+    step = max(1, _CHUNK_ELEMS // max(width, 1))
+    if n <= step:
+        return np.asarray(fn(*flat), dtype=dtype).reshape(shape)
+    out: NDArray[Any] = np.empty(n, dtype=dtype)
+    for lo in range(0, n, step):
+        out[lo : lo + step] = fn(*(f[lo : lo + step] for f in flat))
+    return out.reshape(shape)
 
 
 def _cross(u: Array, v: Array) -> Array:
@@ -117,27 +138,38 @@ def _crossings(P: Array, E0: Array, E1: Array) -> BoolArray:
     return np.asarray(straddle & (px < x_at))
 
 
+def _parity_inside(P: Array, e0: Array, e1: Array) -> BoolArray:
+    return np.asarray(np.count_nonzero(_crossings(P, e0, e1), axis=-1) % 2 == 1)
+
+
 def points_in_polygon(P: ArrayLike, poly: ArrayLike) -> BoolArray:
     """True where P lies inside the simple polygon ``poly`` (m, 2) (even-odd rule)."""
-    P, poly = _f(P), _f(poly)
-    e0, e1 = _edges(poly)
-    return np.asarray(np.count_nonzero(_crossings(P, e0, e1), axis=-1) % 2 == 1)
+    e0, e1 = _edges(_f(poly))
+    return _chunked(lambda p: _parity_inside(p, e0, e1), (_f(P),), len(e0), bool)
+
+
+def _signed_polygon(P: Array, e0: Array, e1: Array) -> Array:
+    d = np.min(point_segment_distance(P[:, None, :], e0, e1), axis=-1)
+    return np.asarray(np.where(_parity_inside(P, e0, e1), -d, d))
 
 
 def point_polygon_distance(P: ArrayLike, poly: ArrayLike) -> Array:
     """Signed distance from P to the boundary of ``poly``: positive outside, negative inside."""
-    P, poly = _f(P), _f(poly)
-    e0, e1 = _edges(poly)
-    d = np.min(point_segment_distance(P[..., None, :], e0, e1), axis=-1)
-    return np.asarray(np.where(points_in_polygon(P, poly), -d, d))
+    e0, e1 = _edges(_f(poly))
+    return _chunked(lambda p: _signed_polygon(p, e0, e1), (_f(P),), len(e0), np.float64)
+
+
+def _segment_polygon(A: Array, B: Array, e0: Array, e1: Array) -> Array:
+    d = np.min(segment_segment_distance(A[:, None, :], B[:, None, :], e0, e1), axis=-1)
+    return np.asarray(np.where(_parity_inside(A, e0, e1), 0.0, d))
 
 
 def segment_polygon_distance(A: ArrayLike, B: ArrayLike, poly: ArrayLike) -> Array:
     """Distance from segment AB to the solid polygon; 0 if it touches, crosses or lies inside."""
-    A, B, poly = _f(A), _f(B), _f(poly)
-    e0, e1 = _edges(poly)
-    d = np.min(segment_segment_distance(A[..., None, :], B[..., None, :], e0, e1), axis=-1)
-    return np.asarray(np.where(points_in_polygon(A, poly), 0.0, d))
+    e0, e1 = _edges(_f(poly))
+    return _chunked(
+        lambda a, b: _segment_polygon(a, b, e0, e1), (_f(A), _f(B)), len(e0), np.float64
+    )
 
 
 def _empty_circles() -> Array:
@@ -202,7 +234,10 @@ class ObstacleSet:
 
     def point_clearance(self, P: ArrayLike) -> Array:
         """Signed distance from P to the nearest obstacle surface (< 0 inside; +inf if none)."""
-        P = _f(P)
+        width = self.circles.shape[0] + self._e0.shape[0]
+        return _chunked(self._point_clearance, (_f(P),), width, np.float64)
+
+    def _point_clearance(self, P: Array) -> Array:
         out = np.full(P.shape[:-1], np.inf)
         c = self.circles
         if c.shape[0]:
@@ -220,9 +255,11 @@ class ObstacleSet:
 
         +inf if there are no obstacles. AB is the closed segment (a swept centre); A == B: a point.
         """
-        A, B = _f(A), _f(B)
-        shape = np.broadcast_shapes(A.shape, B.shape)[:-1]
-        out = np.full(shape, np.inf)
+        width = self.circles.shape[0] + self._e0.shape[0]
+        return _chunked(self._segment_clearance, (_f(A), _f(B)), width, np.float64)
+
+    def _segment_clearance(self, A: Array, B: Array) -> Array:
+        out = np.full(A.shape[:-1], np.inf)
         c = self.circles
         if c.shape[0]:
             dc = point_segment_distance(c[:, :2], A[..., None, :], B[..., None, :]) - c[:, 2]

@@ -1,0 +1,207 @@
+#!/usr/bin/env python3
+"""Optimizer speed: swarmpath against mealpy, and the ICOOT paper's Table 2 study.
+
+    .venv/bin/python scripts/bench/optimizers.py [--part mealpy|table2|all]
+
+Part ``mealpy``: GWO, PSO, BA and FDO on F1 (30 dims, 30 agents, 500 iterations). mealpy 3.0.3
+(the ``bench`` extra: ``pip install -e '.[bench]'``) solves one run at a time: a few runs are
+timed (``--mealpy-runs``, 3 by default); swarmpath computes 30 runs as one batch and its time per
+run is the batch's seconds / 30. Target: swarmpath >= 30x faster per run.
+
+Part ``table2``: PSO, SSA, FDO, mCOOT, COOT, ICOOT x F1-F13 x 30 dims x 30 runs x 500
+iterations in this one process. Target: < 60 s in total.
+
+Algorithms not registered yet are skipped (and listed). The output is markdown (stdout) ready to
+paste into docs/benchmarks.md, with the machine's load average next to the numbers; progress
+notes go to stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import logging
+import os
+import platform
+import sys
+import time
+import warnings
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from swarmpath.functions import get_function
+from swarmpath.optimizers import list_optimizers, minimize
+from swarmpath.stats import describe
+
+# swarmpath name -> (mealpy module, class): the original variant of each algorithm.
+MEALPY_CLASSES = {
+    "GWO": ("GWO", "OriginalGWO"),
+    "PSO": ("PSO", "OriginalPSO"),
+    "BA": ("BA", "OriginalBA"),
+    "FDO": ("FDO", "OriginalFDO"),
+}
+TABLE2_ALGORITHMS = ("PSO", "SSA", "FDO", "mCOOT", "COOT", "ICOOT")
+TABLE2_FUNCTIONS = [f"F{i}" for i in range(1, 14)]
+DIM, AGENTS, ITERATIONS = 30, 30, 500
+
+
+def note(message: str) -> None:
+    print(message, file=sys.stderr, flush=True)
+
+
+def load() -> str:
+    one, five, fifteen = os.getloadavg()
+    return f"{one:.2f} / {five:.2f} / {fifteen:.2f}"
+
+
+def available(wanted: tuple[str, ...] | list[str]) -> tuple[list[str], list[str]]:
+    registered = set(list_optimizers())
+    have = [a for a in wanted if a in registered]
+    missing = [a for a in wanted if a not in registered]
+    if missing:
+        note(f"not registered yet, skipped: {', '.join(missing)}")
+    return have, missing
+
+
+# ----------------------------------------------------------------------------------- mealpy
+def import_mealpy() -> Any:
+    try:
+        return importlib.import_module("mealpy")
+    except ModuleNotFoundError:
+        sys.exit(
+            "mealpy is not installed: install the bench extra first\n"
+            "    .venv/bin/python -m pip install -e '.[bench]'   (mealpy==3.0.3)"
+        )
+
+
+def mealpy_seconds(
+    mealpy: Any, algorithm: str, runs: int, seed: int
+) -> tuple[float, float, list[float]]:
+    """Mean wall and CPU seconds of one mealpy run (over ``runs`` runs) and their best fitness."""
+    module_name, class_name = MEALPY_CLASSES[algorithm]
+    cls = getattr(getattr(mealpy, module_name), class_name)
+    f = get_function("F1")
+    kernel: Callable[[np.ndarray], Any] = f.kernel
+    problem = {
+        "bounds": mealpy.FloatVar(lb=(f.lower,) * DIM, ub=(f.upper,) * DIM, name="x"),
+        "minmax": "min",
+        "obj_func": lambda x: float(kernel(x)),
+        "log_to": None,  # mealpy's logging off (errors only)
+    }
+    wall, cpu, best = [], [], []
+    for r in range(runs):
+        model = cls(epoch=ITERATIONS, pop_size=AGENTS)
+        w0, c0 = time.perf_counter(), time.process_time()
+        agent = model.solve(problem, seed=seed + r)
+        wall.append(time.perf_counter() - w0)
+        cpu.append(time.process_time() - c0)
+        best.append(float(agent.target.fitness))
+    return float(np.mean(wall)), float(np.mean(cpu)), best
+
+
+def part_mealpy(mealpy_runs: int, runs: int, seed: int) -> list[str]:
+    mealpy = import_mealpy()
+    logging.getLogger("mealpy").setLevel(logging.ERROR)
+    algorithms, missing = available(list(MEALPY_CLASSES))
+    lines = [
+        f"### swarmpath vs mealpy {getattr(mealpy, '__version__', '?')}: F1, {DIM} dims, "
+        f"{AGENTS} agents, {ITERATIONS} iterations",
+        "",
+        f"Seconds per run, wall (CPU). mealpy: mean of {mealpy_runs} runs, one at a time; "
+        f"swarmpath: {runs} runs in one batch, seconds / {runs}. Speed-up on CPU time (wall).",
+        "",
+        "| algorithm | mealpy s/run | swarmpath s/run | speed-up | mealpy avg best | "
+        "swarmpath avg best | load 1/5/15 min |",
+        "| --- | ---: | ---: | ---: | ---: | ---: | --- |",
+    ]
+    for a in algorithms:
+        note(f"mealpy {a}: {mealpy_runs} runs ...")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            m_wall, m_cpu, m_best = mealpy_seconds(mealpy, a, mealpy_runs, seed)
+        note(f"swarmpath {a}: {runs} runs ...")
+        c0 = time.process_time()
+        res = minimize(a, "F1", DIM, AGENTS, ITERATIONS, runs=runs, seed=seed)
+        s_cpu = (time.process_time() - c0) / runs
+        s_wall = res.seconds / runs
+        lines.append(
+            f"| {a} | {m_wall:.3f} ({m_cpu:.3f}) | {s_wall:.4f} ({s_cpu:.4f}) | "
+            f"**{m_cpu / s_cpu:.0f}x** ({m_wall / s_wall:.0f}x) | {np.mean(m_best):.2E} | "
+            f"{describe(res.best_fitness)['avg']:.2E} | {load()} |"
+        )
+    for a in missing:
+        lines.append(f"| {a} | | | not registered yet | | | |")
+    return lines
+
+
+# ----------------------------------------------------------------------------------- table 2
+def part_table2(runs: int, seed: int) -> list[str]:
+    algorithms, missing = available(TABLE2_ALGORITHMS)
+    wall: dict[str, float] = {}
+    cpu: dict[str, float] = {}
+    cpu_by_function = dict.fromkeys(TABLE2_FUNCTIONS, 0.0)
+    load_before = load()
+    w_start, c_start = time.perf_counter(), time.process_time()
+    for a in algorithms:
+        note(f"table2 {a}: {len(TABLE2_FUNCTIONS)} functions x {runs} runs ...")
+        w0, c0 = time.perf_counter(), time.process_time()
+        for fn in TABLE2_FUNCTIONS:
+            c1 = time.process_time()
+            minimize(a, fn, DIM, AGENTS, ITERATIONS, runs=runs, seed=seed)
+            cpu_by_function[fn] += time.process_time() - c1
+        wall[a], cpu[a] = time.perf_counter() - w0, time.process_time() - c0
+    total_wall, total_cpu = time.perf_counter() - w_start, time.process_time() - c_start
+    n = len(TABLE2_FUNCTIONS)
+    lines = [
+        f"### ICOOT paper Table 2 setting: F1-F13, {DIM} dims, {AGENTS} agents, {ITERATIONS} "
+        f"iterations, {runs} runs, one process",
+        "",
+        f"| algorithm | wall s ({n} functions x {runs} runs) | CPU s | CPU s per function |",
+        "| --- | ---: | ---: | ---: |",
+    ]
+    for a in algorithms:
+        lines.append(f"| {a} | {wall[a]:.1f} | {cpu[a]:.1f} | {cpu[a] / n:.2f} |")
+    for a in missing:
+        lines.append(f"| {a} | not registered yet | | |")
+    lines += [
+        f"| **total** ({len(algorithms)} of {len(TABLE2_ALGORITHMS)} algorithms) | "
+        f"**{total_wall:.1f}** | **{total_cpu:.1f}** | |",
+        "",
+        f"Load average (1/5/15 min) before: {load_before}; after: {load()}.",
+        "",
+        "CPU seconds per function, summed over the algorithms above:",
+        "",
+        "| " + " | ".join(TABLE2_FUNCTIONS) + " |",
+        "|" + " ---: |" * n,
+        "| " + " | ".join(f"{cpu_by_function[f]:.1f}" for f in TABLE2_FUNCTIONS) + " |",
+    ]
+    return lines
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--part", choices=("mealpy", "table2", "all"), default="all")
+    parser.add_argument("--mealpy-runs", type=int, default=3, help="mealpy runs timed each")
+    parser.add_argument("--runs", type=int, default=30, help="swarmpath runs per cell (batched)")
+    parser.add_argument("--seed", type=int, default=1)
+    args = parser.parse_args(argv)
+    if args.mealpy_runs < 1 or args.runs < 1:
+        parser.error("--mealpy-runs and --runs must be >= 1")
+
+    lines = [
+        f"Machine: {platform.machine()}, {os.cpu_count()} CPUs, Python "
+        f"{platform.python_version()}, numpy {np.__version__}; registered: "
+        f"{', '.join(list_optimizers())}.",
+        "",
+    ]
+    if args.part in ("mealpy", "all"):
+        lines += [*part_mealpy(args.mealpy_runs, args.runs, args.seed), ""]
+    if args.part in ("table2", "all"):
+        lines += [*part_table2(args.runs, args.seed), ""]
+    print("\n".join(lines).rstrip())
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,106 @@
+"""The typer app every command module registers on, and the one-line error convention."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+from typing import Annotated, Any
+
+import typer
+from typer.core import TyperGroup
+
+from swarmpath import __version__
+
+# click's exception classes as this typer uses them (recent typers vendor click as typer._click,
+# older ones use click itself): found through the one typer exports.
+_CLICK_ERRORS = {c.__name__: c for c in typer.BadParameter.__mro__}
+ClickException: type[Exception] = _CLICK_ERRORS["ClickException"]
+UsageError: type[Exception] = _CLICK_ERRORS["UsageError"]
+
+EXIT_USAGE = 2
+
+
+class InputError(ValueError):
+    """Bad user input, raised by a command (or the pure functions it calls) naming the option.
+
+    Printed as ``swarmpath <cmd>: error: <field>: <message>`` on one line on stderr; exit code 2.
+    """
+
+    def __init__(self, field: str, message: str):
+        super().__init__(f"{field}: {message}")
+        self.field = field
+        self.detail = message
+
+
+def error_line(path: str, message: str) -> str:
+    one_line = " ".join(message.split())
+    return f"{path}: {typer.style('error', fg='red', bold=True)}: {one_line}"
+
+
+class _Group(TyperGroup):
+    """Typer's group, except that errors in the user's input are one line on stderr (exit 2)
+    instead of a rich panel or a traceback."""
+
+    def invoke(self, ctx: Any) -> Any:
+        try:
+            return super().invoke(ctx)
+        except InputError as exc:
+            path = " ".join(p for p in (ctx.command_path, ctx.invoked_subcommand) if p)
+            typer.echo(error_line(path, str(exc)), err=True)
+            raise typer.Exit(EXIT_USAGE) from None
+
+    def main(  # type: ignore[override]
+        self,
+        args: Sequence[str] | None = None,
+        prog_name: str | None = None,
+        complete_var: str | None = None,
+        standalone_mode: bool = True,
+        **extra: Any,
+    ) -> Any:
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, False, **extra)
+        try:
+            # Non-standalone, typer returns the code of typer.Exit (and ctx.exit) instead of
+            # calling sys.exit, and lets click's usage errors through to be printed here.
+            rv = super().main(args, prog_name, complete_var, False, **extra)
+        except ClickException as exc:
+            if type(exc).__name__ == "NoArgsIsHelpError":  # bare `swarmpath`: help, as click does
+                exc.show()  # type: ignore[attr-defined]
+            else:
+                ctx = getattr(exc, "ctx", None)
+                path = ctx.command_path if ctx is not None else (prog_name or "swarmpath")
+                message = exc.format_message()  # type: ignore[attr-defined]
+                if isinstance(exc, UsageError):
+                    message += f" (see '{path} --help')"
+                typer.echo(error_line(path, message), err=True)
+            sys.exit(exc.exit_code)  # type: ignore[attr-defined]
+        except typer.Abort:
+            typer.echo("Aborted!", err=True)
+            sys.exit(1)
+        sys.exit(rv if isinstance(rv, int) else 0)
+
+
+app = typer.Typer(
+    cls=_Group,
+    name="swarmpath",
+    help="Swarm optimizers and robot path planners, run as reproducible studies.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_show_locals=False,
+)
+
+
+def _version(value: bool) -> None:
+    if value:
+        typer.echo(f"swarmpath {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: Annotated[
+        bool,
+        typer.Option("--version", callback=_version, is_eager=True, help="Print the version."),
+    ] = False,
+) -> None:
+    """Swarm optimizers and robot path planners, run as reproducible studies."""

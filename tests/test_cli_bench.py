@@ -1,0 +1,227 @@
+"""`swarmpath bench`: the table, the JSON document and the one-line errors (exit code 2)."""
+
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from rich.console import Console
+from typer.testing import CliRunner
+
+from swarmpath import report
+from swarmpath.cli import app
+from swarmpath.cli import bench as bench_cli
+from swarmpath.optimizers import list_optimizers, minimize
+from swarmpath.stats import describe
+
+# GWO and one more of whatever is registered: the command must work for any algorithm.
+ALGOS = ["GWO", *[a for a in list_optimizers() if a != "GWO"][:1]]
+SMALL = ["--agents", "6", "--iterations", "8", "--runs", "3", "--seed", "4"]
+runner = CliRunner()
+
+
+def invoke(*args: str):
+    return runner.invoke(app, ["bench", *args])
+
+
+def parse_table(stdout: str) -> dict[tuple[str, int, str], list[str]]:
+    """{(function, dim, stat): [cell text per algorithm]} from the printed table."""
+    rows: dict[tuple[str, int, str], list[str]] = {}
+    function, dim = "", 0
+    for line in stdout.splitlines():
+        tokens = line.split()
+        if len(tokens) > 3 and tokens[0].startswith("F") and tokens[1].isdigit():
+            function, dim, tokens = tokens[0], int(tokens[1]), tokens[2:]
+        if tokens and tokens[0] in report.TABLE_STATS and function:
+            rows[(function, dim, tokens[0])] = tokens[1:]
+    return rows
+
+
+# ----------------------------------------------------------------------------------- the table
+def test_table_has_every_row_and_marks_the_best_average():
+    result = invoke("-a", ",".join(ALGOS), "-f", "F1,F5", "-d", "2,3", *SMALL)
+    assert result.exit_code == 0, result.stderr
+    header = next(line for line in result.stdout.splitlines() if line.split()[:2] == ["F", "D"])
+    assert header.split()[2:] == ALGOS
+    rows = parse_table(result.stdout)
+    stats = report.TABLE_STATS
+    assert set(rows) == {(f, d, s) for f in ("F1", "F5") for d in (2, 3) for s in stats}
+    avg_of = {
+        (f, d): [describe(minimize(a, f, d, 6, 8, 3, seed=4).best_fitness)["avg"] for a in ALGOS]
+        for f in ("F1", "F5")
+        for d in (2, 3)
+    }
+    for (function, dim, stat), texts in rows.items():
+        assert len(texts) == len(ALGOS)
+        avgs = avg_of[(function, dim)]
+        marked = [t.endswith(report.BEST_MARK) for t in texts]
+        if stat == "avg":
+            assert marked == [v == min(avgs) for v in avgs]
+            printed = [float(t.rstrip(report.BEST_MARK)) for t in texts]
+            assert printed == pytest.approx(avgs, rel=1e-2)
+        else:
+            assert not any(marked)
+    assert "6 agents, 8 iterations, seed 4" in result.stdout
+    assert "cells" not in result.stdout  # the progress bar is on stderr only
+
+
+def test_rows_mark_ties_and_missing_cells():
+    def cell(a, values):
+        return report.Cell(a, "F1", 2, [0, 1], values, [10, 10], 0.1)
+
+    cells = [cell("A", [0.0, 0.0]), cell("B", [0.0, 0.0]), cell("C", [1.0, 3.0])]
+    rows = report.table_rows(cells, ["A", "B", "C", "D"])
+    assert [r.stat for r in rows] == list(report.TABLE_STATS)
+    avg = rows[2]
+    assert avg.best == (True, True, False, False)
+    assert math.isnan(avg.values[3])  # D was not run
+    console = Console(record=True, width=200)
+    console.print(report.render_table(cells, ["A", "B", "C", "D"]))
+    text = console.export_text()
+    assert "0*" in text and "2.00E+00 " in text and " - " in text
+
+
+def test_format_value_like_the_papers():
+    assert report.format_value(6.59e-28) == "6.59E-28"
+    assert report.format_value(-6123.1) == "-6.12E+03"
+    assert report.format_value(0.0) == "0"
+    assert report.format_value(math.inf) == "inf"
+    assert report.format_value(26.81258, digits=4) == "2.6813E+01"
+
+
+# ------------------------------------------------------------------------------------ --json
+def test_json_is_one_document_equal_to_a_direct_minimize():
+    result = invoke("-a", ",".join(ALGOS), "-f", "F1-F2,F7", "-d", "3", "--json", *SMALL)
+    assert result.exit_code == 0, result.stderr
+    doc = json.loads(result.stdout)  # the whole stdout is one JSON document
+    assert doc["settings"]["algorithms"] == ALGOS
+    assert doc["settings"]["functions"] == ["F1", "F2", "F7"]
+    assert len(doc["cells"]) == len(ALGOS) * 3
+    for cell in doc["cells"]:
+        assert set(cell) >= {"algorithm", "function", "dim", "stats", "rank", "seconds",
+                             "evaluations", "best_fitness", "run_ids", "params"}
+        res = minimize(cell["algorithm"], cell["function"], cell["dim"], 6, 8, 3, seed=4)
+        assert cell["best_fitness"] == res.best_fitness.tolist()  # bit for bit
+        assert cell["run_evaluations"] == res.evaluations.tolist()
+        assert cell["evaluations"] == int(res.evaluations.sum())
+        assert cell["stats"] == describe(res.best_fitness)
+        group = [c for c in doc["cells"] if (c["function"], c["dim"]) == (cell["function"], 3)]
+        assert cell["rank"] == 1 + sum(c["stats"]["avg"] < cell["stats"]["avg"] for c in group)
+    assert [r["algorithm"] for r in doc["ranking"]] == ALGOS
+
+
+def test_json_with_params_and_shift_matches_minimize():
+    params = {"GWO": {"a_max": 1.5}}
+    result = invoke("-a", "gwo", "-f", "F9", "-d", "4", "--shifted", "--json",
+                    "--params", json.dumps(params), *SMALL)
+    assert result.exit_code == 0, result.stderr
+    (cell,) = json.loads(result.stdout)["cells"]
+    res = minimize("GWO", "F9", 4, 6, 8, 3, seed=4, params=params["GWO"], shifted=True)
+    assert cell["best_fitness"] == res.best_fitness.tolist()
+    assert cell["params"]["a_max"] == 1.5
+
+
+def test_runs_in_small_batches_give_the_same_runs(monkeypatch):
+    spec = bench_cli.make_spec("GWO", "F1", "5", runs=7, agents=6, iterations=5, seed=2)
+    whole = bench_cli.run_cell(spec, "GWO", "F1", 5)
+    monkeypatch.setattr(bench_cli, "BATCH_ELEMENTS", 6 * 5 * 3)  # batches of 3 runs
+    steps: list[int] = []
+    batched = bench_cli.run_cell(spec, "GWO", "F1", 5, on_step=steps.append)
+    assert batched.best_fitness == whole.best_fitness
+    assert batched.evaluations == whole.evaluations
+    assert steps == [3] * 5 + [3] * 5 + [1] * 5
+
+
+def test_json_numbers_are_strict_json():
+    assert report.json_number(math.inf) == "inf" and report.json_number(-math.inf) == "-inf"
+    assert report.json_number(1.5) == 1.5
+    cell = report.Cell("A", "F1", 2, [0, 1], [1.0, math.inf], [1, 1], 0.0)
+    json.dumps(report.cell_to_json(cell), allow_nan=False)
+
+
+# ----------------------------------------------------------------------------------- errors
+BAD_INPUT = [
+    (["-a", "NOPE"], "--algorithms"),
+    (["-a", ","], "--algorithms"),
+    (["-f", "F99"], "--functions"),
+    (["-f", "F1-F14"], "--functions"),
+    (["-d", "0"], "--dims"),
+    (["-d", "1001"], "--dims"),
+    (["-d", "3,x"], "--dims"),
+    (["-f", "F5", "-d", "1"], "--dims"),
+    (["--agents", "1001"], "--agents"),
+    (["--agents", "0"], "--agents"),
+    (["--iterations", "100001"], "--iterations"),
+    (["--iterations", "0"], "--iterations"),
+    (["--runs", "0"], "--runs"),
+    (["--runs", "10001"], "--runs"),
+    (["--runs", "many"], "--runs"),
+    (["--seed", "-1"], "--seed"),
+    (["--params", "{not json"], "--params"),
+    (["--params", "[1, 2]"], "--params"),
+    (["--params", '{"NOPE": {}}'], "NOPE"),
+    (["--params", '{"GWO": {"no_such_parameter": 1}}'], "no_such_parameter"),
+    (["--params", '{"GWO": {"a_max": "high"}}'], "a_max"),
+    (["--params", '{"GWO": 3}'], "--params"),
+    (["--no-such-option"], "--no-such-option"),
+]
+
+
+@pytest.mark.parametrize(("args", "named"), BAD_INPUT, ids=[" ".join(a) for a, _ in BAD_INPUT])
+def test_bad_input_is_one_line_naming_the_field_with_exit_code_2(args, named):
+    result = invoke("-a", "GWO", "-f", "F1", "-d", "2", "--runs", "1", "--iterations", "2", *args)
+    assert result.exit_code == 2
+    assert result.stdout == ""
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert lines[0].startswith("swarmpath bench: error: ")
+    assert named in lines[0]
+    assert "Traceback" not in result.stderr
+
+
+def test_params_errors_name_the_option():
+    result = invoke("-a", "GWO", "--params", '{"GWO": {"zzz": 1}}')
+    assert "--params: GWO has no parameter 'zzz'" in result.stderr
+
+
+def test_root_help_and_version():
+    assert runner.invoke(app, ["--version"]).stdout.startswith("swarmpath ")
+    result = runner.invoke(app, ["--help"])
+    assert result.exit_code == 0 and "bench" in result.stdout
+
+
+# ------------------------------------------------------------------------------- subprocess
+def _entry_points() -> list[list[str]]:
+    commands = [[sys.executable, "-m", "swarmpath.cli"]]
+    script = Path(sys.executable).parent / "swarmpath"
+    if script.exists():
+        commands.append([str(script)])
+    return commands
+
+
+@pytest.mark.parametrize("command", _entry_points(), ids=lambda c: Path(c[-1]).name)
+def test_real_process_prints_table_json_and_errors(command):
+    env = {**os.environ, "COLUMNS": "60"}  # a narrow terminal must not squeeze a piped table
+    args = ["bench", "-a", ",".join(ALGOS), "-f", "F10", "-d", "2", *SMALL]
+    table = subprocess.run([*command, *args], capture_output=True, text=True, env=env, timeout=120)
+    assert table.returncode == 0, table.stderr
+    rows = parse_table(table.stdout)
+    assert sum(t.endswith("*") for t in rows[("F10", 2, "avg")]) >= 1
+    assert f"cells {len(ALGOS)}/{len(ALGOS)}" in table.stderr  # the progress, on stderr
+
+    doc = subprocess.run([*command, *args, "--json"], capture_output=True, text=True, timeout=120)
+    assert doc.returncode == 0, doc.stderr
+    cells = json.loads(doc.stdout)["cells"]
+    res = minimize("GWO", "F10", 2, 6, 8, 3, seed=4)
+    assert np.array_equal(next(c for c in cells if c["algorithm"] == "GWO")["best_fitness"],
+                          res.best_fitness)
+
+    bad = subprocess.run([*command, *args, "--dims", "5000"], capture_output=True, text=True,
+                         timeout=120)
+    assert bad.returncode == 2
+    assert bad.stdout == ""
+    assert bad.stderr.strip() == "swarmpath bench: error: --dims: 5000 is not in [1, 1000]"
