@@ -1,0 +1,174 @@
+"""One run of one planner on one scenario: the unit a worker hosts.
+
+``Episode(scenario, planner, seed, run)`` pairs a planner with its own simulator. Run r of seed s
+draws the planner's randomness from stream (s, r, OPTIMIZER) and the world's (moving obstacles and
+goal) from (s, r, SIMULATION), so the same (scenario, planner, params, seed, run) gives the same
+path exactly, on any worker, in any order.
+
+``step()`` asks the planner for one decision and lets the simulator execute it; ``run()`` steps
+until the goal is reached or a limit is hit; ``outcome()`` computes the metrics from the executed
+trajectory, with collisions checked against the true obstacle positions at every simulated step.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from swarmpath import metrics
+from swarmpath.optimizers.streams import OPTIMIZER, SIMULATION, run_generator
+from swarmpath.planners.base import Planner, get_planner
+from swarmpath.planners.simulator import Simulator
+from swarmpath.world.optimum import shortest_path
+from swarmpath.world.scenario import Scenario
+
+DEFAULT_STEP_LIMIT = 2000
+DEFAULT_TIME_FACTOR = 6.0  # time limit: this many times the straight-line travel time, plus 60 s
+
+
+@dataclass
+class RunOutcome:
+    planner: str
+    map: str
+    run: int
+    seed: int
+    success: bool
+    reason: str  # "goal reached", or why the run failed
+    collisions: int
+    length: float
+    error: float
+    smoothness: float
+    ompl_smoothness: float
+    min_clearance: float
+    steps: int
+    iterations: int
+    seconds: float  # planning wall time
+    travel_time: float  # simulated seconds
+    optimum: float | None
+    gap: float | None
+    path: list[list[float]] = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+_OPTIMA: dict[int, tuple[Scenario, float | None]] = {}
+
+
+def scenario_optimum(scenario: Scenario) -> float | None:
+    """Exact shortest collision-free length for a fully static scenario (None otherwise)."""
+    if scenario.is_dynamic:
+        return None
+    cached = _OPTIMA.get(id(scenario))
+    if cached is not None and cached[0] is scenario:
+        return cached[1]
+    w, h = scenario.size
+    result = shortest_path(
+        np.asarray(scenario.start, dtype=float),
+        np.asarray(scenario.goal, dtype=float),
+        scenario.static_obstacles(),
+        scenario.robot.radius,
+        world=(0.0, 0.0, float(w), float(h)),
+    )
+    value = float(result.length) if result.exact and math.isfinite(result.length) else None
+    _OPTIMA[id(scenario)] = (scenario, value)
+    return value
+
+
+class Episode:
+    def __init__(
+        self,
+        scenario: Scenario,
+        planner: str,
+        seed: int,
+        run: int = 0,
+        params: Mapping[str, Any] | None = None,
+        step_limit: int = DEFAULT_STEP_LIMIT,
+        time_limit: float | None = None,
+    ):
+        cls: type[Planner] = get_planner(planner)
+        self.scenario = scenario
+        self.seed = int(seed)
+        self.run_index = int(run)
+        static = scenario.static_obstacles() if cls.kind == "global" else None
+        self.planner = cls(scenario, params, run_generator(seed, run, OPTIMIZER), static)
+        sensors = scenario.sensors or cls.default_sensors
+        self.sim = Simulator(scenario, run_generator(seed, run, SIMULATION), sensors)
+        self.step_limit = step_limit
+        if time_limit is None:
+            straight = math.dist(scenario.start, scenario.goal)
+            time_limit = DEFAULT_TIME_FACTOR * straight / scenario.robot.linear_speed + 60.0
+        self.time_limit = float(time_limit)
+        self.steps = 0
+        self.iterations = 0
+        self.planning_seconds = 0.0
+        self.reason: str | None = None
+
+    @property
+    def done(self) -> bool:
+        return self.reason is not None
+
+    def step(self) -> None:
+        if self.done:
+            return
+        obs = self.sim.observe()
+        started = time.perf_counter()
+        decision = self.planner.decide(obs)
+        self.planning_seconds += time.perf_counter() - started
+        self.steps += 1
+        self.iterations += decision.iterations
+        if decision.target is None:
+            self.reason = f"planner gave up: {decision.reason or 'no feasible move'}"
+            return
+        self.sim.drive(decision.target, decision.duration, self.time_limit)
+        if self.sim.reached:
+            self.reason = "goal reached"
+        elif self.sim.time >= self.time_limit - 1e-9:
+            self.reason = f"time limit ({self.time_limit:.0f} s simulated)"
+        elif self.steps >= self.step_limit:
+            self.reason = f"step limit ({self.step_limit} decisions)"
+
+    def run(self) -> RunOutcome:
+        while not self.done:
+            self.step()
+        return self.outcome()
+
+    def outcome(self, planner_name: str | None = None) -> RunOutcome:
+        path = self.sim.path()
+        world = self.sim.world
+        gap_body, collisions = metrics.min_clearance(path, world.obstacles_at, self.sim.radius)
+        length = metrics.path_length(path)
+        error = metrics.final_error(path, world.goal_at(float(path[-1, 2])))
+        reached = self.reason == "goal reached"
+        success = reached and collisions == 0
+        reason = self.reason or "not finished"
+        if reached and collisions:
+            reason = f"collided {collisions} times"
+        optimum = scenario_optimum(self.scenario)
+        gap = metrics.gap(length, optimum) if (success and optimum) else None
+        return RunOutcome(
+            planner=planner_name or self.planner.name,
+            map=self.scenario.name,
+            run=self.run_index,
+            seed=self.seed,
+            success=success,
+            reason=reason,
+            collisions=int(collisions),
+            length=float(length),
+            error=float(error),
+            smoothness=float(metrics.heading_smoothness(path)),
+            ompl_smoothness=float(metrics.ompl_smoothness(path)),
+            min_clearance=float(gap_body),
+            steps=self.steps,
+            iterations=self.iterations,
+            seconds=self.planning_seconds,
+            travel_time=float(path[-1, 2]),
+            optimum=optimum,
+            gap=gap,
+            path=[[float(x), float(y), float(t)] for x, y, t in path],
+        )

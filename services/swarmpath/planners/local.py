@@ -1,0 +1,189 @@
+"""The seeds' step-wise local planner, as pure functions over arrays.
+
+Each planning step a swarm searches candidate next waypoints c around the robot p, minimising the
+weighted sum of eqs 3-6 of Ajeil et al. (2020) / eqs 1-6 of Abdulsaheb & Kadhim (2022):
+
+    f1(c) = |g - c|                                  distance still to go (eq 3)
+    f2(c) = |angle(c - p) - angle(g - p)|            heading deviation (eq 5, wrapped to [0, pi])
+    f(c)  = w1 f1(c) + w2 f2(c),  w1 + w2 = 1        (eqs 6-7)
+
+and the MFB paper's fitness 1 / (f + eps) (eq 8) when ``objective = "inverse"`` (maximised, so the
+optimizer minimises -1 / (f + eps): same argmin as f, different landscape).
+
+The planner knows obstacles only as the points its sensors hit (``hits``, world coordinates). A
+candidate is infeasible when it lies within ``margin`` (robot radius + safety distance) of a hit
+(case 1, inside an inflated obstacle) or when the segment p -> c passes within ``margin`` of one
+(case 2). Infeasible candidates are repaired before they are scored:
+
+* ``repair = "mfb"``: eqs 18-22 of Ajeil et al. Case 1 pushes c radially out of the obstacle to
+  ``margin + ds`` from it (eqs 19-20; the obstacle centre is the nearest hit point); case 2 moves c
+  by delta * D away from the obstacle, D = |c - p|, delta = 0.6 (eqs 21-22).
+* ``repair = "grid"``: the ICOOT paper's section 4.1 on a grid of ``resolution``: case 1 moves c to
+  the nearest free grid offset; case 2 slides c sideways across the line's dominant axis
+  (horizontally for a mostly vertical line and vice versa) to the nearest offset whose segment is
+  free.
+* ``repair = "none"``: infeasible candidates are only penalised.
+
+A candidate still infeasible after repair costs ``PENALTY`` plus its violation, so any feasible
+candidate beats every infeasible one.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarmpath.world.geometry import point_segment_distance
+
+Array = NDArray[np.float64]
+PENALTY = 1e6
+
+
+@dataclass(frozen=True)
+class StepContext:
+    position: Array  # (2,) robot p
+    goal: Array  # (2,) g
+    hits: Array  # (h, 2) sensed obstacle surface points
+    margin: float  # robot radius + safety distance: required clearance from any hit
+    w1: float = 0.9
+    w2: float = 0.1
+    objective: str = "cost"  # or "inverse"
+    eps: float = 1e-4
+    repair: str = "mfb"  # or "grid" or "none"
+    delta: float = 0.6
+    safety: float = 0.05  # ds of eqs 19-20
+    resolution: float = 0.05  # grid repair step
+    lower: Array | None = None  # (2,) box the waypoint must stay in
+    upper: Array | None = None
+
+
+def wrapped_abs(a: Array) -> Array:
+    return np.abs(np.arctan2(np.sin(a), np.cos(a)))
+
+
+def raw_cost(C: Array, ctx: StepContext) -> Array:
+    """w1 f1 + w2 f2 for candidates C (..., 2)."""
+    g, p = ctx.goal, ctx.position
+    f1 = np.hypot(g[0] - C[..., 0], g[1] - C[..., 1])
+    heading = np.arctan2(C[..., 1] - p[1], C[..., 0] - p[0])
+    to_goal = np.arctan2(g[1] - p[1], g[0] - p[0])
+    f2 = wrapped_abs(heading - to_goal)
+    return ctx.w1 * f1 + ctx.w2 * f2
+
+
+def point_hit_distance(C: Array, hits: Array) -> tuple[Array, NDArray[np.int64]]:
+    """Distance from each candidate (..., 2) to its nearest hit, and that hit's index."""
+    if len(hits) == 0:
+        return np.full(C.shape[:-1], np.inf), np.zeros(C.shape[:-1], dtype=np.int64)
+    d = np.hypot(C[..., None, 0] - hits[:, 0], C[..., None, 1] - hits[:, 1])
+    idx = np.argmin(d, axis=-1)
+    return np.take_along_axis(d, idx[..., None], axis=-1)[..., 0], idx
+
+
+def segment_hit_distance(p: Array, C: Array, hits: Array) -> tuple[Array, NDArray[np.int64]]:
+    """Distance from each segment p -> c to its nearest hit, and that hit's index."""
+    if len(hits) == 0:
+        return np.full(C.shape[:-1], np.inf), np.zeros(C.shape[:-1], dtype=np.int64)
+    d = point_segment_distance(hits, p, C[..., None, :])
+    idx = np.argmin(d, axis=-1)
+    return np.take_along_axis(d, idx[..., None], axis=-1)[..., 0], idx
+
+
+def _clip(C: Array, ctx: StepContext) -> Array:
+    if ctx.lower is None or ctx.upper is None:
+        return C
+    return np.clip(C, ctx.lower, ctx.upper)
+
+
+def _unit(v: Array) -> Array:
+    n = np.hypot(v[..., 0], v[..., 1])[..., None]
+    return np.where(n > 1e-12, v / np.where(n > 1e-12, n, 1.0), np.array([1.0, 0.0]))
+
+
+def repair_mfb(C: Array, ctx: StepContext, rounds: int = 3) -> Array:
+    """Eqs 18-22 of Ajeil et al., applied up to ``rounds`` times (each case re-checked)."""
+    hits = ctx.hits
+    if len(hits) == 0:
+        return C
+    for _ in range(rounds):
+        d_pt, i_pt = point_hit_distance(C, hits)
+        inside = d_pt < ctx.margin  # case 1 (eq 18)
+        if np.any(inside):
+            away = _unit(C - hits[i_pt])
+            push = (ctx.margin + ctx.safety - d_pt)[..., None]
+            C = np.where(inside[..., None], C + push * away, C)  # eqs 19-20
+        d_seg, i_seg = segment_hit_distance(ctx.position, C, hits)
+        crossing = d_seg < ctx.margin  # case 2
+        if np.any(crossing):
+            away = _unit(C - hits[i_seg])
+            D = np.hypot(C[..., 0] - ctx.position[0], C[..., 1] - ctx.position[1])[..., None]
+            C = np.where(crossing[..., None], C + ctx.delta * D * away, C)  # eqs 21-22
+        C = _clip(C, ctx)
+        if not np.any(inside) and not np.any(crossing):
+            break
+    return C
+
+
+def repair_grid(C: Array, ctx: StepContext, reach: int = 40) -> Array:
+    """ICOOT section 4.1 on a grid: nearest free offset (case 1), sideways slide (case 2)."""
+    hits = ctx.hits
+    if len(hits) == 0:
+        return C
+    res = ctx.resolution
+    k = np.arange(1, reach + 1) * res
+    steps = np.concatenate([[0.0], np.stack([k, -k], axis=1).ravel()])  # 0, +1, -1, +2, -2, ...
+    p = ctx.position
+    flat = C.reshape(-1, 2)
+    out = flat.copy()
+    d_pt, _ = point_hit_distance(flat, hits)
+    d_seg, _ = segment_hit_distance(p, flat, hits)
+    bad = (d_pt < ctx.margin) | (d_seg < ctx.margin)
+    if not np.any(bad):
+        return C
+    B = flat[bad]  # (b, 2)
+    direction = B - p
+    vertical = np.abs(direction[:, 1]) > np.abs(direction[:, 0])
+    # slide across the line's dominant axis: x for a mostly vertical line, y otherwise
+    axis = np.where(vertical, 0, 1)
+    offsets = np.zeros((len(B), len(steps), 2))
+    offsets[np.arange(len(B)), :, axis] = steps  # (b, s, 2)
+    trial = _clip(B[:, None, :] + offsets, ctx)
+    tp, _ = point_hit_distance(trial, hits)
+    ts, _ = segment_hit_distance(p, trial, hits)
+    free = (tp >= ctx.margin) & (ts >= ctx.margin)
+    first = np.argmax(free, axis=1)  # nearest free offset (steps are ordered by size)
+    found = free[np.arange(len(B)), first]
+    chosen = trial[np.arange(len(B)), first]
+    out[np.flatnonzero(bad)] = np.where(found[:, None], chosen, B)
+    return out.reshape(C.shape)
+
+
+def repair(C: Array, ctx: StepContext) -> Array:
+    if ctx.repair == "mfb":
+        return repair_mfb(C, ctx)
+    if ctx.repair == "grid":
+        return repair_grid(C, ctx)
+    if ctx.repair == "none":
+        return C
+    raise ValueError(f"unknown repair {ctx.repair!r}; valid: mfb, grid, none")
+
+
+def violation(C: Array, ctx: StepContext) -> Array:
+    """How far (m) candidates fall short of the required clearance (0 when feasible)."""
+    d_pt, _ = point_hit_distance(C, ctx.hits)
+    d_seg, _ = segment_hit_distance(ctx.position, C, ctx.hits)
+    return np.maximum(ctx.margin - np.minimum(d_pt, d_seg), 0.0)
+
+
+def score(C: Array, ctx: StepContext) -> tuple[Array, Array]:
+    """(objective to minimise, repaired candidates) for candidates C (..., 2)."""
+    fixed = repair(C, ctx)
+    cost = raw_cost(fixed, ctx)
+    if ctx.objective == "inverse":
+        cost = -1.0 / (cost + ctx.eps)  # eq 8's fitness, maximised
+    elif ctx.objective != "cost":
+        raise ValueError(f"unknown objective {ctx.objective!r}; valid: cost, inverse")
+    v = violation(fixed, ctx)
+    return np.where(v > 0, PENALTY + v, cost), fixed

@@ -1,0 +1,205 @@
+"""The seeds' swarm local planner, usable with any registered optimizer, and its named presets.
+
+Each decision (Abdulsaheb & Kadhim 2022, section 4 and its pseudocode; Ajeil et al. 2020,
+Figure 8):
+
+1. obstacle detection: the robot's virtual sensors return the obstacle points they hit; points
+   seen in the last ``memory`` seconds are kept (static obstacles behind the robot stay known,
+   moving ones fade);
+2. path generation: a swarm of ``agents`` candidate waypoints in the box of half-width ``step``
+   around the robot (clipped to the world) is optimised for ``iterations`` iterations by the chosen
+   optimizer on w1 f1 + w2 f2 (:mod:`swarmpath.planners.local`), infeasible candidates repaired by
+   the local search (MFB eqs 18-22 or ICOOT's grid search) or penalised;
+3. the robot drives toward the best feasible waypoint through its kinematic model for at most
+   ``replan`` seconds, then senses and decides again (receding horizon, so moving obstacles are
+   re-sensed at a fixed rate);
+4. obstacle avoidance fallback: when no feasible candidate exists, the MFB paper's gap vector
+   (eq 24) picks the free gap closest to the goal direction and the robot takes a short step
+   into it; with no free gap it waits for one ``replan`` period.
+
+The run ends within 0.2 m of the goal, or fails at the episode's step or time limit.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+
+from swarmpath.optimizers import Problem, RunStreams, create, get_optimizer
+from swarmpath.optimizers.base import ParameterError
+from swarmpath.planners import local
+from swarmpath.planners.base import Decision, Observation, Planner, PlannerError, register
+
+Array = np.ndarray
+
+
+class SwarmLocalPlanner(Planner):
+    """Generic swarm local planner; the named subclasses fix the optimizer and its paper's settings."""
+
+    name = "swarm-local"
+    kind = "local"
+    default_sensors = "mfb-12"
+    defaults: ClassVar[dict[str, Any]] = {
+        "optimizer": "PSO",
+        "agents": 20,
+        "iterations": 20,
+        "step": 0.8,  # m: candidate box half-width (the sensing range)
+        "w1": 0.9,
+        "w2": 0.1,
+        "safety": 0.1,  # m: clearance kept beyond the robot radius
+        "repair": "mfb",
+        "objective": "cost",
+        "memory": 2.0,  # s: how long sensed points are remembered
+        "replan": 0.5,  # s: drive time per decision
+    }
+    choices: ClassVar[dict[str, tuple[str, ...]]] = {
+        "repair": ("mfb", "grid", "none"),
+        "objective": ("cost", "inverse"),
+    }
+    #: Optimizer parameters of the preset (e.g. ICOOT's two leaders), merged under user ones.
+    optimizer_params: ClassVar[dict[str, Any]] = {}
+
+    @classmethod
+    def check_params(cls, p):  # type: ignore[no-untyped-def]
+        for key in ("agents", "iterations"):
+            if int(p[key]) < 1:
+                raise PlannerError(f"{cls.name}.{key} must be >= 1")
+        for key in ("step", "replan"):
+            if not float(p[key]) > 0:
+                raise PlannerError(f"{cls.name}.{key} must be > 0")
+        for key in ("w1", "w2", "safety", "memory"):
+            if float(p[key]) < 0:
+                raise PlannerError(f"{cls.name}.{key} must be >= 0")
+        try:
+            get_optimizer(str(p["optimizer"]))
+        except KeyError as exc:
+            raise PlannerError(f"{cls.name}.optimizer: {exc.args[0]}") from None
+
+    def __init__(self, scenario, params, rng, static_map=None):  # type: ignore[no-untyped-def]
+        super().__init__(scenario, params, rng, static_map)
+        self._streams = RunStreams([rng])
+        self._memory: list[tuple[float, Array]] = []
+        opt_cls = get_optimizer(str(self.p["optimizer"]))
+        try:
+            self._opt_params = opt_cls.resolve_params(
+                {k: v for k, v in self.optimizer_params.items() if k in opt_cls.defaults}
+            )
+        except ParameterError as exc:
+            raise PlannerError(str(exc)) from None
+
+    # ------------------------------------------------------------------------------ sensing
+    def _known_hits(self, obs: Observation) -> Array:
+        if obs.reading is not None and len(obs.reading.hit_points):
+            self._memory.append((obs.time, obs.reading.hit_points))
+        horizon = obs.time - float(self.p["memory"])
+        self._memory = [(t, h) for t, h in self._memory if t >= horizon - 1e-9]
+        if not self._memory:
+            return np.zeros((0, 2))
+        return np.concatenate([h for _, h in self._memory])
+
+    # ----------------------------------------------------------------------------- deciding
+    def decide(self, obs: Observation) -> Decision:
+        p = np.array([obs.pose.x, obs.pose.y])
+        goal = np.asarray(obs.goal, dtype=float)
+        hits = self._known_hits(obs)
+        w, h = obs.world_size
+        reach = float(self.p["step"])
+        to_goal = float(np.hypot(*(goal - p)))
+        lower = np.maximum(p - reach, [0.0, 0.0])
+        upper = np.minimum(p + reach, [w, h])
+        ctx = local.StepContext(
+            position=p,
+            goal=goal,
+            hits=hits,
+            margin=obs.robot_radius + float(self.p["safety"]),
+            w1=float(self.p["w1"]),
+            w2=float(self.p["w2"]),
+            objective=str(self.p["objective"]),
+            repair=str(self.p["repair"]),
+            safety=float(self.p["safety"]),
+            lower=lower,
+            upper=upper,
+        )
+        duration = float(self.p["replan"])
+        # The goal itself is a candidate: when it is within reach and visible, go straight there.
+        if to_goal <= reach:
+            cost, fixed = local.score(goal[None, :], ctx)
+            if cost[0] < local.PENALTY and np.allclose(fixed[0], goal):
+                return Decision(goal, 0, duration)
+
+        def objective(X: Array, streams: RunStreams) -> Array:
+            cost, _ = local.score(X[0], ctx)
+            return cost[None, :]
+
+        problem = Problem(objective, lower[None, :], upper[None, :])
+        iterations = int(self.p["iterations"])
+        opt = create(str(self.p["optimizer"]), problem, int(self.p["agents"]), iterations,
+                     self._streams, self._opt_params)
+        opt.initialize()
+        while not opt.done:
+            opt.step()
+        best_cost = float(opt.best_fitness[0])
+        if best_cost < local.PENALTY:
+            target = local.repair(opt.best_position[0][None, :], ctx)[0]
+            return Decision(target, iterations, duration)
+        return self._avoid(obs, ctx, iterations, duration)
+
+    def _avoid(self, obs: Observation, ctx: local.StepContext, iterations: int, duration: float) -> (
+        Decision
+    ):
+        """Gap-vector fallback (MFB eq 24): a short step into the free gap nearest the goal."""
+        p = ctx.position
+        angles = obs.pose.theta + np.arange(12) * (2 * np.pi / 12)
+        if obs.reading is not None and obs.reading.fired.size == 12:
+            free = ~obs.reading.gap_vector()
+        else:
+            free = np.ones(12, dtype=bool)
+        step = 0.5 * float(self.p["step"])
+        cands = p + step * np.stack([np.cos(angles), np.sin(angles)], axis=1)
+        cands = np.clip(cands, ctx.lower, ctx.upper)
+        cost = local.raw_cost(cands, ctx)
+        cost = np.where(free & (local.violation(cands, ctx) == 0), cost, np.inf)
+        if np.isfinite(cost).any():
+            return Decision(cands[int(np.argmin(cost))], iterations, duration)
+        return Decision(p.copy(), iterations, duration)  # wait for the way to clear
+
+
+def _preset(name: str, optimizer: str, description: str, reference: str, sensors: str,
+            settings: dict[str, Any], optimizer_params: dict[str, Any] | None = None) -> type:
+    attrs = {
+        "name": name,
+        "description": description,
+        "reference": reference,
+        "default_sensors": sensors,
+        "defaults": {**SwarmLocalPlanner.defaults, "optimizer": optimizer, **settings},
+        "optimizer_params": optimizer_params or {},
+    }
+    cls = type(name.replace("-", "_") + "Planner", (SwarmLocalPlanner,), attrs)
+    return register(cls)
+
+
+ICOOT_PAPER = "Abdulsaheb & Kadhim, IJIES 15(5) 2022, sections 4.1-4.3"
+IHPO_PAPER = "Abdulsaheb & Kadhim, IJIES 16(2) 2023, section 5 (framework of the ICOOT paper)"
+MFB_PAPER = "Ajeil, Ibraheem, Azar & Humaidi, IJARS 2020, Tables 1-2, eqs 3-8, 18-24"
+
+# ICOOT paper: 80 coots, 2 leaders, 80 virtual sensors, grid local search (section 4.1).
+_COOT_SETTINGS = {"agents": 80, "iterations": 10, "step": 1.0, "repair": "grid"}
+_preset("ICOOT", "ICOOT", "ICOOT swarm local planner (80 coots, 2 leaders)", ICOOT_PAPER,
+        "icoot-80", _COOT_SETTINGS, {"leaders": 2, "n_leaders": 2})
+_preset("COOT", "COOT", "COOT in the ICOOT paper's planning framework", ICOOT_PAPER, "icoot-80",
+        _COOT_SETTINGS, {"leaders": 2, "n_leaders": 2})
+_preset("IHPO", "IHPO", "IHPO swarm local planner", IHPO_PAPER, "icoot-80",
+        {"agents": 80, "iterations": 10, "step": 1.0, "repair": "grid"})
+_preset("HPO", "HPO", "HPO in the IHPO paper's planning framework", IHPO_PAPER, "icoot-80",
+        {"agents": 80, "iterations": 10, "step": 1.0, "repair": "grid"})
+# MFB paper Table 1: 8 bats, 8 iterations, sensing range 0.8 m; fitness 1/(f + eps) (eq 8).
+_preset("MFB", "MFB", "Modified Frequency Bat local planner", MFB_PAPER, "mfb-12",
+        {"agents": 8, "iterations": 8, "step": 0.8, "repair": "mfb", "objective": "inverse"})
+# Table 2: 5 PSO particles tuning 5 bats, 5 iterations.
+_preset("HPSO-MFB", "HPSO-MFB", "Hybrid PSO-MFB local planner", MFB_PAPER, "mfb-12",
+        {"agents": 5, "iterations": 5, "step": 0.8, "repair": "mfb", "objective": "inverse"})
+_preset("PSO", "PSO", "PSO in the seeds' local planning framework", MFB_PAPER, "mfb-12",
+        {"agents": 20, "iterations": 20})
+_preset("GWO", "GWO", "GWO in the seeds' local planning framework", MFB_PAPER, "mfb-12",
+        {"agents": 20, "iterations": 20})

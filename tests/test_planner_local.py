@@ -1,0 +1,66 @@
+"""The local planner's objective, feasibility and repairs (pure functions)."""
+
+import numpy as np
+import pytest
+
+from swarmpath.planners import local
+
+
+def ctx(hits, repair="mfb", **kw):
+    return local.StepContext(
+        position=np.array([0.0, 0.0]),
+        goal=np.array([4.0, 0.0]),
+        hits=np.asarray(hits, dtype=float).reshape(-1, 2),
+        margin=0.5,
+        repair=repair,
+        lower=np.array([-1.0, -1.0]),
+        upper=np.array([1.0, 1.0]),
+        **kw,
+    )
+
+
+def test_cost_prefers_progress_and_heading():
+    c = ctx([])
+    near, far, off = np.array([[0.5, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    costs = local.raw_cost(np.stack([near, far, off]), c)
+    assert costs[1] < costs[0] < costs[2]
+    # f2 is the wrapped absolute heading error: 90 degrees off costs w2 * pi/2 on top of f1
+    assert costs[2] == pytest.approx(0.9 * np.hypot(4, 1) + 0.1 * np.pi / 2)
+
+
+def test_inverse_objective_keeps_the_ranking():
+    cands = np.array([[0.5, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    a, _ = local.score(cands, ctx([]))
+    b, _ = local.score(cands, ctx([], objective="inverse"))
+    assert np.array_equal(np.argsort(a), np.argsort(b))
+
+
+@pytest.mark.parametrize("mode", ["mfb", "grid"])
+def test_repair_makes_blocked_candidates_feasible(mode):
+    hits = [[0.6, y] for y in np.linspace(-0.3, 0.3, 7)]  # a wall ahead
+    c = ctx(hits, repair=mode)
+    blocked = np.array([[1.0, 0.0], [0.6, 0.1], [0.9, -0.2]])
+    assert np.all(local.violation(blocked, c) > 0)
+    fixed = local.repair(blocked, c)
+    assert np.all(local.violation(fixed, c) == 0), fixed
+    assert np.all(fixed >= c.lower) and np.all(fixed <= c.upper)
+
+
+def test_mfb_case1_pushes_radially_to_margin_plus_safety():
+    c = ctx([[0.5, 0.0]], safety=0.05)
+    fixed = local.repair_mfb(np.array([[0.5, 0.2]]), c, rounds=1)
+    # eqs 19-20: moved along the obstacle->candidate direction to margin + ds from the obstacle
+    assert fixed[0, 0] == pytest.approx(0.5)
+    assert np.hypot(*(fixed[0] - [0.5, 0.0])) >= 0.5
+
+
+def test_no_repair_penalises():
+    c = ctx([[0.6, 0.0]], repair="none")
+    cost, fixed = local.score(np.array([[1.0, 0.0], [0.0, -1.0]]), c)
+    assert cost[0] >= local.PENALTY and cost[1] < local.PENALTY
+    assert np.array_equal(fixed, [[1.0, 0.0], [0.0, -1.0]])
+
+
+def test_unknown_modes_are_named():
+    with pytest.raises(ValueError, match="valid: mfb, grid, none"):
+        local.repair(np.zeros((1, 2)), ctx([], repair="magic"))
