@@ -37,9 +37,12 @@ def test_inverse_objective_keeps_the_ranking():
 
 @pytest.mark.parametrize("mode", ["mfb", "grid"])
 def test_repair_makes_blocked_candidates_feasible(mode):
-    hits = [[0.6, y] for y in np.linspace(-0.3, 0.3, 7)]  # a wall ahead
-    c = ctx(hits, repair=mode)
-    blocked = np.array([[1.0, 0.0], [0.6, 0.1], [0.9, -0.2]])
+    hits = [[0.8, y] for y in np.linspace(-0.05, 0.05, 3)]  # a small obstacle ahead
+    c = local.StepContext(
+        position=np.array([0.0, 0.0]), goal=np.array([4.0, 0.0]), hits=np.array(hits),
+        margin=0.3, repair=mode, lower=np.array([-2.0, -2.0]), upper=np.array([2.0, 2.0]),
+    )
+    blocked = np.array([[1.5, 0.0], [0.8, 0.1], [1.2, -0.1]])
     assert np.all(local.violation(blocked, c) > 0)
     fixed = local.repair(blocked, c)
     assert np.all(local.violation(fixed, c) == 0), fixed
@@ -47,11 +50,13 @@ def test_repair_makes_blocked_candidates_feasible(mode):
 
 
 def test_mfb_case1_pushes_radially_to_margin_plus_safety():
-    c = ctx([[0.5, 0.0]], safety=0.05)
+    c = local.StepContext(
+        position=np.array([0.5, 2.0]), goal=np.array([0.5, 4.0]), hits=np.array([[0.5, 0.0]]),
+        margin=0.5, safety=0.05,
+    )
     fixed = local.repair_mfb(np.array([[0.5, 0.2]]), c, rounds=1)
     # eqs 19-20: moved along the obstacle->candidate direction to margin + ds from the obstacle
-    assert fixed[0, 0] == pytest.approx(0.5)
-    assert np.hypot(*(fixed[0] - [0.5, 0.0])) >= 0.5
+    assert fixed[0] == pytest.approx([0.5, 0.55])
 
 
 def test_no_repair_penalises():

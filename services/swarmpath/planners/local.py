@@ -17,7 +17,8 @@ candidate is infeasible when it lies within ``margin`` (robot radius + safety di
 
 * ``repair = "mfb"``: eqs 18-22 of Ajeil et al. Case 1 pushes c radially out of the obstacle to
   ``margin + ds`` from it (eqs 19-20; the obstacle centre is the nearest hit point); case 2 moves c
-  by delta * D away from the obstacle, D = |c - p|, delta = 0.6 (eqs 21-22).
+  by delta * D away from the obstacle, D = |c - p|, delta = 0.6 (eqs 21-22), sideways: the
+  direction is from the obstacle to the segment's closest point (see ``_lateral``).
 * ``repair = "grid"``: the ICOOT paper's section 4.1 on a grid of ``resolution``: case 1 moves c to
   the nearest free grid offset; case 2 slides c sideways across the line's dominant axis
   (horizontally for a mostly vertical line and vice versa) to the nearest offset whose segment is
@@ -102,6 +103,25 @@ def _unit(v: Array) -> Array:
     return np.where(n > 1e-12, v / np.where(n > 1e-12, n, 1.0), np.array([1.0, 0.0]))
 
 
+def _lateral(p: Array, C: Array, Q: Array) -> Array:
+    """Unit direction from obstacle points Q to the closest points of the segments p -> C.
+
+    Eqs 21-22 move the candidate along the angle between obstacle and candidate; for a candidate
+    straight behind the obstacle that angle points along the blocked line and never frees it, so
+    the angle is taken toward the side the segment already passes on (the left normal of p -> c
+    when the segment runs through the obstacle point itself).
+    """
+    u = C - p
+    L2 = np.maximum(u[..., 0] ** 2 + u[..., 1] ** 2, 1e-24)
+    s = np.clip(((Q[..., 0] - p[0]) * u[..., 0] + (Q[..., 1] - p[1]) * u[..., 1]) / L2, 0.0, 1.0)
+    closest = p + s[..., None] * u
+    side = closest - Q
+    norm = np.hypot(side[..., 0], side[..., 1])[..., None]
+    left = np.stack([-u[..., 1], u[..., 0]], axis=-1)
+    left = left / np.sqrt(L2)[..., None]
+    return np.where(norm > 1e-9, side / np.where(norm > 1e-9, norm, 1.0), left)
+
+
 def repair_mfb(C: Array, ctx: StepContext, rounds: int = 3) -> Array:
     """Eqs 18-22 of Ajeil et al., applied up to ``rounds`` times (each case re-checked)."""
     hits = ctx.hits
@@ -117,7 +137,7 @@ def repair_mfb(C: Array, ctx: StepContext, rounds: int = 3) -> Array:
         d_seg, i_seg = segment_hit_distance(ctx.position, C, hits)
         crossing = d_seg < ctx.margin  # case 2
         if np.any(crossing):
-            away = _unit(C - hits[i_seg])
+            away = _lateral(ctx.position, C, hits[i_seg])
             D = np.hypot(C[..., 0] - ctx.position[0], C[..., 1] - ctx.position[1])[..., None]
             C = np.where(crossing[..., None], C + ctx.delta * D * away, C)  # eqs 21-22
         C = _clip(C, ctx)
