@@ -124,59 +124,78 @@ def _lateral(p: Array, C: Array, Q: Array) -> Array:
 
 def repair_mfb(C: Array, ctx: StepContext, rounds: int = 3) -> Array:
     """Eqs 18-22 of Ajeil et al., applied up to ``rounds`` times (each case re-checked)."""
+    return _repair_mfb(C, ctx, rounds)[0]
+
+
+def _distances(C: Array, ctx: StepContext) -> tuple[Array, NDArray[np.int64], Array, NDArray[
+    np.int64
+]]:
+    d_pt, i_pt = point_hit_distance(C, ctx.hits)
+    d_seg, i_seg = segment_hit_distance(ctx.position, C, ctx.hits)
+    return d_pt, i_pt, d_seg, i_seg
+
+
+def _repair_mfb(C: Array, ctx: StepContext, rounds: int) -> tuple[Array, Array]:
+    """(repaired candidates, their remaining violation)."""
     hits = ctx.hits
     if len(hits) == 0:
-        return C
+        return C, np.zeros(C.shape[:-1])
     for _ in range(rounds):
-        d_pt, i_pt = point_hit_distance(C, hits)
+        d_pt, i_pt, d_seg, i_seg = _distances(C, ctx)
         inside = d_pt < ctx.margin  # case 1 (eq 18)
+        crossing = ~inside & (d_seg < ctx.margin)  # case 2
+        if not np.any(inside) and not np.any(crossing):
+            return C, np.zeros(C.shape[:-1])
         if np.any(inside):
             away = _unit(C - hits[i_pt])
             push = (ctx.margin + ctx.safety - d_pt)[..., None]
             C = np.where(inside[..., None], C + push * away, C)  # eqs 19-20
-        d_seg, i_seg = segment_hit_distance(ctx.position, C, hits)
-        crossing = d_seg < ctx.margin  # case 2
         if np.any(crossing):
             away = _lateral(ctx.position, C, hits[i_seg])
             D = np.hypot(C[..., 0] - ctx.position[0], C[..., 1] - ctx.position[1])[..., None]
             C = np.where(crossing[..., None], C + ctx.delta * D * away, C)  # eqs 21-22
         C = _clip(C, ctx)
-        if not np.any(inside) and not np.any(crossing):
-            break
-    return C
+    d_pt, _, d_seg, _ = _distances(C, ctx)
+    return C, np.maximum(ctx.margin - np.minimum(d_pt, d_seg), 0.0)
 
 
-def repair_grid(C: Array, ctx: StepContext, reach: int = 40) -> Array:
-    """ICOOT section 4.1 on a grid: nearest free offset (case 1), sideways slide (case 2)."""
+def repair_grid(C: Array, ctx: StepContext, reach: int = 24, chunk: int = 4) -> Array:
+    """ICOOT section 4.1 on a grid: nearest free offset (case 1), sideways slide (case 2).
+
+    Offsets 0, +1, -1, +2, -2, ... (times ``resolution``) across the line's dominant axis are
+    tried nearest first, ``chunk`` sizes at a time, and only for candidates not yet resolved.
+    """
     hits = ctx.hits
     if len(hits) == 0:
         return C
-    res = ctx.resolution
-    k = np.arange(1, reach + 1) * res
-    steps = np.concatenate([[0.0], np.stack([k, -k], axis=1).ravel()])  # 0, +1, -1, +2, -2, ...
     p = ctx.position
     flat = C.reshape(-1, 2)
     out = flat.copy()
-    d_pt, _ = point_hit_distance(flat, hits)
-    d_seg, _ = segment_hit_distance(p, flat, hits)
-    bad = (d_pt < ctx.margin) | (d_seg < ctx.margin)
-    if not np.any(bad):
+    d_pt, _, d_seg, _ = _distances(flat, ctx)
+    bad = np.flatnonzero((d_pt < ctx.margin) | (d_seg < ctx.margin))
+    if bad.size == 0:
         return C
-    B = flat[bad]  # (b, 2)
-    direction = B - p
-    vertical = np.abs(direction[:, 1]) > np.abs(direction[:, 0])
+    direction = flat[bad] - p
     # slide across the line's dominant axis: x for a mostly vertical line, y otherwise
-    axis = np.where(vertical, 0, 1)
-    offsets = np.zeros((len(B), len(steps), 2))
-    offsets[np.arange(len(B)), :, axis] = steps  # (b, s, 2)
-    trial = _clip(B[:, None, :] + offsets, ctx)
-    tp, _ = point_hit_distance(trial, hits)
-    ts, _ = segment_hit_distance(p, trial, hits)
-    free = (tp >= ctx.margin) & (ts >= ctx.margin)
-    first = np.argmax(free, axis=1)  # nearest free offset (steps are ordered by size)
-    found = free[np.arange(len(B)), first]
-    chosen = trial[np.arange(len(B)), first]
-    out[np.flatnonzero(bad)] = np.where(found[:, None], chosen, B)
+    axis = np.where(np.abs(direction[:, 1]) > np.abs(direction[:, 0]), 0, 1)
+    pending = np.ones(bad.size, dtype=bool)
+    for first in range(1, reach + 1, chunk):
+        k = np.arange(first, min(first + chunk, reach + 1)) * ctx.resolution
+        steps = np.stack([k, -k], axis=1).ravel()  # +k, -k, nearest first
+        idx = np.flatnonzero(pending)
+        B = flat[bad[idx]]
+        offsets = np.zeros((idx.size, steps.size, 2))
+        offsets[np.arange(idx.size), :, axis[idx]] = steps
+        trial = _clip(B[:, None, :] + offsets, ctx)
+        tp, _ = point_hit_distance(trial, hits)
+        ts, _ = segment_hit_distance(p, trial, hits)
+        free = (tp >= ctx.margin) & (ts >= ctx.margin)
+        found = free.any(axis=1)
+        pick = np.argmax(free, axis=1)
+        out[bad[idx[found]]] = trial[found, pick[found]]
+        pending[idx[found]] = False
+        if not pending.any():
+            break
     return out.reshape(C.shape)
 
 
@@ -199,11 +218,14 @@ def violation(C: Array, ctx: StepContext) -> Array:
 
 def score(C: Array, ctx: StepContext) -> tuple[Array, Array]:
     """(objective to minimise, repaired candidates) for candidates C (..., 2)."""
-    fixed = repair(C, ctx)
+    if ctx.repair == "mfb":
+        fixed, v = _repair_mfb(C, ctx, 3)
+    else:
+        fixed = repair(C, ctx)
+        v = violation(fixed, ctx)
     cost = raw_cost(fixed, ctx)
     if ctx.objective == "inverse":
         cost = -1.0 / (cost + ctx.eps)  # eq 8's fitness, maximised
     elif ctx.objective != "cost":
         raise ValueError(f"unknown objective {ctx.objective!r}; valid: cost, inverse")
-    v = violation(fixed, ctx)
     return np.where(v > 0, PENALTY + v, cost), fixed

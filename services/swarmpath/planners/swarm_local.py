@@ -9,13 +9,25 @@ Figure 8):
 2. path generation: a swarm of ``agents`` candidate waypoints in the box of half-width ``step``
    around the robot (clipped to the world) is optimised for ``iterations`` iterations by the chosen
    optimizer on w1 f1 + w2 f2 (:mod:`swarmpath.planners.local`), infeasible candidates repaired by
-   the local search (MFB eqs 18-22 or ICOOT's grid search) or penalised;
+   the local search (MFB eqs 18-22 or ICOOT's grid search) or penalised. What f1 and f2 measure
+   against is ``heuristic``: ``"euclidean"`` is the papers' literal objective, distance and
+   heading to the goal (eqs 3 and 5). It makes the robot slide along every obstacle it meets
+   (a greedy "bug" behaviour: 4% above the exact optimum on mfb-static). ``"visibility"``
+   (default) aims instead at a carrot ``lookahead`` metres along the exact shortest path to the
+   goal in the *sensed* map (hit groups wrapped in convex hulls, unseen space free:
+   :mod:`swarmpath.planners.sensed_map`), so the robot leaves obstacles along their tangents.
+   The planner still knows only what its sensors returned;
 3. the robot drives toward the best feasible waypoint through its kinematic model for at most
    ``replan`` seconds, then senses and decides again (receding horizon, so moving obstacles are
    re-sensed at a fixed rate);
 4. obstacle avoidance fallback: when no feasible candidate exists, the MFB paper's gap vector
    (eq 24) picks the free gap closest to the goal direction and the robot takes a short step
-   into it; with no free gap it waits for one ``replan`` period.
+   into it; with no free gap it steps to where it keeps the most clearance (waiting in place
+   would let a moving obstacle drive into it).
+
+Moving obstacles: sensed points that moved between the last two scans are extrapolated over
+``predict`` seconds and added to the known points (:func:`sensed_map.predict`), so candidates
+that an approaching obstacle is about to occupy are infeasible.
 
 The run ends within 0.2 m of the goal, or fails at the episode's step or time limit.
 """
@@ -28,10 +40,12 @@ import numpy as np
 
 from swarmpath.optimizers import Problem, RunStreams, create, get_optimizer
 from swarmpath.optimizers.base import ParameterError
-from swarmpath.planners import local
+from swarmpath.planners import local, sensed_map
 from swarmpath.planners.base import Decision, Observation, Planner, PlannerError, register
 
 Array = np.ndarray
+HIT_CELL = 0.05  # m: sensed points closer than this are merged
+CARROT_CLEARANCE = 0.02  # m: the known-map path keeps this much beyond the planner's margin
 
 
 class SwarmLocalPlanner(Planner):
@@ -47,15 +61,19 @@ class SwarmLocalPlanner(Planner):
         "step": 0.8,  # m: candidate box half-width (the sensing range)
         "w1": 0.9,
         "w2": 0.1,
-        "safety": 0.1,  # m: clearance kept beyond the robot radius
+        "safety": 0.03,  # m: clearance kept beyond the robot radius (ds of eqs 19-20)
         "repair": "mfb",
         "objective": "cost",
         "memory": 2.0,  # s: how long sensed points are remembered
-        "replan": 0.5,  # s: drive time per decision
+        "replan": 0.25,  # s: drive time per decision
+        "heuristic": "visibility",  # what f1 measures the distance to (see module docstring)
+        "lookahead": 1.0,  # m: carrot distance along the known shortest path
+        "predict": 1.0,  # s: horizon over which moving sensed points are extrapolated (0: off)
     }
     choices: ClassVar[dict[str, tuple[str, ...]]] = {
         "repair": ("mfb", "grid", "none"),
         "objective": ("cost", "inverse"),
+        "heuristic": ("visibility", "euclidean"),
     }
     #: Optimizer parameters of the preset (e.g. ICOOT's two leaders), merged under user ones.
     optimizer_params: ClassVar[dict[str, Any]] = {}
@@ -65,10 +83,10 @@ class SwarmLocalPlanner(Planner):
         for key in ("agents", "iterations"):
             if int(p[key]) < 1:
                 raise PlannerError(f"{cls.name}.{key} must be >= 1")
-        for key in ("step", "replan"):
+        for key in ("step", "replan", "lookahead"):
             if not float(p[key]) > 0:
                 raise PlannerError(f"{cls.name}.{key} must be > 0")
-        for key in ("w1", "w2", "safety", "memory"):
+        for key in ("w1", "w2", "safety", "memory", "predict"):
             if float(p[key]) < 0:
                 raise PlannerError(f"{cls.name}.{key} must be >= 0")
         try:
@@ -80,6 +98,7 @@ class SwarmLocalPlanner(Planner):
         super().__init__(scenario, params, rng, static_map)
         self._streams = RunStreams([rng])
         self._memory: list[tuple[float, Array]] = []
+        self._last_scan: tuple[float, Array] | None = None
         opt_cls = get_optimizer(str(self.p["optimizer"]))
         try:
             self._opt_params = opt_cls.resolve_params(
@@ -90,29 +109,47 @@ class SwarmLocalPlanner(Planner):
 
     # ------------------------------------------------------------------------------ sensing
     def _known_hits(self, obs: Observation) -> Array:
+        current = np.zeros((0, 2))
         if obs.reading is not None and len(obs.reading.hit_points):
-            self._memory.append((obs.time, obs.reading.hit_points))
+            current = obs.reading.hit_points
+            self._memory.append((obs.time, current))
         horizon = obs.time - float(self.p["memory"])
         self._memory = [(t, h) for t, h in self._memory if t >= horizon - 1e-9]
-        if not self._memory:
+        parts = [h for _, h in self._memory]
+        ahead = float(self.p["predict"])
+        if ahead > 0 and self._last_scan is not None:
+            t0, previous = self._last_scan
+            steps = tuple(ahead * k / 4 for k in range(1, 5))
+            parts.append(sensed_map.predict(previous, current, obs.time - t0, steps))
+        self._last_scan = (obs.time, current)
+        if not parts:
             return np.zeros((0, 2))
-        return np.concatenate([h for _, h in self._memory])
+        return np.concatenate(parts)
 
     # ----------------------------------------------------------------------------- deciding
     def decide(self, obs: Observation) -> Decision:
         p = np.array([obs.pose.x, obs.pose.y])
         goal = np.asarray(obs.goal, dtype=float)
-        hits = self._known_hits(obs)
         w, h = obs.world_size
         reach = float(self.p["step"])
+        margin = obs.robot_radius + float(self.p["safety"])
+        # Only hits that can touch a candidate segment matter; one per 5 cm cell is plenty.
+        hits = sensed_map.condense(self._known_hits(obs), p, reach + 2 * margin, HIT_CELL)
+        aim = goal
+        if self.p["heuristic"] == "visibility" and len(hits):
+            known = sensed_map.known_obstacles(hits, link=2 * margin)
+            target = sensed_map.carrot(p, goal, known, margin + CARROT_CLEARANCE,
+                                       (0.0, 0.0, float(w), float(h)), float(self.p["lookahead"]))
+            if target is not None:
+                aim = target
         to_goal = float(np.hypot(*(goal - p)))
         lower = np.maximum(p - reach, [0.0, 0.0])
         upper = np.minimum(p + reach, [w, h])
         ctx = local.StepContext(
             position=p,
-            goal=goal,
+            goal=aim,
             hits=hits,
-            margin=obs.robot_radius + float(self.p["safety"]),
+            margin=margin,
             w1=float(self.p["w1"]),
             w2=float(self.p["w2"]),
             objective=str(self.p["objective"]),
@@ -162,7 +199,11 @@ class SwarmLocalPlanner(Planner):
         cost = np.where(free & (local.violation(cands, ctx) == 0), cost, np.inf)
         if np.isfinite(cost).any():
             return Decision(cands[int(np.argmin(cost))], iterations, duration)
-        return Decision(p.copy(), iterations, duration)  # wait for the way to clear
+        # Boxed in: waiting lets a moving obstacle drive into the robot, so flee instead, toward
+        # the direction (staying put included) that keeps the most clearance from what was sensed.
+        options = np.vstack([p[None, :], cands])
+        room, _ = local.segment_hit_distance(p, options, ctx.hits)
+        return Decision(options[int(np.argmax(room))], iterations, duration)
 
 
 def _preset(name: str, optimizer: str, description: str, reference: str, sensors: str,
