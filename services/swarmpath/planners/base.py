@@ -47,6 +47,8 @@ class Decision:
     iterations: int = 0  # optimizer iterations spent on this decision
     duration: float | None = None
     reason: str | None = None  # why target is None
+    #: The target is the goal: keep driving onto it instead of stopping at the goal tolerance.
+    finish: bool = False
 
 
 class Planner(ABC):

@@ -83,10 +83,13 @@ class Simulator:
             world_size=self.scenario.size,
         )
 
-    def drive(self, target: Array, duration: float | None, time_limit: float) -> None:
+    def drive(
+        self, target: Array, duration: float | None, time_limit: float, finish: bool = False
+    ) -> None:
         """Drive toward ``target`` for ``duration`` seconds (the robot waits there if it arrives
         early: the world keeps moving), or until it arrives when ``duration`` is None; stop early
-        when the goal is reached or at the episode's ``time_limit``."""
+        when the goal is reached (unless ``finish``: the target is the goal, drive onto it) or at
+        the episode's ``time_limit``."""
         end = time_limit if duration is None else min(time_limit, self.time + duration)
         tx, ty = float(target[0]), float(target[1])
         while self.time < end - 1e-12:
@@ -103,7 +106,7 @@ class Simulator:
                 self.pose = self.model.advance(self.pose, v, w, self.dt)
             self.world.advance(self.dt)
             self.trajectory.append((self.pose.x, self.pose.y, self.time))
-            if self.reached:
+            if self.reached and not finish:
                 break
 
     def path(self) -> Array:

@@ -163,7 +163,8 @@ class SwarmLocalPlanner(Planner):
         if to_goal <= reach:
             cost, fixed = local.score(goal[None, :], ctx)
             if cost[0] < local.PENALTY and np.allclose(fixed[0], goal):
-                return Decision(goal, 0, duration)
+                # drive onto the goal (the papers' runs end ~1 mm from it), re-sensing as usual
+                return Decision(goal, 0, duration, finish=True)
 
         def objective(X: Array, streams: RunStreams) -> Array:
             cost, _ = local.score(X[0], ctx)
