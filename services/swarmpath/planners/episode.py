@@ -69,14 +69,21 @@ def scenario_optimum(scenario: Scenario) -> float | None:
     if cached is not None and cached[0] is scenario:
         return cached[1]
     w, h = scenario.size
-    result = shortest_path(
-        np.asarray(scenario.start, dtype=float),
-        np.asarray(scenario.goal, dtype=float),
-        scenario.static_obstacles(),
-        scenario.robot.radius,
-        world=(0.0, 0.0, float(w), float(h)),
+    try:
+        result = shortest_path(
+            np.asarray(scenario.start, dtype=float),
+            np.asarray(scenario.goal, dtype=float),
+            scenario.static_obstacles(),
+            scenario.robot.radius,
+            world=(0.0, 0.0, float(w), float(h)),
+        )
+    except ValueError:  # start or goal in collision: no optimum; the run itself reports why
+        result = None
+    value = (
+        float(result.length)
+        if result is not None and result.exact and math.isfinite(result.length)
+        else None
     )
-    value = float(result.length) if result.exact and math.isfinite(result.length) else None
     _OPTIMA[id(scenario)] = (scenario, value)
     return value
 

@@ -22,8 +22,8 @@ Figure 8):
    re-sensed at a fixed rate);
 4. obstacle avoidance fallback: when no feasible candidate exists, the MFB paper's gap vector
    (eq 24) picks the free gap closest to the goal direction and the robot takes a short step
-   into it; with no free gap it steps to where it keeps the most clearance (waiting in place
-   would let a moving obstacle drive into it).
+   into it; with no free gap it waits, unless a (predicted) obstacle comes within the margin of
+   its spot: then it steps to where it keeps the most clearance.
 
 Moving obstacles: sensed points that moved between the last two scans are extrapolated over
 ``predict`` seconds and added to the known points (:func:`sensed_map.predict`), so candidates
@@ -200,10 +200,13 @@ class SwarmLocalPlanner(Planner):
         cost = np.where(free & (local.violation(cands, ctx) == 0), cost, np.inf)
         if np.isfinite(cost).any():
             return Decision(cands[int(np.argmin(cost))], iterations, duration)
-        # Boxed in: waiting lets a moving obstacle drive into the robot, so flee instead, toward
-        # the direction (staying put included) that keeps the most clearance from what was sensed.
+        # Boxed in: wait while the spot stays clear; when a (predicted) obstacle comes within the
+        # margin, flee toward the option that keeps the most clearance (waiting would let a moving
+        # obstacle drive into the robot).
         options = np.vstack([p[None, :], cands])
-        room, _ = local.segment_hit_distance(p, options, ctx.hits)
+        room, _ = local.point_hit_distance(options, ctx.hits)  # clearance where it would stand
+        if room[0] > obs.robot_radius:  # only imminent contact is worth a detour
+            return Decision(p.copy(), iterations, duration)  # safe here: wait for a way to open
         return Decision(options[int(np.argmax(room))], iterations, duration)
 
 
@@ -226,15 +229,17 @@ IHPO_PAPER = "Abdulsaheb & Kadhim, IJIES 16(2) 2023, section 5 (framework of the
 MFB_PAPER = "Ajeil, Ibraheem, Azar & Humaidi, IJARS 2020, Tables 1-2, eqs 3-8, 18-24"
 
 # ICOOT paper: 80 coots, 2 leaders, 80 virtual sensors, grid local search (section 4.1).
-_COOT_SETTINGS = {"agents": 80, "iterations": 10, "step": 1.0, "repair": "grid"}
+_COOT_SETTINGS = {"agents": 80, "iterations": 5, "step": 1.0, "repair": "grid"}
 _preset("ICOOT", "ICOOT", "ICOOT swarm local planner (80 coots, 2 leaders)", ICOOT_PAPER,
-        "icoot-80", _COOT_SETTINGS, {"leaders": 2, "n_leaders": 2})
+        "icoot-80", _COOT_SETTINGS, {"leaders": 2})
 _preset("COOT", "COOT", "COOT in the ICOOT paper's planning framework", ICOOT_PAPER, "icoot-80",
-        _COOT_SETTINGS, {"leaders": 2, "n_leaders": 2})
+        _COOT_SETTINGS, {"leaders": 2})
+# HPO's published hunter rule scales absolute positions (a pull toward the world origin);
+# around a robot the box centre is the meaningful origin (docs/algorithms.md, HPO).
 _preset("IHPO", "IHPO", "IHPO swarm local planner", IHPO_PAPER, "icoot-80",
-        {"agents": 80, "iterations": 10, "step": 1.0, "repair": "grid"})
+        {"agents": 80, "iterations": 5, "step": 1.0, "repair": "grid"}, {"hunter": "centre"})
 _preset("HPO", "HPO", "HPO in the IHPO paper's planning framework", IHPO_PAPER, "icoot-80",
-        {"agents": 80, "iterations": 10, "step": 1.0, "repair": "grid"})
+        {"agents": 80, "iterations": 5, "step": 1.0, "repair": "grid"}, {"hunter": "centre"})
 # MFB paper Table 1: 8 bats, 8 iterations, sensing range 0.8 m; fitness 1/(f + eps) (eq 8).
 _preset("MFB", "MFB", "Modified Frequency Bat local planner", MFB_PAPER, "mfb-12",
         {"agents": 8, "iterations": 8, "step": 0.8, "repair": "mfb", "objective": "inverse"})

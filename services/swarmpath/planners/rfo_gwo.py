@@ -1,0 +1,750 @@
+"""RFO, RFO-GWO and RFO-GWO-EA: the global planners of Ketafa & Al-Darraji (2024).
+
+Ketafa & Al-Darraji, "Path Planning for Autonomous Mobile Robots Using the RFO-GWO Optimization
+Algorithm", Iraqi J. Science 65(2) (2024) 1070-1088, doi 10.24996/ijs.2024.65.2.38: section 3.1
+(RFO, eqs 1-2), 3.2 (GWO, eqs 3-16), 4.1 (the hybrid, eq 17, Algorithms 1 and 2), 4.2 (the EA
+with the Erase mutation and the multiphase refinement), 5 (Table 1 parameters, Table 2 metrics).
+docs/_parts/planners-rfo-gwo.md has the measurements next to Table 2.
+
+Global planners: the static map is given at construction; the first ``decide`` plans the whole
+path (its wall time is the episode's planning time) and returns the first waypoint with
+``iterations`` = the paper's *cost* (RFO iterations consumed, Table 2); later calls hand out the
+remaining waypoints one by one (``duration=None``: drive until reached). The paper's *nodes* are
+the waypoints after the start, i.e. the episode's ``steps``. A failed search returns
+``Decision(None, reason=...)`` with the iterations it consumed; nothing raises.
+
+Phase A, Algorithm 1 (all three planners)
+-----------------------------------------
+``foxes`` foxes start at uniform points of the box of half-width ``radius`` around the start
+(invalid draws stay at the start); each keeps its location history, which begins at the start.
+Every iteration the foxes are sorted by eq 17 (distance to the target) and, in that order, each
+proposes the eq 2 move x' = x + alpha sign(ref - x) with ref = the target (the prey, which the
+planner knows; ``reference = "best"``: the best fox for the others, as eq 2 is printed, and the
+target for the best fox). alpha = u d with u ~ U(0, 1) per fox (``alpha_draw = "population"``: one
+u per iteration, section 3.1's reading) and d = sqrt(|x - target|) (eq 1/17 as printed, square
+root of the Euclidean distance in metres; ``alpha_bound = "distance"``: d = |x - target|). Each
+component of the step is clamped so that it does not pass the reference (the fox can land exactly
+on the target) and the point is clipped to the world. The node is valid when it is closer to the
+target, the segment from the fox's last node passes the safety rule and the node passes the node
+rule (the target itself is exempt from the node rule). A valid node is appended to the fox's
+history, except that a node within ``goal_snap`` (0.2 m, the episode's acceptance tolerance) of
+the target is replaced by the target when the segment to it is valid (or, failing that, the target
+is appended after it when that segment is valid). The first fox to reach the target returns its
+history: the cost is the iteration count at that moment (0 if a fox reaches it at
+initialisation).
+
+Clearance rules (section 4.1; the paper works in cm on 17000 cm maps, we in m, and both margins
+are *in addition to* the robot radius r, as the paper's robot is a body, not a point):
+
+* safety rule (the "more than 20 cm from the border of any barrier" rule): clearance of every
+  segment, and of every node not produced by eq 2, > r + ``safety_margin`` (0.2 m);
+* node rule (the "smaller than one metre from the border of any barriers" rule that hands the
+  fox to GWO): clearance of an eq 2 node > r + ``node_margin`` (1.0 m). Applying it to GWO's
+  wolves as well left mfb-static (10 m wide, r = 0.5 m) unsolved after 2000 iterations.
+
+Both are the product's collision rule (:func:`~swarmpath.world.geometry.collides`, touching
+counts) applied with the enlarged radius, so every output segment is collision-free for the robot
+with at least ``safety_margin`` to spare; the final path is re-checked with
+:meth:`ObstacleSet.segment_clearance` before it is handed out.
+
+When the eq 2 node is invalid:
+
+* ``RFO`` (RFO alone): the fox stays at its previous place (section 3.1: "otherwise, they return
+  to their previous place") and, if unnoticed (mu ~ U(0, 1) > ``notice`` = 0.75), makes the RFO
+  local-search move of eqs 3-5 in two dimensions: x' = x + a r (cos phi1, sin phi1) with the scaling
+  a ~ U(0, 1) once per iteration, phi0, phi1 ~ U(0, 2 pi) per fox and the observation radius
+  r = ``radius`` sin(phi0)/phi0 (eq 4 with Table 1's r in [0, 3] as its scale, in metres). The
+  move is kept if it passes the safety rule (it need not be closer). Reproduction (eqs 6-9) is
+  not used: a fox born in the alpha couple's habitat has no collision-free history.
+* ``RFO-GWO``: Algorithm 2. The "current obstacle" is the one the segment hits (least segment
+  clearance) or, if only the node rule failed, the one nearest to the node. ``wolves`` (Table 1:
+  M = 7) wolves, uniform in the box of half-width ``radius`` around the fox, run
+  ``gwo_iterations`` iterations of the registered GWO (eqs 3-16, authors' leader update) on the
+  negated distance from that obstacle (Algorithm 2 maximises it). A wolf counts only if it is
+  "preferable to the current location of the fox": closer to the target, reached by a segment
+  that passes the safety rule and itself passing the safety rule; others score PENALTY plus their
+  violation. The best wolf found becomes the fox's next node; with none the fox stays
+  ("return current position of fox_i"). The foxes handled by GWO in one iteration are optimised
+  as one batch (they do not interact within an iteration; each has its own generator seeded from
+  the planner's).
+
+Phase B/C, section 4.2 (``RFO-GWO-EA`` only)
+-------------------------------------------
+An EA with the Erase mutation as its only operator (:meth:`RfoFamilyPlanner._ea`: a population
+of copies of the path; Erase picks two nodes V_i, V_j, j > i + 1, and if V_i V_j passes the safety
+rule removes the nodes between them; (mu + lambda) selection on length) runs on the path; then the
+multiphase technique cuts every segment longer than ``split_length`` into equal pieces and runs the
+EA again, ``phases`` times. Erase never lengthens a path (triangle inequality) and adds only
+checked segments; the split points lie on valid segments. Phase A draws the same random numbers as
+``RFO-GWO``, so with the same seed the EA starts from exactly ``RFO-GWO``'s path.
+
+Deviations, all parameters
+--------------------------
+``foxes`` = 15 (section 5's text; Table 1 says 10), ``iterations`` = 2000 (Table 1),
+``radius`` = 3 m (Table 1's r in [0, 3]), ``wolves`` = 7 (Table 1). ``gwo_iterations`` = 10,
+not Table 1's 500: 500 iterations per blocked fox per iteration costs about 50 times the planning
+time and measured no better (the box is small and 2-D). ``patience`` (RFO-GWO variants: 50,
+RFO: off) ends a search after that many iterations in which the best fox got no closer than
+before by ``STALL_TOLERANCE`` (1 cm): in successful runs RFO-GWO never stalled for more than one
+iteration, and a trapped search would otherwise call GWO for all 2000 iterations. EA:
+``ea_population`` = 10, ``ea_generations`` = 100, ``split_length`` = 2 m, ``phases`` = 1 (the
+paper gives none of them). Randomness comes only from the planner's generator: the same seed gives
+the same path.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarmpath.optimizers import Problem, RunStreams, create
+from swarmpath.planners.base import (
+    Decision,
+    Observation,
+    ParamValue,
+    Planner,
+    PlannerError,
+    register,
+)
+from swarmpath.world.geometry import (
+    ObstacleSet,
+    _segments_cross,  # the crossing test inside segment_segment_distance, reused as is
+    collides,
+    point_segment_distance,
+    segment_segment_distance,
+)
+from swarmpath.world.scenario import Scenario
+
+Array = NDArray[np.float64]
+STALL_TOLERANCE = 0.01  # m: smaller gains of the best fox do not count as progress
+PENALTY = 1e6  # GWO objective of an invalid wolf (plus its violation): any valid wolf beats it
+REFERENCE = (
+    "Ketafa & Al-Darraji, Iraqi J. Science 65(2) 2024 1070-1088, doi 10.24996/ijs.2024.65.2.38, "
+    "sections 3-4, eqs 1-17, Algorithms 1-2, Tables 1-2"
+)
+
+
+# ------------------------------------------------------------------------------------ geometry
+class _Clearance:
+    """Exact unsigned clearances against a static map, restricted to nearby obstacles.
+
+    Same formulas as :class:`ObstacleSet` (``point_segment_distance``/``segment_segment_distance``
+    per edge, ``|p - c| - R`` per circle), but only obstacles whose bounding box lies within
+    ``reach`` of the query's bounding box are examined: results are exact whenever the true value
+    is below ``reach`` and otherwise some value >= ``reach`` (possibly +inf), which is all a
+    threshold test ``clearance > reach`` needs.
+
+    Polygon interiors are not tested: every node the planners hold is reached from the start
+    through checked segments, so it lies outside every polygon, and a segment from such a node
+    into a polygon crosses an edge (clearance 0). The planner checks the start once with
+    :meth:`ObstacleSet.point_clearance` and the final path with
+    :meth:`ObstacleSet.segment_clearance`.
+    """
+
+    def __init__(self, obstacles: ObstacleSet):
+        c = obstacles.circles
+        self.circles = c
+        self.kc = int(c.shape[0])
+        boxes = [np.column_stack([c[:, :2] - c[:, 2:3], c[:, :2] + c[:, 2:3]])]
+        e0, e1, owner, spans = [], [], [], []
+        start = 0
+        for j, poly in enumerate(obstacles.polygons):
+            e0.append(poly)
+            e1.append(np.roll(poly, -1, axis=0))
+            owner.append(np.full(len(poly), self.kc + j))
+            spans.append((start, start + len(poly)))
+            start += len(poly)
+            boxes.append(np.concatenate([poly.min(axis=0), poly.max(axis=0)])[None, :])
+        self.e0 = np.concatenate(e0) if e0 else np.zeros((0, 2))
+        self.e1 = np.concatenate(e1) if e1 else np.zeros((0, 2))
+        self.owner = np.concatenate(owner) if owner else np.zeros(0, dtype=np.intp)
+        self.spans = spans
+        self.boxes = np.concatenate(boxes)
+        self.K = int(self.boxes.shape[0])
+
+    def _near(self, A: Array, B: Array, reach: float) -> NDArray[np.bool_]:
+        """(S, K): obstacle k's box is within ``reach`` of segment s's box."""
+        lo = np.minimum(A, B) - reach
+        hi = np.maximum(A, B) + reach
+        b = self.boxes
+        return np.asarray(
+            (b[None, :, 0] <= hi[:, None, 0]) & (b[None, :, 2] >= lo[:, None, 0])
+            & (b[None, :, 1] <= hi[:, None, 1]) & (b[None, :, 3] >= lo[:, None, 1])
+        )
+
+    def _pair_distances(
+        self, A: Array, B: Array, reach: float
+    ) -> tuple[NDArray[np.intp], NDArray[np.intp], Array]:
+        """(segment index, obstacle index, distance) for every segment-circle/edge pair examined."""
+        near = self._near(A, B, reach)
+        seg_i: list[NDArray[np.intp]] = []
+        obs_k: list[NDArray[np.intp]] = []
+        dist: list[Array] = []
+        if self.kc:
+            si, cj = np.nonzero(near[:, : self.kc])
+            if si.size:
+                c = self.circles[cj]
+                d = point_segment_distance(c[:, :2], A[si], B[si]) - c[:, 2]
+                seg_i.append(si)
+                obs_k.append(cj)
+                dist.append(np.maximum(d, 0.0))
+        if self.e0.shape[0]:
+            si, ej = np.nonzero(near[:, self.owner])
+            if si.size:
+                seg_i.append(si)
+                obs_k.append(self.owner[ej])
+                dist.append(segment_segment_distance(A[si], B[si], self.e0[ej], self.e1[ej]))
+        if not seg_i:
+            empty = np.zeros(0, dtype=np.intp)
+            return empty, empty, np.zeros(0)
+        return np.concatenate(seg_i), np.concatenate(obs_k), np.concatenate(dist)
+
+    def segment(self, A: Array, B: Array, reach: float) -> Array:
+        """Clearance of segments AB (S, 2) -> (S,), exact below ``reach``."""
+        A, B = np.atleast_2d(A), np.atleast_2d(B)
+        A, B = np.broadcast_arrays(A, B)
+        out = np.full(A.shape[0], np.inf)
+        si, _, d = self._pair_distances(A, B, reach)
+        if si.size:
+            np.minimum.at(out, si, d)
+        return out
+
+    def segment_and_end(self, A: Array, B: Array, reach: float) -> tuple[Array, Array]:
+        """Clearance of segments AB and of their ends B (S, 2) -> (S,), (S,); exact below reach.
+
+        :func:`segment_segment_distance` unrolled so that the distance of B to each edge serves
+        both results (one pass over the pairs instead of two).
+        """
+        near = self._near(A, B, reach)
+        seg = np.full(A.shape[0], np.inf)
+        end = np.full(A.shape[0], np.inf)
+        if self.kc:
+            si, cj = np.nonzero(near[:, : self.kc])
+            if si.size:
+                c = self.circles[cj]
+                d = point_segment_distance(c[:, :2], A[si], B[si]) - c[:, 2]
+                np.minimum.at(seg, si, np.maximum(d, 0.0))
+                np.minimum.at(end, si, np.hypot(B[si, 0] - c[:, 0], B[si, 1] - c[:, 1]) - c[:, 2])
+        if self.e0.shape[0]:
+            si, ej = np.nonzero(near[:, self.owner])
+            if si.size:
+                a, b, c, d = A[si], B[si], self.e0[ej], self.e1[ej]
+                n = si.size
+                pts = point_segment_distance(
+                    np.concatenate([a, b, c, d]),
+                    np.concatenate([c, c, a, a]),
+                    np.concatenate([d, d, b, b]),
+                )
+                db = pts[n : 2 * n]
+                dseg = np.minimum(np.minimum(pts[:n], db),
+                                  np.minimum(pts[2 * n : 3 * n], pts[3 * n :]))
+                dseg = np.where(_segments_cross(a, b, c, d), 0.0, dseg)
+                np.minimum.at(seg, si, dseg)
+                np.minimum.at(end, si, db)
+        return seg, end
+
+    def nearest(self, A: Array, B: Array, reach: float) -> NDArray[np.intp]:
+        """Index of the obstacle nearest to each segment AB (S, 2) within ``reach`` (-1: none)."""
+        si, k, d = self._pair_distances(A, B, reach)
+        per = np.full((A.shape[0], self.K), np.inf)
+        if k.size:
+            np.minimum.at(per, (si, k), d)
+        out = np.argmin(per, axis=1) if self.K else np.zeros(A.shape[0], dtype=np.intp)
+        return np.where(np.isfinite(per.min(axis=1, initial=np.inf)), out, -1)
+
+    def to_obstacles(self, P: Array, ks: NDArray[np.intp]) -> Array:
+        """Unsigned distance from each point P[s] (S, 2) to the boundary of obstacle ks[s]."""
+        out = np.full(P.shape[0], np.inf)
+        circ = ks < self.kc
+        if circ.any():
+            c = self.circles[ks[circ]]
+            out[circ] = np.abs(np.hypot(P[circ, 0] - c[:, 0], P[circ, 1] - c[:, 1]) - c[:, 2])
+        if self.e0.shape[0]:
+            si, ej = np.nonzero(self.owner[None, :] == ks[:, None])
+            if si.size:
+                d = point_segment_distance(P[si], self.e0[ej], self.e1[ej])
+                np.minimum.at(out, si, d)
+        return out
+
+
+class _BoxQuery:
+    """Clearances of wolves that stay in known boxes: F boxes of m wolves each, wolf f*m + w.
+
+    Each box's wolves are paired once with the obstacles that can matter (within ``reach`` of
+    the box) and with the box's blocked obstacle ``ks[f]``; a call is then a few array gathers.
+    The segment distance fox -> wolf is :func:`segment_segment_distance` unrolled (0 where the
+    segments cross properly, else the least of the four endpoint-to-segment distances) so that
+    the fox's own endpoint distances are computed once and the wolf's are shared with its node
+    clearance.
+    """
+
+    def __init__(self, geo: _Clearance, P: Array, lower: Array, upper: Array, reach: float,
+                 m: int, ks: NDArray[np.intp]):
+        self.n = P.shape[0] * m
+        near = geo._near(lower, upper, reach)
+        wolves = np.arange(m)
+
+        def expand(f: NDArray[np.intp], j: NDArray[np.intp]) -> tuple[NDArray[np.intp], ...]:
+            return (f[:, None] * m + wolves).ravel(), np.repeat(j, m)
+
+        A = np.repeat(P, m, axis=0)  # the fox of each wolf
+        cw, cc = expand(*np.nonzero(near[:, : geo.kc]))
+        ew, ee = expand(*np.nonzero(near[:, geo.owner]))
+        circ = (ks >= 0) & (ks < geo.kc)
+        kcw, kcc = expand(np.flatnonzero(circ), ks[circ])
+        kew, kee = expand(*np.nonzero(geo.owner[None, :] == ks[:, None]))
+        self.cw, self.ew, self.kcw, self.kew = cw, ew, kcw, kew
+        self.c, self.kc = geo.circles[cc], geo.circles[kcc]
+        self.Ae, self.Ac = A[ew], A[cw]
+        self.C = np.concatenate([geo.e0[ee], geo.e0[kee]])
+        self.D = np.concatenate([geo.e1[ee], geo.e1[kee]])
+        self.CD = np.concatenate([geo.e0[ee], geo.e1[ee], self.c[:, :2]])
+        self.fox_end = point_segment_distance(self.Ae, geo.e0[ee], geo.e1[ee])
+        self.ne = ew.size
+        self.rows = np.concatenate([
+            np.zeros(ew.size + cw.size, dtype=np.intp), np.ones(ew.size + cw.size, dtype=np.intp),
+            np.full(kew.size + kcw.size, 2, dtype=np.intp)])
+        self.cols = np.concatenate([ew, cw, ew, cw, kew, kcw])
+
+    def __call__(self, W: Array) -> tuple[Array, Array, Array]:
+        """Segment clearance fox -> W, node clearance of W, distance of W from its obstacle."""
+        ne, c, kc = self.ne, self.c, self.kc
+        We, Wc, Wk = W[self.ew], W[self.cw], W[self.kcw]
+        # wolf endpoint to edge (node clearance and blocked-obstacle distance share one call)
+        wd = point_segment_distance(np.concatenate([We, W[self.kew]]), self.C, self.D)
+        node_e, obs_e = wd[:ne], wd[ne:]
+        # edge endpoints and circle centres to the segment fox -> wolf
+        ends = point_segment_distance(
+            self.CD, np.concatenate([self.Ae, self.Ae, self.Ac]), np.concatenate([We, We, Wc]))
+        C, D = self.C[:ne], self.D[:ne]
+        seg_e = np.minimum(np.minimum(self.fox_end, node_e), np.minimum(ends[:ne], ends[ne:2 * ne]))
+        seg_e = np.where(_segments_cross(self.Ae, We, C, D), 0.0, seg_e)
+        seg_c = np.maximum(ends[2 * ne:] - c[:, 2], 0.0)
+        node_c = np.hypot(Wc[:, 0] - c[:, 0], Wc[:, 1] - c[:, 1]) - c[:, 2]
+        obs_c = np.abs(np.hypot(Wk[:, 0] - kc[:, 0], Wk[:, 1] - kc[:, 1]) - kc[:, 2])
+        out = np.full((3, self.n), np.inf)
+        np.minimum.at(out, (self.rows, self.cols),
+                      np.concatenate([seg_e, seg_c, node_e, node_c, obs_e, obs_c]))
+        return out[0], out[1], out[2]
+
+
+def path_length(path: Array) -> float:
+    return float(np.hypot(*np.diff(path, axis=0).T).sum()) if len(path) > 1 else 0.0
+
+
+# ------------------------------------------------------------------------------------ planners
+class RfoFamilyPlanner(Planner):
+    """Shared machinery of the three planners; the registered subclasses fix the stages."""
+
+    name = "rfo-family"
+    kind = "global"
+    reference = REFERENCE
+    #: What a fox whose eq (2) node is infeasible does: "local" = RFO's local search (eqs 3-5,
+    #: RFO alone), "gwo" = Algorithm 2 (GWO obstacle avoidance).
+    fallback: ClassVar[str] = "local"
+    #: Run section 4.2 (EA with the Erase mutation, multiphase refinement) on the found path.
+    smooth: ClassVar[bool] = False
+
+    defaults: ClassVar[dict[str, Any]] = {
+        "foxes": 15,  # section 5: fifteen individuals (Table 1 says N = 10)
+        "iterations": 2000,  # Table 1: t = 2000
+        "radius": 3.0,  # m, Table 1: r in [0, 3] (neighbourhood of the start, wolves, local moves)
+        "alpha_bound": "sqrt",
+        "alpha_draw": "fox",
+        "reference": "target",
+        "node_margin": 1.0,  # m beyond the robot radius: section 4.1's one-metre rule (eq 2 nodes)
+        "safety_margin": 0.2,  # m beyond the robot radius: section 4.1's 20 cm rule (the rest)
+        "patience": 0,  # stop after this many iterations without progress (0: never)
+        "goal_snap": 0.2,  # m: a fox this close to the target with a free segment steps onto it
+    }
+    choices: ClassVar[dict[str, tuple[str, ...]]] = {
+        "alpha_bound": ("sqrt", "distance"),
+        "alpha_draw": ("fox", "population"),
+        "reference": ("target", "best"),
+    }
+
+    @classmethod
+    def check_params(cls, p: Mapping[str, ParamValue]) -> None:
+        for key in ("foxes", "iterations", "wolves", "gwo_iterations", "ea_population",
+                    "ea_generations"):
+            if key in p and int(p[key]) < 1:
+                raise PlannerError(f"{cls.name}.{key} must be >= 1")
+        for key in ("radius", "split_length"):
+            if key in p and not float(p[key]) > 0:
+                raise PlannerError(f"{cls.name}.{key} must be > 0")
+        for key in ("node_margin", "safety_margin", "goal_snap", "phases"):
+            if key in p and float(p[key]) < 0:
+                raise PlannerError(f"{cls.name}.{key} must be >= 0")
+        if "notice" in p and not 0.0 <= float(p["notice"]) <= 1.0:
+            raise PlannerError(f"{cls.name}.notice must be in [0, 1]")
+        if float(p["safety_margin"]) > float(p["node_margin"]):
+            raise PlannerError(f"{cls.name}.safety_margin must not exceed node_margin")
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        params: Mapping[str, Any] | None,
+        rng: np.random.Generator,
+        static_map: ObstacleSet | None = None,
+    ):
+        super().__init__(scenario, params, rng, static_map)
+        self._waypoints: Array | None = None
+        self._next = 0
+        self._cost = 0
+        self._failure: str | None = None
+        self.raw_path: Array | None = None  # phase A's path (before any smoothing)
+        self.path: Array | None = None  # the path handed out, start included
+        self.trace: list[float] = []  # distance of the best fox to the target, per iteration
+
+    # --------------------------------------------------------------------------- contract
+    def decide(self, obs: Observation) -> Decision:
+        if self._waypoints is None:
+            self._plan(np.array([obs.pose.x, obs.pose.y]), np.asarray(obs.goal, dtype=float),
+                       float(obs.robot_radius))
+            if self._failure is not None:
+                return Decision(None, self._cost, None, self._failure)
+            assert self._waypoints is not None
+            self._next = 1
+            return Decision(self._waypoints[0].copy(), self._cost, None)
+        if self._failure is not None:
+            return Decision(None, 0, None, self._failure)
+        if self._next >= len(self._waypoints):
+            return Decision(None, 0, None, "path exhausted before the goal was reached")
+        target = self._waypoints[self._next].copy()
+        self._next += 1
+        return Decision(target, 0, None)
+
+    # --------------------------------------------------------------------------- planning
+    def plan(self, start: Array, goal: Array, radius: float) -> Array | None:
+        """Plan once (no robot needed): the path with the start, or None (see ``failure``)."""
+        self._plan(np.asarray(start, dtype=float), np.asarray(goal, dtype=float), radius)
+        return self.path
+
+    @property
+    def failure(self) -> str | None:
+        return self._failure
+
+    @property
+    def cost(self) -> int:
+        """The paper's cost: RFO iterations consumed (Table 2)."""
+        return self._cost
+
+    def _plan(self, start: Array, goal: Array, radius: float) -> None:
+        obstacles = self.static_map if self.static_map is not None else (
+            self.scenario.static_obstacles()
+        )
+        self._geo = _Clearance(obstacles)
+        self._goal = goal
+        self._thr_node = radius + float(self.p["node_margin"])
+        self._thr_safe = radius + float(self.p["safety_margin"])
+        w, h = self.scenario.size
+        self._lo = np.array([0.0, 0.0])
+        self._hi = np.array([float(w), float(h)])
+        self._waypoints = np.zeros((0, 2))
+        self.raw_path = self.path = None
+        self.trace = []
+        if bool(collides(obstacles.point_clearance(start), radius)):
+            self._failure = "start is in collision"
+            return
+        self._stall: tuple[int, float] | None = None
+        path, self._cost = self._search(start, goal)
+        if path is None:
+            if self._stall is not None:
+                self._failure = (
+                    f"no fox got closer to the goal for {self._stall[0]} iterations (best "
+                    f"{self._stall[1]:.2f} m away)"
+                )
+            else:
+                self._failure = f"no path to the goal within {self._cost} iterations"
+            return
+        if len(path) == 1:  # already at the target: one waypoint, the target itself
+            path = np.vstack([path, goal])
+        self.raw_path = path
+        if self.smooth:
+            path = self._refine(path)
+        # The product's rule on every output segment (the planner's own rule is stricter).
+        clearance = obstacles.segment_clearance(path[:-1], path[1:])
+        if np.any(collides(clearance, radius)):  # pragma: no cover - guards a geometry bug
+            self._failure = "internal error: planned segment in collision"
+            return
+        self.path = path
+        self._waypoints = path[1:]
+
+    # ------------------------------------------------------------------------ validity
+    def _segments_ok(self, A: Array, B: Array) -> NDArray[np.bool_]:
+        d = self._geo.segment(A, B, self._thr_safe)
+        return ~collides(d, self._thr_safe)
+
+    def _moves_ok(self, A: Array, B: Array, node_threshold: float) -> tuple[
+        NDArray[np.bool_], NDArray[np.bool_]
+    ]:
+        """Segments AB under the safety rule, and nodes B under ``node_threshold`` (goal exempt)."""
+        seg, end = self._geo.segment_and_end(A, B, max(self._thr_safe, node_threshold))
+        at_goal = np.all(B == self._goal, axis=-1)
+        return ~collides(seg, self._thr_safe), at_goal | ~collides(end, node_threshold)
+
+    # ------------------------------------------------------------ phase A: Algorithm 1
+    def _search(self, start: Array, goal: Array) -> tuple[Array | None, int]:
+        rng = self.rng
+        N = int(self.p["foxes"])
+        T = int(self.p["iterations"])
+        R = float(self.p["radius"])
+        snap = float(self.p["goal_snap"])
+        lo, hi = self._lo, self._hi
+        # Line 1: n foxes around the start, each at a valid node reached by a free segment.
+        cand = np.clip(start + rng.uniform(-R, R, (N, 2)), lo, hi)
+        starts = np.broadcast_to(start, cand.shape)
+        good = np.logical_and(*self._moves_ok(starts, cand, self._thr_safe))
+        pos = np.broadcast_to(start, cand.shape).copy()
+        hist: list[list[Array]] = [[start.copy()] for _ in range(N)]
+        for i in np.flatnonzero(good):
+            if self._move(i, cand[i], pos, hist, goal, snap):
+                return np.array(hist[i]), 0
+        for i in range(N):  # a fox at the start may already see the target
+            if self._arrive(i, pos, hist, goal, snap):
+                return np.array(hist[i]), 0
+
+        patience = int(self.p["patience"])
+        record, stalled = math.inf, 0
+        for t in range(1, T + 1):
+            dist = np.hypot(*(pos - goal).T)  # eq 17 (monotone in the Euclidean distance)
+            self.trace.append(float(dist.min()))
+            if dist.min() < record - STALL_TOLERANCE:
+                record, stalled = float(dist.min()), 0
+            else:
+                stalled += 1
+                if patience and stalled >= patience:
+                    self._stall = (patience, record)
+                    return None, t - 1
+            order = np.argsort(dist, kind="stable")  # line 6
+            best = order[0]  # line 7
+            ref = np.broadcast_to(goal, pos.shape).copy()
+            if self.p["reference"] == "best":
+                ref[np.arange(N) != best] = pos[best]
+            bound = dist if self.p["alpha_bound"] == "distance" else np.sqrt(dist)
+            u = rng.random(N) if self.p["alpha_draw"] == "fox" else np.full(N, rng.random())
+            alpha = u * bound
+            delta = ref - pos
+            step = np.sign(delta) * np.minimum(alpha[:, None], np.abs(delta))  # eq 2, clamped
+            new = np.clip(pos + step, lo, hi)
+            closer = np.hypot(*(new - goal).T) < dist
+            seg_ok, node_ok = self._moves_ok(pos, new, self._thr_node)
+            ok = closer & seg_ok & node_ok
+            if self.fallback == "local":
+                moved = self._local_phase(pos, new, ok, rng)
+            else:
+                moved = ok.copy()
+                fail = order[~ok[order]]  # lines 16 and 21, in fitness order
+                if fail.size:
+                    # the obstacle the segment hits, or the one too close to the node
+                    seg_bad = ~seg_ok[fail]
+                    ends = np.where(seg_bad[:, None], pos[fail], new[fail])
+                    ks = np.where(
+                        seg_bad,
+                        self._geo.nearest(ends, new[fail], self._thr_safe),
+                        self._geo.nearest(new[fail], new[fail], self._thr_node),
+                    )
+                    q, found = self._gwo(pos[fail], ks, dist[fail])
+                    new[fail[found]] = q[found]
+                    moved[fail[found]] = True
+            for i in order:
+                if moved[i] and self._move(i, new[i], pos, hist, goal, snap):  # lines 25-27
+                    return np.array(hist[i]), t
+        return None, T
+
+    def _move(self, i: int, q: Array, pos: Array, hist: list[list[Array]], goal: Array,
+              snap: float) -> bool:
+        """Fox i moves to node q (onto the target instead if q is within ``snap`` of it and the
+        segment to the target is valid); True when it has reached the target."""
+        if (not np.array_equal(q, goal) and math.dist(q, goal) <= snap
+                and self._segments_ok(pos[i], goal)[0]):
+            q = goal
+        pos[i] = q
+        hist[i].append(pos[i].copy())
+        return self._arrive(i, pos, hist, goal, snap)
+
+    def _arrive(self, i: int, pos: Array, hist: list[list[Array]], goal: Array,
+                snap: float) -> bool:
+        if np.array_equal(pos[i], goal):
+            return True
+        if math.dist(pos[i], goal) <= snap and self._segments_ok(pos[i], goal)[0]:
+            pos[i] = goal
+            hist[i].append(goal.copy())
+            return True
+        return False
+
+    # ------------------------------------------------- RFO alone: local search (eqs 3-5)
+    def _local_phase(self, pos: Array, new: Array, ok: NDArray[np.bool_],
+                     rng: np.random.Generator) -> NDArray[np.bool_]:
+        """Foxes whose eq (2) node failed stay put; the unnoticed ones (mu > notice) explore."""
+        N = pos.shape[0]
+        mu = rng.random(N)
+        a = rng.random()  # scaling a, once per iteration
+        phi0 = rng.random(N) * (2 * math.pi)
+        phi1 = rng.random(N) * (2 * math.pi)
+        rmax = float(self.p["radius"])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            r = np.where(phi0 > 0, rmax * np.sin(phi0) / np.where(phi0 > 0, phi0, 1.0), rmax)
+        movers = ~ok & (mu > float(self.p["notice"]))
+        moved = ok.copy()
+        if movers.any():
+            idx = np.flatnonzero(movers)
+            step = (a * r[idx])[:, None] * np.column_stack([np.cos(phi1[idx]), np.sin(phi1[idx])])
+            cand = np.clip(pos[idx] + step, self._lo, self._hi)
+            good = np.logical_and(*self._moves_ok(pos[idx], cand, self._thr_safe))
+            good &= np.any(cand != pos[idx], axis=1)
+            new[idx[good]] = cand[good]
+            moved[idx[good]] = True
+        return moved
+
+    # ----------------------------------------------------------------- Algorithm 2: GWO
+    def _gwo(self, P: Array, ks: NDArray[np.intp], dist: Array) -> tuple[Array, NDArray[np.bool_]]:
+        """Algorithm 2 for the foxes at P (F, 2) blocked by obstacles ks (F,), as one batch.
+
+        For each fox, ``wolves`` wolves in the box of half-width ``radius`` around it maximise
+        their distance from its obstacle (minimise the negated distance) for ``gwo_iterations``
+        iterations of the registered GWO (eqs 3-16). A wolf is admissible when it is a valid node
+        reached from the fox by a valid segment and is closer to the target than the fox (it is
+        "preferable to the current location of fox_i"); an inadmissible wolf scores PENALTY plus
+        its violation. Returns the best admissible wolf per fox and whether one was found.
+        """
+        F = P.shape[0]
+        R = float(self.p["radius"])
+        lower = np.maximum(P - R, self._lo)
+        upper = np.minimum(P + R, self._hi)
+        goal = self._goal
+        thr = self._thr_safe
+        m = int(self.p["wolves"])
+        query = _BoxQuery(self._geo, P, lower, upper, thr, m, ks)
+        dp = np.repeat(dist, m)
+        blocked = np.repeat(ks >= 0, m)
+
+        def objective(X: Array, streams: RunStreams) -> Array:
+            W = X.reshape(-1, 2)
+            dseg, dnode, dobs = query(W)
+            dg = np.hypot(W[:, 0] - goal[0], W[:, 1] - goal[1])
+            valid = ~collides(dseg, thr) & ~collides(dnode, thr) & (dg < dp)
+            viol = (np.maximum(thr - dseg, 0.0) + np.maximum(thr - dnode, 0.0)
+                    + np.maximum(dg - dp, 0.0))
+            fit = np.where(blocked, -dobs, dg)
+            return np.where(valid, fit, PENALTY + viol).reshape(F, m)
+
+        # one generator per fox, seeded from the planner's generator
+        seeds = self.rng.integers(0, 2**63, size=F)
+        streams = RunStreams([np.random.Generator(np.random.PCG64(int(s))) for s in seeds])
+        opt = create("GWO", Problem(objective, lower, upper), m,
+                     int(self.p["gwo_iterations"]), streams)
+        opt.initialize()
+        while not opt.done:
+            opt.step()
+        return opt.best_position.copy(), opt.best_fitness < PENALTY
+
+    # ------------------------------------------------ section 4.2: EA + multiphase
+    def _refine(self, path: Array) -> Array:
+        path = self._ea(path)
+        for _ in range(int(self.p["phases"])):
+            path = self._ea(self._split(path, float(self.p["split_length"])))
+        return path
+
+    @staticmethod
+    def _split(path: Array, length: float) -> Array:
+        """Cut every segment longer than ``length`` into equal pieces (points on the segment)."""
+        out = [path[:1]]
+        for a, b in itertools.pairwise(path):
+            n = max(1, math.ceil(math.dist(a, b) / length))
+            s = np.arange(1, n + 1)[:, None] / n
+            pts = a + s * (b - a)
+            pts[-1] = b
+            out.append(pts)
+        return np.concatenate(out)
+
+    def _ea(self, path: Array) -> Array:
+        """Evolutionary algorithm whose only variation is the Erase mutation (section 4.2).
+
+        The population starts as ``ea_population`` copies of the reference path. Each generation
+        every path V_0..V_n draws two distinct node indices i < j; if j > i + 1 and the segment
+        V_i V_j passes the safety rule, its child erases V_{i+1}..V_{j-1} (never longer, by the
+        triangle inequality, and valid: its only new segment was checked). Parents and children
+        compete on length ((mu + lambda) selection, ties to fewer nodes, then to the older path).
+        Returns the shortest path found.
+        """
+        P = int(self.p["ea_population"])
+        pop = [path.copy() for _ in range(P)]
+        cums = [_cumulative(path) for _ in range(P)]
+        for _ in range(int(self.p["ea_generations"])):
+            u = self.rng.random((P, 2))
+            picks = []
+            for m, q in enumerate(pop):
+                n = len(q)
+                i, j = np.sort(np.minimum((u[m] * n).astype(np.intp), n - 1))
+                if j - i >= 2:
+                    picks.append((m, int(i), int(j)))
+            if not picks:
+                continue
+            A = np.array([pop[m][i] for m, i, _ in picks])
+            B = np.array([pop[m][j] for m, _, j in picks])
+            ok = self._segments_ok(A, B)
+            kids, kid_cums = [], []
+            for (m, i, j), good in zip(picks, ok, strict=True):
+                if good:
+                    q = pop[m]
+                    kids.append(np.concatenate([q[: i + 1], q[j:]]))
+                    kid_cums.append(_cumulative(kids[-1]))
+            if not kids:
+                continue
+            pool, pool_cums = pop + kids, cums + kid_cums
+            lengths = np.array([c[-1] for c in pool_cums])
+            nodes = np.array([len(q) for q in pool])
+            keep = np.lexsort((np.arange(len(pool)), nodes, lengths))[:P]
+            pop = [pool[k] for k in keep]
+            cums = [pool_cums[k] for k in keep]
+        return pop[0]
+
+
+def _cumulative(path: Array) -> Array:
+    """Cumulative length along the path (first entry 0)."""
+    return np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(path, axis=0).T))])
+
+
+_COMMON = RfoFamilyPlanner.defaults
+_GWO_PARAMS: dict[str, Any] = {
+    "patience": 50,
+    "wolves": 7,  # Table 1: M = 7
+    "gwo_iterations": 10,
+}
+_EA_PARAMS: dict[str, Any] = {
+    "ea_population": 10,
+    "ea_generations": 100,
+    "split_length": 2.0,  # m
+    "phases": 1,
+}
+
+
+@register
+class RfoPlanner(RfoFamilyPlanner):
+    name = "RFO"
+    description = "Red fox optimizer as a global path planner (eq 2 moves, eqs 3-5 local search)"
+    fallback = "local"
+    defaults: ClassVar[dict[str, Any]] = {**_COMMON, "notice": 0.75}
+
+
+@register
+class RfoGwoPlanner(RfoFamilyPlanner):
+    name = "RFO-GWO"
+    description = "Hybrid red fox / grey wolf global planner (Algorithms 1 and 2)"
+    fallback = "gwo"
+    defaults: ClassVar[dict[str, Any]] = {**_COMMON, **_GWO_PARAMS}
+
+
+@register
+class RfoGwoEaPlanner(RfoFamilyPlanner):
+    name = "RFO-GWO-EA"
+    description = "RFO-GWO, then EA Erase mutation and multiphase refinement (section 4.2)"
+    fallback = "gwo"
+    smooth = True
+    defaults: ClassVar[dict[str, Any]] = {**_COMMON, **_GWO_PARAMS, **_EA_PARAMS}
