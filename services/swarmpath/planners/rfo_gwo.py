@@ -417,7 +417,8 @@ class RfoFamilyPlanner(Planner):
             return Decision(None, 0, None, "path exhausted before the goal was reached")
         target = self._waypoints[self._next].copy()
         self._next += 1
-        return Decision(target, 0, None)
+        # the last waypoint is the goal: drive onto it so the executed path is complete
+        return Decision(target, 0, None, finish=self._next >= len(self._waypoints))
 
     # --------------------------------------------------------------------------- planning
     def plan(self, start: Array, goal: Array, radius: float) -> Array | None:

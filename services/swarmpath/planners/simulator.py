@@ -14,7 +14,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmpath.planners.base import Observation
-from swarmpath.robot.kinematics import DiffDrive, Omni, Pose, diff_drive_command, omni_command
+from swarmpath.robot.kinematics import (
+    ARRIVE,
+    DiffDrive,
+    Omni,
+    Pose,
+    diff_drive_command,
+    omni_command,
+)
 from swarmpath.robot.sensors import SensorModel, get_sensor_model, read_sensors
 from swarmpath.world.scenario import RobotSpec, Scenario, WorldState
 
@@ -93,7 +100,7 @@ class Simulator:
         end = time_limit if duration is None else min(time_limit, self.time + duration)
         tx, ty = float(target[0]), float(target[1])
         while self.time < end - 1e-12:
-            arrived = math.hypot(tx - self.pose.x, ty - self.pose.y) < 1e-6
+            arrived = math.hypot(tx - self.pose.x, ty - self.pose.y) < ARRIVE
             if arrived and duration is None:
                 break
             if arrived:

@@ -22,6 +22,10 @@ from dataclasses import dataclass
 import numpy as np
 
 
+#: Distance (m) at which a waypoint counts as reached, for the controllers and the simulator alike.
+ARRIVE = 1e-4
+
+
 def wrap_angle(a: float) -> float:
     """Angle in (-pi, pi]."""
     return math.atan2(math.sin(a), math.cos(a))
@@ -125,7 +129,7 @@ def diff_drive_command(
     target: tuple[float, float],
     dt: float,
     gain: float = 4.0,
-    arrive: float = 1e-4,
+    arrive: float | None = None,
 ) -> tuple[float, float]:
     """Waypoint tracking for a differential drive: turn toward the target, then drive.
 
@@ -135,7 +139,7 @@ def diff_drive_command(
     """
     dx, dy = target[0] - pose.x, target[1] - pose.y
     dist = math.hypot(dx, dy)
-    if dist < arrive:
+    if dist < (ARRIVE if arrive is None else arrive):
         return 0.0, 0.0
     err = wrap_angle(math.atan2(dy, dx) - pose.theta)
     w = max(-model.max_angular, min(model.max_angular, gain * err))

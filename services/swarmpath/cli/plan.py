@@ -1,0 +1,511 @@
+"""``swarmpath plan``: planners x maps x runs, printed as the papers' run tables.
+
+For each planner and map it runs ``--runs`` episodes (run r of ``--seed`` s is the same path on
+any machine, see :mod:`swarmpath.planners.episode`) and prints Run / Distance / Error / Elapsed
+time plus success, collisions and the gap to the exact optimum, with a Mean row. ``--json``
+prints ``{"runs": [...], "summary": [...]}`` (the summary from
+:func:`swarmpath.planners.summary.summarize`), ``--plot DIR`` writes one PNG per planner x map.
+
+``--maps`` takes preset names (``--list-maps``) and paths: scenario JSON/YAML, ROS map_server /
+nav2 YAML (recognised by its ``image`` key) or MovingAI ``.map`` files (one metre per cell).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import re
+import sys
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich import box
+from rich.console import Console
+from rich.measure import Measurement
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from swarmpath.cli.core import InputError, app
+
+MAX_RUNS = 10_000
+MAP_SUFFIXES = (".json", ".yaml", ".yml", ".map")
+
+
+@dataclass
+class PlanSpec:
+    planners: list[str]
+    maps: list[Any]  # Scenario objects, in order, with distinct names
+    runs: int = 10
+    seed: int = 1
+    params: dict[str, dict[str, Any]] = field(default_factory=dict)
+
+    def cells(self) -> list[tuple[str, Any]]:
+        return [(p, m) for p in self.planners for m in self.maps]
+
+
+@dataclass
+class CellResult:
+    planner: str
+    scenario: Any
+    runs: list[dict[str, Any]]
+    world: Any = None  # run 0's simulated world (obstacle and goal motion), for plots
+
+
+# ------------------------------------------------------------------------------ input parsing
+def _names(spec: str) -> list[str]:
+    return [p.strip() for p in spec.split(",") if p.strip()]
+
+
+def resolve_planners(spec: str) -> list[str]:
+    """'ICOOT,mfb' -> registered names (case-insensitive, duplicates dropped); 'all' = all."""
+    from swarmpath.planners import list_planners
+
+    registered = list_planners()
+    if spec.strip().lower() == "all":
+        return registered
+    by_lower = {name.lower(): name for name in registered}
+    out: list[str] = []
+    for part in _names(spec):
+        name = part if part in registered else by_lower.get(part.lower())
+        if name is None:
+            raise InputError(
+                "--planners", f"unknown planner {part!r}; registered: {', '.join(registered)}"
+            )
+        if name not in out:
+            out.append(name)
+    if not out:
+        raise InputError("--planners", "no planner given")
+    return out
+
+
+def load_map(item: str) -> Any:
+    """A preset by name, or a scenario / nav2 / MovingAI file; raises InputError('--maps')."""
+    from swarmpath.world import get_map, list_maps
+
+    presets = list_maps()
+    by_lower = {m.lower(): m for m in presets}
+    if item in presets or item.lower() in by_lower:
+        return get_map(item if item in presets else by_lower[item.lower()])
+    path = Path(item)
+    if not path.is_file():
+        hint = "no such file" if path.suffix.lower() in MAP_SUFFIXES else "unknown map"
+        raise InputError(
+            "--maps",
+            f"{hint} {item!r}; presets: {', '.join(presets)}; or a path to a scenario "
+            "JSON/YAML, nav2 map YAML or MovingAI .map file",
+        )
+    try:
+        return _load_file(path)
+    except InputError:
+        raise
+    except (ValueError, KeyError, OSError) as exc:  # ScenarioError, MapImportError, ...
+        raise InputError("--maps", f"{item}: {exc}") from None
+
+
+def _load_file(path: Path) -> Any:
+    import yaml
+
+    from swarmpath.world.importers import load_movingai_map, load_ros_map
+    from swarmpath.world.scenario_io import load_scenario, scenario_from_dict
+
+    suffix = path.suffix.lower()
+    if suffix == ".map":
+        return load_movingai_map(path).scenario
+    if suffix in (".yaml", ".yml"):
+        try:
+            doc = yaml.safe_load(path.read_text(encoding="utf-8"))
+        except yaml.YAMLError as exc:
+            raise InputError("--maps", f"{path}: not valid YAML ({exc})") from None
+        if isinstance(doc, dict) and "image" in doc:
+            return load_ros_map(path).scenario
+        if not isinstance(doc, dict):
+            raise InputError("--maps", f"{path}: expected a YAML mapping")
+        return scenario_from_dict(doc, str(path))
+    return load_scenario(path)
+
+
+def resolve_maps(spec: str) -> list[Any]:
+    maps: list[Any] = []
+    names: set[str] = set()
+    for item in _names(spec):
+        scenario = load_map(item)
+        name, k = scenario.name, 2
+        while name in names:  # two files with the same scenario name: keep them apart
+            name, k = f"{scenario.name}#{k}", k + 1
+        if name != scenario.name:
+            scenario = dataclasses.replace(scenario, name=name)
+        names.add(name)
+        maps.append(scenario)
+    if not maps:
+        raise InputError("--maps", "no map given")
+    return maps
+
+
+def parse_params(text: str | None, planners: Sequence[str]) -> dict[str, dict[str, Any]]:
+    """'{"OMPL-RRTstar": {"time": 0.5}}' -> params per planner, each checked by the planner."""
+    from swarmpath.planners import PlannerError, get_planner
+
+    if text is None or not text.strip():
+        return {}
+    try:
+        raw = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InputError("--params", f"not valid JSON: {exc.msg} (column {exc.colno})") from None
+    if not isinstance(raw, dict):
+        raise InputError("--params", 'must be a JSON object like {"MFB": {"agents": 10}}')
+    by_lower = {p.lower(): p for p in planners}
+    out: dict[str, dict[str, Any]] = {}
+    for key, values in raw.items():
+        name = key if key in planners else by_lower.get(str(key).lower())
+        if name is None:
+            raise InputError(
+                "--params", f"{key!r} is not one of --planners ({', '.join(planners)})"
+            )
+        if not isinstance(values, dict):
+            raise InputError("--params", f"{key}: parameters must be a JSON object")
+        try:
+            get_planner(name).resolve_params(values)
+        except PlannerError as exc:
+            raise InputError("--params", str(exc)) from None
+        out[name] = dict(values)
+    return out
+
+
+def make_spec(planners: str, maps: str, runs: int = 10, seed: int = 1,
+              params: str | None = None) -> PlanSpec:
+    """Validate the command's options; raises :class:`InputError` naming the bad one."""
+    names = resolve_planners(planners)
+    scenarios = resolve_maps(maps)
+    if not 1 <= runs <= MAX_RUNS:
+        raise InputError("--runs", f"{runs} is not in [1, {MAX_RUNS}]")
+    if seed < 0:
+        raise InputError("--seed", f"{seed} is negative")
+    return PlanSpec(names, scenarios, runs, seed, parse_params(params, names))
+
+
+# -------------------------------------------------------------------------------------- running
+def run_episode(spec: PlanSpec, planner: str, scenario: Any, run: int,
+                on_step: Callable[[], None] | None = None) -> tuple[dict[str, Any], Any]:
+    """One run as a JSON-ready dict (``RunOutcome`` fields), and its simulated world.
+
+    A planner that raises (a bug: planners report failures as results) gives a failed run whose
+    reason names the exception; the error is also noted on stderr.
+    """
+    from swarmpath.planners import Episode
+
+    ep = None
+    try:
+        ep = Episode(scenario, planner, spec.seed, run, spec.params.get(planner))
+        while not ep.done:
+            ep.step()
+            if on_step is not None:
+                on_step()
+        return ep.outcome().to_dict(), ep.sim.world
+    except Exception as exc:  # recorded as a failed run, never hidden
+        reason = f"internal error: {type(exc).__name__}: {exc}"
+        typer.echo(f"swarmpath plan: warning: {planner} on {scenario.name} run {run}: {reason}",
+                   err=True)
+        if ep is not None:
+            try:
+                out = ep.outcome().to_dict()
+                out.update(success=False, reason=reason)
+                return out, ep.sim.world
+            except Exception:
+                pass
+        return {
+            "planner": planner, "map": scenario.name, "run": run, "seed": spec.seed,
+            "success": False, "reason": reason, "collisions": 0, "length": 0.0,
+            "error": math.dist(scenario.start, scenario.goal), "smoothness": 0.0,
+            "ompl_smoothness": 0.0, "min_clearance": None, "steps": 0, "iterations": 0,
+            "seconds": 0.0, "travel_time": 0.0, "optimum": None, "gap": None,
+            "path": [[float(scenario.start[0]), float(scenario.start[1]), 0.0]],
+        }, None
+
+
+def run_plan(
+    spec: PlanSpec,
+    on_run: Callable[[int, str, str, int], None] | None = None,
+    on_step: Callable[[], None] | None = None,
+) -> list[CellResult]:
+    """Every run of every planner x map, in table order. ``on_run(i, planner, map, run)``
+    before the i-th run starts."""
+    from swarmpath.planners.summary import json_safe
+
+    cells = []
+    i = 0
+    for planner, scenario in spec.cells():
+        cell = CellResult(planner, scenario, [])
+        for run in range(spec.runs):
+            if on_run is not None:
+                on_run(i, planner, scenario.name, run)
+            outcome, world = run_episode(spec, planner, scenario, run, on_step)
+            cell.runs.append(json_safe(outcome))
+            if run == 0:
+                cell.world = world
+            i += 1
+        cells.append(cell)
+    return cells
+
+
+def document(cells: Sequence[CellResult]) -> dict[str, Any]:
+    """The ``--json`` document: exactly {"runs": [...], "summary": [...]}."""
+    from swarmpath.planners.summary import summarize
+
+    runs = [r for c in cells for r in c.runs]
+    return {"runs": runs, "summary": summarize(runs)}
+
+
+# --------------------------------------------------------------------------------------- tables
+def _num(v: Any, digits: int = 4) -> str:
+    return "-" if v is None else f"{float(v):.{digits}f}"
+
+
+def render_cell(cell: CellResult, row: dict[str, Any]) -> Table:
+    """The paper-style run table of one planner x map (``row``: its summary)."""
+    optimum = row["optimum"]
+    title = f"{cell.planner} on {cell.scenario.name}"
+    title += f" (exact optimum {optimum:.4f} m)" if optimum is not None else " (no exact optimum)"
+    table = Table(title=title, box=box.SIMPLE_HEAD, pad_edge=False)
+    for name in ("Run", "Distance (m)", "Error (m)", "Elapsed time (s)", "Success",
+                 "Collisions", "Gap (%)", "Steps", "Iterations"):
+        table.add_column(name, justify="left" if name == "Success" else "right", no_wrap=True)
+    failed = any(not r["success"] for r in cell.runs)
+    if failed:
+        table.add_column("Reason")
+    for r in cell.runs:
+        gap = None if r["gap"] is None else 100.0 * r["gap"]
+        cols = [str(r["run"] + 1), _num(r["length"]), _num(r["error"]), _num(r["seconds"], 3),
+                "yes" if r["success"] else "no", str(r["collisions"]), _num(gap, 2),
+                str(r["steps"]), str(r["iterations"])]
+        if failed:
+            cols.append("" if r["success"] else str(r["reason"]))
+        table.add_row(*cols)
+    gap_mean = None if row["gap_mean"] is None else 100.0 * row["gap_mean"]
+    mean = ["Mean", _num(row["length_mean"]), _num(row["error_mean"]), _num(row["seconds_mean"], 3),
+            f"{row['successes']}/{row['runs']}", str(row["collisions"]), _num(gap_mean, 2),
+            f"{row['steps_mean']:.1f}", f"{row['iterations_mean']:.0f}"]
+    if failed:
+        mean.append("")
+    table.add_row(*mean, style="bold", end_section=True)
+    return table
+
+
+def print_tables(cells: Sequence[CellResult], spec: PlanSpec, seconds: float) -> None:
+    from swarmpath.planners.summary import summarize
+
+    console = Console()
+    tables = []
+    for cell in cells:
+        tables.append(render_cell(cell, summarize(cell.runs)[0]))
+    if not console.is_terminal:  # pipes and files: never squeeze the numbers
+        widest = max(Measurement.get(console, console.options.update(width=100_000), t).maximum
+                     for t in tables)
+        console = Console(width=max(80, widest))
+    for t in tables:
+        console.print(t)
+    console.print(
+        f"{spec.runs} runs per planner x map, seed {spec.seed}; Distance = executed path length, "
+        "Error = final distance to the goal, Elapsed time = planning wall time; the Mean row "
+        f"averages Distance and Gap over successful runs; {seconds:.1f} s",
+        highlight=False,
+    )
+
+
+# ---------------------------------------------------------------------------------------- plots
+def _slug(text: str) -> str:
+    return re.sub(r"[^A-Za-z0-9._-]+", "_", text).strip("_") or "map"
+
+
+def plot_cell(cell: CellResult, directory: Path) -> Path:
+    """One PNG: the map, obstacles and their robot-radius-inflated outlines, moving obstacles at
+    their initial positions with a faint trace (run 0's world), start, goal (and its trace when it
+    moves), every run's executed path (failed runs dashed red)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Circle, Patch, Polygon, Rectangle
+    from shapely.geometry import Polygon as ShapelyPolygon
+
+    s = cell.scenario
+    r = s.robot.radius
+    w, h = s.size
+    fig, ax = plt.subplots(figsize=(7, 7.4), dpi=100)
+    try:
+        ax.add_patch(Rectangle((0, 0), w, h, fill=False, ec="black", lw=1.0))
+        for ob in s.obstacles:
+            moving = ob.is_moving
+            face = "#f4b183" if moving else "#9e9e9e"
+            if ob.shape == "circle":
+                c, rad = ob.center, ob.radius
+                ax.add_patch(Circle(c, rad, fc=face, ec="none", alpha=0.9))
+                ax.add_patch(Circle(c, rad + r, fill=False, ec="#616161", ls="--", lw=0.8))
+            else:
+                pts = np.asarray(ob.points)
+                ax.add_patch(Polygon(pts, closed=True, fc=face, ec="none", alpha=0.9))
+                outline = ShapelyPolygon(pts).buffer(r, quad_segs=16)
+                xs, ys = outline.exterior.xy
+                ax.plot(xs, ys, color="#616161", ls="--", lw=0.8)
+        t_end = max((run["path"][-1][2] for run in cell.runs if run["path"]), default=0.0)
+        world = cell.world
+        if world is not None and s.is_dynamic and t_end > 0:
+            times = np.linspace(0.0, t_end, 200)
+            # columns of obstacle_positions_at (ObstacleSet order) that belong to movers
+            movers = [j for j, k in enumerate(world.set_order) if s.obstacles[k].is_moving]
+            if movers:
+                pos = np.array([world.obstacle_positions_at(float(t)) for t in times])
+                for j in movers:
+                    ax.plot(pos[:, j, 0], pos[:, j, 1], color="#e07b39", alpha=0.35, lw=1.0)
+            if s.goal_motion is not None:
+                g = np.array([world.goal_at(float(t)) for t in times])
+                ax.plot(g[:, 0], g[:, 1], color="#2e7d32", alpha=0.5, lw=1.0, ls=":")
+        for run in cell.runs:
+            p = np.asarray(run["path"], dtype=float).reshape(-1, 3)
+            if run["success"]:
+                ax.plot(p[:, 0], p[:, 1], lw=1.2, alpha=0.85)
+            else:
+                ax.plot(p[:, 0], p[:, 1], lw=1.2, ls="--", color="#d32f2f", alpha=0.85)
+        ax.plot(*s.start, marker="o", color="#1565c0", ms=8, ls="none")
+        ax.plot(*s.goal, marker="*", color="#2e7d32", ms=13, ls="none")
+        handles = [
+            Line2D([], [], marker="o", color="#1565c0", ls="none", label="start"),
+            Line2D([], [], marker="*", color="#2e7d32", ms=10, ls="none", label="goal (t=0)"),
+            Patch(fc="#9e9e9e", label="static obstacle"),
+            Line2D([], [], color="#616161", ls="--", lw=0.8, label=f"inflated by r={r:g} m"),
+        ]
+        if any(ob.is_moving for ob in s.obstacles):
+            handles += [Patch(fc="#f4b183", label="moving obstacle (t=0)"),
+                        Line2D([], [], color="#e07b39", alpha=0.35, label="obstacle trace (run 1)")]
+        if s.goal_motion is not None:
+            handles.append(Line2D([], [], color="#2e7d32", alpha=0.5, ls=":",
+                                  label="goal trace (run 1)"))
+        handles += [Line2D([], [], color="#1f77b4", label="run (reached the goal)"),
+                    Line2D([], [], color="#d32f2f", ls="--", label="run (failed)")]
+        ok = sum(1 for run in cell.runs if run["success"])
+        ax.set_title(f"{cell.planner} on {s.name}: {ok}/{len(cell.runs)} runs reached the goal")
+        ax.set_xlim(-0.02 * w, 1.02 * w)
+        ax.set_ylim(-0.02 * h, 1.02 * h)
+        ax.set_aspect("equal")
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("y (m)")
+        fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=8, frameon=False)
+        fig.subplots_adjust(bottom=0.13, top=0.94)
+        out = directory / f"{_slug(cell.planner)}_{_slug(s.name)}.png"
+        fig.savefig(out)
+    finally:
+        plt.close(fig)
+    return out
+
+
+# -------------------------------------------------------------------------------------- command
+def _run_with_progress(spec: PlanSpec, stderr: Console) -> list[CellResult]:
+    total = len(spec.cells()) * spec.runs
+    columns = (
+        TextColumn("{task.description:<28}"),
+        BarColumn(),
+        TextColumn("runs {task.completed:.0f}/{task.total:.0f}"),
+        TextColumn("steps {task.fields[steps]}"),
+        TimeElapsedColumn(),
+    )
+    with Progress(*columns, console=stderr, transient=stderr.is_terminal) as progress:
+        task = progress.add_task("plan", total=total, steps=0)
+        steps = 0
+
+        def on_run(i: int, planner: str, name: str, run: int) -> None:
+            nonlocal steps
+            steps = 0
+            progress.update(task, completed=i, description=f"{planner} {name} #{run + 1}",
+                            steps=0)
+
+        def on_step() -> None:
+            nonlocal steps
+            steps += 1
+            if steps % 10 == 0:
+                progress.update(task, steps=steps)
+
+        cells = run_plan(spec, on_run, on_step)
+        progress.update(task, completed=total, description="done", steps=steps)
+    return cells
+
+
+def _list_maps() -> None:
+    from swarmpath.world import get_map, list_maps
+
+    for name in list_maps():
+        typer.echo(f"{name:<14} {get_map(name).description}")
+
+
+def _list_planners() -> None:
+    from swarmpath.planners import get_planner, list_planners
+
+    for name in list_planners():
+        cls = get_planner(name)
+        typer.echo(f"{name:<14} {cls.kind:<7} {cls.description}")
+
+
+@app.command()
+def plan(
+    planners: Annotated[
+        str, typer.Option("--planners", "-p", help="Comma-separated planner names, or 'all'.")
+    ] = "all",
+    maps: Annotated[
+        str,
+        typer.Option("--maps", "-m", help="Comma-separated presets or paths (scenario JSON/YAML, "
+                     "nav2 map YAML, MovingAI .map)."),
+    ] = "mfb-static",
+    runs: Annotated[int, typer.Option(help="Runs per planner x map.")] = 10,
+    seed: Annotated[int, typer.Option(help="Study seed; run r uses its own streams of it.")] = 1,
+    as_json: Annotated[
+        bool, typer.Option("--json", help='Print one JSON document {"runs", "summary"}.')
+    ] = False,
+    plot: Annotated[
+        Path | None, typer.Option("--plot", help="Write one PNG per planner x map into DIR.",
+                                  metavar="DIR")
+    ] = None,
+    params: Annotated[
+        str | None,
+        typer.Option(help='Planner parameters: \'{"OMPL-RRTstar": {"time": 0.5}}\'.'),
+    ] = None,
+    list_maps: Annotated[
+        bool, typer.Option("--list-maps", help="List the preset maps and exit.")
+    ] = False,
+    list_planners: Annotated[
+        bool, typer.Option("--list-planners", help="List the registered planners and exit.")
+    ] = False,
+) -> None:
+    """Run path planners on maps; print the papers' run tables (Run / Distance / Error / Elapsed
+    time) with success, collisions and the gap to the exact optimum."""
+    import time
+
+    if list_maps or list_planners:
+        if list_maps:
+            _list_maps()
+        if list_planners:
+            _list_planners()
+        return
+    spec = make_spec(planners, maps, runs, seed, params)
+    if plot is not None:
+        try:
+            plot.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise InputError("--plot", f"cannot create {str(plot)!r}: {exc.strerror}") from None
+        if not plot.is_dir():
+            raise InputError("--plot", f"{str(plot)!r} is not a directory")
+    stderr = Console(stderr=True)
+    started = time.perf_counter()
+    cells = _run_with_progress(spec, stderr)
+    seconds = time.perf_counter() - started
+    if plot is not None:
+        for cell in cells:
+            out = plot_cell(cell, plot)
+            stderr.print(f"wrote {out}", highlight=False)
+    if as_json:
+        sys.stdout.write(json.dumps(document(cells), allow_nan=False) + "\n")
+        return
+    print_tables(cells, spec, seconds)
