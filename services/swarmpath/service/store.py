@@ -39,7 +39,7 @@ import threading
 import time
 import uuid
 import zlib
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -47,11 +47,13 @@ from typing import Any
 from swarmpath.service.protocol import (
     CELL_ADAPTER,
     AckStatus,
+    BenchmarkCell,
     BenchmarkJobSpec,
     JobState,
     JobStatus,
     Lease,
     LeaseState,
+    MapCell,
     MapJobSpec,
     RunResult,
     expand_cells,
@@ -372,11 +374,14 @@ class Store:
         now: float | None = None,
         lease_seconds: float = 60.0,
         heartbeat_seconds: float | None = None,
+        runs_for: Callable[[BenchmarkCell | MapCell], int] | None = None,
     ) -> Lease | None:
         """Lease up to ``max_runs`` runs of one cell to ``worker``, or None if nothing is leasable.
 
         Jobs take turns (the job leased least recently goes first; new jobs in submission order);
-        within a job, requeued runs go first, then the next unleased runs in cell order."""
+        within a job, requeued runs go first, then the next unleased runs in cell order.
+        ``runs_for(cell_spec)``, when given, caps the lease's size for the cell picked (the
+        coordinator sizes leases by the expected cost of a run; at least one run is leased)."""
         if max_runs < 1:
             raise ValueError("max_runs must be >= 1")
         now = time.time() if now is None else now
@@ -387,7 +392,7 @@ class Store:
             ).fetchall()
             for job in jobs:
                 seq = job["seq"]
-                picked = self._pick_runs(db, seq, max_runs)
+                picked = self._pick_runs(db, seq, max_runs, runs_for)
                 if picked is None:
                     continue
                 cell_idx, runs = picked
@@ -427,12 +432,34 @@ class Store:
         return None
 
     @staticmethod
-    def _pick_runs(db: sqlite3.Connection, seq: int, max_runs: int) -> tuple[int, list[int]] | None:
+    def _cap(
+        db: sqlite3.Connection,
+        seq: int,
+        cell_idx: int,
+        max_runs: int,
+        runs_for: Callable[[BenchmarkCell | MapCell], int] | None,
+    ) -> int:
+        if runs_for is None:
+            return max_runs
+        spec = db.execute(
+            "SELECT spec FROM cells WHERE job_seq = ? AND idx = ?", (seq, cell_idx)
+        ).fetchone()[0]
+        return max(1, min(max_runs, int(runs_for(CELL_ADAPTER.validate_json(spec)))))
+
+    @classmethod
+    def _pick_runs(
+        cls,
+        db: sqlite3.Connection,
+        seq: int,
+        max_runs: int,
+        runs_for: Callable[[BenchmarkCell | MapCell], int] | None = None,
+    ) -> tuple[int, list[int]] | None:
         first = db.execute(
             "SELECT cell_idx FROM requeue WHERE job_seq = ? ORDER BY cell_idx, run LIMIT 1", (seq,)
         ).fetchone()
         if first is not None:
             cell_idx = first[0]
+            max_runs = cls._cap(db, seq, cell_idx, max_runs, runs_for)
             runs = [
                 r[0]
                 for r in db.execute(
@@ -453,6 +480,7 @@ class Store:
         ).fetchone()
         if cell is None:
             return None
+        max_runs = cls._cap(db, seq, cell["idx"], max_runs, runs_for)
         start = cell["next_run"]
         stop = min(cell["runs"], start + max_runs)
         db.execute(

@@ -1,0 +1,922 @@
+"""The worker: a Zenoh client that pulls leases from the coordinator, runs them, reports results.
+
+Layers, the lower ones usable without the upper ones:
+
+* :func:`execute_lease` - the work itself, a plain function: a benchmark lease is one vectorized
+  ``minimize(..., run_ids=lease.runs)`` (split into memory-bounded batches, as ``swarmpath bench``
+  does; runs are independent so the numbers are the same), a map lease one
+  ``Episode(scenario, planner, seed, run, params)`` per run. Returns the encoded RunResults; a run
+  that raises is a ``failed`` result (not retried); cancellation is checked every iteration/step.
+* Slots - where leases execute, ``--slots N`` of them: spawned child processes by default (never
+  forked: the parent runs Zenoh), or threads (``executor="thread"``, for tests and debugging).
+  A child ignores SIGINT (the parent decides), and exits by itself when its parent disappears.
+* :class:`Worker` - the protocol (schemas/README.md): liveliness token, pull loop with backoff,
+  heartbeats (RunProgress) for running leases, results put with CongestionControl.BLOCK and
+  re-sent until acknowledged, ``drop_leases`` and ``Cancel`` honoured, graceful stop on
+  SIGTERM/SIGINT: stop pulling, let running leases finish for ``grace_seconds`` (then abort them),
+  wait for the acks, undeclare the token (the coordinator requeues whatever was not reported).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import re
+import signal
+import socket
+import threading
+import time
+import traceback
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+from swarmpath.service.protocol import (
+    DEFAULT_PREFIX,
+    MAX_BODY_BYTES,
+    PROTOCOL_VERSION,
+    Ack,
+    BenchmarkCell,
+    Cancel,
+    Keys,
+    Lease,
+    LeaseRequest,
+    MapCell,
+    NoWork,
+    RunProgress,
+    RunResult,
+    decode,
+    decode_work_reply,
+    encode,
+)
+from swarmpath.service.zenoh_config import DEFAULT_ZENOH, client_config
+
+log = logging.getLogger("swarmpath.worker")
+
+#: Runs of a benchmark lease are computed in batches of at most this many array elements per
+#: population (runs x agents x dim), like ``swarmpath bench``.
+BATCH_ELEMENTS = 1 << 22
+#: Result batches are cut to stay below this many bytes of JSON (the coordinator drops > 1 MB).
+BATCH_BYTES = 512_000
+#: A single result larger than this has its curve (and path) thinned to fit.
+RESULT_BYTES = MAX_BODY_BYTES - 4096
+
+
+class Cancelled(Exception):
+    """The lease was dropped or cancelled while it ran."""
+
+
+def _never() -> bool:
+    return False
+
+
+# ----------------------------------------------------------------------------------- executing
+def execute_lease(
+    lease: Lease,
+    cancelled: Callable[[], bool] = _never,
+    progress: Callable[[int], None] | None = None,
+) -> list[tuple[int, bytes]]:
+    """Run every run of ``lease``; returns ``(run, encoded RunResult)`` in run order.
+
+    Raises :class:`Cancelled` when ``cancelled()`` turns true. ``progress(n)`` is called with the
+    number of iterations (benchmark) or planner steps (map) done so far in the lease."""
+    if isinstance(lease.spec, BenchmarkCell):
+        results = _benchmark(lease, lease.spec, cancelled, progress)
+    else:
+        results = _map(lease, lease.spec, cancelled, progress)
+    return [(r.run, fit_result(r)) for r in results]
+
+
+def _result(lease: Lease, run: int, seconds: float, **fields: Any) -> RunResult:
+    return RunResult(
+        lease_id=lease.lease_id, job_id=lease.job_id, cell=lease.cell, run=run,
+        worker=lease.worker, seconds=max(0.0, seconds), **fields,
+    )
+
+
+def _failure_text(exc: BaseException) -> str:
+    text = "".join(traceback.format_exception_only(type(exc), exc)).strip()
+    return text[:20_000]
+
+
+def benchmark_batches(runs: Sequence[int], agents: int, dim: int) -> list[list[int]]:
+    """The lease's runs in memory-bounded batches (at most BATCH_ELEMENTS per population)."""
+    size = max(1, BATCH_ELEMENTS // max(1, agents * dim))
+    runs = list(runs)
+    return [runs[i:i + size] for i in range(0, len(runs), size)]
+
+
+def _benchmark(
+    lease: Lease,
+    spec: BenchmarkCell,
+    cancelled: Callable[[], bool],
+    progress: Callable[[int], None] | None,
+) -> list[RunResult]:
+    from swarmpath.optimizers import minimize
+
+    out: list[RunResult] = []
+    done = 0
+
+    def hook(_optimizer: object) -> None:
+        nonlocal done
+        done += 1
+        if progress is not None:
+            progress(done)
+        if cancelled():
+            raise Cancelled(lease.lease_id)
+
+    for batch in benchmark_batches(lease.runs, spec.agents, spec.dim):
+        if cancelled():
+            raise Cancelled(lease.lease_id)
+        started = time.perf_counter()
+        try:
+            res = minimize(
+                spec.algorithm, spec.function, dim=spec.dim, agents=spec.agents,
+                iterations=spec.iterations, seed=lease.seed, params=spec.params,
+                shifted=spec.shifted, run_ids=batch, on_iteration=hook,
+            )
+        except Cancelled:
+            raise
+        except Exception as exc:
+            seconds = (time.perf_counter() - started) / len(batch)
+            failure = _failure_text(exc)
+            log.warning("lease %s: runs %s of %s failed: %s", lease.lease_id, batch, lease.cell,
+                        failure.splitlines()[-1] if failure else "")
+            out += [_result(lease, r, seconds, status="failed", failure=failure) for r in batch]
+            continue
+        share = res.seconds / len(batch)
+        for i, r in enumerate(batch):
+            out.append(_result(
+                lease, r, share,
+                metrics={"best_fitness": float(res.best_fitness[i]),
+                         "evaluations": int(res.evaluations[i])},
+                curve=[float(v) for v in res.curve[i]],
+                best_position=[float(v) for v in res.best_position[i]],
+            ))
+    return out
+
+
+def load_scenario(spec: MapCell) -> Any:
+    """The cell's scenario: the inline object, or the preset named ``spec.map``."""
+    if spec.scenario is not None:
+        from swarmpath.world.scenario_io import scenario_from_dict
+
+        return scenario_from_dict(dict(spec.scenario))
+    from swarmpath.world.presets import get_map
+
+    return get_map(spec.map)
+
+
+def _map(
+    lease: Lease,
+    spec: MapCell,
+    cancelled: Callable[[], bool],
+    progress: Callable[[int], None] | None,
+) -> list[RunResult]:
+    out: list[RunResult] = []
+    steps = 0
+    try:
+        from swarmpath.planners import Episode
+
+        scenario = load_scenario(spec)
+    except Exception as exc:
+        failure = _failure_text(exc)
+        return [_result(lease, r, 0.0, status="failed", failure=failure) for r in lease.runs]
+    for r in lease.runs:
+        if cancelled():
+            raise Cancelled(lease.lease_id)
+        started = time.perf_counter()
+        try:
+            episode = Episode(scenario, spec.planner, lease.seed, r, spec.params)
+            while not episode.done:
+                episode.step()
+                steps += 1
+                if progress is not None:
+                    progress(steps)
+                if cancelled():
+                    raise Cancelled(lease.lease_id)
+            outcome = episode.outcome()
+        except Cancelled:
+            raise
+        except Exception as exc:
+            out.append(_result(lease, r, time.perf_counter() - started, status="failed",
+                               failure=_failure_text(exc)))
+            continue
+        data = outcome.to_dict()
+        path = data.pop("path", None) or []
+        metrics = {k: v for k, v in data.items() if _scalar(v)}
+        out.append(_result(
+            lease, r, time.perf_counter() - started, metrics=metrics,
+            path=[(float(p[0]), float(p[1]), float(p[2])) for p in path],
+        ))
+    return out
+
+
+def _scalar(v: Any) -> bool:
+    return v is None or isinstance(v, bool | int | float | str)
+
+
+def fit_result(result: RunResult, limit: int = RESULT_BYTES) -> bytes:
+    """The encoded result, its curve (and path) thinned to evenly spaced samples, first and last
+    kept, when it would not fit in one message (``metrics.curve_stride`` records the stride)."""
+    data = encode(result)
+    stride = 1
+    while len(data) > limit and stride < 1 << 20:
+        stride *= 2
+        changes: dict[str, Any] = {}
+        if result.curve:
+            changes["curve"] = _thin(result.curve, stride)
+            changes["metrics"] = {**result.metrics, "curve_stride": stride}
+        if result.path and len(result.path) > 2:
+            changes["path"] = _thin(result.path, stride)
+        if not changes:
+            break
+        data = encode(result.model_copy(update=changes))
+    return data
+
+
+def _thin(values: Sequence[Any], stride: int) -> list[Any]:
+    out = list(values[::stride])
+    if (len(values) - 1) % stride:
+        out.append(values[-1])
+    return out
+
+
+def pack_batches(worker: str, results: Sequence[bytes], limit: int = BATCH_BYTES) -> list[bytes]:
+    """ResultBatch payloads from encoded results, each at most ``limit`` bytes when possible."""
+    head = b'{"worker":' + json.dumps(worker).encode() + b',"results":['
+    out: list[bytes] = []
+    chunk: list[bytes] = []
+    size = len(head) + 2
+    for r in results:
+        if chunk and size + len(r) + 1 > limit:
+            out.append(head + b",".join(chunk) + b"]}")
+            chunk, size = [], len(head) + 2
+        chunk.append(r)
+        size += len(r) + 1
+    if chunk:
+        out.append(head + b",".join(chunk) + b"]}")
+    return out
+
+
+# -------------------------------------------------------------------------------------- slots
+class Slot:
+    """Executes one lease at a time; ``on_done(slot, lease, outcome)`` is called from a thread of
+    the slot with outcome = list of (run, bytes), or ``Cancelled``, or an Exception."""
+
+    def __init__(self, index: int, on_done: Callable[[Slot, Lease, Any], None]):
+        self.index = index
+        self.on_done = on_done
+        self.lease: Lease | None = None
+
+    @property
+    def busy(self) -> bool:
+        return self.lease is not None
+
+    def start(self) -> None: ...
+    def submit(self, lease: Lease) -> None: ...
+    def cancel(self) -> None: ...
+    def iteration(self) -> int:
+        return 0
+
+    def close(self, timeout: float = 5.0) -> None: ...
+
+
+class ThreadSlot(Slot):
+    """A lease runs in a thread of the worker process (shares the GIL: for tests and debugging)."""
+
+    def __init__(self, index: int, on_done: Callable[[Slot, Lease, Any], None]):
+        super().__init__(index, on_done)
+        self._cancel = threading.Event()
+        self._done = 0
+        self._thread: threading.Thread | None = None
+
+    def submit(self, lease: Lease) -> None:
+        self.lease = lease
+        self._cancel.clear()
+        self._done = 0
+        self._thread = threading.Thread(
+            target=self._run, args=(lease,), name=f"slot-{self.index}", daemon=True)
+        self._thread.start()
+
+    def _run(self, lease: Lease) -> None:
+        def progress(n: int) -> None:
+            self._done = n
+
+        try:
+            outcome: Any = execute_lease(lease, self._cancel.is_set, progress)
+        except Cancelled as exc:
+            outcome = exc
+        except Exception as exc:  # pragma: no cover - execute_lease reports run failures itself
+            outcome = exc
+        self.lease = None
+        self.on_done(self, lease, outcome)
+
+    def cancel(self) -> None:
+        self._cancel.set()
+
+    def iteration(self) -> int:
+        return self._done
+
+    def close(self, timeout: float = 5.0) -> None:
+        self._cancel.set()
+        if self._thread is not None:
+            self._thread.join(timeout)
+
+
+def _slot_main(conn: Any, cancel: Any, done: Any, parent: int) -> None:
+    """A slot's child process: leases in, results out, until told to stop or orphaned."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's business
+
+    def orphan_watch() -> None:
+        while True:
+            time.sleep(0.5)
+            if os.getppid() != parent:
+                os._exit(3)
+
+    threading.Thread(target=orphan_watch, daemon=True).start()
+    logging.basicConfig(level=logging.WARNING, format="%(asctime)s slot %(message)s")
+    # One slot is one core: no BLAS/OpenMP thread pools fighting the other slots and workers
+    # (numpy is not imported yet in this fresh process; an explicit setting wins).
+    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(var, "1")
+    import swarmpath.optimizers  # noqa: F401  (pay the import before the first lease)
+
+    def progress(n: int) -> None:
+        done.value = n
+
+    def is_cancelled() -> bool:
+        return bool(cancel.value)
+
+    while True:
+        try:
+            message = conn.recv()
+        except (EOFError, OSError):
+            return
+        if message is None:
+            return
+        try:
+            lease = decode_work_reply(message)
+            assert isinstance(lease, Lease)
+            reply: tuple[Any, ...] = ("done", execute_lease(lease, is_cancelled, progress))
+        except Cancelled:
+            reply = ("cancelled",)
+        except Exception as exc:  # reported to the parent
+            reply = ("error", _failure_text(exc))
+        try:
+            conn.send(reply)
+        except (EOFError, OSError):
+            return
+
+
+class ProcessSlot(Slot):
+    """A lease runs in a spawned child process (true parallelism; killed and respawned if it
+    dies). The child is started with the multiprocessing *spawn* method, never forked."""
+
+    def __init__(self, index: int, on_done: Callable[[Slot, Lease, Any], None]):
+        super().__init__(index, on_done)
+        import multiprocessing
+
+        self._ctx = multiprocessing.get_context("spawn")
+        self._cancel = self._ctx.Value("b", 0, lock=False)
+        self._done = self._ctx.Value("q", 0, lock=False)
+        self._proc: Any = None
+        self._conn: Any = None
+        self._waiter: threading.Thread | None = None
+        self._closing = False
+
+    def start(self) -> None:
+        parent_conn, child_conn = self._ctx.Pipe()
+        self._proc = self._ctx.Process(
+            target=_slot_main, args=(child_conn, self._cancel, self._done, os.getpid()),
+            name=f"swarmpath-slot-{self.index}", daemon=True,
+        )
+        self._proc.start()
+        child_conn.close()
+        self._conn = parent_conn
+
+    def submit(self, lease: Lease) -> None:
+        if self._proc is None or not self._proc.is_alive():
+            self.start()
+        self.lease = lease
+        self._cancel.value = 0
+        self._done.value = 0
+        self._conn.send(encode(lease))
+        self._waiter = threading.Thread(
+            target=self._wait, args=(lease,), name=f"slot-{self.index}", daemon=True)
+        self._waiter.start()
+
+    def _wait(self, lease: Lease) -> None:
+        outcome: Any
+        try:
+            reply = self._conn.recv()
+        except (EOFError, OSError):
+            code = self._proc.exitcode if self._proc is not None else None
+            if self._proc is not None:
+                self._proc.join(1.0)
+                code = self._proc.exitcode
+            outcome = RuntimeError(f"the slot process died (exit code {code})")
+            self._proc = None
+        else:
+            if reply[0] == "done":
+                outcome = reply[1]
+            elif reply[0] == "cancelled":
+                outcome = Cancelled(lease.lease_id)
+            else:
+                outcome = RuntimeError(reply[1])
+        self.lease = None
+        if not self._closing:
+            self.on_done(self, lease, outcome)
+
+    def cancel(self) -> None:
+        self._cancel.value = 1
+
+    def iteration(self) -> int:
+        return int(self._done.value)
+
+    def close(self, timeout: float = 5.0) -> None:
+        self._closing = True
+        self._cancel.value = 1
+        if self._conn is not None:
+            try:
+                self._conn.send(None)
+            except (OSError, ValueError):
+                pass
+        if self._proc is not None:
+            self._proc.join(timeout)
+            if self._proc.is_alive():
+                self._proc.terminate()
+                self._proc.join(2.0)
+        if self._conn is not None:
+            self._conn.close()
+
+
+# ------------------------------------------------------------------------------------- worker
+def default_worker_id() -> str:
+    host = re.sub(r"[^A-Za-z0-9_.-]", "-", socket.gethostname()).strip("-._") or "host"
+    return f"{host[:100]}-{os.getpid()}"
+
+
+@dataclass
+class WorkerSettings:
+    connect: list[str] = field(default_factory=lambda: [DEFAULT_ZENOH])
+    prefix: str = DEFAULT_PREFIX
+    slots: int = 1
+    worker_id: str | None = None
+    max_runs: int = 1000  # per lease request; the coordinator sizes leases below this
+    executor: Literal["process", "thread"] = "process"
+    user: str | None = None
+    password: str | None = None
+    shm: bool = False
+    zenoh_extra: dict[str, Any] | None = None
+    query_timeout: float = 10.0  # waiting for a lease reply
+    ack_timeout: float = 5.0  # results not settled within this are put again (with backoff)
+    max_backoff: float = 5.0  # coordinator absent: retry pulls at most this far apart
+    grace_seconds: float = 10.0  # on stop: running leases get this long to finish
+    exit_with_parent: int | None = None  # stop when this process is no longer our parent
+
+    def zenoh_config(self) -> dict[str, Any]:
+        return client_config(self.connect, shm=self.shm, user=self.user, password=self.password,
+                             extra=self.zenoh_extra)
+
+
+@dataclass
+class _Active:
+    lease: Lease
+    slot: Slot
+    received: float
+    last_progress: float
+
+
+@dataclass
+class _Pending:
+    job_id: str
+    lease_id: str
+    data: bytes
+    sent: float = 0.0
+    seq: int = 0  # of the put that last carried it
+    attempts: int = 0
+
+
+class Worker:
+    """See the module docstring. ``run()`` blocks until ``stop()`` (or a signal)."""
+
+    def __init__(self, settings: WorkerSettings):
+        self.settings = settings
+        self.id = settings.worker_id or default_worker_id()
+        Keys(settings.prefix).worker_token(self.id)  # validates the id
+        self.keys = Keys(settings.prefix)
+        self.host = socket.gethostname()
+        self._lock = threading.RLock()
+        self._wake = threading.Condition(self._lock)
+        self._stop = threading.Event()
+        self._abort = threading.Event()
+        self._active: dict[str, _Active] = {}
+        self._pending: dict[tuple[str, int], _Pending] = {}
+        self._dropped: set[str] = set()
+        self._cancelled_jobs: set[str] = set()
+        self._slots: list[Slot] = []
+        self._session: Any = None
+        self._zenoh: Any = None
+        self.runs_done = 0
+        self.leases_done = 0
+        self._closing = False
+        self._seq = 0  # puts of results so far
+        self._acked_seq = 0  # highest put with an acknowledged result
+        self._last_ack = time.monotonic()
+
+    # ------------------------------------------------------------------------------ control
+    def stop(self) -> None:
+        """Graceful stop (idempotent); a second call aborts running leases at once."""
+        if self._stop.is_set():
+            self._abort.set()
+        self._stop.set()
+        with self._wake:
+            self._wake.notify_all()
+
+    def install_signal_handlers(self) -> None:
+        def handler(signum: int, _frame: Any) -> None:
+            name = signal.Signals(signum).name
+            if self._stop.is_set():
+                log.warning("%s again: aborting running leases", name)
+            else:
+                log.info("%s: finishing (at most %.0f s), then leaving", name,
+                         self.settings.grace_seconds)
+            self.stop()
+
+        signal.signal(signal.SIGTERM, handler)
+        signal.signal(signal.SIGINT, handler)
+
+    # ---------------------------------------------------------------------------------- run
+    def run(self) -> int:
+        slot_cls = ProcessSlot if self.settings.executor == "process" else ThreadSlot
+        self._slots = [slot_cls(i, self._on_slot_done) for i in range(self.settings.slots)]
+        for slot in self._slots:
+            slot.start()
+        if self.settings.exit_with_parent:
+            threading.Thread(target=self._watch_parent, daemon=True).start()
+        try:
+            if not self._open():
+                return 1
+            self._declare()
+            threads = [
+                threading.Thread(target=self._heartbeat_loop, name="heartbeat", daemon=True),
+                threading.Thread(target=self._resend_loop, name="resend", daemon=True),
+            ]
+            for t in threads:
+                t.start()
+            log.info("worker %s ready: %d %s slot(s), pulling from %s", self.id,
+                     len(self._slots), self.settings.executor, ", ".join(self.settings.connect))
+            self._pull_loop()
+            self._drain()
+            return 0
+        finally:
+            self._shutdown()
+
+    def _watch_parent(self) -> None:
+        while not self._stop.wait(0.5):
+            if os.getppid() != self.settings.exit_with_parent:
+                log.warning("parent process %s is gone: stopping", self.settings.exit_with_parent)
+                self.stop()
+                return
+
+    def _open(self) -> bool:
+        import zenoh
+
+        from swarmpath.service.zenoh_config import describe, to_zenoh
+
+        self._zenoh = zenoh
+        conf = self.settings.zenoh_config()
+        complained = False
+        while not self._stop.is_set():
+            try:
+                self._session = zenoh.open(to_zenoh(conf))
+                log.info("%s", describe(conf))
+                return True
+            except Exception as exc:
+                if not complained:
+                    log.warning("cannot open %s (%s); retrying until it answers",
+                                describe(conf), " ".join(str(exc).split())[:200])
+                    complained = True
+                self._stop.wait(1.0)
+        return False
+
+    def _declare(self) -> None:
+        s = self._session
+        self._token = s.liveliness().declare_token(self.keys.worker_token(self.id))
+        self._subs = [
+            s.declare_subscriber(self.keys.ack(self.id), self._on_ack),
+            s.declare_subscriber(self.keys.cancel, self._on_cancel),
+        ]
+        self._querier = s.declare_querier(
+            self.keys.work, timeout=self.settings.query_timeout,
+            target=self._zenoh.QueryTarget.BEST_MATCHING,
+        )
+
+    # ----------------------------------------------------------------------------- pulling
+    def _free_slot(self) -> Slot | None:
+        for slot in self._slots:
+            if not slot.busy and not any(a.slot is slot for a in self._active.values()):
+                return slot
+        return None
+
+    def request(self) -> bytes:
+        return encode(LeaseRequest(
+            worker=self.id, max_runs=self.settings.max_runs, host=self.host, pid=os.getpid(),
+            slots=len(self._slots), version=_version(), protocol=PROTOCOL_VERSION,
+        ))
+
+    def _ask(self) -> Lease | NoWork | None:
+        """One lease request; None when nobody answered."""
+        replies = list(self._querier.get(payload=self.request()))
+        for reply in replies:
+            ok = reply.ok
+            if ok is None:
+                err = reply.err
+                log.warning("lease request failed: %s",
+                            err.payload.to_bytes()[:200] if err is not None else "?")
+                continue
+            try:
+                return decode_work_reply(ok.payload.to_bytes())
+            except Exception as exc:
+                log.warning("ignored a malformed lease reply: %s", " ".join(str(exc).split())[:200])
+        return None
+
+    def _pull_loop(self) -> None:
+        backoff = 0.0
+        while not self._stop.is_set():
+            with self._wake:
+                while not self._stop.is_set() and self._free_slot() is None:
+                    self._wake.wait(0.5)
+            if self._stop.is_set():
+                return
+            try:
+                reply = self._ask()
+            except Exception as exc:
+                log.warning("lease request failed: %s", exc)
+                reply = None
+            if reply is None:
+                backoff = min(self.settings.max_backoff, max(1.0, backoff * 2))
+                if backoff <= 1.0:
+                    log.warning("no coordinator answers on %s; retrying", self.keys.work)
+                self._stop.wait(backoff)
+                continue
+            if backoff:
+                log.info("coordinator reachable again")
+                backoff = 0.0
+                self._resend_all()
+            if isinstance(reply, NoWork):
+                self._stop.wait(reply.retry_after)
+                continue
+            self._start(reply)
+
+    def _start(self, lease: Lease) -> None:
+        with self._lock:
+            slot = self._free_slot()
+            if slot is None or lease.worker != self.id:  # pragma: no cover - we asked for one
+                log.warning("got lease %s without a free slot; it will expire", lease.lease_id)
+                return
+            now = time.monotonic()
+            self._active[lease.lease_id] = _Active(lease, slot, now, now)
+        log.debug("lease %s: %s runs %s", lease.lease_id, lease.cell, lease.runs)
+        slot.submit(lease)
+
+    # ----------------------------------------------------------------------------- results
+    def _on_slot_done(self, slot: Slot, lease: Lease, outcome: Any) -> None:
+        with self._lock:
+            self._active.pop(lease.lease_id, None)
+            dropped = lease.lease_id in self._dropped or lease.job_id in self._cancelled_jobs
+        try:
+            if isinstance(outcome, Cancelled) or dropped:
+                log.info("lease %s (%s) dropped", lease.lease_id, lease.cell)
+            elif isinstance(outcome, BaseException):
+                text = f"{type(outcome).__name__}: {outcome}"
+                log.error("lease %s failed as a whole: %s", lease.lease_id, text)
+                self._publish_results(lease, [
+                    (r, fit_result(_result(lease, r, 0.0, status="failed", failure=text[:20_000])))
+                    for r in lease.runs
+                ])
+            else:
+                self._publish_results(lease, outcome)
+                self.leases_done += 1
+                self.runs_done += len(outcome)
+        except Exception:  # never lose the slot thread silently; the lease expires and requeues
+            log.exception("handling the outcome of lease %s failed", lease.lease_id)
+        finally:
+            with self._wake:
+                self._wake.notify_all()
+
+    def _publish_results(self, lease: Lease, results: list[tuple[int, bytes]]) -> None:
+        entries = [_Pending(lease.job_id, lease.lease_id, data) for _run, data in results]
+        with self._lock:
+            for (run, _data), entry in zip(results, entries, strict=True):
+                self._pending[(lease.lease_id, run)] = entry
+        self._send(lease.job_id, entries)
+
+    def _send(self, job_id: str, entries: list[_Pending]) -> None:
+        """Put results (in batches) and note when and in which put they went."""
+        with self._lock:
+            self._seq += 1
+            now = time.monotonic()
+            for e in entries:
+                e.sent, e.seq = now, self._seq
+                e.attempts += 1
+        key = self.keys.results(job_id)
+        for payload in pack_batches(self.id, [e.data for e in entries]):
+            self._put(key, payload)
+
+    def _put(self, key: str, payload: bytes) -> None:
+        try:
+            self._session.put(
+                key, payload, encoding=self._zenoh.Encoding.APPLICATION_JSON,
+                congestion_control=self._zenoh.CongestionControl.BLOCK,
+            )
+        except Exception as exc:
+            log.warning("put on %s failed (will retry): %s", key, exc)
+
+    def _on_ack(self, sample: Any) -> None:
+        """Zenoh callback: quick bookkeeping only."""
+        try:
+            ack = decode(Ack, sample.payload.to_bytes())
+        except Exception as exc:
+            log.warning("ignored a malformed ack: %s", " ".join(str(exc).split())[:200])
+            return
+        with self._wake:
+            if ack.results:
+                self._last_ack = time.monotonic()
+            for r in ack.results:
+                entry = self._pending.pop((r.lease_id, r.run), None)
+                if entry is not None:
+                    self._acked_seq = max(self._acked_seq, entry.seq)
+                if r.status == "stale":
+                    log.info("result %s run %d was stale (%s)", r.cell, r.run, r.lease_id)
+            for lease_id in ack.drop_leases:
+                self._drop(lease_id)
+            self._wake.notify_all()
+
+    def _on_cancel(self, sample: Any) -> None:
+        try:
+            msg = decode(Cancel, sample.payload.to_bytes())
+        except Exception as exc:
+            log.warning("ignored a malformed cancel: %s", " ".join(str(exc).split())[:200])
+            return
+        with self._wake:
+            self._cancelled_jobs.add(msg.job_id)
+            for a in list(self._active.values()):
+                if a.lease.job_id == msg.job_id:
+                    log.info("job %s cancelled: dropping lease %s", msg.job_id, a.lease.lease_id)
+                    a.slot.cancel()
+            for key in [k for k, p in self._pending.items() if p.job_id == msg.job_id]:
+                del self._pending[key]
+            self._wake.notify_all()
+
+    def _drop(self, lease_id: str) -> None:
+        self._dropped.add(lease_id)
+        if len(self._dropped) > 10_000:
+            self._dropped = {lease_id}
+        active = self._active.get(lease_id)
+        if active is not None:
+            log.info("coordinator dropped lease %s (%s)", lease_id, active.lease.cell)
+            active.slot.cancel()
+        for key in [k for k, p in self._pending.items() if p.lease_id == lease_id]:
+            del self._pending[key]
+
+    def _resend_all(self) -> None:
+        with self._lock:
+            for p in self._pending.values():
+                p.sent = 0.0
+
+    def _resend_loop(self) -> None:
+        while self._session is not None and not self._abort.is_set():
+            time.sleep(0.25)
+            self.resend_due()
+            if self._closing:
+                return
+
+    def resend_due(self, now: float | None = None) -> int:
+        """Put again what was not acknowledged within ack_timeout (doubling, at most 30 s) -
+        unless acks keep coming for earlier puts: the coordinator handles each worker's messages
+        in order, so it is busy, not deaf, and re-sending would only add duplicates to its queue.
+        A result is re-sent at once when a later put was acknowledged before it (it was lost)
+        or after an outage (``_resend_all``). Returns how many results were put again."""
+        now = time.monotonic() if now is None else now
+        due: dict[str, list[_Pending]] = {}
+        with self._lock:
+            silent = now - self._last_ack >= self.settings.ack_timeout
+            for p in self._pending.values():
+                wait = min(30.0, self.settings.ack_timeout * 2 ** max(0, p.attempts - 1))
+                overtaken = p.seq < self._acked_seq
+                if p.sent == 0.0 or (now - p.sent >= wait and (silent or overtaken)):
+                    due.setdefault(p.job_id, []).append(p)
+        for job_id, entries in due.items():
+            log.info("re-sending %d unacknowledged results of job %s", len(entries), job_id)
+            self._send(job_id, entries)
+        return sum(len(v) for v in due.values())
+
+    # --------------------------------------------------------------------------- heartbeat
+    def _heartbeat_loop(self) -> None:
+        while not self._closing:
+            time.sleep(0.25)
+            self.heartbeat_due()
+
+    def heartbeat_due(self, now: float | None = None) -> int:
+        """RunProgress for each running lease not reported for half its heartbeat_seconds."""
+        now = time.monotonic() if now is None else now
+        with self._lock:
+            due = [a for a in self._active.values()
+                   if now - a.last_progress >= 0.5 * a.lease.heartbeat_seconds]
+            for a in due:
+                a.last_progress = now
+        for a in due:
+            lease = a.lease
+            spec = lease.spec
+            total = spec.iterations * len(
+                benchmark_batches(lease.runs, spec.agents, spec.dim)
+            ) if isinstance(spec, BenchmarkCell) else 0
+            msg = RunProgress(
+                lease_id=lease.lease_id, job_id=lease.job_id, worker=self.id,
+                cell=lease.cell, runs=list(lease.runs), iteration=a.slot.iteration(),
+                iterations=total,
+            )
+            self._put(self.keys.progress(lease.job_id), encode(msg))
+        return len(due)
+
+    # ---------------------------------------------------------------------------- stopping
+    def _drain(self) -> None:
+        """Stop: let running leases finish (grace), abort the rest, wait for the acks."""
+        deadline = time.monotonic() + self.settings.grace_seconds
+        with self._wake:
+            while self._active and not self._abort.is_set() and time.monotonic() < deadline:
+                self._wake.wait(0.25)
+            if self._active:
+                log.info("aborting %d running leases; the coordinator requeues them",
+                         len(self._active))
+                for a in self._active.values():
+                    self._dropped.add(a.lease.lease_id)
+                    a.slot.cancel()
+            stop_at = time.monotonic() + 3.0
+            while self._active and time.monotonic() < stop_at:
+                self._wake.wait(0.25)
+            ack_deadline = time.monotonic() + self.settings.ack_timeout
+            if self._pending:
+                self._resend_all()
+            while self._pending and not self._abort.is_set() and time.monotonic() < ack_deadline:
+                self._wake.wait(0.25)
+            if self._pending:
+                log.warning("%d results not acknowledged at exit: the coordinator requeues "
+                            "their runs", len(self._pending))
+
+    def _shutdown(self) -> None:
+        self._closing = True
+        for entity in (getattr(self, "_querier", None), *getattr(self, "_subs", []),
+                       getattr(self, "_token", None)):
+            if entity is None:
+                continue
+            try:
+                entity.undeclare()
+            except Exception:  # pragma: no cover
+                log.debug("undeclare failed", exc_info=True)
+        self._subs = []
+        self._token = None
+        self._querier = None
+        if self._session is not None:
+            try:
+                self._session.close()
+            except Exception:  # pragma: no cover
+                log.debug("closing the session failed", exc_info=True)
+            self._session = None
+        for slot in self._slots:
+            slot.close(timeout=3.0)
+        log.info("worker %s stopped: %d leases, %d runs", self.id, self.leases_done,
+                 self.runs_done)
+
+
+def _version() -> str:
+    try:
+        from swarmpath import __version__
+    except ImportError:  # pragma: no cover
+        return ""
+    return __version__
+
+
+def run_worker(settings: WorkerSettings, *, signals: bool = True) -> int:
+    """Run a worker until SIGTERM/SIGINT (the ``swarmpath worker`` command)."""
+    worker = Worker(settings)
+    if signals:
+        worker.install_signal_handlers()
+    return worker.run()
+
+
+__all__ = [
+    "Cancelled",
+    "ProcessSlot",
+    "ThreadSlot",
+    "Worker",
+    "WorkerSettings",
+    "benchmark_batches",
+    "execute_lease",
+    "fit_result",
+    "pack_batches",
+    "run_worker",
+]

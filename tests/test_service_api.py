@@ -1,0 +1,589 @@
+"""The coordinator without a network: REST routes (FastAPI TestClient), the protocol handlers driven
+with bytes, the worker's execution functions, lease sizing and the Zenoh config builders."""
+
+from __future__ import annotations
+
+import io
+import json
+import logging
+
+import pytest
+from fastapi.testclient import TestClient
+from mcap.reader import make_reader
+
+from swarmpath.optimizers import minimize
+from swarmpath.service.client import ServiceClient, ServiceError, error_field
+from swarmpath.service.coordinator import (
+    Coordinator,
+    CoordinatorSettings,
+    LeaseSizer,
+    create_app,
+    json_safe,
+)
+from swarmpath.service.protocol import (
+    Ack,
+    BenchmarkCell,
+    Lease,
+    LeaseRequest,
+    MapCell,
+    NoWork,
+    RunProgress,
+    decode,
+    decode_work_reply,
+    encode,
+)
+from swarmpath.service.worker import (
+    Cancelled,
+    ThreadSlot,
+    benchmark_batches,
+    execute_lease,
+    fit_result,
+    pack_batches,
+)
+from swarmpath.service.zenoh_config import check_endpoint, client_config, router_config
+
+SPEC = {
+    "kind": "benchmark", "algorithms": ["GWO", "PSO"], "functions": ["F1", "F9"], "dims": [3],
+    "runs": 5, "agents": 6, "iterations": 12, "seed": 4,
+}
+
+
+class Wire:
+    """Stands in for Zenoh: records what the coordinator publishes."""
+
+    def __init__(self) -> None:
+        self.sent: list[tuple[str, bytes]] = []
+
+    def __call__(self, key: str, payload: bytes) -> None:
+        self.sent.append((key, payload))
+
+    def acks(self) -> list[Ack]:
+        return [decode(Ack, p) for k, p in self.sent if "/ack/" in k]
+
+
+@pytest.fixture
+def app(tmp_path, monkeypatch):
+    monkeypatch.delenv("SWARMPATH_TOKEN", raising=False)
+    return create_app(CoordinatorSettings(data_dir=tmp_path / "data"), use_zenoh=False)
+
+
+@pytest.fixture
+def client(app):
+    with TestClient(app) as c:
+        yield c
+
+
+@pytest.fixture
+def core(client, app) -> Coordinator:
+    core = app.state.core
+    core.publish = Wire()
+    return core
+
+
+def lease_for(core: Coordinator, worker: str = "w1", max_runs: int = 100) -> Lease | NoWork:
+    reply = core.handle_lease_request(encode(LeaseRequest(worker=worker, max_runs=max_runs)))
+    return decode_work_reply(reply)
+
+
+def work_off(core: Coordinator, worker: str = "w1", max_runs: int = 100) -> int:
+    """What a worker does, without the network: lease, execute, publish, until no work."""
+    core.worker_alive(worker)
+    n = 0
+    while isinstance(lease := lease_for(core, worker, max_runs), Lease):
+        results = execute_lease(lease)
+        for payload in pack_batches(worker, [data for _run, data in results]):
+            ack = core.handle_results(f"swarmpath/results/{lease.job_id}", payload)
+            assert ack is not None and {r.status for r in ack.results} == {"accepted"}
+        n += len(results)
+    return n
+
+
+# ------------------------------------------------------------------------------------ jobs
+def test_submit_status_list_and_404(client):
+    r = client.post("/jobs", json=SPEC)
+    assert r.status_code == 201
+    job = r.json()
+    assert set(job) == {"id", "state", "runs_total"}
+    assert job["state"] == "queued" and job["runs_total"] == 20
+    status = client.get(f"/jobs/{job['id']}").json()
+    assert (status["state"], status["runs_done"], status["kind"]) == ("queued", 0, "benchmark")
+    assert [j["id"] for j in client.get("/jobs").json()] == [job["id"]]
+    assert client.get("/jobs", params={"state": "queued"}).json()[0]["id"] == job["id"]
+    assert client.get("/jobs", params={"state": "done"}).json() == []
+    for path in ("/jobs/nope", "/jobs/nope/summary", "/jobs/nope/runs", "/jobs/nope/runs/0",
+                 "/jobs/nope/mcap"):
+        assert client.get(path).status_code == 404, path
+    assert client.delete("/jobs/nope").status_code == 404
+    assert client.get(f"/jobs/{job['id']}/runs/20").status_code == 404
+
+
+@pytest.mark.parametrize(
+    ("change", "field"),
+    [
+        ({"algorithms": ["GWO", "NOPE"]}, "algorithms"),
+        ({"functions": ["F99"]}, "functions"),
+        ({"dims": [1001]}, "dims.0"),
+        ({"agents": 1001}, "agents"),
+        ({"iterations": 100_001}, "iterations"),
+        ({"runs": 10_001}, "runs"),
+        ({"functions": ["F1-F13"], "dims": [2, 3, 4, 5], "runs": 10_000}, "runs"),
+        ({"params": {"GWO": {"nope": 1}}}, "params"),
+        ({"seed": -1}, "seed"),
+        ({"kind": "nope"}, "body"),
+        ({"extra": 1}, "extra"),
+    ],
+)
+def test_malformed_jobs_are_422_naming_the_field(client, change, field):
+    r = client.post("/jobs", json={**SPEC, **change})
+    assert r.status_code == 422
+    fields = [error_field(d["loc"]) for d in r.json()["detail"]]
+    assert field in fields, r.json()
+    assert all(d["msg"] for d in r.json()["detail"])
+    assert client.get("/jobs").json() == []
+
+
+def test_bad_bodies_and_queries_are_422(client):
+    r = client.post("/jobs", content=b"{not json", headers={"content-type": "application/json"})
+    assert r.status_code == 422 and r.json()["detail"][0]["loc"][0] == "body"
+    big = json.dumps({**SPEC, "pad": "x" * 1_000_001})
+    r = client.post("/jobs", content=big, headers={"content-type": "application/json"})
+    assert r.status_code == 422
+    assert r.json()["detail"][0]["loc"] == ["body"] and "exceeds" in r.json()["detail"][0]["msg"]
+    r = client.get("/jobs", params={"state": "bogus"})
+    assert r.status_code == 422 and r.json()["detail"][0]["loc"] == ["query", "state"]
+    r = client.get("/jobs", params={"limit": 0})
+    assert r.status_code == 422 and r.json()["detail"][0]["loc"] == ["query", "limit"]
+
+
+def test_map_job_without_planners_or_with_unknown_map_names_the_field(client):
+    r = client.post("/jobs", json={"kind": "map", "planners": ["NOPE"], "maps": ["nowhere"]})
+    assert r.status_code == 422
+    fields = {error_field(d["loc"]) for d in r.json()["detail"]}
+    assert fields & {"planners", "maps"}
+
+
+def test_token_protects_mutating_endpoints(tmp_path, monkeypatch):
+    monkeypatch.setenv("SWARMPATH_TOKEN", "s3cret")
+    app = create_app(CoordinatorSettings(data_dir=tmp_path / "d"), use_zenoh=False)
+    with TestClient(app) as c:
+        assert c.post("/jobs", json=SPEC).status_code == 401
+        bad = {"Authorization": "Bearer nope"}
+        assert c.post("/jobs", json=SPEC, headers=bad).status_code == 401
+        good = {"Authorization": "Bearer s3cret"}
+        r = c.post("/jobs", json=SPEC, headers=good)
+        assert r.status_code == 201
+        assert c.delete(f"/jobs/{r.json()['id']}").status_code == 401
+        assert c.get(f"/jobs/{r.json()['id']}").status_code == 200  # reading is open
+        assert c.delete(f"/jobs/{r.json()['id']}", headers=good).json()["state"] == "cancelled"
+
+
+# -------------------------------------------------------------------------------- protocol
+def test_a_job_worked_off_through_the_handlers(client, core):
+    job = client.post("/jobs", json=SPEC).json()
+    assert client.get(f"/jobs/{job['id']}/mcap").status_code == 409
+    assert "queued (0/20 runs finished)" in client.get(f"/jobs/{job['id']}/mcap").json()["detail"]
+    assert work_off(core) == 20
+    status = client.get(f"/jobs/{job['id']}").json()
+    assert status["state"] == "done" and status["runs_done"] == 20
+
+    # every run equals a direct minimize() call with the same seed
+    items = client.get(f"/jobs/{job['id']}/runs", params={"limit": 100}).json()["items"]
+    assert [i["run_id"] for i in items] == list(range(20))
+    for a in SPEC["algorithms"]:
+        for f in SPEC["functions"]:
+            direct = minimize(a, f, 3, 6, 12, runs=5, seed=4).best_fitness.tolist()
+            got = [i["best_fitness"] for i in items if i["algorithm"] == a and i["function"] == f]
+            assert got == direct
+    page = client.get(f"/jobs/{job['id']}/runs", params={"limit": 3, "offset": 18}).json()
+    assert page["total"] == 20 and [i["run_id"] for i in page["items"]] == [18, 19]
+    one = client.get(f"/jobs/{job['id']}/runs/7").json()
+    assert len(one["curve"]) == 12 and one["state"] == "done" and one["worker"] == "w1"
+
+    summary = client.get(f"/jobs/{job['id']}/summary").json()
+    assert not summary["partial"] and len(summary["rows"]) == 4
+    csv = client.get(f"/jobs/{job['id']}/summary", params={"format": "csv"})
+    assert csv.headers["content-type"].startswith("text/csv")
+    assert csv.text.splitlines()[0].startswith("algorithm,function,dim")
+
+    r = client.get(f"/jobs/{job['id']}/mcap")
+    assert r.status_code == 200
+    reader = make_reader(io.BytesIO(r.content))
+    results = [json.loads(m.data) for _s, _c, m in reader.iter_messages(topics=["/results"])]
+    assert sorted(m["run_id"] for m in results) == list(range(20))
+
+
+def test_duplicates_stale_and_garbage(client, core, caplog):
+    job = client.post("/jobs", json=SPEC).json()
+    core.worker_alive("w1")
+    lease = lease_for(core)
+    assert isinstance(lease, Lease)
+    payloads = pack_batches("w1", [d for _r, d in execute_lease(lease)])
+    key = f"swarmpath/results/{job['id']}"
+    first = core.handle_results(key, payloads[0])
+    again = core.handle_results(key, payloads[0])
+    assert {r.status for r in first.results} == {"accepted"}
+    assert {r.status for r in again.results} == {"duplicate"}
+    # someone else's lease, or published under another job's key: stale
+    forged = payloads[0].replace(b'"worker":"w1"', b'"worker":"w2"')
+    assert {r.status for r in core.handle_results(key, forged).results} == {"stale"}
+    assert {r.status for r in core.handle_results("swarmpath/results/other",
+                                                  payloads[0]).results} == {"stale"}
+    with caplog.at_level(logging.WARNING, logger="swarmpath.coordinator"):
+        for garbage in (b"", b"\xff\x00", b"{}", b"[1,2]", b'{"worker": "w1", "results": []}',
+                        b"x" * 2_000_000):
+            assert core.handle_results(key, garbage) is None
+            assert core.handle_progress(f"swarmpath/progress/{job['id']}", garbage) is None
+        reply = decode_work_reply(core.handle_lease_request(b"garbage"))
+        assert isinstance(reply, NoWork) and "malformed" in reply.reason
+    assert "malformed result batch" in caplog.text
+    assert core.stats["malformed"] >= 13
+    assert client.get("/healthz").json()["status"] == "ok"
+    assert "swarmpath_messages_malformed_total 13" in client.get("/metrics").text
+    n = client.get(f"/jobs/{job['id']}").json()["runs_done"]
+    assert n == len(lease.runs)
+
+
+def test_progress_renews_and_drops(client, core):
+    client.post("/jobs", json=SPEC)
+    core.worker_alive("w1")
+    lease = lease_for(core)
+    progress = RunProgress(lease_id=lease.lease_id, job_id=lease.job_id, worker="w1",
+                           cell=lease.cell, runs=lease.runs)
+    key = f"swarmpath/progress/{lease.job_id}"
+    assert core.handle_progress(key, encode(progress)) is None  # active: renewed, no answer
+    unknown = progress.model_copy(update={"lease_id": "nope"})
+    assert core.handle_progress(key, encode(unknown)).drop_leases == ["nope"]
+    assert core.publish.acks()[-1].drop_leases == ["nope"]
+
+
+def test_leases_only_to_live_workers_and_requeue_when_gone(client, core):
+    job = client.post("/jobs", json=SPEC).json()
+    assert isinstance(lease_for(core, "ghost"), NoWork)
+    core.worker_alive("w1")
+    lease = lease_for(core, "w1", 3)
+    assert isinstance(lease, Lease) and len(lease.runs) == 3
+    workers = {w["id"]: w for w in client.get("/workers").json()}
+    assert len(workers["w1"]["current_runs"]) == 3 and workers["w1"]["alive"] is True
+    assert workers["ghost"]["alive"] is False and workers["ghost"]["current_runs"] == []
+    assert core.worker_gone("w1") == 3
+    assert {w["id"]: w for w in client.get("/workers").json()}["w1"]["alive"] is False
+    core.worker_alive("w2")
+    again = lease_for(core, "w2", 3)
+    assert (again.cell, again.runs) == (lease.cell, lease.runs)  # requeued runs first
+    assert "swarmpath_lease_requeues_total 3" in client.get("/metrics").text
+    assert client.get(f"/jobs/{job['id']}").json()["state"] == "running"
+
+
+def test_cancel_publishes_and_finalizes(client, core):
+    job = client.post("/jobs", json=SPEC).json()
+    core.worker_alive("w1")
+    lease = lease_for(core)
+    r = client.delete(f"/jobs/{job['id']}")
+    assert r.status_code == 200 and r.json()["state"] == "cancelled"
+    assert ("swarmpath/cancel", encode_cancel(job["id"])) in core.publish.sent
+    assert client.get(f"/jobs/{job['id']}/mcap").status_code == 200
+    results = pack_batches("w1", [d for _r, d in execute_lease(lease)])
+    ack = core.handle_results(f"swarmpath/results/{job['id']}", results[0])
+    assert {r.status for r in ack.results} == {"stale"}
+    assert isinstance(lease_for(core), NoWork)
+    assert client.delete(f"/jobs/{job['id']}").json()["state"] == "cancelled"
+
+
+def encode_cancel(job_id: str) -> bytes:
+    from swarmpath.service.protocol import Cancel
+
+    return encode(Cancel(job_id=job_id))
+
+
+def test_catalog_health_metrics(client):
+    cat = client.get("/catalog").json()
+    gwo = next(o for o in cat["optimizers"] if o["name"] == "GWO")
+    assert "params" in gwo and gwo["min_agents"] >= 1
+    assert {"F1", "F13"} <= {f["name"] for f in cat["functions"]}
+    assert "mfb-static" in {m["name"] for m in cat["maps"]}
+    assert "planners" in cat
+    health = client.get("/healthz").json()
+    assert health["status"] == "ok" and health["zenoh"] is False
+    text = client.get("/metrics").text
+    for name in ("swarmpath_queue_depth", "swarmpath_runs_per_second", "swarmpath_workers",
+                 "swarmpath_lease_requeues_total"):
+        assert f"# TYPE {name}" in text
+    assert client.get("/openapi.json").status_code == 200
+
+
+def test_client_against_the_app(app):
+    with TestClient(app) as c:
+        client = ServiceClient("http://testserver", transport=c._transport)
+        job = client.submit(SPEC)
+        assert client.job(job["id"])["state"] == "queued"
+        with pytest.raises(ServiceError) as err:
+            client.submit({**SPEC, "dims": [0]})
+        assert err.value.status == 422 and err.value.fields == ["dims.0"]
+        with pytest.raises(ServiceError) as err:
+            client.download(job["id"], "/nonexistent/x.mcap")
+        assert err.value.status == 409
+
+
+# --------------------------------------------------------------------------------- worker
+def make_lease(spec, runs, seed=4) -> Lease:
+    return Lease(lease_id="L1", worker="w1", job_id="j1", cell=spec.key, cell_index=0,
+                 runs_per_cell=10, seed=seed, runs=runs, spec=spec, deadline=0.0,
+                 lease_seconds=30.0, heartbeat_seconds=10.0)
+
+
+def test_execute_lease_equals_minimize_and_splits_batches(monkeypatch):
+    spec = BenchmarkCell(algorithm="GWO", function="F9", dim=4, agents=6, iterations=10)
+    import swarmpath.service.worker as w
+
+    monkeypatch.setattr(w, "BATCH_ELEMENTS", 6 * 4 * 2)  # batches of two runs
+    assert benchmark_batches([3, 5, 7], 6, 4) == [[3, 5], [7]]
+    got = execute_lease(make_lease(spec, [3, 5, 7]))
+    direct = minimize("GWO", "F9", 4, 6, 10, seed=4, run_ids=[3, 5, 7])
+    values = [json.loads(d)["metrics"]["best_fitness"] for _r, d in got]
+    assert [r for r, _d in got] == [3, 5, 7]
+    assert values == direct.best_fitness.tolist()
+
+
+def test_execute_lease_failures_and_cancellation():
+    spec = BenchmarkCell(algorithm="GWO", function="F1", dim=2, agents=6, iterations=5,
+                         params={"nope": 1})
+    results = [json.loads(d) for _r, d in execute_lease(make_lease(spec, [0, 1]))]
+    assert [r["status"] for r in results] == ["failed", "failed"]
+    assert "nope" in results[0]["failure"]
+    ok = spec.model_copy(update={"params": {}})
+    with pytest.raises(Cancelled):
+        execute_lease(make_lease(ok, [0]), cancelled=lambda: True)
+
+
+def test_thread_slot_runs_a_lease():
+    import threading
+
+    done = threading.Event()
+    seen = []
+
+    def on_done(slot, lease, outcome):
+        seen.append((lease.lease_id, outcome))
+        done.set()
+
+    slot = ThreadSlot(0, on_done)
+    spec = BenchmarkCell(algorithm="PSO", function="F1", dim=2, agents=5, iterations=5)
+    slot.submit(make_lease(spec, [0, 1]))
+    assert done.wait(30)
+    assert seen[0][0] == "L1" and [r for r, _ in seen[0][1]] == [0, 1]
+    slot.close()
+
+
+def test_pack_batches_and_fit_result():
+    results = [json.dumps({"i": i, "pad": "x" * 300}).encode() for i in range(10)]
+    batches = pack_batches("w1", results, limit=1000)
+    assert len(batches) > 1 and all(len(b) <= 1000 for b in batches)
+    merged = [r for b in batches for r in json.loads(b)["results"]]
+    assert [r["i"] for r in merged] == list(range(10))
+    spec = BenchmarkCell(algorithm="GWO", function="F1", dim=2, agents=6, iterations=5)
+    from swarmpath.service.protocol import RunResult
+
+    big = RunResult(lease_id="L1", job_id="j1", cell=spec.key, run=0, worker="w1", seconds=1.0,
+                    curve=[1.0 / (i + 1) for i in range(50_000)])
+    data = fit_result(big, limit=100_000)
+    obj = json.loads(data)
+    assert len(data) <= 100_000 and obj["metrics"]["curve_stride"] > 1
+    assert obj["curve"][0] == 1.0 and obj["curve"][-1] == 1.0 / 50_000
+
+
+# ------------------------------------------------------------------------------ sizing etc.
+def test_lease_sizer():
+    sizer = LeaseSizer(target_seconds=2.0, min_runs=8)
+    cheap = BenchmarkCell(algorithm="GWO", function="F1", dim=2, agents=5, iterations=10)
+    costly = BenchmarkCell(algorithm="GWO", function="F1", dim=100, agents=100, iterations=5000)
+    assert sizer.runs_for(cheap) > 1000
+    assert sizer.runs_for(costly) == 8  # vectorization floor
+    sizer.observe(cheap, 0.1)
+    assert sizer.runs_for(cheap) == 20
+    m = MapCell(planner="ICOOT", map="mfb-static")
+    assert sizer.runs_for(m) == 1
+    sizer.observe(m, 0.01)
+    assert sizer.runs_for(m) == 200
+
+
+def test_json_safe():
+    assert json_safe({"a": [1.0, float("inf"), float("nan")], "b": float("-inf")}) == {
+        "a": [1.0, "inf", "nan"], "b": "-inf"}
+
+
+def test_zenoh_configs_never_scout():
+    r = router_config("tcp/127.0.0.1:7447", extra={"scouting": {"multicast": {"enabled": True}}})
+    c = client_config(["tcp/127.0.0.1:7447"], user="u", password="p")
+    for conf in (r, c):
+        assert conf["scouting"] == {"multicast": {"enabled": False}, "gossip": {"enabled": False}}
+        assert conf["transport"]["shared_memory"] == {"enabled": False}
+    assert r["mode"] == "router" and r["listen"]["endpoints"] == ["tcp/127.0.0.1:7447"]
+    assert r["connect"]["endpoints"] == []
+    assert c["mode"] == "client" and c["listen"]["endpoints"] == []
+    assert c["transport"]["auth"]["usrpwd"] == {"user": "u", "password": "p"}
+    assert router_config(shm=True)["transport"]["shared_memory"]["enabled"] is True
+    for bad in ("127.0.0.1:7447", "tcp/127.0.0.1", "tcp/:7447", "tcp/h:99999", ""):
+        with pytest.raises(ValueError):
+            check_endpoint(bad)
+    with pytest.raises(ValueError):
+        client_config("tcp/127.0.0.1:7447", user="u")
+    with pytest.raises(ValueError):
+        router_config(dictionary_file="/nonexistent/users.txt")
+
+
+# ------------------------------------------------------------- worker bookkeeping, no network
+class FakeSession:
+    def __init__(self) -> None:
+        self.puts: list[tuple[str, bytes]] = []
+
+    def put(self, key: str, payload: bytes, **_kw) -> None:
+        self.puts.append((key, payload))
+
+
+class Sample:
+    def __init__(self, payload: bytes) -> None:
+        self.payload = type("Z", (), {"to_bytes": lambda _self: payload})()
+
+
+def offline_worker(**settings):
+    from types import SimpleNamespace
+
+    from swarmpath.service.worker import Worker, WorkerSettings
+
+    w = Worker(WorkerSettings(worker_id="w1", **settings))
+    w._session = FakeSession()
+    w._zenoh = SimpleNamespace(Encoding=SimpleNamespace(APPLICATION_JSON=None),
+                               CongestionControl=SimpleNamespace(BLOCK=None))
+    return w
+
+
+def run_ack(lease: Lease, runs, status="accepted", drop=()) -> Sample:
+    from swarmpath.service.protocol import RunAck
+
+    return Sample(encode(Ack(worker="w1", drop_leases=list(drop), results=[
+        RunAck(lease_id=lease.lease_id, job_id=lease.job_id, cell=lease.cell, run=r,
+               status=status) for r in runs])))
+
+
+def test_worker_resends_until_acknowledged():
+    import time as _time
+
+    w = offline_worker(ack_timeout=5.0)
+    spec = BenchmarkCell(algorithm="PSO", function="F1", dim=2, agents=5, iterations=3)
+    lease = make_lease(spec, [0, 1, 2])
+    w._publish_results(lease, execute_lease(lease))
+    assert len(w._session.puts) == 1 and w._session.puts[0][0] == "swarmpath/results/j1"
+    t = _time.monotonic()
+    assert w.resend_due(t + 1) == 0  # not yet due
+    w._on_ack(run_ack(lease, [0]))  # the coordinator is working through them ...
+    w._last_ack = t + 4  # ... (an ack came 1.5 s ago): no resend
+    assert w.resend_due(t + 5.5) == 0
+    assert w.resend_due(t + 9.5) == 2  # silent for longer than ack_timeout: put again
+    assert len(w._session.puts) == 2 and len(json.loads(w._session.puts[1][1])["results"]) == 2
+    w._on_ack(run_ack(lease, [1, 2], status="duplicate"))
+    assert w._pending == {} and w.resend_due(t + 100) == 0
+
+
+def test_worker_resends_a_result_overtaken_by_a_later_one():
+    import time as _time
+
+    w = offline_worker()
+    spec = BenchmarkCell(algorithm="PSO", function="F1", dim=2, agents=5, iterations=3)
+    first, second = make_lease(spec, [0]), make_lease(spec, [1]).model_copy(
+        update={"lease_id": "L2"})
+    w._publish_results(first, execute_lease(first))
+    w._publish_results(second, execute_lease(second))
+    w._on_ack(run_ack(second, [1]))  # the later put was handled: the first one was lost
+    assert w.resend_due(_time.monotonic() + 5.1) == 1
+    assert json.loads(w._session.puts[-1][1])["results"][0]["lease_id"] == "L1"
+
+
+def test_worker_drops_leases_and_cancelled_jobs():
+    from swarmpath.service.protocol import Cancel
+
+    w = offline_worker()
+    spec = BenchmarkCell(algorithm="PSO", function="F1", dim=2, agents=5, iterations=3)
+    lease = make_lease(spec, [0, 1])
+    w._publish_results(lease, execute_lease(lease))
+    w._on_ack(run_ack(lease, [], drop=["L1"]))
+    assert w._pending == {} and "L1" in w._dropped
+    w._publish_results(lease, execute_lease(lease))
+    w._on_cancel(Sample(encode(Cancel(job_id="j1"))))
+    assert w._pending == {} and "j1" in w._cancelled_jobs
+    w._on_ack(Sample(b"garbage"))  # logged, ignored
+
+
+def test_worker_heartbeats_running_leases():
+    import time as _time
+
+    from swarmpath.service.worker import _Active
+
+    w = offline_worker()
+    spec = BenchmarkCell(algorithm="PSO", function="F1", dim=2, agents=5, iterations=30)
+    lease = make_lease(spec, [0, 1])
+    slot = ThreadSlot(0, lambda *a: None)
+    t = _time.monotonic()
+    w._active[lease.lease_id] = _Active(lease, slot, t, t)
+    assert w.heartbeat_due(t + 1) == 0
+    assert w.heartbeat_due(t + 5.1) == 1  # half of heartbeat_seconds (10 s)
+    key, payload = w._session.puts[-1]
+    progress = decode(RunProgress, payload)
+    assert key == "swarmpath/progress/j1" and progress.iterations == 30 and progress.runs == [0, 1]
+    assert w.heartbeat_due(t + 6) == 0
+
+
+# ------------------------------------------------------------------------- CLI, no network
+@pytest.fixture
+def cli(app, monkeypatch):
+    """Run ``swarmpath ...`` in-process against the app (the client talks to TestClient)."""
+    from typer.testing import CliRunner
+
+    import swarmpath.cli.service as service_cli
+    from swarmpath.cli import app as cli_app
+
+    with TestClient(app) as c:
+        monkeypatch.setattr(service_cli, "_client",
+                            lambda url: ServiceClient("http://testserver", transport=c._transport))
+        runner = CliRunner()
+        yield lambda *args: runner.invoke(cli_app, list(args))
+
+
+def one_error_line(result, command: str, named: str) -> None:
+    assert result.exit_code == 2, (result.stdout, result.stderr)
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"swarmpath {command}: error: "), lines
+    assert named in lines[0] and "Traceback" not in result.stderr
+
+
+def test_cli_client_commands(cli, tmp_path):
+    spec = tmp_path / "spec.json"
+    spec.write_text(json.dumps(SPEC))
+    result = cli("submit", str(spec))
+    assert result.exit_code == 0, result.stderr
+    job = result.stdout.strip()
+    assert len(job) == 12
+    status = cli("status", job)
+    assert status.exit_code == 0 and job in status.stdout and "queued" in status.stdout
+    listing = cli("status", "--json")
+    assert json.loads(listing.stdout)["jobs"][0]["id"] == job
+    csv = cli("results", job, "--format", "csv")
+    assert csv.exit_code == 0 and csv.stdout.startswith("algorithm,function,dim")
+    table = cli("results", job)
+    assert table.exit_code == 0 and "GWO" in table.stdout and "partial" in table.stdout
+    early = cli("download", job, "-o", str(tmp_path / "x.mcap"))
+    assert early.exit_code == 1 and "409" in early.stderr and "queued" in early.stderr
+
+
+def test_cli_bad_input_names_the_field(cli, tmp_path):
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({**SPEC, "dims": [5000]}))
+    one_error_line(cli("submit", str(bad)), "submit", "dims.0")
+    bad.write_text("{nope")
+    one_error_line(cli("submit", str(bad)), "submit", "SPEC.json")
+    one_error_line(cli("submit", str(tmp_path / "missing.json")), "submit", "SPEC.json")
+    one_error_line(cli("status", "nosuchjob"), "status", "JOB")
+    one_error_line(cli("results", "nosuchjob", "--format", "xml"), "results", "--format")
+    one_error_line(cli("worker", "--connect", "127.0.0.1:7447"), "worker", "--connect")
+    one_error_line(cli("worker", "--slots", "0"), "worker", "--slots")
+    one_error_line(cli("worker", "--id", "bad id!"), "worker", "--id")
+    one_error_line(cli("coordinator", "--http", "nowhere"), "coordinator", "--http")
+    one_error_line(cli("up", "--zenoh", "tcp/127.0.0.1"), "up", "--zenoh")
