@@ -1,0 +1,496 @@
+"""The service commands: ``up``, ``coordinator``, ``worker`` (processes) and ``submit``, ``status``,
+``results``, ``download`` (REST clients; ``--url`` or ``$SWARMPATH_URL``, token from
+``$SWARMPATH_TOKEN``).
+
+Heavy imports (fastapi, uvicorn, zenoh) stay inside the command functions.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from swarmpath.cli.core import InputError, app
+
+DEFAULT_DATA = "swarmpath-data"
+DEFAULT_ZENOH = "tcp/127.0.0.1:7447"
+DEFAULT_HTTP = "127.0.0.1:8000"
+
+UrlOpt = Annotated[
+    str | None,
+    typer.Option("--url", envvar="SWARMPATH_URL",
+                 help="Coordinator URL [default: http://127.0.0.1:8000]."),
+]
+
+
+def _logging(level: str) -> None:
+    logging.basicConfig(
+        level=getattr(logging, level.upper(), logging.INFO),
+        format="%(asctime)s %(levelname)s %(name)s: %(message)s",
+        stream=sys.stderr,
+    )
+
+
+def parse_http(value: str, option: str = "--http") -> tuple[str, int]:
+    """'127.0.0.1:8000' -> ('127.0.0.1', 8000)."""
+    host, sep, port = value.rpartition(":")
+    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise InputError(option, f"{value!r} is not HOST:PORT (e.g. 127.0.0.1:8000)")
+    return host.strip("[]"), int(port)
+
+
+def _endpoints(values: list[str] | None, option: str, default: str) -> list[str]:
+    from swarmpath.service.zenoh_config import check_endpoint
+
+    out = []
+    for v in values or [default]:
+        try:
+            out.append(check_endpoint(v))
+        except ValueError as exc:
+            raise InputError(option, str(exc)) from None
+    return out
+
+
+def _connectable(listen: str) -> str:
+    """Where local workers connect for a listen endpoint (0.0.0.0 / [::] -> loopback)."""
+    proto, _, rest = listen.partition("/")
+    host, _, port = rest.rpartition(":")
+    if host in ("0.0.0.0", "[::]", "::"):
+        host = "127.0.0.1"
+    return f"{proto}/{host}:{port}"
+
+
+def _extra(path: Path | None, option: str) -> dict[str, Any] | None:
+    from swarmpath.service.zenoh_config import load_extra
+
+    try:
+        return load_extra(path)
+    except (OSError, ValueError) as exc:
+        raise InputError(option, str(exc)) from None
+
+
+def _coordinator_settings(
+    data: Path, zenoh: list[str] | None, prefix: str, lease_seconds: float, shm: bool,
+    auth_dictionary: Path | None, zenoh_config: Path | None,
+) -> Any:
+    from swarmpath.service.coordinator import CoordinatorSettings
+    from swarmpath.service.protocol import Keys
+
+    try:
+        Keys(prefix)
+    except ValueError as exc:
+        raise InputError("--prefix", str(exc)) from None
+    if lease_seconds <= 0:
+        raise InputError("--lease-seconds", "must be positive")
+    if auth_dictionary is not None and not auth_dictionary.is_file():
+        raise InputError("--auth-dictionary", f"{str(auth_dictionary)!r} does not exist")
+    return CoordinatorSettings(
+        data_dir=data, zenoh_listen=_endpoints(zenoh, "--zenoh", DEFAULT_ZENOH), prefix=prefix,
+        lease_seconds=lease_seconds, shm=shm,
+        dictionary_file=str(auth_dictionary) if auth_dictionary else None,
+        zenoh_extra=_extra(zenoh_config, "--zenoh-config"),
+    )
+
+
+def _serve(app_: Any, http: str, log_level: str) -> None:
+    import uvicorn
+
+    host, port = parse_http(http)
+    config = uvicorn.Config(app_, host=host, port=port, log_level=log_level.lower(),
+                            access_log=log_level.lower() == "debug", lifespan="on")
+    server = uvicorn.Server(config)
+    server.run()
+    if not server.started:
+        typer.echo(f"swarmpath: error: could not serve HTTP on {http}", err=True)
+        raise typer.Exit(1)
+
+
+# ------------------------------------------------------------------------------- processes
+ZenohOpt = Annotated[
+    list[str] | None,
+    typer.Option("--zenoh", help=f"Zenoh listen endpoint(s) [default: {DEFAULT_ZENOH}]."),
+]
+DataOpt = Annotated[Path, typer.Option("--data", help="Data directory (SQLite queue, MCAP files).")]
+HttpOpt = Annotated[str, typer.Option("--http", help="HTTP listen address HOST:PORT.")]
+PrefixOpt = Annotated[str, typer.Option("--prefix", help="Key-expression prefix.")]
+LogOpt = Annotated[str, typer.Option("--log-level", help="debug, info, warning, error.")]
+LeaseOpt = Annotated[
+    float, typer.Option("--lease-seconds", help="Requeue a lease after this long without news.")
+]
+ShmOpt = Annotated[bool, typer.Option("--shm", help="Enable Zenoh shared memory (off by default).")]
+ZConfOpt = Annotated[
+    Path | None, typer.Option("--zenoh-config", help="JSON file of extra Zenoh settings.")
+]
+
+
+@app.command()
+def coordinator(
+    http: HttpOpt = DEFAULT_HTTP,
+    zenoh: ZenohOpt = None,
+    data: DataOpt = Path(DEFAULT_DATA),
+    prefix: PrefixOpt = "swarmpath",
+    lease_seconds: LeaseOpt = 30.0,
+    auth_dictionary: Annotated[
+        Path | None,
+        typer.Option("--auth-dictionary",
+                     help="Zenoh user/password file (user:password lines): workers must log in."),
+    ] = None,
+    shm: ShmOpt = False,
+    zenoh_config: ZConfOpt = None,
+    log_level: LogOpt = "info",
+) -> None:
+    """Run the coordinator: REST API, job queue and the Zenoh router (no local workers)."""
+    parse_http(http)
+    settings = _coordinator_settings(data, zenoh, prefix, lease_seconds, shm, auth_dictionary,
+                                     zenoh_config)
+    _logging(log_level)
+    from swarmpath.service.coordinator import create_app
+
+    _serve(create_app(settings), http, log_level)
+
+
+@app.command()
+def worker(
+    connect: Annotated[
+        list[str] | None,
+        typer.Option("--connect",
+                     help=f"Coordinator's Zenoh endpoint(s) [default: {DEFAULT_ZENOH}]."),
+    ] = None,
+    slots: Annotated[int, typer.Option("--slots", help="Leases executed concurrently.")] = 1,
+    worker_id: Annotated[
+        str | None, typer.Option("--id", help="Worker id [default: HOST-PID].")
+    ] = None,
+    prefix: PrefixOpt = "swarmpath",
+    user: Annotated[
+        str | None, typer.Option("--user", envvar="SWARMPATH_ZENOH_USER", help="Zenoh user.")
+    ] = None,
+    password: Annotated[
+        str | None,
+        typer.Option("--password", envvar="SWARMPATH_ZENOH_PASSWORD",
+                     help="Zenoh password (prefer the environment variable)."),
+    ] = None,
+    threads: Annotated[
+        bool, typer.Option("--threads", help="Run leases in threads, not child processes.")
+    ] = False,
+    grace: Annotated[
+        float, typer.Option("--grace", help="On SIGTERM, let running leases finish this long.")
+    ] = 10.0,
+    exit_with_parent: Annotated[int | None, typer.Option(hidden=True)] = None,
+    shm: ShmOpt = False,
+    zenoh_config: ZConfOpt = None,
+    log_level: LogOpt = "info",
+) -> None:
+    """Run a worker: pull runs from the coordinator, execute them, report the results."""
+    from swarmpath.service.protocol import ID_PATTERN, Keys
+    from swarmpath.service.worker import WorkerSettings, run_worker
+
+    endpoints = _endpoints(connect, "--connect", DEFAULT_ZENOH)
+    if not 1 <= slots <= 256:
+        raise InputError("--slots", f"{slots} is not in [1, 256]")
+    try:
+        keys = Keys(prefix)
+        if worker_id is not None:
+            keys.worker_token(worker_id)
+    except ValueError as exc:
+        option = "--prefix" if "prefix" in str(exc) else "--id"
+        raise InputError(option, f"{exc} (ids match {ID_PATTERN})") from None
+    if bool(user) != bool(password):
+        raise InputError("--password" if user else "--user", "user and password go together")
+    if grace < 0:
+        raise InputError("--grace", "must be >= 0")
+    settings = WorkerSettings(
+        connect=endpoints, prefix=prefix, slots=slots, worker_id=worker_id,
+        executor="thread" if threads else "process", user=user, password=password, shm=shm,
+        zenoh_extra=_extra(zenoh_config, "--zenoh-config"), grace_seconds=grace,
+        exit_with_parent=exit_with_parent,
+    )
+    _logging(log_level)
+    raise typer.Exit(run_worker(settings))
+
+
+class LocalWorkers:
+    """The worker subprocesses of ``swarmpath up`` (fork+exec'd, so nothing of Zenoh is shared)."""
+
+    def __init__(self, n: int, connect: str, prefix: str, slots: int, log_level: str):
+        self.n, self.connect, self.prefix, self.slots = n, connect, prefix, slots
+        self.log_level = log_level
+        self.procs: list[subprocess.Popen[bytes]] = []
+
+    def start(self) -> None:
+        for i in range(self.n):
+            cmd = [
+                sys.executable, "-m", "swarmpath.cli", "worker", "--connect", self.connect,
+                "--prefix", self.prefix, "--slots", str(self.slots),
+                "--exit-with-parent", str(os.getpid()), "--log-level", self.log_level,
+                "--id", f"{_host()}-{os.getpid()}-w{i}",
+            ]
+            self.procs.append(subprocess.Popen(cmd, start_new_session=True))
+        typer.echo(f"swarmpath up: {self.n} local worker(s) started "
+                   f"(pids {', '.join(str(p.pid) for p in self.procs)})", err=True)
+
+    def stop(self, timeout: float = 20.0) -> None:
+        for p in self.procs:
+            if p.poll() is None:
+                p.send_signal(signal.SIGTERM)
+        deadline = time.monotonic() + timeout
+        for p in self.procs:
+            try:
+                p.wait(max(0.1, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait(5)
+
+
+def _host() -> str:
+    from swarmpath.service.worker import default_worker_id
+
+    return default_worker_id().rsplit("-", 1)[0]
+
+
+@app.command()
+def up(
+    workers: Annotated[
+        int, typer.Option("--workers", help="Local worker processes [default: CPU count].")
+    ] = 0,
+    http: HttpOpt = DEFAULT_HTTP,
+    zenoh: Annotated[str, typer.Option("--zenoh", help="Zenoh listen endpoint.")] = DEFAULT_ZENOH,
+    data: DataOpt = Path(DEFAULT_DATA),
+    slots: Annotated[int, typer.Option("--slots", help="Slots per local worker.")] = 1,
+    prefix: PrefixOpt = "swarmpath",
+    lease_seconds: LeaseOpt = 30.0,
+    log_level: LogOpt = "info",
+) -> None:
+    """Start the coordinator and N local workers; Ctrl-C (or SIGTERM) stops everything."""
+    n = workers or os.cpu_count() or 1
+    if not 0 <= workers <= 256:
+        raise InputError("--workers", f"{workers} is not in [1, 256]")
+    if not 1 <= slots <= 256:
+        raise InputError("--slots", f"{slots} is not in [1, 256]")
+    parse_http(http)
+    settings = _coordinator_settings(data, [zenoh], prefix, lease_seconds, False, None, None)
+    _logging(log_level)
+    from swarmpath.service.coordinator import create_app
+
+    local = LocalWorkers(n, _connectable(settings.zenoh_listen[0]), prefix, slots, log_level)
+    typer.echo(f"swarmpath up: http://{http}  zenoh {zenoh}  data {data}", err=True)
+    _serve(create_app(settings, on_started=local.start, on_stopping=local.stop), http, log_level)
+
+
+# ---------------------------------------------------------------------------------- clients
+def _client(url: str | None) -> Any:
+    from swarmpath.service.client import ServiceClient
+
+    return ServiceClient(url)
+
+
+def _fail(exc: Exception, job_option: str = "JOB") -> None:
+    """ServiceError -> InputError (bad input, exit 2) or a one-line error (exit 1)."""
+    from swarmpath.service.client import ServiceError, Unreachable, describe_detail
+
+    if isinstance(exc, Unreachable):
+        typer.echo(f"swarmpath: error: {exc}", err=True)
+        raise typer.Exit(1)
+    if isinstance(exc, ServiceError):
+        if exc.status == 422:
+            field = exc.fields[0] if exc.fields else "spec"
+            raise InputError(field, describe_detail(exc.detail)) from None
+        if exc.status == 404:
+            raise InputError(job_option, describe_detail(exc.detail)) from None
+        if exc.status == 401:
+            typer.echo("swarmpath: error: unauthorized: set SWARMPATH_TOKEN", err=True)
+            raise typer.Exit(1)
+        typer.echo(f"swarmpath: error: {exc.status}: {describe_detail(exc.detail)}", err=True)
+        raise typer.Exit(1)
+    raise exc
+
+
+def _table(title: str, columns: list[str], rows: list[dict[str, Any]]) -> Any:
+    from rich.table import Table
+
+    table = Table(title=title, title_justify="left")
+    for c in columns:
+        table.add_column(c, justify="left" if c in _TEXT_COLUMNS else "right")
+    for row in rows:
+        table.add_row(*(_cell(row.get(c)) for c in columns))
+    return table
+
+
+_TEXT_COLUMNS = {"algorithm", "function", "planner", "map", "id", "kind", "state", "host",
+                 "worker", "current_runs"}
+
+
+def _cell(v: Any) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    if isinstance(v, list):
+        return ", ".join(str(x) for x in v[:4]) + (f" (+{len(v) - 4})" if len(v) > 4 else "")
+    return str(v)
+
+
+def _when(t: float | None) -> str:
+    return time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(t)) if t else ""
+
+
+def _console() -> Any:
+    from rich.console import Console
+
+    console = Console()
+    if not console.is_terminal:
+        console = Console(width=200)
+    return console
+
+
+@app.command()
+def submit(
+    spec_file: Annotated[Path, typer.Argument(metavar="SPEC.json", help="Job spec ('-': stdin).")],
+    wait: Annotated[bool, typer.Option("--wait", help="Wait for the job, with progress.")] = False,
+    url: UrlOpt = None,
+) -> None:
+    """Submit a job spec; prints the job id (and waits with a progress bar with --wait)."""
+    try:
+        text = sys.stdin.read() if str(spec_file) == "-" else spec_file.read_text("utf-8")
+    except OSError as exc:
+        raise InputError("SPEC.json", f"cannot read {spec_file}: {exc.strerror}") from None
+    try:
+        spec = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InputError("SPEC.json", f"not valid JSON: {exc.msg} (line {exc.lineno})") from None
+    if not isinstance(spec, dict):
+        raise InputError("SPEC.json", "a job spec is a JSON object")
+    with _client(url) as client:
+        try:
+            job = client.submit(spec)
+        except Exception as exc:
+            _fail(exc)
+            raise
+        typer.echo(job["id"])
+        typer.echo(f"job {job['id']}: {job['runs_total']} runs, {job['state']}", err=True)
+        if not wait:
+            return
+        status = _wait_with_progress(client, job["id"], job["runs_total"])
+    typer.echo(f"job {status['id']}: {status['state']} ({status['runs_done']} done, "
+               f"{status['runs_failed']} failed)", err=True)
+    if status["state"] != "done":
+        raise typer.Exit(1)
+
+
+def _wait_with_progress(client: Any, job_id: str, total: int) -> dict[str, Any]:
+    from rich.console import Console
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
+
+    stderr = Console(stderr=True)
+    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+               TimeElapsedColumn(), TimeRemainingColumn())
+    with Progress(*columns, console=stderr, transient=False) as progress:
+        task = progress.add_task(f"job {job_id}", total=total)
+
+        def show(status: dict[str, Any]) -> None:
+            progress.update(task, completed=status["runs_done"] + status["runs_failed"],
+                            description=f"job {job_id} {status['state']}")
+
+        try:
+            return client.wait(job_id, poll=0.5, on_status=show)
+        except Exception as exc:
+            _fail(exc)
+            raise
+
+
+@app.command()
+def status(
+    job: Annotated[str | None, typer.Argument(metavar="[JOB]", help="A job id.")] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print JSON.")] = False,
+    url: UrlOpt = None,
+) -> None:
+    """Jobs (newest first) and workers, or one job."""
+    with _client(url) as client:
+        try:
+            if job is not None:
+                data: Any = client.job(job)
+            else:
+                data = {"jobs": client.jobs(), "workers": client.workers()}
+        except Exception as exc:
+            _fail(exc)
+            raise
+    if as_json:
+        typer.echo(json.dumps(data, indent=2))
+        return
+    console = _console()
+    jobs = [data] if job is not None else data["jobs"]
+    rows = [{**j, "runs": f"{j['runs_done'] + j['runs_failed']}/{j['runs_total']}",
+             "failed": j["runs_failed"], "created": _when(j["created"]),
+             "finished": _when(j["finished"])} for j in jobs]
+    console.print(_table("jobs", ["id", "kind", "state", "runs", "failed", "created", "finished"],
+                         rows))
+    if job is None:
+        workers = [{**w, "alive": "yes" if w["alive"] else "no",
+                    "current_runs": len(w["current_runs"]),
+                    "last_seen": _when(w["last_seen"])} for w in data["workers"]]
+        console.print(_table("workers", ["id", "host", "pid", "slots", "alive", "current_runs",
+                                         "runs_done", "last_seen"], workers))
+
+
+@app.command()
+def results(
+    job: Annotated[str, typer.Argument(metavar="JOB", help="A job id.")],
+    format: Annotated[
+        str, typer.Option("--format", help="table, json or csv.")
+    ] = "table",
+    url: UrlOpt = None,
+) -> None:
+    """The job's summary table (partial while it runs)."""
+    if format not in ("table", "json", "csv"):
+        raise InputError("--format", f"{format!r} is not one of table, json, csv")
+    with _client(url) as client:
+        try:
+            if format == "csv":
+                sys.stdout.write(client.summary_csv(job))
+                return
+            summary = client.summary(job)
+        except Exception as exc:
+            _fail(exc)
+            raise
+    if format == "json":
+        typer.echo(json.dumps(summary, indent=2))
+        return
+    title = (f"job {job} ({summary['kind']}): {summary['state']}, "
+             f"{summary['runs_done'] + summary['runs_failed']}/{summary['runs_total']} runs"
+             + (" (partial)" if summary["partial"] else ""))
+    _console().print(_table(title, summary["columns"], summary["rows"]))
+
+
+@app.command()
+def download(
+    job: Annotated[str, typer.Argument(metavar="JOB", help="A job id.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Where to write the MCAP.")],
+    url: UrlOpt = None,
+) -> None:
+    """Download the job's MCAP file (after the job has ended)."""
+    if output.is_dir():
+        output = output / f"{job}.mcap"
+    if not output.parent.exists():
+        raise InputError("--output", f"directory {str(output.parent)!r} does not exist")
+    with _client(url) as client:
+        try:
+            path = client.download(job, output)
+        except Exception as exc:
+            _fail(exc)
+            raise
+    typer.echo(f"{path} ({path.stat().st_size} bytes)", err=True)
