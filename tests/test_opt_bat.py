@@ -1,4 +1,4 @@
-"""MFB and HPSO-MFB (Ajeil et al. 2020): the decisions of docs/_parts/algorithms-bat.md."""
+"""MFB and HPSO-MFB (Ajeil et al. 2020): the decisions of docs/algorithms.md."""
 
 import numpy as np
 import pytest

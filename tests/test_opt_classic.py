@@ -3,7 +3,7 @@
 The published values are the PSO, SSA and FDO columns of Table 2 of the seeds (000_*, ICOOT, and
 001_*, IHPO, which repeats them): 30 dims, 30 agents, 500 iterations, mean of the best over 1000
 runs. Where our faithful implementation differs by more than the tolerance, the difference is a
-documented exception (docs/_parts/algorithms-classic.md) and the test asserts its direction.
+documented exception (docs/algorithms.md) and the test asserts its direction.
 """
 
 import math
@@ -43,7 +43,7 @@ DECADES = 1.0
 F8_REL = 0.25
 
 # Documented exceptions: (algorithm, function) -> sign of log10(ours / published) beyond the
-# tolerance (+1: we are worse, -1: we are better). See docs/_parts/algorithms-classic.md.
+# tolerance (+1: we are worse, -1: we are better). See docs/algorithms.md.
 EXCEPTIONS = {
     # Mirjalili-group PSO (Vmax = 6 absolute) lands on the GWO paper's PSO column, not the
     # seeds' one, on these: worse on the sphere-like F1/F6, and stuck at the bounds on F2.

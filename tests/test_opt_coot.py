@@ -296,7 +296,7 @@ PUBLISHED = {
 # Optimum reached to full precision in most runs: the published average over 1000 runs is set by
 # its worst runs, so we check that our runs lie in the published [min, max] range instead.
 HEAVY_TAILED = {"F1", "F2", "F3", "F4", "F9", "F10", "F11"}
-# Documented exceptions (docs/_parts/algorithms-coot.md, "Measured against Table 2"): what we check
+# Documented exceptions (docs/algorithms.md, "Measured against Table 2"): what we check
 # instead of the published average's order of magnitude.
 EXCEPTIONS = {
     # ours is ~10x *better*; the published ICOOT F13 is 3.8x worse than the published COOT F13

@@ -1,6 +1,6 @@
 """HPO, IHPO and RFO: published numbers, origin bias, parameter readings, small-N guards.
 
-Decisions and measured tables: docs/_parts/algorithms-hpo-rfo.md.
+Decisions and measured tables: docs/algorithms.md.
 """
 
 import numpy as np

@@ -20,7 +20,7 @@ MFB_CENTRES = [
     (7.7, 8), (3, 9), (5, 1), (3, 4.5), (5, 7.2),
 ]  # fmt: skip
 MFB_BEST_REPORTED = 14.6268  # the paper's best path (Hybrid PSO-MFB, Table 4, run 10)
-MFB_OPTIMUM = 14.482999744658636  # this module's exact value, recorded in docs/_parts/optimum.md
+MFB_OPTIMUM = 14.482999744658636  # this module's exact value, recorded in docs/metrics.md
 
 
 def _circles(rows: list[tuple[float, float, float]]) -> ObstacleSet:

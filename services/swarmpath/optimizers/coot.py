@@ -5,7 +5,7 @@ with Applications 183 (2021) 115352, doi 10.1016/j.eswa.2021.115352. Equation nu
 those of its restatement as eqs 11-19 in Abdulsaheb & Kadhim, IJIES 15(5) 2022 (seed 000, whose
 Table 2 has a COOT column).
 Where the equations leave a point open we follow the authors' COOT.m (File Exchange 89102);
-docs/_parts/algorithms-coot.md lists every decision and its measured effect.
+docs/algorithms.md lists every decision and its measured effect.
 
 Population: N_L = ceil(0.1 N) leaders (parameter ``leaders`` overrides) and N_c = N - N_L coots.
 Per iteration t = 1..T:

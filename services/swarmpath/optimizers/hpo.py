@@ -36,7 +36,7 @@ Decisions:
   Gauss-Seidel; no loop over agents). This is a real change, not a detail: without the
   immediate target update the prey cloud contracts around a fixed T and stalls. Measured with a
   scratch port of the authors' loop: shifted F1 ~1e-5 sequential vs ~1e4 here, F6/F12 of Table 2
-  reached sequentially and missed here (docs/_parts/algorithms-hpo-rfo.md). The code's prey step
+  reached sequentially and missed here (docs/algorithms.md). The code's prey step
   (``prey_step = "2Z"``) suffers much less.
 * Positions are always replaced (no greedy selection), as in paper and code.
 * Bounds: the new position is clipped to the box before it is evaluated.

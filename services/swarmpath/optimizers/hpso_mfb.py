@@ -11,7 +11,7 @@ The concrete, vectorized design used here:
   at the start with zero velocity. The paper only says 0 < alpha < 1 and gamma > 0; with the
   per-iteration loudness decay A = A(0) alpha^t, alpha < 0.8 silences a bat within ~20
   iterations (A < 0.02), and a box starting at 0.01 measured 10-1000x worse on F1, F5, F11 at
-  30 dims (docs/_parts/algorithms-bat.md); ``alpha_low=0.01`` restores it.
+  30 dims (docs/algorithms.md); ``alpha_low=0.01`` restores it.
 * Each particle owns one MFB sub-swarm (mfb.py; all its rules and parameters apply). All
   sub-swarms advance together, one MFB iteration per ``step``, in the same (runs, bats, dim)
   arrays. ``split="divide"`` (default): ``agents`` is the total number of bats, bat j belongs to

@@ -16,7 +16,7 @@ base algorithm is our COOT (authors' code semantics, see ``coot.py``), changed a
 * acc(j) = |(1 - D) + (1 - 1/|alpha|) - U(0, 2)| (eq 24): one U(0, 2) per agent and iteration
   (coots and leaders draw their own), D and alpha once per iteration and run from the coots'
   positions at the start of the iteration. The paper defines D and alpha on a 2-D map with a 1 m
-  integer grid; our d-dimensional, scale-free reading (docs/_parts/algorithms-coot.md):
+  integer grid; our d-dimensional, scale-free reading (docs/algorithms.md):
   - coordinates in units of a lattice cell h = ``cell`` x (ub - lb) per axis (the paper's 1 m in
     a 10 m map is cell = 0.1);
   - r = max over axes of the half extent (max - min) / 2 of the coots, plus 1 cell (eqs 22-23,

@@ -5,7 +5,7 @@ omnidirectional mobile robot using swarm optimization and sensors deployment", I
 Robot. Syst. 17(3) (2020), eqs 9-15 and Table 1, on top of the bat algorithm of Yang, "A new
 metaheuristic bat-inspired algorithm", NICSO 2010, SCI 284, 65-74 (loop, acceptance test, local
 walk around the best). The paper leaves gaps; each is closed here and in
-docs/_parts/algorithms-bat.md, and each decision has a parameter selecting the alternative.
+docs/algorithms.md, and each decision has a parameter selecting the alternative.
 
 One iteration t = 1..T, for every bat i of every run at once:
 

@@ -3,7 +3,7 @@
 Połap & Woźniak, "Red fox optimization algorithm", Expert Systems with Applications 166 (2021)
 114107, doi 10.1016/j.eswa.2020.114107; eqs 1-2 as restated in Ketafa & Al-Darraji, Iraqi J.
 Science 65(2) 2024 (seed 003, section 3.1); eqs 3-9 after the original paper. No author code
-exists; every gap below is our decision (docs/_parts/algorithms-hpo-rfo.md).
+exists; every gap below is our decision (docs/algorithms.md).
 
 One iteration, as three population-level phases (the paper loops over foxes; we move all foxes
 of a phase together, so a fox's phase sees the population as it was when the phase began):

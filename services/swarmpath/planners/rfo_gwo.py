@@ -4,7 +4,7 @@ Ketafa & Al-Darraji, "Path Planning for Autonomous Mobile Robots Using the RFO-G
 Algorithm", Iraqi J. Science 65(2) (2024) 1070-1088, doi 10.24996/ijs.2024.65.2.38: section 3.1
 (RFO, eqs 1-2), 3.2 (GWO, eqs 3-16), 4.1 (the hybrid, eq 17, Algorithms 1 and 2), 4.2 (the EA
 with the Erase mutation and the multiphase refinement), 5 (Table 1 parameters, Table 2 metrics).
-docs/_parts/planners-rfo-gwo.md has the measurements next to Table 2.
+docs/planners.md has the measurements next to Table 2.
 
 Global planners: the static map is given at construction; the first ``decide`` plans the whole
 path (its wall time is the episode's planning time) and returns the first waypoint with

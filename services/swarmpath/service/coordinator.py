@@ -15,8 +15,8 @@ Three layers, the lower ones usable without the upper ones:
 * :func:`create_app` - the FastAPI application; its lifespan opens the store, recovers after a
   crash, starts the bridge and the 1 s :class:`Ticker`, and undoes all of that on shutdown.
 
-The wire protocol is documented in ``schemas/README.md``; the decisions in docs/_parts/service.md
-and docs/_parts/service-runtime.md.
+The wire protocol is documented in ``schemas/README.md``; the decisions in docs/service.md
+and docs/service.md.
 """
 
 import asyncio

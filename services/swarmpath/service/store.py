@@ -20,7 +20,7 @@ Runs are not stored up front: each cell keeps a cursor ``next_run`` (runs below 
 at least once) and a *requeue set* (runs whose lease expired or whose worker vanished before a
 result arrived). A result row exists per completed run, unique on (job, cell, run).
 
-Fencing (see docs/_parts/service.md): a result is accepted when its lease exists, belongs to the
+Fencing (see docs/service.md): a result is accepted when its lease exists, belongs to the
 sending worker, covers that run, the job is not cancelled and the run has no result yet. That
 includes the late result of a lease that already expired or was released (its runs requeued):
 runs are deterministic, so the late result is the result; it is accepted once, the run leaves the
