@@ -5,7 +5,12 @@ import pytest
 
 from swarmpath.optimizers import Problem, RunStreams, create, minimize
 
+
 # Mirjalili et al. 2014, Table 3 (GWO, 30 dims, 30 agents, 500 iterations, 30 runs): averages.
+def sphere(X, streams):
+    return np.sum(X * X, axis=-1)
+
+
 PUBLISHED_AVG = {"F1": 6.59e-28, "F5": 26.81258, "F8": -6123.1, "F10": 1.06e-13, "F11": 0.004485}
 
 
@@ -13,7 +18,7 @@ def test_leader_update_replays_the_sequential_sweep():
     """The vectorized update equals GWO.m's agent-by-agent loop, including no demotion."""
     rng = np.random.default_rng(5)
     R, N, d = 4, 9, 3
-    problem = Problem(lambda X, s: np.sum(X * X, axis=-1), np.full((R, d), -5.0), np.full((R, d), 5.0))
+    problem = Problem(sphere, np.full((R, d), -5.0), np.full((R, d), 5.0))
     opt = create("GWO", problem, agents=N, iterations=3, streams=RunStreams.for_runs(0, R))
     opt.initialize()
     for _ in range(4):
@@ -36,7 +41,7 @@ def test_leader_update_replays_the_sequential_sweep():
 
 
 def test_new_alpha_does_not_demote_old_alpha():
-    problem = Problem(lambda X, s: np.sum(X * X, axis=-1), np.full((1, 1), -5.0), np.full((1, 1), 5.0))
+    problem = Problem(sphere, np.full((1, 1), -5.0), np.full((1, 1), 5.0))
     opt = create("GWO", problem, agents=2, iterations=1, streams=RunStreams.for_runs(0, 1))
     opt.initialize()
     opt.X = np.array([[[1.0], [2.0]]])

@@ -126,7 +126,7 @@ def test_steppable_equals_minimize(algo):
 
 
 def test_unknown_names_list_valid_ones():
-    with pytest.raises(KeyError, match="valid: .*GWO"):
+    with pytest.raises(KeyError, match=r"valid: .*GWO"):
         minimize("NOPE", "F1")
     with pytest.raises(KeyError, match="valid: F1"):
         minimize("GWO", "F99")

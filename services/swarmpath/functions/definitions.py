@@ -97,7 +97,8 @@ def penalized_1(x: Array) -> Array:  # F12
     d = x.shape[-1]
     y = 1.0 + (x + 1.0) / 4.0
     first = 10.0 * np.sin(np.pi * y[..., 0]) ** 2
-    inner = np.sum((y[..., :-1] - 1.0) ** 2 * (1.0 + 10.0 * np.sin(np.pi * y[..., 1:]) ** 2), axis=-1)
+    wave = 1.0 + 10.0 * np.sin(np.pi * y[..., 1:]) ** 2
+    inner = np.sum((y[..., :-1] - 1.0) ** 2 * wave, axis=-1)
     last = (y[..., -1] - 1.0) ** 2
     return (np.pi / d) * (first + inner + last) + _penalty(x, 10.0, 100.0, 4)
 

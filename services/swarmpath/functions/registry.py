@@ -23,7 +23,7 @@ SHIFT_FRACTION = 0.8
 class BenchmarkFunction:
     """A test function on a box, optionally shifted: value(x) = kernel(x - shift).
 
-    ``lower``/``upper`` are scalars applied to every coordinate (the box does not move with a shift).
+    ``lower``/``upper`` are scalars applied to every coordinate (a shift does not move the box).
     ``f_min`` is the known minimum inside the box for any dimension (F8's depends on it: see
     :meth:`f_min_for`); ``optimum`` is the minimiser's coordinate value before shifting.
     """

@@ -60,7 +60,8 @@ def _check_sizes(dim: int, agents: int, iterations: int) -> None:
         ("agents", agents, MAX_AGENTS),
         ("iterations", iterations, MAX_ITERATIONS),
     ):
-        if isinstance(value, bool) or not isinstance(value, int | np.integer) or not 1 <= value <= top:
+        integral = isinstance(value, int | np.integer) and not isinstance(value, bool)
+        if not integral or not 1 <= value <= top:
             raise ParameterError(f"{label} must be an integer in [1, {top}], got {value!r}")
 
 

@@ -105,7 +105,7 @@ class Optimizer(ABC):
         cls.check_params(merged)
         return merged
 
-    @classmethod
+    @classmethod  # noqa: B027 - an optional hook, empty on purpose
     def check_params(cls, p: Mapping[str, ParamValue]) -> None:
         """Range checks of a subclass; raise ParameterError naming the parameter."""
 

@@ -17,11 +17,12 @@ ever found, with demotion) for users who want it; it is not the published algori
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import ClassVar
 
 import numpy as np
 
-from swarmpath.optimizers.base import Array, Optimizer
+from swarmpath.optimizers.base import Array, Optimizer, ParameterError, ParamValue
 from swarmpath.optimizers.registry import register
 
 
@@ -35,9 +36,7 @@ class GWO(Optimizer):
     min_agents = 1
 
     @classmethod
-    def check_params(cls, p):  # type: ignore[no-untyped-def]
-        from swarmpath.optimizers.base import ParameterError
-
+    def check_params(cls, p: Mapping[str, ParamValue]) -> None:
         if not float(p["a_max"]) > 0:
             raise ParameterError("GWO.a_max must be > 0")
 
@@ -63,7 +62,7 @@ class GWO(Optimizer):
         only decreases, "f > alpha at the time" equals f > (running min of alpha before agent i),
         so each record is a masked minimum whose first attaining index is the strict-< winner.
         """
-        R, N = F.shape
+        R = F.shape[0]
         rows = np.arange(R)
         a0, b0, d0 = self.scores[:, 0], self.scores[:, 1], self.scores[:, 2]
         # alpha before agent i (exclusive running min, seeded with the stored alpha)

@@ -40,7 +40,7 @@ def mantegna_sigma(beta: float) -> float:
 
 
 def levy(streams: RunStreams, *shape: int, beta: float = 1.5, scale: float = 0.01) -> Array:
-    """Levy flight steps (Mantegna 1994): scale * u / |v|^(1/beta), u ~ N(0, sigma^2), v ~ N(0,1)."""
+    """Levy flight steps (Mantegna 1994): scale u / |v|^(1/beta), u ~ N(0, sigma^2), v ~ N(0, 1)."""
     u = streams.normal(*shape) * mantegna_sigma(beta)
     v = streams.normal(*shape)
     return scale * u / np.abs(v) ** (1.0 / beta)

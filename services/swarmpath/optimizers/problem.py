@@ -48,7 +48,7 @@ class Problem:
 
 @dataclass
 class BenchmarkProblem(Problem):
-    """F1-F13 on its box for each run, optionally shifted per run (shift drawn from the run's seed)."""
+    """F1-F13 on its box for each run, optionally shifted per run (shift from the run's seed)."""
 
     function: BenchmarkFunction | None = None
     shifts: Array | None = None  # (runs, dim) or None

@@ -28,7 +28,8 @@ def run_generator(seed: int, run: int, purpose: int = OPTIMIZER) -> np.random.Ge
     """The generator of run ``run`` for ``purpose`` under study seed ``seed``."""
     if seed < 0 or run < 0:
         raise ValueError("seed and run must be non-negative integers")
-    return np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(run, purpose))))
+    sequence = np.random.SeedSequence(seed, spawn_key=(run, purpose))
+    return np.random.Generator(np.random.PCG64(sequence))
 
 
 class RunStreams:

@@ -106,7 +106,7 @@ class Planner(ABC):
         cls.check_params(merged)
         return merged
 
-    @classmethod
+    @classmethod  # noqa: B027 - an optional hook, empty on purpose
     def check_params(cls, p: Mapping[str, ParamValue]) -> None:
         """Range checks; raise PlannerError naming the parameter."""
 

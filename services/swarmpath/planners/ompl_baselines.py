@@ -125,7 +125,7 @@ class FastChecker:
         self.polygons: list[tuple[float, float, float, float, list[tuple[float, ...]]]] = []
         for poly in obstacles.polygons:
             pts = [(float(x), float(y)) for x, y in poly]
-            edges = []
+            edges: list[tuple[float, ...]] = []
             for i, (ax, ay) in enumerate(pts):
                 bx, by = pts[(i + 1) % len(pts)]
                 dx, dy = bx - ax, by - ay
@@ -366,7 +366,7 @@ class _IterationBudget:
 
 if ob is not None:
 
-    class _ExactMotionValidator(ob.MotionValidator):  # type: ignore[misc,name-defined]
+    class _ExactMotionValidator(ob.MotionValidator):
         """Exact edge test (the planners call only the two-state form)."""
 
         def __init__(self, si: Any, checker: FastChecker):
@@ -399,7 +399,7 @@ class OmplPlanner(Planner):
     }
 
     @classmethod
-    def check_params(cls, p):  # type: ignore[no-untyped-def]
+    def check_params(cls, p):
         if not 0.0 < float(p["time"]) <= MAX_TIME:
             raise PlannerError(f"{cls.name}.time must be in (0, {MAX_TIME:g}] seconds")
         if not 0 <= int(p["iterations"]) <= MAX_ITERATIONS:
@@ -409,7 +409,7 @@ class OmplPlanner(Planner):
         if not float(p["resolution"]) > 0.0:
             raise PlannerError(f"{cls.name}.resolution must be > 0")
 
-    def __init__(self, scenario, params, rng, static_map=None):  # type: ignore[no-untyped-def]
+    def __init__(self, scenario, params, rng, static_map=None):
         super().__init__(scenario, params, rng, static_map)
         self.result: PlanResult | None = None
         self.path: Array | None = None  # the planned path, start to goal

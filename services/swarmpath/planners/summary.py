@@ -71,8 +71,8 @@ def summarize_cell(runs: Iterable[Any]) -> dict[str, Any]:
     error = _stats([float(_get(r, "error")) for r in rows])
     seconds = _stats([float(_get(r, "seconds")) for r in rows])
     smooth = _stats([float(_get(r, "smoothness")) for r in ok])
-    clearances = [finite_or_none(_get(r, "min_clearance")) for r in rows]
-    clearances = [c for c in clearances if c is not None]
+    maybe = [finite_or_none(_get(r, "min_clearance")) for r in rows]
+    clearances = [c for c in maybe if c is not None]
     failures: dict[str, int] = {}
     for r in rows:
         if not _get(r, "success"):

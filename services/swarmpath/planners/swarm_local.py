@@ -49,7 +49,7 @@ CARROT_CLEARANCE = 0.02  # m: the known-map path keeps this much beyond the plan
 
 
 class SwarmLocalPlanner(Planner):
-    """Generic swarm local planner; the named subclasses fix the optimizer and its paper's settings."""
+    """Generic swarm local planner; named subclasses fix the optimizer and its paper's settings."""
 
     name = "swarm-local"
     kind = "local"
@@ -79,7 +79,7 @@ class SwarmLocalPlanner(Planner):
     optimizer_params: ClassVar[dict[str, Any]] = {}
 
     @classmethod
-    def check_params(cls, p):  # type: ignore[no-untyped-def]
+    def check_params(cls, p):
         for key in ("agents", "iterations"):
             if int(p[key]) < 1:
                 raise PlannerError(f"{cls.name}.{key} must be >= 1")
@@ -94,7 +94,7 @@ class SwarmLocalPlanner(Planner):
         except KeyError as exc:
             raise PlannerError(f"{cls.name}.optimizer: {exc.args[0]}") from None
 
-    def __init__(self, scenario, params, rng, static_map=None):  # type: ignore[no-untyped-def]
+    def __init__(self, scenario, params, rng, static_map=None):
         super().__init__(scenario, params, rng, static_map)
         self._streams = RunStreams([rng])
         self._memory: list[tuple[float, Array]] = []
@@ -183,9 +183,9 @@ class SwarmLocalPlanner(Planner):
             return Decision(target, iterations, duration)
         return self._avoid(obs, ctx, iterations, duration)
 
-    def _avoid(self, obs: Observation, ctx: local.StepContext, iterations: int, duration: float) -> (
-        Decision
-    ):
+    def _avoid(
+        self, obs: Observation, ctx: local.StepContext, iterations: int, duration: float
+    ) -> Decision:
         """Gap-vector fallback (MFB eq 24): a short step into the free gap nearest the goal."""
         p = ctx.position
         angles = obs.pose.theta + np.arange(12) * (2 * np.pi / 12)

@@ -21,7 +21,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-
 #: Distance (m) at which a waypoint counts as reached, for the controllers and the simulator alike.
 ARRIVE = 1e-4
 
