@@ -102,7 +102,7 @@ def chain_sweep(moved: Array, old: Array, chain: NDArray[np.bool_]) -> Array:
     """
     r, j = np.nonzero(chain)
     moved[r, j] = 0.5 * old[r, j]
-    return linear_chain(chain * 0.5, moved)
+    return linear_chain(np.where(chain, 0.5, 0.0), moved)
 
 
 @register

@@ -503,7 +503,7 @@ class RfoFamilyPlanner(Planner):
         good = np.logical_and(*self._moves_ok(starts, cand, self._thr_safe))
         pos = np.broadcast_to(start, cand.shape).copy()
         hist: list[list[Array]] = [[start.copy()] for _ in range(N)]
-        for i in np.flatnonzero(good):
+        for i in np.flatnonzero(good).tolist():
             if self._move(i, cand[i], pos, hist, goal, snap):
                 return np.array(hist[i]), 0
         for i in range(N):  # a fox at the start may already see the target
@@ -586,11 +586,13 @@ class RfoFamilyPlanner(Planner):
         N = pos.shape[0]
         mu = rng.random(N)
         a = rng.random()  # scaling a, once per iteration
-        phi0 = rng.random(N) * (2 * math.pi)
-        phi1 = rng.random(N) * (2 * math.pi)
+        phi0: Array = np.asarray(rng.random(N)) * (2 * math.pi)
+        phi1: Array = np.asarray(rng.random(N)) * (2 * math.pi)
         rmax = float(self.p["radius"])
         with np.errstate(invalid="ignore", divide="ignore"):
-            r = np.where(phi0 > 0, rmax * np.sin(phi0) / np.where(phi0 > 0, phi0, 1.0), rmax)
+            r: Array = np.asarray(
+                np.where(phi0 > 0, rmax * np.sin(phi0) / np.where(phi0 > 0, phi0, 1.0), rmax)
+            )
         movers = ~ok & (mu > float(self.p["notice"]))
         moved = ok.copy()
         if movers.any():
@@ -636,7 +638,7 @@ class RfoFamilyPlanner(Planner):
             return np.where(valid, fit, PENALTY + viol).reshape(F, m)
 
         # one generator per fox, seeded from the planner's generator
-        seeds = self.rng.integers(0, 2**63, size=F)
+        seeds = np.asarray(self.rng.integers(0, 2**63, size=F), dtype=np.int64)
         streams = RunStreams([np.random.Generator(np.random.PCG64(int(s))) for s in seeds])
         opt = create("GWO", Problem(objective, lower, upper), m,
                      int(self.p["gwo_iterations"]), streams)
