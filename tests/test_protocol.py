@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import importlib
 import json
 import math
 import sys
@@ -148,24 +147,8 @@ def test_unknown_kind_is_rejected():
 
 
 # -------------------------------------------------------------------------------------- map jobs
-def importable(module: str, attr: str) -> bool:
-    try:
-        return hasattr(importlib.import_module(module), attr)
-    except ImportError:
-        return False
 
 
-HAVE_PLANNERS = importable("swarmpath.planners", "list_planners")
-HAVE_PRESETS = importable("swarmpath.world.presets", "list_maps")
-
-
-@pytest.mark.skipif(HAVE_PLANNERS, reason="swarmpath.planners is importable")
-def test_map_spec_without_planners_is_a_clear_error():
-    err = fails_on({"kind": "map", "planners": ["ICOOT"], "maps": ["mfb-static"]}, "planners")
-    assert "planners are not available" in str(err)
-
-
-@pytest.mark.skipif(not HAVE_PRESETS, reason="swarmpath.world.presets not written yet")
 def test_unknown_map_name_names_maps():
     err = fails_on({"kind": "map", "planners": ["ICOOT"], "maps": ["no-such-map"]}, "maps")
     assert "no-such-map" in str(err)
@@ -175,8 +158,6 @@ def test_inline_scenario_needs_a_name():
     fails_on({"kind": "map", "planners": ["ICOOT"], "maps": [{"size": [10, 10]}]}, "maps")
 
 
-@pytest.mark.skipif(not importable("swarmpath.world.scenario_io", "scenario_from_dict"),
-                    reason="scenario reader not written yet")
 def test_inline_scenario_is_validated_by_the_world_layer():
     bad = {"name": "bad", "size": [10, 10], "start": [0, 0], "goal": [10, 10],
            "obstacles": [{"shape": "circle", "center": [2, 2], "radius": -1}]}
@@ -184,7 +165,6 @@ def test_inline_scenario_is_validated_by_the_world_layer():
     assert "bad" in str(err)
 
 
-@pytest.mark.skipif(not (HAVE_PLANNERS and HAVE_PRESETS), reason="planners/presets not written")
 def test_valid_map_spec():
     from swarmpath.planners import list_planners
     from swarmpath.world.presets import list_maps

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import importlib
 import json
 import shutil
 import signal
@@ -29,18 +28,6 @@ from swarmpath.service.store import Store
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_store import SPEC, T0, drain, execute
-
-
-def importable(module: str, attr: str) -> bool:
-    try:
-        return hasattr(importlib.import_module(module), attr)
-    except ImportError:
-        return False
-
-
-HAVE_WORLD = importable("swarmpath.world.scenario_io", "scenario_from_dict") and importable(
-    "swarmpath.world.raster", "rasterize_scenario"
-)
 
 
 def read_all(path: Path):
@@ -332,7 +319,6 @@ def map_record(job: str, run: int, created: float, scenario=SCENARIO) -> dict:
     }
 
 
-@pytest.mark.skipif(not HAVE_WORLD, reason="swarmpath.world not available")
 def test_map_job_file_opens_in_foxglove(tmp_path):
     spec = {"kind": "map", "planners": ["P"], "maps": [SCENARIO], "runs": 2, "seed": 1}
     rec = JobRecorder(tmp_path / "m.mcap", "job1", "map", spec, T0)
@@ -395,7 +381,6 @@ def test_map_job_file_opens_in_foxglove(tmp_path):
     assert json.loads(metadata["swarmpath.job"]["spec"])["maps"][0]["name"] == "demo"
 
 
-@pytest.mark.skipif(not HAVE_WORLD, reason="swarmpath.world not available")
 def test_map_job_through_the_store(store):
     spec = MapJobSpec.model_construct(kind="map", planners=["P"], maps=[SCENARIO], runs=2,
                                       seed=1, params={})

@@ -340,7 +340,6 @@ def test_cancel_a_running_job(service):
 
 
 def test_map_job(service):
-    pytest.importorskip("swarmpath.planners")
     from swarmpath.planners import Episode
     from swarmpath.world.presets import get_map
 

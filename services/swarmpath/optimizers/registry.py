@@ -15,6 +15,7 @@ _MODULES = (
     "rfo",
 )
 _REGISTRY: dict[str, type[Optimizer]] = {}
+_SEQUENCE: dict[str, int] = {}
 _loaded = False
 
 
@@ -22,6 +23,7 @@ def register(cls: type[Optimizer]) -> type[Optimizer]:
     if cls.name in _REGISTRY and _REGISTRY[cls.name] is not cls:
         raise ValueError(f"optimizer {cls.name!r} registered twice")
     _REGISTRY[cls.name] = cls
+    _SEQUENCE.setdefault(cls.__name__ + "/" + cls.__module__, len(_SEQUENCE))
     return cls
 
 
@@ -29,17 +31,21 @@ def _load() -> None:
     global _loaded
     if not _loaded:
         for module in _MODULES:
-            try:
-                importlib.import_module(f"swarmpath.optimizers.{module}")
-            except ModuleNotFoundError as exc:  # TEMP while the team writes the modules
-                if exc.name != f"swarmpath.optimizers.{module}":
-                    raise
+            importlib.import_module(f"swarmpath.optimizers.{module}")
         _loaded = True
+
+
+def _position(cls: type) -> tuple[int, int]:
+    """Listing order: the module order above, then registration order (whatever was imported
+    first, e.g. by a test importing one module directly)."""
+    module = cls.__module__.rsplit(".", 1)[-1]
+    rank = _MODULES.index(module) if module in _MODULES else len(_MODULES)
+    return rank, _SEQUENCE[cls.__name__ + "/" + cls.__module__]
 
 
 def list_optimizers() -> list[str]:
     _load()
-    return list(_REGISTRY)
+    return [cls.name for cls in sorted(_REGISTRY.values(), key=_position)]
 
 
 def get_optimizer(name: str) -> type[Optimizer]:
@@ -47,4 +53,5 @@ def get_optimizer(name: str) -> type[Optimizer]:
     try:
         return _REGISTRY[name]
     except KeyError:
-        raise KeyError(f"unknown optimizer {name!r}; valid: {', '.join(_REGISTRY)}") from None
+        valid = ", ".join(list_optimizers())
+        raise KeyError(f"unknown optimizer {name!r}; valid: {valid}") from None

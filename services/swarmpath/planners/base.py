@@ -117,6 +117,7 @@ class Planner(ABC):
 # ----------------------------------------------------------------------------------- registry
 _MODULES = ("swarm_local", "rfo_gwo", "ompl_baselines")
 _REGISTRY: dict[str, type[Planner]] = {}
+_SEQUENCE: dict[str, int] = {}
 _loaded = False
 
 
@@ -124,6 +125,7 @@ def register(cls: type[Planner]) -> type[Planner]:
     if cls.name in _REGISTRY and _REGISTRY[cls.name] is not cls:
         raise ValueError(f"planner {cls.name!r} registered twice")
     _REGISTRY[cls.name] = cls
+    _SEQUENCE.setdefault(cls.__name__ + "/" + cls.__module__, len(_SEQUENCE))
     return cls
 
 
@@ -131,17 +133,21 @@ def _load() -> None:
     global _loaded
     if not _loaded:
         for module in _MODULES:
-            try:
-                importlib.import_module(f"swarmpath.planners.{module}")
-            except ModuleNotFoundError as exc:  # TEMP while the team writes the modules
-                if exc.name != f"swarmpath.planners.{module}":
-                    raise
+            importlib.import_module(f"swarmpath.planners.{module}")
         _loaded = True
+
+
+def _position(cls: type) -> tuple[int, int]:
+    """Listing order: the module order above, then registration order (whatever was imported
+    first, e.g. by a test importing one module directly)."""
+    module = cls.__module__.rsplit(".", 1)[-1]
+    rank = _MODULES.index(module) if module in _MODULES else len(_MODULES)
+    return rank, _SEQUENCE[cls.__name__ + "/" + cls.__module__]
 
 
 def list_planners() -> list[str]:
     _load()
-    return list(_REGISTRY)
+    return [cls.name for cls in sorted(_REGISTRY.values(), key=_position)]
 
 
 def get_planner(name: str) -> type[Planner]:
@@ -149,4 +155,5 @@ def get_planner(name: str) -> type[Planner]:
     try:
         return _REGISTRY[name]
     except KeyError:
-        raise PlannerError(f"unknown planner {name!r}; valid: {', '.join(_REGISTRY)}") from None
+        valid = ", ".join(list_planners())
+        raise PlannerError(f"unknown planner {name!r}; valid: {valid}") from None

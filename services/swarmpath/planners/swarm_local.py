@@ -213,6 +213,7 @@ class SwarmLocalPlanner(Planner):
 def _preset(name: str, optimizer: str, description: str, reference: str, sensors: str,
             settings: dict[str, Any], optimizer_params: dict[str, Any] | None = None) -> type:
     attrs = {
+        "__module__": __name__,
         "name": name,
         "description": description,
         "reference": reference,

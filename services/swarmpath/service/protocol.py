@@ -100,37 +100,22 @@ def _check_total(info: ValidationInfo, runs: int, axes: Sequence[str]) -> int:
 
 
 def _planner_registry() -> Any:
-    """``swarmpath.planners`` (imported lazily: it is optional for benchmark-only installs)."""
-    try:
-        planners = importlib.import_module("swarmpath.planners")
-    except ImportError as exc:
-        raise ValueError(f"planners are not available in this installation ({exc})") from None
-    if not hasattr(planners, "list_planners"):
-        raise ValueError("planners are not available in this installation (no list_planners)")
-    return planners
+    """``swarmpath.planners``, imported on first use (it pulls in the whole planning stack)."""
+    return importlib.import_module("swarmpath.planners")
 
 
 def _map_names() -> list[str]:
-    try:
-        from swarmpath.world.presets import list_maps
-    except ImportError as exc:
-        raise ValueError(f"preset maps are not available in this installation ({exc})") from None
+    from swarmpath.world.presets import list_maps
+
     return list(list_maps())
 
 
 def _check_inline_scenario(scenario: Mapping[str, Any]) -> None:
-    """Full validation by the world layer's JSON reader when it is installed (lazy import)."""
+    """Full validation of an inline scenario by the world layer's JSON reader."""
+    from swarmpath.world.scenario_io import scenario_from_dict
+
     try:
-        from swarmpath.world import scenario_io
-    except ImportError:
-        return  # the basic shape was checked by the caller; workers validate again before running
-    reader = getattr(scenario_io, "scenario_from_dict", None) or getattr(
-        scenario_io, "from_dict", None
-    )
-    if reader is None:
-        return
-    try:
-        reader(dict(scenario))
+        scenario_from_dict(dict(scenario))
     except (ValueError, TypeError, KeyError) as exc:
         raise ValueError(f"scenario {scenario.get('name')!r}: {exc}") from None
 
