@@ -86,9 +86,9 @@ def test_collisions_are_detected_not_trusted():
         assert out.collisions > 0 and not out.success
         assert "collided" in out.reason and out.min_clearance < 0
     finally:
-        from swarmpath.planners import base
+        from swarmpath.planners.base import REGISTRY
 
-        base._REGISTRY.pop("test-straight")
+        REGISTRY.unregister("test-straight")
 
 
 def test_unknown_planner_and_parameter_are_named():

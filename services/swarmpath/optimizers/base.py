@@ -17,9 +17,9 @@ from numpy.typing import NDArray
 
 from swarmpath.optimizers.problem import Problem
 from swarmpath.optimizers.streams import RunStreams
+from swarmpath.registry import ParamValue, resolve_params
 
 Array = NDArray[np.float64]
-ParamValue = float | int | bool | str
 
 
 class ParameterError(ValueError):
@@ -74,34 +74,7 @@ class Optimizer(ABC):
     # ----------------------------------------------------------------------------------- params
     @classmethod
     def resolve_params(cls, params: Mapping[str, Any] | None) -> dict[str, ParamValue]:
-        merged: dict[str, ParamValue] = dict(cls.defaults)
-        for key, value in (params or {}).items():
-            if key not in cls.defaults:
-                valid = ", ".join(sorted(cls.defaults)) or "none"
-                raise ParameterError(f"{cls.name} has no parameter {key!r}; valid: {valid}")
-            default = cls.defaults[key]
-            if isinstance(default, bool):
-                if not isinstance(value, bool):
-                    raise ParameterError(f"{cls.name}.{key} must be true or false, got {value!r}")
-            elif isinstance(default, str):
-                allowed = cls.choices.get(key, ())
-                if not isinstance(value, str) or (allowed and value not in allowed):
-                    raise ParameterError(
-                        f"{cls.name}.{key} must be one of {', '.join(allowed)}; got {value!r}"
-                    )
-            elif isinstance(default, int):
-                if isinstance(value, bool) or not isinstance(value, int | float) or (
-                    float(value) != int(value)
-                ):
-                    raise ParameterError(f"{cls.name}.{key} must be an integer, got {value!r}")
-                value = int(value)
-            else:
-                if isinstance(value, bool) or not isinstance(value, int | float) or not np.isfinite(
-                    value
-                ):
-                    raise ParameterError(f"{cls.name}.{key} must be a finite number, got {value!r}")
-                value = float(value)
-            merged[key] = value
+        merged = resolve_params(cls.name, cls.defaults, cls.choices, params, ParameterError)
         cls.check_params(merged)
         return merged
 

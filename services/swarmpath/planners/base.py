@@ -7,7 +7,6 @@ handed the static part of the map once, at construction, and say so (``kind = "g
 
 from __future__ import annotations
 
-import importlib
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -16,13 +15,13 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmpath.registry import ParamValue, Registry, resolve_params
 from swarmpath.robot.kinematics import Pose
 from swarmpath.robot.sensors import SensorReading
 from swarmpath.world.geometry import ObstacleSet
 from swarmpath.world.scenario import Scenario
 
 Array = NDArray[np.float64]
-ParamValue = float | int | bool | str
 
 
 class PlannerError(ValueError):
@@ -75,34 +74,8 @@ class Planner(ABC):
 
     @classmethod
     def resolve_params(cls, params: Mapping[str, Any] | None) -> dict[str, ParamValue]:
-        merged: dict[str, ParamValue] = dict(cls.defaults)
-        for key, value in (params or {}).items():
-            if key not in cls.defaults:
-                valid = ", ".join(sorted(cls.defaults)) or "none"
-                raise PlannerError(f"planner {cls.name} has no parameter {key!r}; valid: {valid}")
-            default = cls.defaults[key]
-            if isinstance(default, bool):
-                ok = isinstance(value, bool)
-            elif isinstance(default, str):
-                allowed = cls.choices.get(key, ())
-                ok = isinstance(value, str) and (not allowed or value in allowed)
-                if not ok:
-                    raise PlannerError(
-                        f"{cls.name}.{key} must be one of {', '.join(allowed)}; got {value!r}"
-                    )
-            elif isinstance(default, int):
-                ok = isinstance(value, int | float) and not isinstance(value, bool) and float(
-                    value
-                ) == int(value)
-                value = int(value) if ok else value
-            else:
-                ok = isinstance(value, int | float) and not isinstance(value, bool) and bool(
-                    np.isfinite(value)
-                )
-                value = float(value) if ok else value
-            if not ok:
-                raise PlannerError(f"{cls.name}.{key} has the wrong type: {value!r}")
-            merged[key] = value
+        owner = f"planner {cls.name}"
+        merged = resolve_params(owner, cls.defaults, cls.choices, params, PlannerError)
         cls.check_params(merged)
         return merged
 
@@ -116,44 +89,13 @@ class Planner(ABC):
 
 # ----------------------------------------------------------------------------------- registry
 _MODULES = ("swarm_local", "rfo_gwo", "ompl_baselines")
-_REGISTRY: dict[str, type[Planner]] = {}
-_SEQUENCE: dict[str, int] = {}
-_loaded = False
-
-
-def register(cls: type[Planner]) -> type[Planner]:
-    if cls.name in _REGISTRY and _REGISTRY[cls.name] is not cls:
-        raise ValueError(f"planner {cls.name!r} registered twice")
-    _REGISTRY[cls.name] = cls
-    _SEQUENCE.setdefault(cls.__name__ + "/" + cls.__module__, len(_SEQUENCE))
-    return cls
-
-
-def _load() -> None:
-    global _loaded
-    if not _loaded:
-        for module in _MODULES:
-            importlib.import_module(f"swarmpath.planners.{module}")
-        _loaded = True
-
-
-def _position(cls: type) -> tuple[int, int]:
-    """Listing order: the module order above, then registration order (whatever was imported
-    first, e.g. by a test importing one module directly)."""
-    module = cls.__module__.rsplit(".", 1)[-1]
-    rank = _MODULES.index(module) if module in _MODULES else len(_MODULES)
-    return rank, _SEQUENCE[cls.__name__ + "/" + cls.__module__]
+REGISTRY: Registry[Planner] = Registry("planner", "swarmpath.planners", _MODULES, PlannerError)
+register = REGISTRY.register
 
 
 def list_planners() -> list[str]:
-    _load()
-    return [cls.name for cls in sorted(_REGISTRY.values(), key=_position)]
+    return REGISTRY.names()
 
 
 def get_planner(name: str) -> type[Planner]:
-    _load()
-    try:
-        return _REGISTRY[name]
-    except KeyError:
-        valid = ", ".join(list_planners())
-        raise PlannerError(f"unknown planner {name!r}; valid: {valid}") from None
+    return REGISTRY.get(name)
