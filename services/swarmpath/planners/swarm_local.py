@@ -230,7 +230,7 @@ IHPO_PAPER = "Abdulsaheb & Kadhim, IJIES 16(2) 2023, section 5 (framework of the
 MFB_PAPER = "Ajeil, Ibraheem, Azar & Humaidi, IJARS 2020, Tables 1-2, eqs 3-8, 18-24"
 
 # ICOOT paper: 80 coots, 2 leaders, 80 virtual sensors, grid local search (section 4.1).
-_COOT_SETTINGS = {"agents": 80, "iterations": 5, "step": 1.0, "repair": "grid"}
+_COOT_SETTINGS = {"agents": 80, "iterations": 5, "step": 0.8, "repair": "grid"}
 _preset("ICOOT", "ICOOT", "ICOOT swarm local planner (80 coots, 2 leaders)", ICOOT_PAPER,
         "icoot-80", _COOT_SETTINGS, {"leaders": 2})
 _preset("COOT", "COOT", "COOT in the ICOOT paper's planning framework", ICOOT_PAPER, "icoot-80",
@@ -238,9 +238,9 @@ _preset("COOT", "COOT", "COOT in the ICOOT paper's planning framework", ICOOT_PA
 # HPO's published hunter rule scales absolute positions (a pull toward the world origin);
 # around a robot the box centre is the meaningful origin (docs/algorithms.md, HPO).
 _preset("IHPO", "IHPO", "IHPO swarm local planner", IHPO_PAPER, "icoot-80",
-        {"agents": 80, "iterations": 5, "step": 1.0, "repair": "grid"}, {"hunter": "centre"})
+        {"agents": 80, "iterations": 5, "step": 0.8, "repair": "grid"}, {"hunter": "centre"})
 _preset("HPO", "HPO", "HPO in the IHPO paper's planning framework", IHPO_PAPER, "icoot-80",
-        {"agents": 80, "iterations": 5, "step": 1.0, "repair": "grid"}, {"hunter": "centre"})
+        {"agents": 80, "iterations": 5, "step": 0.8, "repair": "grid"}, {"hunter": "centre"})
 # MFB paper Table 1: 8 bats, 8 iterations, sensing range 0.8 m; fitness 1/(f + eps) (eq 8).
 _preset("MFB", "MFB", "Modified Frequency Bat local planner", MFB_PAPER, "mfb-12",
         {"agents": 8, "iterations": 8, "step": 0.8, "repair": "mfb", "objective": "inverse"})
