@@ -37,7 +37,8 @@ Decisions:
   immediate target update the prey cloud contracts around a fixed T and stalls. Measured with a
   scratch port of the authors' loop: shifted F1 ~1e-5 sequential vs ~1e4 here, F6/F12 of Table 2
   reached sequentially and missed here (docs/algorithms.md). The code's prey step
-  (``prey_step = "2Z"``) suffers much less.
+  (``prey_step = "2Z"``) suffers much less. ``update = "sequential"`` runs the authors' sweep
+  (a loop over agents, vectorized over runs; opt-in, about 6x slower).
 * Positions are always replaced (no greedy selection), as in paper and code.
 * Bounds: the new position is clipped to the box before it is evaluated.
 * Evaluations: N at initialization and N per iteration, N (T + 1) in all (the MATLAB loop starts
@@ -93,11 +94,13 @@ class HPO(Optimizer):
         "prey_step": "CZ",
         "prey_angle": "independent",
         "hunter": "paper",
+        "update": "synchronous",
     }
     choices: ClassVar[dict[str, tuple[str, ...]]] = {
         "prey_step": ("CZ", "2Z"),
         "prey_angle": ("independent", "from_z"),
         "hunter": ("paper", "centre", "relative"),
+        "update": ("synchronous", "sequential"),
     }
     min_agents = 1
 
@@ -181,18 +184,44 @@ class HPO(Optimizer):
         C = hpo_c(self.t, self.T)
         kbest = hpo_kbest(C, self.N)
         draw = self._draw(C)
-        P, mu = self._hunter_anchor(C, kbest)
+        if self.p["update"] == "synchronous":
+            X = self._moved(draw, C, kbest, slice(0, self.N))
+            self._clip_inplace(X)
+            self.X = X
+            self.evaluate(X)
+            return
+        # The authors' sweep: agent i moves from the population as agents 0..i-1 left it (mu and
+        # P recomputed) and toward the best point including their evaluations. A loop over
+        # agents (vectorized over runs): opt-in, for reproducing the published column.
+        for i in range(self.N):
+            rows = slice(i, i + 1)
+            X = self._moved(draw, C, kbest, rows)
+            self._clip_inplace(X)
+            self.X[:, rows] = X
+            self.evaluate(X)
+
+    def _hunter_rows(self, draw: Draw, rows: slice) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+        """(run, agent-within-rows) of the hunters among ``rows``."""
         r, i = draw.hunters
-        anchor = C * P + (1.0 - C) * mu
-        hunt = self._hunter_move(draw.CZ[r, i] / C, self.X[r, i], anchor[r], r)
+        keep = (i >= rows.start) & (i < rows.stop)
+        return r[keep], i[keep] - rows.start
+
+    def _moved(self, draw: Draw, C: float, kbest: int, rows: slice) -> Array:
+        """New positions (R, len(rows), d) of agents ``rows`` from the current population."""
+        X = self.X[:, rows].copy()
+        r, i = self._hunter_rows(draw, rows)
+        hunt = None
+        if r.size:
+            P, mu = self._hunter_anchor(C, kbest)
+            anchor = C * P + (1.0 - C) * mu
+            hunt = self._hunter_move(draw.CZ[:, rows][r, i] / C, X[r, i], anchor[r], r)
         T = self.best_position[:, None, :]
-        X = self.X  # prey, in place: x' = T + S (T - x)
-        np.subtract(T, X, out=X)
-        X *= draw.S
+        np.subtract(T, X, out=X)  # prey: x' = T + S (T - x)
+        X *= draw.S[:, rows]
         X += T
-        X[r, i] = hunt
-        self._clip_inplace(X)
-        self.evaluate(X)
+        if hunt is not None:
+            X[r, i] = hunt
+        return X
 
     def _clip_inplace(self, X: Array) -> None:
         np.maximum(X, self.lb, out=X)

@@ -49,7 +49,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from swarmpath.optimizers.base import Array
-from swarmpath.optimizers.hpo import HPO, hpo_c, hpo_kbest
+from swarmpath.optimizers.hpo import HPO, Draw
 from swarmpath.optimizers.registry import register
 
 
@@ -93,50 +93,48 @@ class IHPO(HPO):
             u = rows[:, 0, :1, None]  # (R, 1, 1): the first agent's number serves everyone
         return (2.0 * u - 1.0) * cp
 
-    def _iterate(self) -> None:
-        C = hpo_c(self.t, self.T)
-        kbest = hpo_kbest(C, self.N)
+    def _moved(self, draw: Draw, C: float, kbest: int, rows: slice) -> Array:
         cc = C if self.p["cp_c"] == "hpo" else 1.0
         cp = math.sin(cc - self.t / self.T)
-        draw = self._draw(C)
-        alpha = self._alpha(cp, draw.slabs, draw.rows)
+        alpha_all = self._alpha(cp, draw.slabs, draw.rows)
+        X = self.X[:, rows].copy()
+        alpha = np.broadcast_to(alpha_all, self.X.shape)[:, rows]
         branches = self.p["alpha_branches"]
         on = self.p["alpha_on"]
-        P, mu = self._hunter_anchor(C, kbest)
-        r, i = draw.hunters
-        X = self.X
+        r, i = self._hunter_rows(draw, rows)
 
         # hunters (a few rows): HPO's move h, then alpha
-        z, x = draw.CZ[r, i] / C, X[r, i]
-        a = np.broadcast_to(alpha, X.shape)[r, i]  # (h, d)
-        if branches == "prey":
-            hunt = self._hunter_move(z, x, C * P[r] + (1.0 - C) * mu[r], r)
-        elif on == "literal":  # eq 14a: alpha scales the prey position
-            hunt = self._hunter_move(z, x, a * (C * P[r]) + (1.0 - C) * mu[r], r)
-        else:
-            h = self._hunter_move(z, x, C * P[r] + (1.0 - C) * mu[r], r)
-            hunt = a * h if on == "position" else x + a * (h - x)
+        hunt = None
+        if r.size:
+            P, mu = self._hunter_anchor(C, kbest)
+            z, x = draw.CZ[:, rows][r, i] / C, X[r, i]
+            a = alpha[r, i]  # (h, d)
+            if branches == "prey":
+                hunt = self._hunter_move(z, x, C * P[r] + (1.0 - C) * mu[r], r)
+            elif on == "literal":  # eq 14a: alpha scales the prey position
+                hunt = self._hunter_move(z, x, a * (C * P[r]) + (1.0 - C) * mu[r], r)
+            else:
+                h = self._hunter_move(z, x, C * P[r] + (1.0 - C) * mu[r], r)
+                hunt = a * h if on == "position" else x + a * (h - x)
 
-        # prey, in place on the whole population (hunter rows are overwritten below)
+        # prey on the selected rows (hunter rows are overwritten below)
         T = self.best_position[:, None, :]
-        S = draw.S
+        S = draw.S[:, rows]
         if branches == "hunter" or on in ("step", "literal"):
             if branches != "hunter":
-                S *= alpha  # eq 14b: T + alpha C Z cos(2 pi r4) (T - x)
+                S = S * alpha  # eq 14b: T + alpha C Z cos(2 pi r4) (T - x)
             np.subtract(T, X, out=X)
             X *= S
             X += T
         elif on == "displacement":  # x + alpha (T + S (T - x) - x) = x + alpha (1 + S)(T - x)
-            S += 1.0
-            S *= alpha
             D = T - X
-            D *= S
+            D *= (S + 1.0) * alpha
             X += D
         else:  # position: alpha (T + S (T - x))
             np.subtract(T, X, out=X)
             X *= S
             X += T
             X *= alpha
-        X[r, i] = hunt
-        self._clip_inplace(X)
-        self.evaluate(X)
+        if hunt is not None:
+            X[r, i] = hunt
+        return X
