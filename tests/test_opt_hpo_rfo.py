@@ -120,6 +120,7 @@ ALTERNATIVES = [
     ("IHPO", "alpha_branches", "prey"), ("IHPO", "beta_draw", "iteration"),
     ("IHPO", "beta_draw", "dimension"), ("IHPO", "cp_c", "one"), ("IHPO", "hunter", "relative"),
     ("IHPO", "prey_step", "2Z"), ("IHPO", "prey_angle", "from_z"),
+    ("HPO", "update", "sequential"), ("IHPO", "update", "sequential"),
     ("RFO", "alpha_draw", "fox"), ("RFO", "kappa_draw", "fox"),
     ("RFO", "reproduction", "scaled_centre"), ("RFO", "local_greedy", True),
 ]
