@@ -22,7 +22,7 @@ from rich.measure import Measurement
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from swarmpath import __version__, report
-from swarmpath.cli.core import InputError, app
+from swarmpath.cli.core import InputError, app, parse_params_option
 from swarmpath.functions import expand_function_names, get_function
 from swarmpath.optimizers import ParameterError, get_optimizer, list_optimizers, minimize
 from swarmpath.optimizers.api import MAX_AGENTS, MAX_DIM, MAX_ITERATIONS
@@ -113,30 +113,10 @@ def check_range(option: str, value: int, low: int, high: int) -> int:
 
 def parse_params(text: str | None, algorithms: Sequence[str]) -> dict[str, dict[str, Any]]:
     """'{"ICOOT": {"p": 0.5}}' -> params per algorithm, each checked by the algorithm itself."""
-    if text is None or not text.strip():
-        return {}
-    try:
-        raw = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise InputError("--params", f"not valid JSON: {exc.msg} (column {exc.colno})") from None
-    if not isinstance(raw, dict):
-        raise InputError("--params", 'must be a JSON object like {"GWO": {"a_max": 2}}')
-    by_lower = {a.lower(): a for a in algorithms}
-    out: dict[str, dict[str, Any]] = {}
-    for key, values in raw.items():
-        name = key if key in algorithms else by_lower.get(str(key).lower())
-        if name is None:
-            raise InputError(
-                "--params", f"{key!r} is not one of --algorithms ({', '.join(algorithms)})"
-            )
-        if not isinstance(values, dict):
-            raise InputError("--params", f"{key}: parameters must be a JSON object")
-        try:
-            get_optimizer(name).resolve_params(values)
-        except ParameterError as exc:
-            raise InputError("--params", str(exc)) from None
-        out[name] = dict(values)
-    return out
+    return parse_params_option(
+        text, algorithms, "--algorithms", '{"GWO": {"a_max": 2}}',
+        lambda name, values: get_optimizer(name).resolve_params(values),
+    )
 
 
 def make_spec(

@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+import json
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Annotated, Any
 
 import typer
@@ -30,6 +31,44 @@ class InputError(ValueError):
         super().__init__(f"{field}: {message}")
         self.field = field
         self.detail = message
+
+
+def parse_params_option(
+    text: str | None,
+    names: Sequence[str],
+    names_option: str,
+    example: str,
+    check: Callable[[str, dict[str, Any]], object],
+) -> dict[str, dict[str, Any]]:
+    """``--params`` JSON ``{name: {param: value}}`` for names given in ``names_option``.
+
+    ``check(name, values)`` validates one entry (the algorithm's or planner's own
+    ``resolve_params``); its ValueError becomes an error naming ``--params``.
+    """
+    if text is None or not text.strip():
+        return {}
+    try:
+        raw = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InputError("--params", f"not valid JSON: {exc.msg} (column {exc.colno})") from None
+    if not isinstance(raw, dict):
+        raise InputError("--params", f"must be a JSON object like {example}")
+    by_lower = {n.lower(): n for n in names}
+    out: dict[str, dict[str, Any]] = {}
+    for key, values in raw.items():
+        name = key if key in names else by_lower.get(str(key).lower())
+        if name is None:
+            raise InputError(
+                "--params", f"{key!r} is not one of {names_option} ({', '.join(names)})"
+            )
+        if not isinstance(values, dict):
+            raise InputError("--params", f"{key}: parameters must be a JSON object")
+        try:
+            check(name, values)
+        except ValueError as exc:
+            raise InputError("--params", str(exc)) from None
+        out[name] = dict(values)
+    return out
 
 
 def error_line(path: str, message: str) -> str:

@@ -29,7 +29,7 @@ from rich.measure import Measurement
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from swarmpath.cli.core import InputError, app
+from swarmpath.cli.core import InputError, app, parse_params_option
 
 MAX_RUNS = 10_000
 MAP_SUFFIXES = (".json", ".yaml", ".yml", ".map")
@@ -147,32 +147,12 @@ def resolve_maps(spec: str) -> list[Any]:
 
 def parse_params(text: str | None, planners: Sequence[str]) -> dict[str, dict[str, Any]]:
     """'{"OMPL-RRTstar": {"time": 0.5}}' -> params per planner, each checked by the planner."""
-    from swarmpath.planners import PlannerError, get_planner
+    from swarmpath.planners import get_planner
 
-    if text is None or not text.strip():
-        return {}
-    try:
-        raw = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise InputError("--params", f"not valid JSON: {exc.msg} (column {exc.colno})") from None
-    if not isinstance(raw, dict):
-        raise InputError("--params", 'must be a JSON object like {"MFB": {"agents": 10}}')
-    by_lower = {p.lower(): p for p in planners}
-    out: dict[str, dict[str, Any]] = {}
-    for key, values in raw.items():
-        name = key if key in planners else by_lower.get(str(key).lower())
-        if name is None:
-            raise InputError(
-                "--params", f"{key!r} is not one of --planners ({', '.join(planners)})"
-            )
-        if not isinstance(values, dict):
-            raise InputError("--params", f"{key}: parameters must be a JSON object")
-        try:
-            get_planner(name).resolve_params(values)
-        except PlannerError as exc:
-            raise InputError("--params", str(exc)) from None
-        out[name] = dict(values)
-    return out
+    return parse_params_option(
+        text, planners, "--planners", '{"MFB": {"agents": 10}}',
+        lambda name, values: get_planner(name).resolve_params(values),
+    )
 
 
 def make_spec(planners: str, maps: str, runs: int = 10, seed: int = 1,
