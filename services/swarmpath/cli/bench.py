@@ -22,7 +22,7 @@ from rich.measure import Measurement
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from swarmpath import __version__, report
-from swarmpath.cli.core import InputError, app, parse_params_option
+from swarmpath.cli.core import InputError, app, parse_params_option, resolve_names
 from swarmpath.functions import expand_function_names, get_function
 from swarmpath.optimizers import ParameterError, get_optimizer, list_optimizers, minimize
 from swarmpath.optimizers.api import MAX_AGENTS, MAX_DIM, MAX_ITERATIONS
@@ -60,23 +60,7 @@ def _names(spec: str) -> list[str]:
 
 def resolve_algorithms(spec: str) -> list[str]:
     """'ICOOT,coot,GWO' -> registered names (case-insensitive, duplicates dropped); 'all' = all."""
-    registered = list_optimizers()
-    if spec.strip().lower() == "all":
-        return registered
-    by_lower = {name.lower(): name for name in registered}
-    out: list[str] = []
-    for part in _names(spec):
-        name = part if part in registered else by_lower.get(part.lower())
-        if name is None:
-            raise InputError(
-                "--algorithms",
-                f"unknown algorithm {part!r}; registered: {', '.join(registered) or 'none'}",
-            )
-        if name not in out:
-            out.append(name)
-    if not out:
-        raise InputError("--algorithms", "no algorithm given")
-    return out
+    return resolve_names(spec, list_optimizers(), "--algorithms", "algorithm")
 
 
 def resolve_functions(spec: str) -> list[str]:

@@ -33,6 +33,26 @@ class InputError(ValueError):
         self.detail = message
 
 
+def resolve_names(spec: str, registered: Sequence[str], option: str, kind: str) -> list[str]:
+    """'ICOOT,coot' -> registered names (case-insensitive, duplicates dropped); 'all' = all."""
+    if spec.strip().lower() == "all":
+        return list(registered)
+    by_lower = {name.lower(): name for name in registered}
+    out: list[str] = []
+    for part in (p.strip() for p in spec.split(",")):
+        if not part:
+            continue
+        name = part if part in registered else by_lower.get(part.lower())
+        if name is None:
+            valid = ", ".join(registered) or "none"
+            raise InputError(option, f"unknown {kind} {part!r}; registered: {valid}")
+        if name not in out:
+            out.append(name)
+    if not out:
+        raise InputError(option, f"no {kind} given")
+    return out
+
+
 def parse_params_option(
     text: str | None,
     names: Sequence[str],

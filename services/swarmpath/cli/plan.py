@@ -29,7 +29,7 @@ from rich.measure import Measurement
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from swarmpath.cli.core import InputError, app, parse_params_option
+from swarmpath.cli.core import InputError, app, parse_params_option, resolve_names
 
 MAX_RUNS = 10_000
 MAP_SUFFIXES = (".json", ".yaml", ".yml", ".map")
@@ -64,22 +64,7 @@ def resolve_planners(spec: str) -> list[str]:
     """'ICOOT,mfb' -> registered names (case-insensitive, duplicates dropped); 'all' = all."""
     from swarmpath.planners import list_planners
 
-    registered = list_planners()
-    if spec.strip().lower() == "all":
-        return registered
-    by_lower = {name.lower(): name for name in registered}
-    out: list[str] = []
-    for part in _names(spec):
-        name = part if part in registered else by_lower.get(part.lower())
-        if name is None:
-            raise InputError(
-                "--planners", f"unknown planner {part!r}; registered: {', '.join(registered)}"
-            )
-        if name not in out:
-            out.append(name)
-    if not out:
-        raise InputError("--planners", "no planner given")
-    return out
+    return resolve_names(spec, list_planners(), "--planners", "planner")
 
 
 def load_map(item: str) -> Any:
