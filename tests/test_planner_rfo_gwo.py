@@ -205,3 +205,29 @@ def test_start_at_the_goal_gives_one_waypoint():
     path = pl.plan(here, here, s.robot.radius)
     assert path is not None and len(path) == 2 and pl.cost == 0
     assert np.array_equal(path[-1], here)
+
+
+def test_node_clearance_scales_with_the_map() -> None:
+    """1 m on the paper's 170 m maps, the safety margin's floor on a 10 m map."""
+    cls = get_planner("RFO-GWO-EA")
+    pl = cls(scenario("mfb-static"), None, run_generator(1, 0), None)
+    assert isinstance(pl, RfoFamilyPlanner)
+    assert pl.node_clearance(170.0, 170.0) == 1.0
+    assert pl.node_clearance(10.0, 10.0) == pytest.approx(0.2)
+    with pytest.raises(PlannerError):
+        cls.resolve_params({"node_scale": -1.0})
+
+
+def test_ea_path_near_the_optimum_on_mfb_static() -> None:
+    """Scale-aware rules: median of 5 seeds within 10 % of the exact optimum (14.483 m)."""
+    outs = [episode("mfb-static", "RFO-GWO-EA", seed=s)[1] for s in range(1, 6)]
+    assert all(o.success for o in outs)
+    assert float(np.median([o.length for o in outs])) < 1.10 * 14.483
+
+
+@pytest.mark.parametrize("seed", [1, 2, 10])
+def test_ea_avoids_moving_obstacles_on_mfb_dynamic(seed: int) -> None:
+    """Watching the sensors while following the path: no collision with the moving circles."""
+    out = Episode(scenario("mfb-dynamic"), "RFO-GWO-EA", seed=seed, run=0).run()
+    assert out.success, out.reason
+    assert out.collisions == 0

@@ -39,8 +39,11 @@ are *in addition to* the robot radius r, as the paper's robot is a body, not a p
 * safety rule (the "more than 20 cm from the border of any barrier" rule): clearance of every
   segment, and of every node not produced by eq 2, > r + ``safety_margin`` (0.2 m);
 * node rule (the "smaller than one metre from the border of any barriers" rule that hands the
-  fox to GWO): clearance of an eq 2 node > r + ``node_margin`` (1.0 m). Applying it to GWO's
-  wolves as well left mfb-static (10 m wide, r = 0.5 m) unsolved after 2000 iterations.
+  fox to GWO): clearance of an eq 2 node > r + m with the scale-aware margin
+  m = max(``safety_margin``, min(``node_margin`` (1.0 m), ``node_scale`` (0.02) * the larger
+  world side)) (:meth:`RfoFamilyPlanner.node_clearance`): exactly 1 m on the paper's 170 m
+  maps, 0.2 m on a 10 m map. Applying it to GWO's wolves as well left mfb-static (10 m wide,
+  r = 0.5 m) unsolved after 2000 iterations.
 
 Both are the product's collision rule (:func:`~swarmpath.world.geometry.collides`, touching
 counts) applied with the enlarged radius, so every output segment is collision-free for the robot
@@ -78,6 +81,19 @@ EA again, ``phases`` times. Erase never lengthens a path (triangle inequality) a
 checked segments; the split points lie on valid segments. Phase A draws the same random numbers as
 ``RFO-GWO``, so with the same seed the EA starts from exactly ``RFO-GWO``'s path.
 
+Following the path among moving obstacles
+-----------------------------------------
+The planner gets only the static map. When the observation carries a sensor reading and the
+scenario declares moving obstacles (that fact only), :meth:`RfoFamilyPlanner._follow` hands out
+decisions of ``replan`` (0.25 s) so that the robot re-senses. Hits farther than ``STATIC_HIT``
+from the static map and the border, with their positions predicted ``predict`` (1 s) ahead
+(:func:`sensed_map.predict`) and condensed within ``watch`` (3 m) (:func:`sensed_map.condense`),
+must stay farther than r + ``dynamic_margin`` (0.3 m) from the segment to the current waypoint;
+otherwise the robot waits or steps ``side_step`` (0.3 m) to the candidate (12 directions) that
+keeps that margin and is nearest the waypoint, or, with none, to the one with the most room. A
+waypoint no longer reachable on the static map after a step aside triggers a new plan from the
+current position. Without sensors or moving obstacles the waypoints are handed out as above.
+
 Deviations, all parameters
 --------------------------
 ``foxes`` = 15 (section 5's text; Table 1 says 10), ``iterations`` = 2000 (Table 1),
@@ -87,9 +103,10 @@ time and measured no better (the box is small and 2-D). ``patience`` (RFO-GWO va
 RFO: off) ends a search after that many iterations in which the best fox got no closer than
 before by ``STALL_TOLERANCE`` (1 cm): in successful runs RFO-GWO never stalled for more than one
 iteration, and a trapped search would otherwise call GWO for all 2000 iterations. EA:
-``ea_population`` = 10, ``ea_generations`` = 100, ``split_length`` = 2 m, ``phases`` = 1 (the
-paper gives none of them). Randomness comes only from the planner's generator: the same seed gives
-the same path.
+``ea_population`` = 10, ``ea_generations`` = 100, ``split_length`` = 2 m capped at
+``split_scale`` (0.025) times the larger world side (2 m on 170 m maps, 0.25 m on 10 m maps),
+``phases`` = 1 (the paper gives none of them). Randomness comes only from the planner's
+generator: the same seed gives the same path.
 """
 
 from __future__ import annotations
@@ -103,6 +120,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmpath.optimizers import Problem, RunStreams, create
+from swarmpath.planners import sensed_map
 from swarmpath.planners.base import (
     Decision,
     Observation,
@@ -111,6 +129,7 @@ from swarmpath.planners.base import (
     PlannerError,
     register,
 )
+from swarmpath.robot.kinematics import ARRIVE
 from swarmpath.world.geometry import (
     ObstacleSet,
     _segments_cross,  # the crossing test inside segment_segment_distance, reused as is
@@ -122,6 +141,8 @@ from swarmpath.world.scenario import Scenario
 
 Array = NDArray[np.float64]
 STALL_TOLERANCE = 0.01  # m: smaller gains of the best fox do not count as progress
+STATIC_HIT = 0.05  # m: a sensed hit this close to the static map or the border is explained by it
+HIT_CELL = 0.05  # m: sensed hits are condensed to one per cell of this size
 PENALTY = 1e6  # GWO objective of an invalid wolf (plus its violation): any valid wolf beats it
 REFERENCE = (
     "Ketafa & Al-Darraji, Iraqi J. Science 65(2) 2024 1070-1088, doi 10.24996/ijs.2024.65.2.38, "
@@ -333,6 +354,15 @@ class _BoxQuery:
         return out[0], out[1], out[2]
 
 
+def _hit_clearance(a: Array, b: Array, hits: Array) -> float:
+    """Least distance from the segment ab to the sensed points (inf with none)."""
+    if len(hits) == 0:
+        return math.inf
+    n = len(hits)
+    d = point_segment_distance(hits, np.broadcast_to(a, (n, 2)), np.broadcast_to(b, (n, 2)))
+    return float(np.min(d))
+
+
 def path_length(path: Array) -> float:
     return float(np.hypot(*np.diff(path, axis=0).T).sum()) if len(path) > 1 else 0.0
 
@@ -358,9 +388,16 @@ class RfoFamilyPlanner(Planner):
         "alpha_draw": "fox",
         "reference": "target",
         "node_margin": 1.0,  # m beyond the robot radius: section 4.1's one-metre rule (eq 2 nodes)
+        "node_scale": 0.02,  # node rule capped at this fraction of the larger world side
         "safety_margin": 0.2,  # m beyond the robot radius: section 4.1's 20 cm rule (the rest)
         "patience": 0,  # stop after this many iterations without progress (0: never)
         "goal_snap": 0.2,  # m: a fox this close to the target with a free segment steps onto it
+        # following the path with sensors (moving obstacles)
+        "watch": 3.0,  # m: sensed points farther than this from the robot are ignored
+        "dynamic_margin": 0.3,  # m beyond the robot radius kept from sensed points
+        "predict": 1.0,  # s: horizon over which moving sensed points are extrapolated (0: off)
+        "replan": 0.25,  # s: decision length while moving obstacles are sensed
+        "side_step": 0.3,  # m: length of a step aside
     }
     choices: ClassVar[dict[str, tuple[str, ...]]] = {
         "alpha_bound": ("sqrt", "distance"),
@@ -374,10 +411,11 @@ class RfoFamilyPlanner(Planner):
                     "ea_generations"):
             if key in p and int(p[key]) < 1:
                 raise PlannerError(f"{cls.name}.{key} must be >= 1")
-        for key in ("radius", "split_length"):
+        for key in ("radius", "split_length", "watch", "replan", "side_step"):
             if key in p and not float(p[key]) > 0:
                 raise PlannerError(f"{cls.name}.{key} must be > 0")
-        for key in ("node_margin", "safety_margin", "goal_snap", "phases"):
+        for key in ("node_margin", "node_scale", "split_scale", "safety_margin", "goal_snap",
+                    "phases", "dynamic_margin", "predict"):
             if key in p and float(p[key]) < 0:
                 raise PlannerError(f"{cls.name}.{key} must be >= 0")
         if "notice" in p and not 0.0 <= float(p["notice"]) <= 1.0:
@@ -400,6 +438,9 @@ class RfoFamilyPlanner(Planner):
         self.raw_path: Array | None = None  # phase A's path (before any smoothing)
         self.path: Array | None = None  # the path handed out, start included
         self.trace: list[float] = []  # distance of the best fox to the target, per iteration
+        self._static = static_map if static_map is not None else scenario.static_obstacles()
+        self._last_scan: tuple[float, Array] | None = None
+        self._moving = any(o.is_moving for o in scenario.obstacles)
 
     # --------------------------------------------------------------------------- contract
     def decide(self, obs: Observation) -> Decision:
@@ -410,9 +451,15 @@ class RfoFamilyPlanner(Planner):
                 return Decision(None, self._cost, None, self._failure)
             assert self._waypoints is not None
             self._next = 1
+            if self._watching(obs):  # watch from the first step on
+                decision = self._follow(obs)
+                return Decision(decision.target, self._cost + decision.iterations,
+                                decision.duration, decision.reason, decision.finish)
             return Decision(self._waypoints[0].copy(), self._cost, None)
         if self._failure is not None:
             return Decision(None, 0, None, self._failure)
+        if self._watching(obs):
+            return self._follow(obs)
         if self._next >= len(self._waypoints):
             return Decision(None, 0, None, "path exhausted before the goal was reached")
         target = self._waypoints[self._next].copy()
@@ -420,11 +467,104 @@ class RfoFamilyPlanner(Planner):
         # the last waypoint is the goal: drive onto it so the executed path is complete
         return Decision(target, 0, None, finish=self._next >= len(self._waypoints))
 
+    # ------------------------------------------------------------- sensed moving obstacles
+    def _sensed(self, obs: Observation, position: Array) -> Array:
+        """Sensed hits not explained by the static map or the world border, plus their predicted
+        positions (:func:`sensed_map.predict`), condensed within ``watch`` of ``position``."""
+        assert obs.reading is not None
+        hits = np.asarray(obs.reading.hit_points, dtype=float).reshape(-1, 2)
+        if len(hits):
+            w, h = obs.world_size
+            border = np.minimum(np.minimum(hits[:, 0], w - hits[:, 0]),
+                                np.minimum(hits[:, 1], h - hits[:, 1]))
+            static = self._static.point_clearance(hits) <= STATIC_HIT
+            hits = hits[~static & (border > STATIC_HIT)]
+        parts = [hits]
+        if self._last_scan is not None:
+            t0, previous = self._last_scan
+            ahead = float(self.p["predict"])
+            if ahead > 0:
+                steps = tuple(ahead * k / 4 for k in range(1, 5))
+                parts.append(sensed_map.predict(previous, hits, obs.time - t0, steps))
+        self._last_scan = (obs.time, hits)
+        return sensed_map.condense(np.concatenate(parts), position, float(self.p["watch"]),
+                                   HIT_CELL)
+
+    def _watching(self, obs: Observation) -> bool:
+        """Watch the sensors when there are some and the scenario says obstacles move (where and
+        how they move is not used; without moving obstacles the static map is the whole world)."""
+        return obs.reading is not None and self._moving
+
+    def _follow(self, obs: Observation) -> Decision:
+        """Follow the path while watching the sensors (scenarios with sensors only).
+
+        Decisions last ``replan`` seconds so that the robot re-senses: drive
+        to the current waypoint while the sensed and predicted points stay farther than
+        ``radius + dynamic_margin`` from the segment, else step aside (or wait) to the free
+        candidate nearest the waypoint; a waypoint no longer reachable on the static map
+        triggers a new plan from the current position.
+        """
+        assert self._waypoints is not None
+        r = float(obs.robot_radius)
+        pos = np.array([obs.pose.x, obs.pose.y])
+        hits = self._sensed(obs, pos)
+        k = self._next - 1  # the waypoint handed out last
+        if k >= 0 and math.dist(pos, self._waypoints[k]) <= 10 * ARRIVE:
+            k = self._next
+            if k >= len(self._waypoints):
+                return Decision(None, 0, None, "path exhausted before the goal was reached")
+            self._next = k + 1
+        target = self._waypoints[k].copy()
+        finish = k == len(self._waypoints) - 1
+        duration = float(self.p["replan"])
+        if len(hits) == 0:
+            return Decision(target, 0, duration, finish=finish)
+        margin = r + float(self.p["dynamic_margin"])
+        iterations = 0
+        if collides(self._static.segment_clearance(pos[None, :], target[None, :]), r)[0]:
+            # a step aside left the path: plan again from here on the static map
+            goal = np.asarray(obs.goal, dtype=float)
+            self._plan(pos, goal, r)
+            iterations = self._cost
+            if self._failure is not None:
+                return Decision(None, iterations, None, self._failure)
+            assert self._waypoints is not None
+            self._next = 1
+            target = self._waypoints[0].copy()
+            finish = len(self._waypoints) == 1
+        if _hit_clearance(pos, target, hits) > margin:
+            return Decision(target, iterations, duration, finish=finish)
+        # blocked: the candidate (waiting included) nearest the waypoint that stays clear
+        step = float(self.p["side_step"])
+        angles = np.arange(12) * (2 * math.pi / 12)
+        cands = np.vstack([pos, pos + step * np.column_stack([np.cos(angles), np.sin(angles)])])
+        w, h = obs.world_size
+        cands = np.clip(cands, [r, r], [w - r, h - r])
+        starts = np.broadcast_to(pos, cands.shape)
+        free = ~collides(self._static.segment_clearance(starts, cands), r)
+        room = np.array([_hit_clearance(pos, c, hits) for c in cands])
+        ok = free & (room > margin)
+        if ok.any():
+            cost = np.where(ok, np.hypot(*(cands - target).T), np.inf)
+            return Decision(cands[int(np.argmin(cost))], iterations, duration)
+        room = np.where(free, room, -np.inf)
+        return Decision(cands[int(np.argmax(room))], iterations, duration)
+
     # --------------------------------------------------------------------------- planning
     def plan(self, start: Array, goal: Array, radius: float) -> Array | None:
         """Plan once (no robot needed): the path with the start, or None (see ``failure``)."""
         self._plan(np.asarray(start, dtype=float), np.asarray(goal, dtype=float), radius)
         return self.path
+
+    def node_clearance(self, width: float, height: float) -> float:
+        """Margin of the node rule beyond the robot radius on a ``width`` x ``height`` world.
+
+        ``min(node_margin, node_scale * max(width, height))``, never below ``safety_margin``:
+        1 m on the paper's 170 m maps (0.02 * 170 = 3.4), 0.2 m on a 10 m map.
+        """
+        scaled = float(self.p["node_scale"]) * max(width, height)
+        margin = min(float(self.p["node_margin"]), scaled)
+        return max(margin, float(self.p["safety_margin"]))
 
     @property
     def failure(self) -> str | None:
@@ -441,9 +581,12 @@ class RfoFamilyPlanner(Planner):
         )
         self._geo = _Clearance(obstacles)
         self._goal = goal
-        self._thr_node = radius + float(self.p["node_margin"])
-        self._thr_safe = radius + float(self.p["safety_margin"])
         w, h = self.scenario.size
+        self._thr_node = radius + self.node_clearance(float(w), float(h))
+        self._thr_safe = radius + float(self.p["safety_margin"])
+        split = float(self.p.get("split_length", 2.0))
+        scale = float(self.p.get("split_scale", 0.0))
+        self._split_length = min(split, scale * max(w, h)) if scale > 0 else split
         self._lo = np.array([0.0, 0.0])
         self._hi = np.array([float(w), float(h)])
         self._waypoints = np.zeros((0, 2))
@@ -651,7 +794,7 @@ class RfoFamilyPlanner(Planner):
     def _refine(self, path: Array) -> Array:
         path = self._ea(path)
         for _ in range(int(self.p["phases"])):
-            path = self._ea(self._split(path, float(self.p["split_length"])))
+            path = self._ea(self._split(path, self._split_length))
         return path
 
     @staticmethod
@@ -724,6 +867,7 @@ _EA_PARAMS: dict[str, Any] = {
     "ea_population": 10,
     "ea_generations": 100,
     "split_length": 2.0,  # m
+    "split_scale": 0.025,  # split length capped at this fraction of the larger world side
     "phases": 1,
 }
 
