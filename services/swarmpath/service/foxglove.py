@@ -52,40 +52,30 @@ def _duration(desc: str) -> dict[str, Any]:
     }
 
 
-def _vector3(desc: str) -> dict[str, Any]:
+def _components(title: str, desc: str, axes: str, what: str) -> dict[str, Any]:
+    """A Foxglove struct of named float components (Vector3, Point3, Quaternion...)."""
     return {
-        "title": "foxglove.Vector3",
+        "title": f"foxglove.{title}",
         "description": desc,
         "type": "object",
-        "properties": {a: _num(f"{a} coordinate length") for a in "xyz"},
+        "properties": {a: _num(f"{a} {what}") for a in axes},
     }
+
+
+def _vector3(desc: str) -> dict[str, Any]:
+    return _components("Vector3", desc, "xyz", "coordinate length")
 
 
 def _vector2(desc: str) -> dict[str, Any]:
-    return {
-        "title": "foxglove.Vector2",
-        "description": desc,
-        "type": "object",
-        "properties": {a: _num(f"{a} coordinate length") for a in "xy"},
-    }
+    return _components("Vector2", desc, "xy", "coordinate length")
 
 
 def _point3(desc: str) -> dict[str, Any]:
-    return {
-        "title": "foxglove.Point3",
-        "description": desc,
-        "type": "object",
-        "properties": {a: _num(f"{a} coordinate position") for a in "xyz"},
-    }
+    return _components("Point3", desc, "xyz", "coordinate position")
 
 
 def _quaternion(desc: str) -> dict[str, Any]:
-    return {
-        "title": "foxglove.Quaternion",
-        "description": desc,
-        "type": "object",
-        "properties": {a: _num(f"{a} value") for a in "xyzw"},
-    }
+    return _components("Quaternion", desc, "xyzw", "value")
 
 
 def _pose(desc: str) -> dict[str, Any]:
