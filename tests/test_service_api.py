@@ -24,6 +24,7 @@ from swarmpath.service.protocol import (
     Ack,
     BenchmarkCell,
     Lease,
+    LeaseBundle,
     LeaseRequest,
     MapCell,
     NoWork,
@@ -361,15 +362,17 @@ def test_thread_slot_runs_a_lease():
     done = threading.Event()
     seen = []
 
-    def on_done(slot, lease, outcome):
-        seen.append((lease.lease_id, outcome))
+    def on_done(slot, outcomes):
+        seen.extend((lease.lease_id, outcome) for lease, outcome in outcomes)
         done.set()
 
     slot = ThreadSlot(0, on_done)
     spec = BenchmarkCell(algorithm="PSO", function="F1", dim=2, agents=5, iterations=5)
-    slot.submit(make_lease(spec, [0, 1]))
+    second = make_lease(spec, [2]).model_copy(update={"lease_id": "L2"})
+    slot.submit([make_lease(spec, [0, 1]), second])  # a group: run one after the other
     assert done.wait(30)
-    assert seen[0][0] == "L1" and [r for r, _ in seen[0][1]] == [0, 1]
+    assert [lease_id for lease_id, _ in seen] == ["L1", "L2"]
+    assert [r for r, _ in seen[0][1]] == [0, 1] and [r for r, _ in seen[1][1]] == [2]
     slot.close()
 
 
@@ -587,3 +590,85 @@ def test_cli_bad_input_names_the_field(cli, tmp_path):
     one_error_line(cli("worker", "--id", "bad id!"), "worker", "--id")
     one_error_line(cli("coordinator", "--http", "nowhere"), "coordinator", "--http")
     one_error_line(cli("up", "--zenoh", "tcp/127.0.0.1"), "up", "--zenoh")
+
+
+# ------------------------------------------------------------- bundles, group commit, prefetch
+def test_lease_sizer_shrinks_leases_at_the_end_and_fills_bundles():
+    sizer = LeaseSizer(target_seconds=10.0, min_runs=8)
+    cell = BenchmarkCell(algorithm="GWO", function="F1", dim=30, agents=30, iterations=500)
+    sizer.observe(cell, 0.05)
+    assert sizer.runs_for(cell) == 200  # 10 s of 0.05 s runs
+    assert sizer.runs_for(cell, remaining=10_000) == 200
+    sizer.slots = 2
+    assert sizer.runs_for(cell, remaining=400) == 100  # a quarter of what is left
+    assert sizer.runs_for(cell, remaining=20) == 8  # never below the vectorization floor
+    one = make_lease(cell, [0])
+    assert sizer.runs_for(cell, remaining=10_000, bundle=[one] * 100) == 100
+    assert sizer.runs_for(cell, remaining=10_000, bundle=[one] * 200) == 0  # bundle is full
+
+
+def test_lease_bundles_and_group_commit(core, client):
+    job = client.post("/jobs", json={**SPEC, "runs": 1}).json()["id"]  # 4 cells of one run
+    core.worker_alive("w1")
+    request = encode(LeaseRequest(worker="w1", max_runs=100, max_leases=8, slots=1))
+    bundles = [decode_work_reply(core.handle_lease_request(request)) for _ in range(3)]
+    assert all(isinstance(b, LeaseBundle) for b in bundles)
+    # one slot: each bundle takes half of the job's work left (the tail rule), at least a lease
+    assert [[lease.cell_index for lease in b.leases] for b in bundles] == [[0, 1], [2], [3]]
+    leases = [lease for b in bundles for lease in b.leases]
+    results = [data for lease in leases for _r, data in execute_lease(lease)]
+    first, second = (pack_batches("w1", results[:2])[0], pack_batches("w1", results[2:])[0])
+    key = f"swarmpath/results/{job}"
+    acks = core.handle_result_batches([(key, first), (key, b"garbage"), (key, second),
+                                       (key, first)])
+    assert acks[1] is None
+    assert [r.status for r in acks[0].results] == ["accepted", "accepted"]
+    assert [r.status for r in acks[2].results] == ["accepted", "accepted"]
+    assert [r.status for r in acks[3].results] == ["duplicate", "duplicate"]
+    assert client.get(f"/jobs/{job}").json()["state"] == "done"
+    assert isinstance(lease_for(core), NoWork)
+    single = decode_work_reply(core.handle_lease_request(encode(LeaseRequest(worker="w1"))))
+    assert isinstance(single, NoWork)
+
+
+def test_worker_prefetches_and_runs_bundles_in_one_slot():
+    import threading
+
+    w = offline_worker(prefetch=1)
+    done = threading.Event()
+    original = w._on_slot_done
+
+    def on_done(slot, outcomes):
+        original(slot, outcomes)
+        if not w._active:
+            done.set()
+
+    w._slots = [ThreadSlot(0, on_done)]
+    assert w._wants_work()
+    spec = BenchmarkCell(algorithm="PSO", function="F1", dim=2, agents=5, iterations=200)
+    first = [make_lease(spec, [0]), make_lease(spec, [1]).model_copy(update={"lease_id": "L2"})]
+    w._take(first)
+    assert w._slots[0].busy and w._wants_work()  # one bundle running, room for one more
+    w._take([make_lease(spec, [2]).model_copy(update={"lease_id": "L3"})])
+    assert not w._wants_work() and len(w._queue) == 1
+    assert w.heartbeat_due(w._active["L3"].received + 60) == 3  # queued leases renew too
+    assert done.wait(60)
+    puts = [json.loads(p) for k, p in w._session.puts if k == "swarmpath/results/j1"]
+    assert [[r["lease_id"] for r in p["results"]] for p in puts] == [["L1", "L2"], ["L3"]]
+    assert w._wants_work() and len(w._pending) == 3
+    for slot in w._slots:
+        slot.close()
+
+
+def test_worker_forgets_a_dropped_lease_that_has_not_started():
+    w = offline_worker()
+    w._slots = [ThreadSlot(0, w._on_slot_done)]
+    spec = BenchmarkCell(algorithm="PSO", function="F1", dim=2, agents=5, iterations=2000)
+    w._take([make_lease(spec, [0])])
+    w._take([make_lease(spec, [1]).model_copy(update={"lease_id": "L2"})])
+    assert set(w._active) == {"L1", "L2"} and w._active["L2"].slot is None
+    w._drop("L2")
+    assert set(w._active) == {"L1"}
+    w._drop("L1")  # running: cancelled in its slot
+    w._slots[0].close(timeout=30)
+    assert w._active == {} and w._pending == {}

@@ -482,3 +482,61 @@ def test_wal_mode_and_data_dir(tmp_path):
         mode = s._db.execute("PRAGMA journal_mode").fetchone()[0]
         assert mode == "wal"
         assert s.path.exists() and os.path.dirname(s.path).endswith("dir")
+
+
+# ------------------------------------------------------------------- bundles, series, durability
+def test_lease_many_packs_leases_until_the_sizer_says_stop(store):
+    store.create_job({**SPEC, "runs": 1}, now=T0)  # four cells of one run
+    seen = []
+
+    def runs_for(spec, remaining, bundle):
+        seen.append((spec.key, remaining, len(bundle)))
+        return 0 if len(bundle) == 3 else 5
+
+    leases = store.lease_many("w1", 100, now=T0, max_leases=10, runs_for=runs_for)
+    assert [lease.runs for lease in leases] == [[0], [0], [0]]
+    assert [lease.cell_index for lease in leases] == [0, 1, 2]
+    assert [s[1:] for s in seen] == [(4, 0), (3, 1), (2, 2), (1, 3)]
+    assert len({lease.lease_id for lease in leases}) == 3
+    rest = store.lease_many("w2", 100, now=T0, max_leases=10)
+    assert [(lease.cell_index, lease.runs) for lease in rest] == [(3, [0])]
+    for lease in leases + rest:
+        assert set(store.accept_results(execute(lease), now=T0)) == {"accepted"}
+    assert store.job_status(leases[0].job_id).state == "done"
+
+
+def test_relaxed_lease_commits_survive_reopening(tmp_path):
+    s = Store(tmp_path / "d")
+    job = s.create_job(SPEC, now=T0)
+    lease = s.lease("w1", 2, now=T0)
+    s.heartbeat(lease.lease_id, "w1", now=T0 + 1, lease_seconds=100)
+    s.close()
+    again = Store(tmp_path / "d")
+    assert [x["lease_id"] for x in again.active_leases()] == [lease.lease_id]
+    assert again.active_leases()[0]["deadline"] == T0 + 101
+    assert again.accept_results(execute(lease), now=T0) == ["accepted", "accepted"]
+    assert again.job_status(job).runs_done == 2
+    assert again._db.execute("PRAGMA synchronous").fetchone()[0] == 2  # FULL again
+    again.close()
+
+
+def test_series_are_stored_exactly_and_old_rows_still_read(store):
+    import zlib
+
+    from swarmpath.service.store import decode_series, encode_series
+
+    series = {"curve": [3.0, float("inf"), 1e-300, 0.1], "best_position": None,
+              "path": [(0.0, 1.0, 2.0), (3.5, 4.25, 5.0)]}
+    blob = encode_series(series)
+    assert blob is not None and blob.startswith(b"SPS1")
+    assert decode_series(blob) == {"curve": [3.0, float("inf"), 1e-300, 0.1],
+                                   "path": [[0.0, 1.0, 2.0], [3.5, 4.25, 5.0]]}
+    assert encode_series({"curve": None}) is None and decode_series(None) == {}
+    legacy = zlib.compress(json.dumps({"curve": [1.5, 2.5]}).encode(), 1)
+    assert decode_series(legacy) == {"curve": [1.5, 2.5]}
+    job = store.create_job(SPEC, now=T0)
+    lease = store.lease("w1", 2, now=T0)
+    results = execute(lease)
+    store.accept_results(results, now=T0)
+    item = store.run(job, results[1].run)
+    assert item["curve"] == results[1].curve and item["best_position"] == results[1].best_position

@@ -29,7 +29,7 @@ import secrets
 import threading
 import time
 from collections import Counter, OrderedDict, deque
-from collections.abc import AsyncIterator, Callable, Mapping
+from collections.abc import AsyncIterator, Callable, Mapping, Sequence
 from contextlib import asynccontextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -50,6 +50,8 @@ from swarmpath.service.protocol import (
     Cancel,
     JobStatus,
     Keys,
+    Lease,
+    LeaseBundle,
     LeaseRequest,
     MapCell,
     MapJobSpec,
@@ -81,7 +83,7 @@ class CoordinatorSettings:
     prefix: str = DEFAULT_PREFIX
     lease_seconds: float = 30.0  # a lease without heartbeat for this long is requeued
     heartbeat_seconds: float | None = None  # default lease_seconds / 3
-    target_lease_seconds: float = 3.0  # leases are sized to about this much work
+    target_lease_seconds: float = 10.0  # a lease (or bundle of leases) is about this much work
     min_lease_runs: int = 8  # benchmark leases: at least this many runs (vectorization)
     retry_after: float = 0.5  # NoWork: ask again after this long
     token: str | None = None  # bearer token of mutating endpoints (None: $SWARMPATH_TOKEN)
@@ -138,14 +140,21 @@ class LeaseSizer:
     vectorized batch), per cell spec, as an exponential moving average; before the first result a
     rough prior is used (benchmark: from agents x iterations x dim; map: 5 s, i.e. one run).
     Benchmark leases get at least ``min_runs`` runs: runs of one cell are computed vectorized and a
-    batch of one is several times slower per run than a batch of 30."""
+    batch of one is several times slower per run than a batch of 30.
+
+    Near the end of a job the target shrinks (guided self-scheduling): a lease takes at most
+    ``remaining / (2 * slots)`` of the job's unleased work, ``slots`` being the slots of the live
+    workers, so the last leases are small and no worker is left computing a big one alone while
+    the others idle. A bundle (several leases in one reply) is filled until its leases' estimated
+    seconds reach that target."""
 
     MAP_PRIOR_SECONDS = 5.0
 
-    def __init__(self, target_seconds: float = 3.0, min_runs: int = 8, alpha: float = 0.3):
+    def __init__(self, target_seconds: float = 10.0, min_runs: int = 8, alpha: float = 0.3):
         self.target_seconds = float(target_seconds)
         self.min_runs = max(1, int(min_runs))
         self.alpha = alpha
+        self.slots = 1  # slots of the live workers (the coordinator keeps it current)
         self._estimates: dict[str, float] = {}
         self._lock = threading.Lock()
 
@@ -164,11 +173,25 @@ class LeaseSizer:
             est = self._estimates.get(self.cost_key(spec))
         return self.prior(spec) if est is None else est
 
-    def runs_for(self, spec: BenchmarkCell | MapCell) -> int:
+    def runs_for(
+        self,
+        spec: BenchmarkCell | MapCell,
+        remaining: int | None = None,
+        bundle: Sequence[Lease] = (),
+    ) -> int:
+        """Runs of a lease of ``spec``; 0 when ``bundle`` (the leases already in this reply)
+        holds enough work. ``remaining``: the job's runs not leased yet (None: no tail rule)."""
         est = max(self.estimate(spec), 1e-6)
-        n = int(self.target_seconds / est)
+        budget = self.target_seconds
+        if remaining is not None:
+            budget = min(budget, remaining * est / (2 * max(1, self.slots)))
+        if bundle:
+            budget -= sum(len(lease.runs) * max(self.estimate(lease.spec), 1e-6)
+                          for lease in bundle)
+            if budget <= 0:
+                return 0
         low = self.min_runs if isinstance(spec, BenchmarkCell) else 1
-        return max(low, n)
+        return max(low, int(budget / est))
 
     def observe(self, spec: BenchmarkCell | MapCell, seconds_per_run: float) -> None:
         if not (seconds_per_run > 0 and math.isfinite(seconds_per_run)):
@@ -321,22 +344,28 @@ class Coordinator:
             return self._no_work("coordinator shutting down", 2.0)
         if self.settings.require_liveliness and not self.is_alive(req.worker):
             return self._no_work(f"no liveliness token seen for worker {req.worker} yet")
+        with self._lock:
+            self.sizer.slots = max(1, sum(
+                int(self._workers.get(w, {}).get("slots") or 1) for w in self._alive))
         try:
-            lease = self.store.lease(
+            leases = self.store.lease_many(
                 req.worker, req.max_runs, now, self.settings.lease_seconds,
-                self.heartbeat_seconds, runs_for=self.sizer.runs_for,
+                self.heartbeat_seconds, max_leases=req.max_leases, runs_for=self.sizer.runs_for,
             )
         except Exception as exc:  # store closed, disk full, ...: the worker retries
             log.exception("leasing failed")
             return self._no_work(f"coordinator error: {_short(exc, 200)}", 2.0)
-        if lease is None:
+        if not leases:
             return self._no_work("empty")
         if self.settings.require_liveliness and not self.is_alive(req.worker):
             # the worker vanished while we leased: its requeue may have run before our commit
-            self.store.release(lease.lease_id, req.worker)
+            for lease in leases:
+                self.store.release(lease.lease_id, req.worker)
             return self._no_work(f"worker {req.worker} lost its liveliness token")
-        self.stats["leases"] += 1
-        return encode(lease)
+        self.stats["leases"] += len(leases)
+        if req.max_leases == 1:
+            return encode(leases[0])
+        return encode(LeaseBundle(leases=leases))
 
     # ------------------------------------------------------------------------------ results
     def _job_info(self, job_id: str) -> dict[str, Any] | None:
@@ -349,7 +378,7 @@ class Coordinator:
                 return None
             info = {
                 "kind": status.kind, "seed": spec.seed, "rpc": spec.runs,
-                "cells": {c["key"]: (c["index"], c["spec"]) for c in cells},
+                "cells": {c["key"]: (c["index"], c["spec"], _cell(c["spec"])) for c in cells},
             }
             if len(self._jobs) > 256:
                 self._jobs.clear()
@@ -366,7 +395,7 @@ class Coordinator:
                 return
             self._recording.add(job_id)
             for r in results:
-                idx, spec = info["cells"][r.cell]
+                idx, spec, _parsed = info["cells"][r.cell]
                 record: dict[str, Any] = {
                     "job_id": job_id, "kind": info["kind"],
                     "run_id": idx * info["rpc"] + r.run, "cell_index": idx, "cell": r.cell,
@@ -383,67 +412,94 @@ class Coordinator:
     def handle_results(self, key: str, payload: bytes, now: float | None = None) -> Ack | None:
         """A ResultBatch on ``results/<job>``: store (one transaction), record, acknowledge.
         Malformed batches are logged and dropped (None)."""
+        return self.handle_result_batches([(key, payload)], now)[0]
+
+    def handle_result_batches(
+        self, messages: Sequence[tuple[str, bytes]], now: float | None = None
+    ) -> list[Ack | None]:
+        """Several ResultBatch messages (key, payload) at once - group commit: the results of all
+        of them are stored in one transaction (one fsync), then each batch is recorded and
+        acknowledged to its worker. Returns each message's Ack (None: malformed, dropped)."""
         now = time.time() if now is None else now
-        job_id = Keys.last_chunk(key)
-        try:
-            batch = decode(ResultBatch, payload)
-        except Exception as exc:
-            self.stats["malformed"] += 1
-            log.warning("dropped a malformed result batch on %s: %s", key, _short(exc))
-            return None
-        self._seen(batch.worker, now)
-        valid = [r for r in batch.results if r.job_id == job_id and r.worker == batch.worker]
-        if len(valid) < len(batch.results):
-            log.warning("%d results of %s name another job or worker than their batch: stale",
-                        len(batch.results) - len(valid), batch.worker)
+        batches: list[tuple[str, ResultBatch, list[RunResult]] | None] = []
+        for key, payload in messages:
+            job_id = Keys.last_chunk(key)
+            try:
+                batch = decode(ResultBatch, payload)
+            except Exception as exc:
+                self.stats["malformed"] += 1
+                log.warning("dropped a malformed result batch on %s: %s", key, _short(exc))
+                batches.append(None)
+                continue
+            self._seen(batch.worker, now)
+            valid = [r for r in batch.results if r.job_id == job_id and r.worker == batch.worker]
+            if len(valid) < len(batch.results):
+                log.warning("%d results of %s name another job or worker than their batch: "
+                            "stale", len(batch.results) - len(valid), batch.worker)
+            batches.append((job_id, batch, valid))
         by_id: dict[int, str] = {}
+        todo: list[RunResult] = []
         with self._lock:  # re-sent copies of results stored moments ago: no store round trip
-            for r in valid:
-                owner, runs = self._settled.get(r.lease_id, ("", ()))
-                if owner == r.worker and r.run in runs:
-                    by_id[id(r)] = "duplicate"
-        if by_id:
-            self.stats["duplicates_fast"] += len(by_id)
-            valid = [r for r in valid if id(r) not in by_id]
-        statuses = self.store.accept_results(valid, now) if valid else []
-        by_id.update((id(r), s) for r, s in zip(valid, statuses, strict=True))
+            for item in batches:
+                for r in item[2] if item is not None else ():
+                    owner, runs = self._settled.get(r.lease_id, ("", ()))
+                    if owner == r.worker and r.run in runs:
+                        by_id[id(r)] = "duplicate"
+                        self.stats["duplicates_fast"] += 1
+                    else:
+                        todo.append(r)
+        statuses = self.store.accept_results(todo, now) if todo else []
+        by_id.update((id(r), s) for r, s in zip(todo, statuses, strict=True))
         with self._lock:
-            for r, s in zip(valid, statuses, strict=True):
+            for r, s in zip(todo, statuses, strict=True):
                 if s != "stale":  # the lease exists and is r.worker's
                     self._settled.setdefault(r.lease_id, (r.worker, set()))[1].add(r.run)
                     self._settled.move_to_end(r.lease_id)
             while len(self._settled) > 20_000:
                 self._settled.popitem(last=False)
-        accepted = [r for r in valid if by_id[id(r)] == "accepted"]
-        if accepted:
-            with self._lock:
-                self._accepted.append((now, len(accepted)))
-            info = self._job_info(job_id)
-            if info is not None:
-                for r in accepted:
-                    if r.status == "ok" and r.cell in info["cells"]:
-                        spec = info["cells"][r.cell][1]
-                        try:
-                            self.sizer.observe(_cell(spec), r.seconds)
-                        except Exception:  # pragma: no cover - specs come from the store
-                            pass
-            try:
-                self._record(job_id, accepted, now)
-            except Exception:
-                log.exception("recording results of job %s in its MCAP failed", job_id)
-            status = self.store.job_status(job_id)
-            if status is not None and status.state in FINAL_STATES:
-                self.finalize(job_id)
-        ack = Ack(
-            worker=batch.worker,
-            results=[
-                RunAck(lease_id=r.lease_id, job_id=r.job_id, cell=r.cell, run=r.run,
-                       status=by_id.get(id(r), "stale"))
-                for r in batch.results
-            ],
-        )
-        self._send(self.keys.ack(batch.worker), encode(ack))
-        return ack
+        accepted: dict[str, list[RunResult]] = {}
+        for r in todo:
+            if by_id[id(r)] == "accepted":
+                accepted.setdefault(r.job_id, []).append(r)
+        for job_id, results in accepted.items():
+            self._after_accept(job_id, results, now)
+        acks: list[Ack | None] = []
+        for item in batches:
+            if item is None:
+                acks.append(None)
+                continue
+            _job_id, batch, _valid = item
+            ack = Ack(
+                worker=batch.worker,
+                results=[
+                    RunAck(lease_id=r.lease_id, job_id=r.job_id, cell=r.cell, run=r.run,
+                           status=by_id.get(id(r), "stale"))  # type: ignore[arg-type]
+                    for r in batch.results
+                ],
+            )
+            self._send(self.keys.ack(batch.worker), encode(ack))
+            acks.append(ack)
+        return acks
+
+    def _after_accept(self, job_id: str, accepted: list[RunResult], now: float) -> None:
+        """Learn run costs, write the MCAP, finalize the job when it ended."""
+        with self._lock:
+            self._accepted.append((now, len(accepted)))
+        info = self._job_info(job_id)
+        if info is not None:
+            for r in accepted:
+                if r.status == "ok" and r.cell in info["cells"]:
+                    try:
+                        self.sizer.observe(info["cells"][r.cell][2], r.seconds)
+                    except Exception:  # pragma: no cover - specs come from the store
+                        pass
+        try:
+            self._record(job_id, accepted, now)
+        except Exception:
+            log.exception("recording results of job %s in its MCAP failed", job_id)
+        status = self.store.job_status(job_id)
+        if status is not None and status.state in FINAL_STATES:
+            self.finalize(job_id)
 
     def handle_progress(self, key: str, payload: bytes, now: float | None = None) -> Ack | None:
         """A RunProgress: renew the lease; tell the worker to drop it when it is not active."""
@@ -596,8 +652,14 @@ def _cell(spec: Mapping[str, Any]) -> BenchmarkCell | MapCell:
 
 
 # --------------------------------------------------------------------------------- transport
+_NOTHING = object()
+
+
 class ZenohBridge:
     """The coordinator's Zenoh side (see the module docstring)."""
+
+    GROUP_MESSAGES = 64  # result batches stored in one transaction at most ...
+    GROUP_BYTES = 8_000_000  # ... and at most this many bytes of them
 
     def __init__(self, core: Coordinator, config: Mapping[str, Any]):
         self.core = core
@@ -693,14 +755,29 @@ class ZenohBridge:
                     pass
 
     def _serve_events(self) -> None:
+        held: Any = _NOTHING  # an item taken from the queue while grouping results
         while True:
-            item = self._events.get()
+            item = self._events.get() if held is _NOTHING else held
+            held = _NOTHING
             if item is None:
                 return
             kind, key, payload = item
             try:
                 if kind == "results":
-                    self.core.handle_results(key, payload)
+                    # group commit: the result batches already queued share one transaction
+                    group = [(key, payload)]
+                    size = len(payload)
+                    while len(group) < self.GROUP_MESSAGES and size < self.GROUP_BYTES:
+                        try:
+                            nxt = self._events.get_nowait()
+                        except queue.Empty:
+                            break
+                        if nxt is None or nxt[0] != "results":
+                            held = nxt
+                            break
+                        group.append((nxt[1], nxt[2]))
+                        size += len(nxt[2])
+                    self.core.handle_result_batches(group)
                 elif kind == "progress":
                     self.core.handle_progress(key, payload)
                 elif kind == "gone" and not self.core.is_alive(key):  # not back meanwhile

@@ -43,6 +43,7 @@ MAX_RUNS_PER_JOB = 1_000_000
 MAX_BODY_BYTES = 1_000_000  # REST bodies and Zenoh payloads a coordinator accepts
 MAX_SEED = 2**63 - 1
 MAX_LEASE_RUNS = MAX_RUNS_PER_CELL
+MAX_BUNDLE_LEASES = 64  # leases in one reply to a LeaseRequest
 
 PROTOCOL_VERSION = 1
 DEFAULT_PREFIX = "swarmpath"
@@ -420,6 +421,10 @@ class LeaseRequest(Model):
 
     worker: Identifier
     max_runs: int = Field(default=1, ge=1, le=MAX_LEASE_RUNS)
+    max_leases: int = Field(
+        default=1, ge=1, le=MAX_BUNDLE_LEASES,
+        description="more than 1: the reply is a LeaseBundle of up to this many leases",
+    )
     host: str = ""
     pid: int = 0
     slots: int = Field(default=1, ge=1)
@@ -473,8 +478,18 @@ class NoWork(Model):
     reason: str = "empty"
 
 
-WorkReply = Annotated[Lease | NoWork, Field(discriminator="kind")]
-WORK_REPLY_ADAPTER: TypeAdapter[Lease | NoWork] = TypeAdapter(WorkReply)
+class LeaseBundle(Model):
+    """Reply to a LeaseRequest with ``max_leases`` > 1: one or more leases (of any cells and jobs)
+    that together make about the coordinator's target of work. Each lease is independent (own
+    id, deadline, heartbeats, results); a worker may run them one after the other in one slot
+    and report their results in one ResultBatch."""
+
+    kind: Literal["leases"] = "leases"
+    leases: list[Lease] = Field(min_length=1, max_length=MAX_BUNDLE_LEASES)
+
+
+WorkReply = Annotated[Lease | LeaseBundle | NoWork, Field(discriminator="kind")]
+WORK_REPLY_ADAPTER: TypeAdapter[Lease | LeaseBundle | NoWork] = TypeAdapter(WorkReply)
 
 
 class RunProgress(Model):
@@ -647,7 +662,7 @@ def decode(model: type[M], payload: bytes | str) -> M:
     return model.model_validate_json(payload)
 
 
-def decode_work_reply(payload: bytes | str) -> Lease | NoWork:
+def decode_work_reply(payload: bytes | str) -> Lease | LeaseBundle | NoWork:
     return WORK_REPLY_ADAPTER.validate_json(payload)
 
 
@@ -663,7 +678,7 @@ def error_fields(exc: Exception) -> list[str]:
 # Messages the coordinator sends are exported as it writes them (every field present); those it
 # receives (from users and workers) as it reads them (fields with defaults may be left out).
 SENT_BY_COORDINATOR = frozenset(
-    {"cell_spec", "run_request", "work_reply", "lease", "no_work", "ack", "cancel",
+    {"cell_spec", "run_request", "work_reply", "lease", "lease_bundle", "no_work", "ack", "cancel",
      "worker_status", "job_status"}
 )
 SCHEMA_MODELS: dict[str, Any] = {
@@ -675,6 +690,7 @@ SCHEMA_MODELS: dict[str, Any] = {
     "lease_request": LeaseRequest,
     "work_reply": WORK_REPLY_ADAPTER,
     "lease": Lease,
+    "lease_bundle": LeaseBundle,
     "no_work": NoWork,
     "run_progress": RunProgress,
     "run_result": RunResult,

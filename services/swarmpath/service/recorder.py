@@ -51,6 +51,7 @@ from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import Any, BinaryIO
 
+import pydantic_core
 from mcap.exceptions import McapError
 from mcap.reader import NonSeekingReader
 from mcap.writer import CompressionType, IndexType, Writer
@@ -180,6 +181,18 @@ def _clamp(v: float) -> float:
     if math.isfinite(v):
         return v
     return -_BIG if v < 0 else _BIG
+
+
+def clamped(values: Any) -> list[float]:
+    """A curve as a list of finite floats (non-finite values clamped, see :func:`_clamp`);
+    vectorized: a 500-value curve costs microseconds, not a Python loop per value."""
+    import numpy as np
+
+    arr = np.asarray(values, dtype=float)
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        arr = np.where(bad, np.where(arr < 0, -_BIG, _BIG), arr)
+    return arr.tolist()  # type: ignore[no-any-return]
 
 
 def _json(obj: Any) -> bytes:
@@ -328,10 +341,12 @@ class JobRecorder:
             self._channels[topic] = cid
         return cid
 
-    def _put(self, topic: str, schema_name: str, log_ns: int, message: dict[str, Any]) -> None:
+    def _put(
+        self, topic: str, schema_name: str, log_ns: int, message: dict[str, Any] | bytes
+    ) -> None:
         self._writer.add_message(
             self._channel(topic, schema_name), log_time=log_ns, publish_time=log_ns,
-            data=_json(message),
+            data=message if isinstance(message, bytes) else _json(message),
         )
         self._dirty = True
 
@@ -352,7 +367,7 @@ class JobRecorder:
         self.flush_if_due()
         return True
 
-    def _result_message(self, record: dict[str, Any], identity: dict[str, Any]) -> dict:
+    def _result_message(self, record: dict[str, Any], identity: dict[str, Any]) -> dict[str, Any]:
         msg: dict[str, Any] = {
             "job_id": record["job_id"],
             "run_id": int(record["run_id"]),
@@ -378,13 +393,12 @@ class JobRecorder:
         self._put("/results", "swarmpath.BenchmarkRunResult", ns,
                   self._result_message(record, identity))
         curve = record.get("curve")
-        if curve:
-            self._put("/curves", "swarmpath.ConvergenceCurve", ns, {
+        if curve is not None and len(curve):
+            self._put("/curves", "swarmpath.ConvergenceCurve", ns, pydantic_core.to_json({
                 "job_id": record["job_id"], "run_id": int(record["run_id"]),
                 "cell": record["cell"], "run": int(record["run"]), "seed": int(record["seed"]),
-                **identity, "iterations": len(curve),
-                "best_fitness": [_clamp(float(v)) for v in curve],
-            })
+                **identity, "iterations": len(curve), "best_fitness": clamped(curve),
+            }))
 
     def _map_run(self, record: dict[str, Any]) -> None:
         spec = record["spec"]

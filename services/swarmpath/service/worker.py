@@ -28,6 +28,7 @@ import socket
 import threading
 import time
 import traceback
+from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
@@ -35,12 +36,14 @@ from typing import Any, Literal
 from swarmpath.service.protocol import (
     DEFAULT_PREFIX,
     MAX_BODY_BYTES,
+    MAX_BUNDLE_LEASES,
     PROTOCOL_VERSION,
     Ack,
     BenchmarkCell,
     Cancel,
     Keys,
     Lease,
+    LeaseBundle,
     LeaseRequest,
     MapCell,
     NoWork,
@@ -261,72 +264,117 @@ def pack_batches(worker: str, results: Sequence[bytes], limit: int = BATCH_BYTES
 
 
 # -------------------------------------------------------------------------------------- slots
-class Slot:
-    """Executes one lease at a time; ``on_done(slot, lease, outcome)`` is called from a thread of
-    the slot with outcome = list of (run, bytes), or ``Cancelled``, or an Exception."""
+class NotRun(Exception):
+    """A lease of a group that never started (its slot process died before): run it again."""
 
-    def __init__(self, index: int, on_done: Callable[[Slot, Lease, Any], None]):
+
+#: What a slot reports for each lease of a group: ``(lease, outcome)`` with outcome the list of
+#: ``(run, encoded RunResult)``, or a :class:`Cancelled`, :class:`NotRun` or other exception.
+Outcomes = list[tuple[Lease, Any]]
+
+
+class Slot:
+    """Executes one group of leases at a time, one lease after the other (a group is the leases
+    of one LeaseBundle, or a single lease); ``on_done(slot, outcomes)`` is called once per group
+    from a thread of the slot. Each lease of a group can be cancelled on its own."""
+
+    def __init__(self, index: int, on_done: Callable[[Slot, Outcomes], None]):
         self.index = index
         self.on_done = on_done
-        self.lease: Lease | None = None
+        self.leases: list[Lease] = []
 
     @property
     def busy(self) -> bool:
-        return self.lease is not None
+        return bool(self.leases)
+
+    @property
+    def ready(self) -> bool:
+        """Started and able to take a group (a process slot: after its warm-up)."""
+        return True
 
     def start(self) -> None: ...
-    def submit(self, lease: Lease) -> None: ...
-    def cancel(self) -> None: ...
-    def iteration(self) -> int:
+    def submit(self, leases: Sequence[Lease]) -> None: ...
+    def cancel(self, lease_id: str | None = None) -> None: ...
+    def iteration(self, lease_id: str | None = None) -> int:
         return 0
 
     def close(self, timeout: float = 5.0) -> None: ...
 
+    def _position(self, lease_id: str | None) -> list[int]:
+        return [i for i, lease in enumerate(self.leases)
+                if lease_id is None or lease.lease_id == lease_id]
+
 
 class ThreadSlot(Slot):
-    """A lease runs in a thread of the worker process (shares the GIL: for tests and debugging)."""
+    """Leases run in a thread of the worker process (shares the GIL: for tests and debugging)."""
 
-    def __init__(self, index: int, on_done: Callable[[Slot, Lease, Any], None]):
+    def __init__(self, index: int, on_done: Callable[[Slot, Outcomes], None]):
         super().__init__(index, on_done)
-        self._cancel = threading.Event()
+        self._cancel: list[threading.Event] = []
+        self._current = -1
         self._done = 0
         self._thread: threading.Thread | None = None
 
-    def submit(self, lease: Lease) -> None:
-        self.lease = lease
-        self._cancel.clear()
-        self._done = 0
+    def submit(self, leases: Sequence[Lease]) -> None:
+        group = list(leases)
+        self._cancel = [threading.Event() for _ in group]
+        self._current, self._done = -1, 0
+        self.leases = group
         self._thread = threading.Thread(
-            target=self._run, args=(lease,), name=f"slot-{self.index}", daemon=True)
+            target=self._run, args=(group, self._cancel), name=f"slot-{self.index}", daemon=True)
         self._thread.start()
 
-    def _run(self, lease: Lease) -> None:
+    def _run(self, group: list[Lease], flags: list[threading.Event]) -> None:
         def progress(n: int) -> None:
             self._done = n
 
-        try:
-            outcome: Any = execute_lease(lease, self._cancel.is_set, progress)
-        except Cancelled as exc:
-            outcome = exc
-        except Exception as exc:  # pragma: no cover - execute_lease reports run failures itself
-            outcome = exc
-        self.lease = None
-        self.on_done(self, lease, outcome)
+        outcomes: Outcomes = []
+        for i, lease in enumerate(group):
+            self._current, self._done = i, 0
+            try:
+                outcome: Any = execute_lease(lease, flags[i].is_set, progress)
+            except Cancelled as exc:
+                outcome = exc
+            except Exception as exc:  # pragma: no cover - execute_lease reports run failures
+                outcome = exc
+            outcomes.append((lease, outcome))
+        self.leases = []
+        self.on_done(self, outcomes)
 
-    def cancel(self) -> None:
-        self._cancel.set()
+    def cancel(self, lease_id: str | None = None) -> None:
+        for i in self._position(lease_id):
+            self._cancel[i].set()
 
-    def iteration(self) -> int:
-        return self._done
+    def iteration(self, lease_id: str | None = None) -> int:
+        current = self._current
+        if 0 <= current < len(self.leases) and (
+                lease_id is None or self.leases[current].lease_id == lease_id):
+            return self._done
+        return 0
 
     def close(self, timeout: float = 5.0) -> None:
-        self._cancel.set()
+        for flag in self._cancel:
+            flag.set()
         if self._thread is not None:
             self._thread.join(timeout)
 
 
-def _slot_main(conn: Any, cancel: Any, done: Any, parent: int) -> None:
-    """A slot's child process: leases in, results out, until told to stop or orphaned."""
+def warm_up() -> None:
+    """One tiny run, so that the first lease does not pay for lazy imports and first-use setup
+    (tens of milliseconds; a whole lease of tiny runs costs less)."""
+    spec = BenchmarkCell(algorithm="PSO", function="F1", dim=2, agents=5, iterations=1)
+    lease = Lease(lease_id="warm-up", worker="warm-up", job_id="warm-up", cell=spec.key,
+                  cell_index=0, runs_per_cell=1, seed=0, runs=[0], spec=spec, deadline=0.0,
+                  lease_seconds=1.0, heartbeat_seconds=1.0)
+    try:
+        execute_lease(lease)
+    except Exception:  # pragma: no cover - a broken core shows up in the first real lease
+        log.debug("warm-up run failed", exc_info=True)
+
+
+def _slot_main(conn: Any, cancel: Any, done: Any, current: Any, parent: int) -> None:
+    """A slot's child process: groups of leases in, one reply per lease out, until told to stop
+    or orphaned."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's business
 
     def orphan_watch() -> None:
@@ -346,8 +394,11 @@ def _slot_main(conn: Any, cancel: Any, done: Any, parent: int) -> None:
     def progress(n: int) -> None:
         done.value = n
 
-    def is_cancelled() -> bool:
-        return bool(cancel.value)
+    warm_up()
+    try:
+        conn.send(("ready", -1))  # the worker pulls work for this slot only from now on
+    except (EOFError, OSError):
+        return
 
     while True:
         try:
@@ -357,87 +408,144 @@ def _slot_main(conn: Any, cancel: Any, done: Any, parent: int) -> None:
         if message is None:
             return
         try:
-            lease = decode_work_reply(message)
-            assert isinstance(lease, Lease)
-            reply: tuple[Any, ...] = ("done", execute_lease(lease, is_cancelled, progress))
-        except Cancelled:
-            reply = ("cancelled",)
-        except Exception as exc:  # reported to the parent
-            reply = ("error", _failure_text(exc))
-        try:
-            conn.send(reply)
-        except (EOFError, OSError):
-            return
+            bundle = decode_work_reply(message)
+            assert isinstance(bundle, LeaseBundle)
+        except Exception as exc:  # pragma: no cover - the parent encoded it
+            conn.send(("error", -1, _failure_text(exc)))
+            continue
+        for i, lease in enumerate(bundle.leases):
+            current.value, done.value = i, 0
+            try:
+                reply: tuple[Any, ...] = (
+                    "done", i, execute_lease(lease, lambda i=i: bool(cancel[i]), progress))
+            except Cancelled:
+                reply = ("cancelled", i)
+            except Exception as exc:  # reported to the parent
+                reply = ("error", i, _failure_text(exc))
+            try:
+                conn.send(reply)
+            except (EOFError, OSError):
+                return
+        current.value = -1
 
 
 class ProcessSlot(Slot):
-    """A lease runs in a spawned child process (true parallelism; killed and respawned if it
+    """Leases run in a spawned child process (true parallelism; killed and respawned if it
     dies). The child is started with the multiprocessing *spawn* method, never forked."""
 
-    def __init__(self, index: int, on_done: Callable[[Slot, Lease, Any], None]):
+    def __init__(self, index: int, on_done: Callable[[Slot, Outcomes], None]):
         super().__init__(index, on_done)
         import multiprocessing
 
         self._ctx = multiprocessing.get_context("spawn")
-        self._cancel = self._ctx.Value("b", 0, lock=False)
+        self._cancel = self._ctx.Array("b", MAX_BUNDLE_LEASES, lock=False)
         self._done = self._ctx.Value("q", 0, lock=False)
+        self._current = self._ctx.Value("i", -1, lock=False)
         self._proc: Any = None
         self._conn: Any = None
         self._waiter: threading.Thread | None = None
         self._closing = False
+        self._ready = threading.Event()
+        self.on_ready: Callable[[], None] | None = None
+
+    @property
+    def busy(self) -> bool:
+        """Running a group, or not ready yet (starting): no work is pulled for it then."""
+        return bool(self.leases) or not self._ready.is_set()
+
+    @property
+    def ready(self) -> bool:
+        return self._ready.is_set()
+
+    def _await_ready(self) -> bool:
+        try:
+            reply = self._conn.recv()
+        except (EOFError, OSError):
+            return False
+        if reply[0] != "ready":  # pragma: no cover - the child says ready first
+            return False
+        self._ready.set()
+        if self.on_ready is not None:
+            self.on_ready()
+        return True
 
     def start(self) -> None:
+        self._ready.clear()
         parent_conn, child_conn = self._ctx.Pipe()
         self._proc = self._ctx.Process(
-            target=_slot_main, args=(child_conn, self._cancel, self._done, os.getpid()),
+            target=_slot_main,
+            args=(child_conn, self._cancel, self._done, self._current, os.getpid()),
             name=f"swarmpath-slot-{self.index}", daemon=True,
         )
         self._proc.start()
         child_conn.close()
         self._conn = parent_conn
+        threading.Thread(target=self._await_ready, name=f"slot-{self.index}-start",
+                         daemon=True).start()
 
-    def submit(self, lease: Lease) -> None:
+    def submit(self, leases: Sequence[Lease]) -> None:
         if self._proc is None or not self._proc.is_alive():
-            self.start()
-        self.lease = lease
-        self._cancel.value = 0
-        self._done.value = 0
-        self._conn.send(encode(lease))
+            self.start()  # the group waits in the pipe until the new child is ready
+        group = list(leases)[:MAX_BUNDLE_LEASES]
+        for i in range(MAX_BUNDLE_LEASES):
+            self._cancel[i] = 0
+        self._done.value, self._current.value = 0, -1
+        self.leases = group
+        self._conn.send(encode(LeaseBundle(leases=group)))
         self._waiter = threading.Thread(
-            target=self._wait, args=(lease,), name=f"slot-{self.index}", daemon=True)
+            target=self._wait, args=(group,), name=f"slot-{self.index}", daemon=True)
         self._waiter.start()
 
-    def _wait(self, lease: Lease) -> None:
-        outcome: Any
-        try:
-            reply = self._conn.recv()
-        except (EOFError, OSError):
-            code = self._proc.exitcode if self._proc is not None else None
-            if self._proc is not None:
-                self._proc.join(1.0)
-                code = self._proc.exitcode
-            outcome = RuntimeError(f"the slot process died (exit code {code})")
-            self._proc = None
-        else:
-            if reply[0] == "done":
-                outcome = reply[1]
-            elif reply[0] == "cancelled":
-                outcome = Cancelled(lease.lease_id)
-            else:
-                outcome = RuntimeError(reply[1])
-        self.lease = None
+    def _wait(self, group: list[Lease]) -> None:
+        got: dict[int, Any] = {}
+        while len(got) < len(group):
+            try:
+                if not self._ready.wait(0.05):  # a respawned child: its ready comes first
+                    if self._proc is not None and self._proc.is_alive():
+                        continue
+                    raise EOFError
+                reply = self._conn.recv()
+            except (EOFError, OSError):
+                code = self._proc.exitcode if self._proc is not None else None
+                if self._proc is not None:
+                    self._proc.join(1.0)
+                    code = self._proc.exitcode
+                self._proc = None
+                # the lease that was running fails (a run that kills its process would kill
+                # every worker it is given to); the ones not started yet are run again
+                died = RuntimeError(f"the slot process died (exit code {code})")
+                running = min((i for i in range(len(group)) if i not in got), default=0)
+                for i in range(len(group)):
+                    if i not in got:
+                        got[i] = died if i == running else NotRun(group[i].lease_id)
+                break
+            kind, i = reply[0], reply[1]
+            if i < 0:  # the group could not be read at all
+                for j in range(len(group)):
+                    got.setdefault(j, RuntimeError(reply[2]))
+                break
+            got[i] = (reply[2] if kind == "done" else
+                      Cancelled(group[i].lease_id) if kind == "cancelled" else
+                      RuntimeError(reply[2]))
+        self.leases = []
         if not self._closing:
-            self.on_done(self, lease, outcome)
+            self.on_done(self, [(lease, got[i]) for i, lease in enumerate(group)])
 
-    def cancel(self) -> None:
-        self._cancel.value = 1
+    def cancel(self, lease_id: str | None = None) -> None:
+        for i in self._position(lease_id):
+            self._cancel[i] = 1
 
-    def iteration(self) -> int:
-        return int(self._done.value)
+    def iteration(self, lease_id: str | None = None) -> int:
+        current, leases = int(self._current.value), self.leases
+        if 0 <= current < len(leases) and (
+                lease_id is None or leases[current].lease_id == lease_id):
+            return int(self._done.value)
+        return 0
 
     def close(self, timeout: float = 5.0) -> None:
         self._closing = True
-        self._cancel.value = 1
+        for i in range(MAX_BUNDLE_LEASES):
+            self._cancel[i] = 1
         if self._conn is not None:
             try:
                 self._conn.send(None)
@@ -465,6 +573,8 @@ class WorkerSettings:
     slots: int = 1
     worker_id: str | None = None
     max_runs: int = 1000  # per lease request; the coordinator sizes leases below this
+    max_leases: int = 32  # per lease request: small leases come as bundles of up to this many
+    prefetch: int = 1  # bundles held beyond the slots: the next one is at hand when a slot frees
     executor: Literal["process", "thread"] = "process"
     user: str | None = None
     password: str | None = None
@@ -484,7 +594,7 @@ class WorkerSettings:
 @dataclass
 class _Active:
     lease: Lease
-    slot: Slot
+    slot: Slot | None  # None while the lease waits in the queue
     received: float
     last_progress: float
 
@@ -512,7 +622,8 @@ class Worker:
         self._wake = threading.Condition(self._lock)
         self._stop = threading.Event()
         self._abort = threading.Event()
-        self._active: dict[str, _Active] = {}
+        self._active: dict[str, _Active] = {}  # leases held: running or queued
+        self._queue: deque[list[Lease]] = deque()  # groups waiting for a free slot
         self._pending: dict[tuple[str, int], _Pending] = {}
         self._dropped: set[str] = set()
         self._cancelled_jobs: set[str] = set()
@@ -553,6 +664,8 @@ class Worker:
         slot_cls = ProcessSlot if self.settings.executor == "process" else ThreadSlot
         self._slots = [slot_cls(i, self._on_slot_done) for i in range(self.settings.slots)]
         for slot in self._slots:
+            if isinstance(slot, ProcessSlot):
+                slot.on_ready = self._slot_ready
             slot.start()
         if self.settings.exit_with_parent:
             threading.Thread(target=self._watch_parent, daemon=True).start()
@@ -573,6 +686,10 @@ class Worker:
             return 0
         finally:
             self._shutdown()
+
+    def _slot_ready(self) -> None:
+        with self._wake:
+            self._wake.notify_all()
 
     def _watch_parent(self) -> None:
         while not self._stop.wait(0.5):
@@ -621,13 +738,24 @@ class Worker:
                 return slot
         return None
 
+    def _wants_work(self) -> bool:
+        """Pull while fewer groups are held (running or queued) than ready slots + prefetch
+        (nothing before a slot is ready: work is not taken before it can start)."""
+        ready = [slot for slot in self._slots if slot.ready]
+        if not ready:
+            return False
+        running = sum(1 for slot in ready if slot.busy)
+        return running + len(self._queue) < len(ready) + max(0, self.settings.prefetch)
+
     def request(self) -> bytes:
         return encode(LeaseRequest(
-            worker=self.id, max_runs=self.settings.max_runs, host=self.host, pid=os.getpid(),
-            slots=len(self._slots), version=_version(), protocol=PROTOCOL_VERSION,
+            worker=self.id, max_runs=self.settings.max_runs,
+            max_leases=max(1, min(self.settings.max_leases, MAX_BUNDLE_LEASES)),
+            host=self.host, pid=os.getpid(), slots=len(self._slots), version=_version(),
+            protocol=PROTOCOL_VERSION,
         ))
 
-    def _ask(self) -> Lease | NoWork | None:
+    def _ask(self) -> Lease | LeaseBundle | NoWork | None:
         """One lease request; None when nobody answered."""
         replies = list(self._querier.get(payload=self.request()))
         for reply in replies:
@@ -644,10 +772,12 @@ class Worker:
         return None
 
     def _pull_loop(self) -> None:
+        """Ask for work whenever fewer groups are held than slots + prefetch: with prefetch the
+        next group is already here when a slot finishes, so no slot waits for a round trip."""
         backoff = 0.0
         while not self._stop.is_set():
             with self._wake:
-                while not self._stop.is_set() and self._free_slot() is None:
+                while not self._stop.is_set() and not self._wants_work():
                     self._wake.wait(0.5)
             if self._stop.is_set():
                 return
@@ -669,50 +799,99 @@ class Worker:
             if isinstance(reply, NoWork):
                 self._stop.wait(reply.retry_after)
                 continue
-            self._start(reply)
+            self._take(reply.leases if isinstance(reply, LeaseBundle) else [reply])
+
+    def _take(self, leases: Sequence[Lease]) -> None:
+        """Hold a group of granted leases and start it as soon as a slot is free."""
+        mine = [lease for lease in leases if lease.worker == self.id]
+        if len(mine) < len(leases):  # pragma: no cover - we asked for ourselves
+            log.warning("ignored %d leases granted to another worker", len(leases) - len(mine))
+        if not mine:
+            return
+        with self._lock:
+            now = time.monotonic()
+            for lease in mine:
+                self._active[lease.lease_id] = _Active(lease, None, now, now)
+                log.debug("lease %s: %s runs %s", lease.lease_id, lease.cell, lease.runs)
+            self._queue.append(mine)
+        self._dispatch()
 
     def _start(self, lease: Lease) -> None:
-        with self._lock:
-            slot = self._free_slot()
-            if slot is None or lease.worker != self.id:  # pragma: no cover - we asked for one
-                log.warning("got lease %s without a free slot; it will expire", lease.lease_id)
-                return
-            now = time.monotonic()
-            self._active[lease.lease_id] = _Active(lease, slot, now, now)
-        log.debug("lease %s: %s runs %s", lease.lease_id, lease.cell, lease.runs)
-        slot.submit(lease)
+        """Run one lease (as a group of one)."""
+        self._take([lease])
+
+    def _dispatch(self) -> None:
+        """Start queued groups on free slots."""
+        while True:
+            with self._lock:
+                if not self._queue or self._stop.is_set():  # stopping: _drain forgets them
+                    return
+                slot = self._free_slot()
+                if slot is None:
+                    return
+                group = [lease for lease in self._queue.popleft()
+                         if lease.lease_id in self._active]
+                if not group:
+                    continue
+                for lease in group:
+                    self._active[lease.lease_id].slot = slot
+                slot.leases = group  # busy from now on (submit sets it again)
+            slot.submit(group)
 
     # ----------------------------------------------------------------------------- results
-    def _on_slot_done(self, slot: Slot, lease: Lease, outcome: Any) -> None:
+    def _on_slot_done(self, slot: Slot, outcomes: Outcomes) -> None:
+        done: list[tuple[Lease, list[tuple[int, bytes]]]] = []
+        again: list[Lease] = []
         with self._lock:
-            self._active.pop(lease.lease_id, None)
-            dropped = lease.lease_id in self._dropped or lease.job_id in self._cancelled_jobs
+            for lease, outcome in outcomes:
+                dropped = lease.lease_id in self._dropped or lease.job_id in self._cancelled_jobs
+                held = self._active.get(lease.lease_id)
+                if isinstance(outcome, NotRun) and held is not None and not dropped \
+                        and not self._stop.is_set():
+                    held.slot = None
+                    again.append(lease)
+                    continue
+                self._active.pop(lease.lease_id, None)
+                if isinstance(outcome, Cancelled | NotRun) or dropped:
+                    log.info("lease %s (%s) dropped", lease.lease_id, lease.cell)
+                elif isinstance(outcome, BaseException):
+                    text = f"{type(outcome).__name__}: {outcome}"
+                    log.error("lease %s failed as a whole: %s", lease.lease_id, text)
+                    done.append((lease, [
+                        (r, fit_result(_result(lease, r, 0.0, status="failed",
+                                               failure=text[:20_000])))
+                        for r in lease.runs
+                    ]))
+                else:
+                    done.append((lease, outcome))
+                    self.leases_done += 1
+                    self.runs_done += len(outcome)
+            if again:
+                self._queue.appendleft(again)
         try:
-            if isinstance(outcome, Cancelled) or dropped:
-                log.info("lease %s (%s) dropped", lease.lease_id, lease.cell)
-            elif isinstance(outcome, BaseException):
-                text = f"{type(outcome).__name__}: {outcome}"
-                log.error("lease %s failed as a whole: %s", lease.lease_id, text)
-                self._publish_results(lease, [
-                    (r, fit_result(_result(lease, r, 0.0, status="failed", failure=text[:20_000])))
-                    for r in lease.runs
-                ])
-            else:
-                self._publish_results(lease, outcome)
-                self.leases_done += 1
-                self.runs_done += len(outcome)
+            self._dispatch()  # the next group first: the slot is free again
+            self._publish_many(done)
         except Exception:  # never lose the slot thread silently; the lease expires and requeues
-            log.exception("handling the outcome of lease %s failed", lease.lease_id)
+            log.exception("handling the outcome of a group of %d leases failed", len(outcomes))
         finally:
             with self._wake:
                 self._wake.notify_all()
 
     def _publish_results(self, lease: Lease, results: list[tuple[int, bytes]]) -> None:
-        entries = [_Pending(lease.job_id, lease.lease_id, data) for _run, data in results]
+        self._publish_many([(lease, results)])
+
+    def _publish_many(self, items: Sequence[tuple[Lease, list[tuple[int, bytes]]]]) -> None:
+        """Results of finished leases: remembered until acknowledged, put once per job (in
+        batches of at most BATCH_BYTES)."""
+        by_job: dict[str, list[_Pending]] = {}
         with self._lock:
-            for (run, _data), entry in zip(results, entries, strict=True):
-                self._pending[(lease.lease_id, run)] = entry
-        self._send(lease.job_id, entries)
+            for lease, results in items:
+                for run, data in results:
+                    entry = _Pending(lease.job_id, lease.lease_id, data)
+                    self._pending[(lease.lease_id, run)] = entry
+                    by_job.setdefault(lease.job_id, []).append(entry)
+        for job_id, entries in by_job.items():
+            self._send(job_id, entries)
 
     def _send(self, job_id: str, entries: list[_Pending]) -> None:
         """Put results (in batches) and note when and in which put they went."""
@@ -766,7 +945,7 @@ class Worker:
             for a in list(self._active.values()):
                 if a.lease.job_id == msg.job_id:
                     log.info("job %s cancelled: dropping lease %s", msg.job_id, a.lease.lease_id)
-                    a.slot.cancel()
+                    self._abandon(a)
             for key in [k for k, p in self._pending.items() if p.job_id == msg.job_id]:
                 del self._pending[key]
             self._wake.notify_all()
@@ -778,9 +957,16 @@ class Worker:
         active = self._active.get(lease_id)
         if active is not None:
             log.info("coordinator dropped lease %s (%s)", lease_id, active.lease.cell)
-            active.slot.cancel()
+            self._abandon(active)
         for key in [k for k, p in self._pending.items() if p.lease_id == lease_id]:
             del self._pending[key]
+
+    def _abandon(self, active: _Active) -> None:
+        """Stop a held lease: cancel it in its slot, or forget it if it has not started."""
+        if active.slot is not None:
+            active.slot.cancel(active.lease.lease_id)
+        else:
+            self._active.pop(active.lease.lease_id, None)  # _dispatch skips it
 
     def _resend_all(self) -> None:
         with self._lock:
@@ -836,7 +1022,8 @@ class Worker:
             ) if isinstance(spec, BenchmarkCell) else 0
             msg = RunProgress(
                 lease_id=lease.lease_id, job_id=lease.job_id, worker=self.id,
-                cell=lease.cell, runs=list(lease.runs), iteration=a.slot.iteration(),
+                cell=lease.cell, runs=list(lease.runs),
+                iteration=a.slot.iteration(lease.lease_id) if a.slot is not None else 0,
                 iterations=total,
             )
             self._put(self.keys.progress(lease.job_id), encode(msg))
@@ -847,14 +1034,22 @@ class Worker:
         """Stop: let running leases finish (grace), abort the rest, wait for the acks."""
         deadline = time.monotonic() + self.settings.grace_seconds
         with self._wake:
+            # leases not started yet are left to the coordinator (requeued when we leave)
+            for group in self._queue:
+                for lease in group:
+                    a = self._active.get(lease.lease_id)
+                    if a is not None and a.slot is None:
+                        self._dropped.add(lease.lease_id)
+                        del self._active[lease.lease_id]
+            self._queue.clear()
             while self._active and not self._abort.is_set() and time.monotonic() < deadline:
                 self._wake.wait(0.25)
             if self._active:
                 log.info("aborting %d running leases; the coordinator requeues them",
                          len(self._active))
-                for a in self._active.values():
+                for a in list(self._active.values()):
                     self._dropped.add(a.lease.lease_id)
-                    a.slot.cancel()
+                    self._abandon(a)
             stop_at = time.monotonic() + 3.0
             while self._active and time.monotonic() < stop_at:
                 self._wake.wait(0.25)
