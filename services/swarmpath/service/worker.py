@@ -154,8 +154,8 @@ def _benchmark(
                 lease, r, share,
                 metrics={"best_fitness": float(res.best_fitness[i]),
                          "evaluations": int(res.evaluations[i])},
-                curve=[float(v) for v in res.curve[i]],
-                best_position=[float(v) for v in res.best_position[i]],
+                curve=res.curve[i].tolist(),  # float64 -> float, exact (and 20x faster
+                best_position=res.best_position[i].tolist(),  # than a Python loop)
             ))
     return out
 
