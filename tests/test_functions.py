@@ -106,3 +106,37 @@ def test_name_expansion_and_errors():
     assert expand_function_names("F2,F6-floor,F9-F10") == ["F2", "F6-floor", "F9", "F10"]
     with pytest.raises(KeyError, match="valid: F1, F2"):
         expand_function_names("F14")
+
+
+def test_trig_kernels_match_the_c_library():
+    from swarmpath.functions.trig import cospi, sinpi, sinpi_squared
+
+    rng = np.random.default_rng(5)
+    for q in (rng.uniform(-0.5, 0.5, 20000), rng.uniform(-700.0, 700.0, 20000)):
+        # reference: the C library on the exactly reduced argument, sign restored by parity
+        n = np.rint(q)
+        r = q - n
+        sign = np.where(np.mod(n, 2.0) == 0.0, 1.0, -1.0)
+        sin_ref, cos_ref = sign * np.sin(np.pi * r), sign * np.cos(np.pi * r)
+        assert np.max(np.abs(sinpi(q) - sin_ref)) < 4e-16
+        assert np.max(np.abs(cospi(q) - cos_ref)) < 4e-16
+        assert np.max(np.abs(sinpi_squared(q) - sin_ref**2)) < 8e-16
+    k = np.arange(-6.0, 7.0)
+    assert np.all(sinpi(k) == 0.0) and np.all(sinpi_squared(k) == 0.0)
+    assert np.array_equal(cospi(k), np.where(np.mod(k, 2.0) == 0.0, 1.0, -1.0))
+    assert np.all(cospi(k + 0.5) == 0.0)
+    assert np.array_equal(sinpi(k + 0.5), np.where(np.mod(k, 2.0) == 0.0, 1.0, -1.0))
+    # shapes, including 0-d
+    assert sinpi(np.float64(0.25)).shape == () and cospi(np.zeros((2, 3))).shape == (2, 3)
+
+
+@pytest.mark.parametrize("name", list_functions())
+def test_batch_rows_are_bit_identical_to_single_runs(name):
+    # the reproducibility contract needs this: run r alone or in any batch, the same bits
+    f = get_function(name)
+    rng = np.random.default_rng(2)
+    X = rng.uniform(f.lower, f.upper, size=(37, 30, 30))
+    whole = f.kernel(X)
+    for r in (0, 5, 36):
+        assert np.array_equal(f.kernel(X[r : r + 1])[0], whole[r])
+        assert np.array_equal(f.kernel(X[r : r + 3])[0], whole[r])
