@@ -134,3 +134,19 @@ def test_unknown_names_list_valid_ones():
         minimize("GWO", "F1", dim=0)
     with pytest.raises(ParameterError, match="agents"):
         minimize("GWO", "F1", agents=5000)
+
+
+def test_buffered_streams_deliver_each_runs_unbuffered_sequence():
+    from swarmpath.optimizers.streams import run_generator
+
+    buffered = RunStreams.for_runs(9, [0, 3, 5], block=64)
+    draws = [buffered.random(3, 7), buffered.random(50), buffered.random(100), buffered.random(2)]
+    for i, r in enumerate([0, 3, 5]):
+        alone = run_generator(9, r).random(21 + 50 + 100 + 2)
+        assert np.array_equal(np.concatenate([d[i].ravel() for d in draws]), alone)
+    # the same run in another batch, with normals interleaved, gives the same numbers
+    a, b = RunStreams.for_runs(9, [3]), RunStreams.for_runs(9, [5, 3, 0])
+    for s in (a, b):
+        s.draws = [s.random(40, 30), s.normal(31, 30), s.random(9000), s.normal(5)]
+    for x, y in zip(a.draws, b.draws, strict=True):
+        assert np.array_equal(x[0], y[1]) and x.flags.c_contiguous

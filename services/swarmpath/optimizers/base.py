@@ -68,6 +68,8 @@ class Optimizer(ABC):
         self.lb = problem.lower[:, None, :]  # (R, 1, d): broadcasts over agents
         self.ub = problem.upper[:, None, :]
         self._initialized = False
+        self._run_index = np.arange(self.R)
+        self._full_bounds: dict[int, tuple[Array, Array]] = {}
         #: True once a masked evaluation happened (some computed points were not used).
         self.masked_evaluation = False
 
@@ -120,20 +122,46 @@ class Optimizer(ABC):
         if mask is not None:
             self.masked_evaluation = True
             F = np.where(mask, F, np.inf)
-            self.evaluations += mask.sum(axis=1)
+            self.evaluations += np.count_nonzero(mask, axis=1)
         else:
             self.evaluations += X.shape[1]
-        F = np.where(np.isnan(F), np.inf, F)
+        nan = np.isnan(F)
+        if nan.any():
+            F = np.where(nan, np.inf, F)
         idx = np.argmin(F, axis=1)
-        rows = np.arange(self.R)
+        rows = self._run_index
         cand = F[rows, idx]
         better = cand < self.best_fitness
-        self.best_fitness = np.where(better, cand, self.best_fitness)
-        self.best_position = np.where(better[:, None], X[rows, idx], self.best_position)
+        if better.any():
+            self.best_fitness = np.where(better, cand, self.best_fitness)
+            self.best_position = np.where(better[:, None], X[rows, idx], self.best_position)
         return F
 
     def clip(self, X: Array) -> Array:
         return np.clip(X, self.lb, self.ub)
+
+    def full_bounds(self, m: int) -> tuple[Array, Array]:
+        """(lower, upper) spelled out as contiguous (R, m, d) arrays, cached per m.
+
+        numpy 1.26 runs elementwise operations on equal-shaped contiguous operands much faster
+        than on broadcast ones (which it copies through buffers): hot clipping uses these.
+        """
+        cached = self._full_bounds.get(m)
+        if cached is None:
+            shape = (self.R, m, self.d)
+            cached = (
+                np.ascontiguousarray(np.broadcast_to(self.lb, shape)),
+                np.ascontiguousarray(np.broadcast_to(self.ub, shape)),
+            )
+            self._full_bounds[m] = cached
+        return cached
+
+    def clip_inplace(self, X: Array) -> Array:
+        """Clip X (R, m, d) to the box in place and return it."""
+        lower, upper = self.full_bounds(X.shape[1])
+        np.maximum(X, lower, out=X)
+        np.minimum(X, upper, out=X)
+        return X
 
     def random_population(self, m: int | None = None) -> Array:
         """Uniform positions in the box: (R, m, d)."""
