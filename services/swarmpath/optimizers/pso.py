@@ -31,7 +31,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from swarmpath.optimizers.base import Optimizer, ParameterError, ParamValue
+from swarmpath.optimizers.base import Array, Optimizer, ParameterError, ParamValue
 from swarmpath.optimizers.registry import register
 
 
@@ -71,11 +71,14 @@ class PSO(Optimizer):
         self._tmp = np.empty_like(self.X)
         mode = self.p["vmax_mode"]
         self.clamp = mode != "none"
+        self.vmax: Array | float
         if mode == "range":
-            self.vmax = float(self.p["vmax_fraction"]) * (self.ub - self.lb)
+            self.vmax = np.ascontiguousarray(
+                np.broadcast_to(float(self.p["vmax_fraction"]) * (self.ub - self.lb), self.X.shape)
+            )
+            self.vmin: Array | float = -self.vmax
         else:
-            self.vmax = np.full((self.R, 1, self.d), float(self.p["vmax"]))
-        self.vmin = -self.vmax
+            self.vmax, self.vmin = float(self.p["vmax"]), -float(self.p["vmax"])
         self.pbest_f = self.evaluate(self.X)
         self.pbest = self.X.copy()
 
@@ -83,26 +86,31 @@ class PSO(Optimizer):
         p = self.p
         w_max, w_min = float(p["w_max"]), float(p["w_min"])
         w = w_max - (self.t - 1) * (w_max - w_min) / self.T
+        c1, c2 = float(p["c1"]), float(p["c2"])
         X, V, tmp = self.X, self.V, self._tmp
-        r = self.rng.random(2, self.N, self.d)  # r1, r2: (R, 2, N, d)
-        r1, r2 = r[:, 0], r[:, 1]
-        # In-place arithmetic: V = w V + c1 r1 (P - X) + c2 r2 (G - X)
+        r1 = self.rng.random(self.N, self.d)
+        r2 = self.rng.random(self.N, self.d)
+        # In place, on contiguous operands: V = w V + c1 r1 (P - X) + c2 r2 (G - X)
         np.subtract(self.pbest, X, out=tmp)
-        r1 *= float(p["c1"])
         r1 *= tmp
-        np.subtract(self.best_position[:, None, :], X, out=tmp)
-        r2 *= float(p["c2"])
+        np.copyto(tmp, self.best_position[:, None, :])
+        tmp -= X
         r2 *= tmp
+        if c1 == c2:  # c (a + b): one multiplication fewer (exactly c a + c b for c = 2)
+            r1 += r2
+            r1 *= c1
+        else:
+            r1 *= c1
+            r2 *= c2
+            r1 += r2
         V *= w
         V += r1
-        V += r2
         if self.clamp:
             np.maximum(V, self.vmin, out=V)
             np.minimum(V, self.vmax, out=V)
         X += V
-        np.maximum(X, self.lb, out=X)
-        np.minimum(X, self.ub, out=X)
+        self.clip_inplace(X)
         F = self.evaluate(X)
-        better = F < self.pbest_f
-        np.copyto(self.pbest_f, F, where=better)
-        np.copyto(self.pbest, X, where=better[:, :, None])
+        improved = np.nonzero(F < self.pbest_f)  # a minority of the agents: copy those rows
+        self.pbest_f[improved] = F[improved]
+        self.pbest[improved] = X[improved]

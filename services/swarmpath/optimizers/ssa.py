@@ -11,8 +11,9 @@ of the single-objective SSA; semantics of the authors' ``SSA.m`` (v1.0):
 * c1 = 2 exp(-(4 t / T)^2) (eq 3.2) for iterations t = 1..T (``SSA.m`` runs l = 2..T because it
   counts the initial evaluation as iteration 1; the frame counts it separately, see the docs).
 * Followers (eq 3.4): x_i = (x_i + x_{i-1}) / 2 where x_{i-1} has *already* moved in this
-  iteration (the code's in-place sweep). The sweep is computed exactly, without a loop over
-  agents, as a prefix scan of affine maps (``ops.linear_chain``).
+  iteration (the code's in-place sweep). The sweep is computed without a loop over agents in
+  closed form, y_i = 2^-i y_0 + sum_j 2^-(i-j+1) x_j (y_0 the last leader): one small matrix
+  product per run whose weights are powers of two, the same values up to rounding.
 * Who leads: the code makes the first half of the population leaders (i <= N/2, 1-based); the
   paper has a single leader (the first salp). ``leaders = "half"`` (default, code) or ``"one"``
   (paper).
@@ -33,7 +34,6 @@ from typing import ClassVar
 import numpy as np
 
 from swarmpath.optimizers.base import Optimizer
-from swarmpath.optimizers.ops import linear_chain
 from swarmpath.optimizers.registry import register
 
 
@@ -57,27 +57,31 @@ class SSA(Optimizer):
         self.n_leaders = self.N // 2 if self.p["leaders"] == "half" else 1
         self.X = self.random_population()
         self.evaluate(self.X)
-        # follower chain coefficients: y_0 = last leader (a = 0), y_k = y_{k-1}/2 + x_k/2
-        k = self.N - self.n_leaders + 1
-        self._chain_a = np.full((self.R, k), 0.5)
-        self._chain_a[:, 0] = 0.0
-        self._span = self.ub - self.lb
+        NL, k = self.n_leaders, self.N - self.n_leaders
+        lower, upper = self.full_bounds(NL)
+        self._span = upper - lower  # (R, NL, d), contiguous
+        self._lower = lower
+        # Followers (eq 3.4), y_0 = the last (moved) leader, y_i = (y_{i-1} + x_i) / 2: in closed
+        # form y_i = 2^-i y_0 + sum_{j=1..i} 2^-(i-j+1) x_j, a (k+1, k+1) lower-triangular matrix
+        # of powers of two applied to [leader, followers] (one small matrix product per run).
+        i = np.arange(k + 1)
+        gap = i[:, None] - i[None, :]
+        chain = np.where(gap >= 0, 0.5 ** (gap + 1.0), 0.0)
+        chain[:, 0] *= 2.0
+        self._chain = chain[1:]  # the leader row is not needed: (k, k + 1)
 
     def _iterate(self) -> None:
         NL, X = self.n_leaders, self.X
         c1 = self.c1(self.t, self.T)
-        r = self.rng.random(2, NL, self.d)  # c2, c3: (R, 2, NL, d)
-        lead = r[:, 0]
+        lead = self.rng.random(NL, self.d)  # c2
+        c3 = self.rng.random(NL, self.d)
         lead *= self._span
-        lead += self.lb  # (ub - lb) c2 + lb
+        lead += self._lower  # (ub - lb) c2 + lb
         lead *= c1
-        np.negative(lead, out=lead, where=r[:, 1] >= 0.5)
+        np.negative(lead, out=lead, where=c3 >= 0.5)
         lead += self.best_position[:, None, :]
         X[:, :NL] = lead
         # followers: the chain starts at the last (moved, unclipped) leader
-        b = X[:, NL - 1 :].copy()
-        b[:, 1:] *= 0.5
-        X[:, NL:] = linear_chain(self._chain_a, b)[:, 1:]
-        np.maximum(X, self.lb, out=X)
-        np.minimum(X, self.ub, out=X)
+        X[:, NL:] = np.matmul(self._chain, X[:, NL - 1 :])
+        self.clip_inplace(X)
         self.evaluate(X)
