@@ -20,8 +20,9 @@ Per iteration t = 1..T:
    as R1 is fresh for every coot and iteration and only one branch uses it, that is the same
    as an independent R2 drawn by the same scalar-or-vector rule, which is what we draw (each
    coot draws two scalars and two vectors: (R, R1) when following, (R2, Q) when moving at
-   random). The in-place sweep is reproduced exactly, without a loop over agents, by
-   ``ops.linear_chain`` (chain: y_i = y_{i-1}/2 + CP_i/2; other moves: y_i = their clipped move).
+   random). The in-place sweep is reproduced exactly, with COOT.m's arithmetic and without a
+   loop over agents, by ``chain_sweep``: every coot first makes its own (clipped) move, then the
+   chaining coots are replaced by (y_{i-1} + CP_i) / 2, level by level of chain depth.
 2. All coots are evaluated. Sweeping coots in order, a coot better than its leader k (strictly)
    swaps position and fitness with it (COOT.m); replayed exactly with running minima per leader.
 3. Leaders (eq 18): Temp = B R3 cos(2 pi R) (gBest - LP_j) + gBest if R4 < 0.5, and
@@ -55,26 +56,19 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmpath.functions.trig import cospi
 from swarmpath.optimizers.base import Array, Optimizer, ParameterError, ParamValue
-from swarmpath.optimizers.ops import linear_chain
 from swarmpath.optimizers.registry import register
-
-TWO_PI = 2.0 * math.pi
 
 
 def cos_angle(u: Array) -> Array:
     """cos(2 pi R) for R = 2u - 1 ~ U(-1, 1), as a new array.
 
-    cos(2 pi R) = cos(2 pi v) with v = 2u - round(2u) in [-1/2, 1/2] (period 1), and
-    cos(2 pi v) = sin(2 pi (1/4 - |v|)) with an argument in [-pi/2, pi/2]: the same values up to
-    rounding, computed faster (float64 libm cos on large arguments dominates an iteration).
+    cos(2 pi (2u - 1)) = cos(4 pi u) = ``cospi(4u)`` (4u is exact): whole-array arithmetic, the
+    same values as the C library's cos up to the last bit or two, several times faster
+    (``swarmpath.functions.trig``); the cosine is the most expensive operation of an iteration.
     """
-    v = np.multiply(u, 2.0)
-    v -= np.rint(v)
-    np.abs(v, out=v)
-    np.subtract(0.25, v, out=v)
-    v *= TWO_PI
-    return np.sin(v, out=v)
+    return cospi(np.multiply(u, 4.0))
 
 
 def record_holders(vals: Array) -> NDArray[np.int64]:
@@ -92,17 +86,35 @@ def record_holders(vals: Array) -> NDArray[np.int64]:
     return np.maximum.accumulate(idx, axis=-1)
 
 
-def chain_sweep(moved: Array, old: Array, chain: NDArray[np.bool_]) -> Array:
-    """The in-place coot sweep of COOT.m, vectorized with ``ops.linear_chain``.
+def chain_sweep(Y: Array, old: Array, chain: NDArray[np.bool_]) -> Array:
+    """The in-place coot sweep of COOT.m for the chaining coots, in place on ``Y`` (R, n, d).
 
-    Coot i ends at ``moved[:, i]`` unless ``chain[:, i]``, in which case it ends at
-    (y_{i-1} + old_i) / 2, y_{i-1} being where coot i - 1 ended (already moved): the affine
-    recursion y_i = a_i y_{i-1} + b_i with a_i = 1/2, b_i = old_i / 2 for chaining coots and
-    a_i = 0, b_i = moved_i for the others. ``moved`` is used as scratch space.
+    Coot i ends at ``Y[:, i]`` unless ``chain[:, i]``, in which case it ends at
+    (y_{i-1} + old_i) / 2 (eq 15, COOT.m's arithmetic), y_{i-1} being where coot i - 1 ended
+    (already moved). Coot 0 never chains. Chaining coots are processed by depth, the number of
+    chaining coots in a row ending at them: all depth-1 coots at once (their predecessor is
+    final), then depth 2, and so on. A coot chains with probability 1/4, so the loop is short
+    (depth <= 8 in practice even for 1000 runs) and touches only the chaining coots: no loop
+    over agents, no whole-array scan. A mean of two in-box points is in the box (rounding is
+    monotone), so no clipping is needed.
     """
-    r, j = np.nonzero(chain)
-    moved[r, j] = 0.5 * old[r, j]
-    return linear_chain(np.where(chain, 0.5, 0.0), moved)
+    R, n, d = Y.shape
+    flat = np.flatnonzero(chain)  # r * n + i
+    if flat.size == 0:
+        return Y
+    count = np.cumsum(chain, axis=1)
+    depth = count - np.maximum.accumulate(np.where(chain, 0, count), axis=1)
+    level = depth.ravel()[flat]
+    rows = Y.view()
+    rows.shape = (R * n, d)  # a view (raises if Y is not contiguous)
+    before = old.reshape(R * n, d)
+    for k in range(1, int(level.max()) + 1):
+        idx = flat[level == k]
+        mean = rows[idx - 1]
+        mean += before[idx]
+        mean *= 0.5
+        rows[idx] = mean
+    return Y
 
 
 @register
@@ -165,11 +177,10 @@ class COOT(Optimizer):
         self._leader_rank = np.arange(1, nl + 1)
         self.span = self.ub - self.lb  # (R, 1, d)
         # bounds spelled out for the coots: contiguous operands take numpy's fast path
-        shape = (self.R, self.Nc, self.d)
-        self._lb_coots = np.ascontiguousarray(np.broadcast_to(self.lb, shape))
-        self._ub_coots = np.ascontiguousarray(np.broadcast_to(self.ub, shape))
+        self._lb_coots, self._ub_coots = self.full_bounds(self.Nc)
         self._layout = self._draw_layout()
-        self._width = sum(math.prod(shape) for _, shape in self._layout)
+        lower, upper = self.full_bounds(self.Nc)
+        self._span_coots = upper - lower  # (R, N_c, d)
 
     # ------------------------------------------------------------------------------- randomness
     def _draw_layout(self) -> list[tuple[str, tuple[int, ...]]]:
@@ -197,15 +208,12 @@ class COOT(Optimizer):
         return []
 
     def _draw(self) -> dict[str, Array]:
-        """All uniforms of an iteration in one rng call, as named views shaped (R, *shape)."""
-        U = self.rng.random(self._width)
-        out: dict[str, Array] = {}
-        start = 0
-        for name, shape in self._layout:
-            size = math.prod(shape)
-            out[name] = U[:, start : start + size].reshape(self.R, *shape)
-            start += size
-        return out
+        """All uniforms of an iteration, in layout order, each a contiguous (R, *shape) array.
+
+        Consecutive draws from the per-run streams: the same numbers as one draw of the whole
+        layout, split into named parts, but without strided views (slow operands in numpy).
+        """
+        return {name: self.rng.random(*shape) for name, shape in self._layout}
 
     # ---------------------------------------------------------------------------------- hooks
     def _prepare(self, u: dict[str, Array]) -> None:
@@ -218,10 +226,10 @@ class COOT(Optimizer):
     def _leader_gain(self) -> float:
         return 1.0
 
-    def _random_target(self, Q: Array, X: Array, runs: NDArray[np.int64]) -> Array:
-        """The point the random movement heads for (eq 13: Q itself), for the moving coots only.
+    def _random_target(self, Q: Array, X: Array) -> Array:
+        """The point the random movement heads for (eq 13: Q itself).
 
-        Q and X are (n, d) rows of the coots making a random move, ``runs`` their run indices.
+        Q and X are (R, N_c, d), computed for every coot (only those moving at random use it).
         May work in Q's buffer.
         """
         return Q
@@ -275,56 +283,46 @@ class COOT(Optimizer):
     def _move_coots(self, A: float, u: dict[str, Array]) -> None:
         """Eqs 12-17 for every coot, as COOT.m's in-place sweep (see the module docstring)."""
         X = self.CP
-        R, nc, d = X.shape
         follow = u["c_follow"] < 0.5
         chain = (~follow) & (u["c_chain"] < 0.5)
         chain[:, 0] = False  # COOT.m: the first coot cannot chain; it moves at random instead
-        rand = ~(follow | chain)
         vec = self._vector_rows(u["c_flag"])
         S1, S2, V1, V2 = u["c_S1"], u["c_S2"], u["c_V1"], u["c_V2"]
         acc = self._acc("c")
-        fa = 2.0 * acc if acc is not None else np.full((R, nc), 2.0)
-        ra = A * acc if acc is not None else np.full((R, nc), A)
+        fa: Array | float = 2.0 * acc if acc is not None else 2.0
+        ra: Array | float = A * acc if acc is not None else A
         # y = X + W (T - X). Follow (eq 17): T = LP_k, W = 1 + 2 acc R1 cos(2 pi R), since
         # LP + w (LP - X) = X + (1 + w)(LP - X); R, R1 = V1, V2 (or S1, S2). Random (eq 13):
-        # T = Q = lb + V2 (ub - lb), W = A acc R2 with R2 = V1 (or S1). Chain rows: see below.
-        # Rows are handled compactly: cos is the most expensive operation of an iteration.
-        W = np.zeros((R, nc, d))
-        rows = follow & vec
-        w = cos_angle(V1[rows])
-        w *= V2[rows]
-        w *= fa[rows][:, None]
+        # T = Q = lb + V2 (ub - lb), W = A acc R2 with R2 = V1 (or S1). Chain rows: see below
+        # (their W and T are computed and discarded). W per coot first, for the scalar rows:
+        w = cos_angle(S1)
+        w *= S2
+        w *= fa
         w += 1.0
-        W[rows] = w
-        rows = follow & ~vec
-        W[rows] = (1.0 + fa * cos_angle(S1) * S2)[rows][:, None]
-        rows = rand & vec
-        W[rows] = V1[rows] * ra[rows][:, None]
-        rows = rand & ~vec
-        W[rows] = (ra * S1)[rows][:, None]
-        T = X.copy()
-        rf, jf = np.nonzero(follow)
-        T[rf, jf] = self.LP[rf, self.leader_of[jf]]
-        rr, jr = np.nonzero(rand)
-        Q = V2[rr, jr]
-        Q *= self.span[rr, 0]
-        Q += self.lb[rr, 0]  # eq 12
-        T[rr, jr] = self._random_target(Q, X[rr, jr], rr)
+        np.multiply(S1, ra, out=w, where=~follow)
+        # then the vector rows: A acc V1 (random), and the follow rows compactly (cos is costly)
+        W = np.multiply(V1, ra[..., None] if isinstance(ra, np.ndarray) else ra)
+        rows = np.nonzero(~vec)
+        W[rows] = w[rows][:, None]
+        rows = np.nonzero(follow & vec)
+        c = cos_angle(V1[rows])
+        c *= V2[rows]
+        c *= fa[rows][:, None] if isinstance(fa, np.ndarray) else fa
+        c += 1.0
+        W[rows] = c
+        Q = np.multiply(V2, self._span_coots)
+        Q += self._lb_coots  # eq 12, for every coot
+        T = self._random_target(Q, X)
+        rows = np.nonzero(follow)
+        T[rows] = self.LP[rows[0], self.leader_of[rows[1]]]
         T -= X
         T *= W
         T += X
         self._clip_inplace(T)
-        Y = chain_sweep(T, X, chain)  # eq 15 with the already moved predecessor
-        self._clip_inplace(Y)  # a mean of in-box points: guards rounding only
-        self.CP = Y
+        self.CP = chain_sweep(T, X, chain)  # eq 15 with the already moved predecessor
 
     def _clip_inplace(self, X: Array) -> None:
-        if X.shape == self._ub_coots.shape:
-            np.minimum(X, self._ub_coots, out=X)
-            np.maximum(X, self._lb_coots, out=X)
-        else:
-            np.minimum(X, self.ub, out=X)
-            np.maximum(X, self.lb, out=X)
+        self.clip_inplace(X)
 
     def _swap_with_leaders(self) -> None:
         """COOT.m's sweep: coot i swaps with leader k when strictly better, in coot order.

@@ -40,7 +40,6 @@ from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import numpy as np
-from numpy.typing import NDArray
 
 from swarmpath.optimizers.base import Array, ParameterError, ParamValue
 from swarmpath.optimizers.coot import COOT
@@ -125,12 +124,11 @@ class ICOOT(COOT):
     def _leader_gain(self) -> float:
         return float(self.p["leader_gain"])
 
-    def _random_target(self, Q: Array, X: Array, runs: NDArray[np.int64]) -> Array:
+    def _random_target(self, Q: Array, X: Array) -> Array:
         mode = self.p["random_target"]
-        g = self.g[runs]
+        g = self.g[:, None, :]
         if mode == "centred":
-            Q += g
-            Q -= self._mid[runs]
+            Q += g - self._mid[:, None, :]
         elif mode == "literal":
             Q += g
         elif mode == "offset":  # X + w((Q - X) + (g - X)) = X + w(T - X) with T = Q + g - X
