@@ -150,3 +150,27 @@ def test_buffered_streams_deliver_each_runs_unbuffered_sequence():
         s.draws = [s.random(40, 30), s.normal(31, 30), s.random(9000), s.normal(5)]
     for x, y in zip(a.draws, b.draws, strict=True):
         assert np.array_equal(x[0], y[1]) and x.flags.c_contiguous
+
+
+def test_stream_parts_are_consecutive_draws():
+    for block in (0, 50):
+        for kind in ("random", "normal"):
+            a = RunStreams.for_runs(4, [1, 2], block=block)
+            b = RunStreams.for_runs(4, [1, 2], block=block)
+            parts = getattr(a, f"{kind}_parts")(3, 4, 5)
+            singles = [getattr(b, kind)(4, 5) for _ in range(3)]
+            for x, y in zip(parts, singles, strict=True):
+                assert np.array_equal(x, y) and x.flags.c_contiguous
+
+
+def test_chunked_batches_give_the_same_runs(algo, monkeypatch):
+    import swarmpath.optimizers.api as api
+
+    kw = dict(dim=4, agents=10, iterations=8, seed=2, shifted=True)
+    whole = minimize(algo, "F7", runs=5, **kw)
+    calls = []
+    monkeypatch.setattr(api, "CHUNK_ELEMENTS", 2 * 10 * 4)  # chunks of two runs
+    chunked = minimize(algo, "F7", runs=5, on_iteration=calls.append, **kw)
+    assert len(calls) == 8
+    for field in ("curve", "best_fitness", "best_position", "evaluations", "shifts"):
+        assert np.array_equal(getattr(whole, field), getattr(chunked, field)), field

@@ -179,6 +179,7 @@ class COOT(Optimizer):
         # bounds spelled out for the coots: contiguous operands take numpy's fast path
         self._lb_coots, self._ub_coots = self.full_bounds(self.Nc)
         self._layout = self._draw_layout()
+        self._plan = self._draw_plan()
         lower, upper = self.full_bounds(self.Nc)
         self._span_coots = upper - lower  # (R, N_c, d)
 
@@ -208,12 +209,60 @@ class COOT(Optimizer):
         return []
 
     def _draw(self) -> dict[str, Array]:
-        """All uniforms of an iteration, in layout order, each a contiguous (R, *shape) array.
+        """All uniforms of an iteration, in layout order, as named (R, *shape) arrays.
 
         Consecutive draws from the per-run streams: the same numbers as one draw of the whole
-        layout, split into named parts, but without strided views (slow operands in numpy).
+        layout split into named parts, drawn in groups of equal shape (fewer calls). Per-agent
+        scalars are views of their group (small arrays); every per-component part is a
+        contiguous array of its own (strided views are slow operands in numpy).
         """
-        return {name: self.rng.random(*shape) for name, shape in self._layout}
+        out: dict[str, Array] = {}
+        for names, shape in self._plan:
+            if len(names) == 1:
+                out[names[0]] = self.rng.random(*shape)
+            elif len(shape) == 1:
+                block = self.rng.random(len(names), *shape)
+                for i, name in enumerate(names):
+                    out[name] = block[:, i]
+            else:
+                out.update(zip(names, self.rng.random_parts(len(names), *shape), strict=True))
+        return out
+
+    def _draw_plan(self) -> list[tuple[tuple[str, ...], tuple[int, ...]]]:
+        """The layout with consecutive parts of equal shape grouped into one draw."""
+        plan: list[tuple[tuple[str, ...], tuple[int, ...]]] = []
+        for name, shape in self._layout:
+            if plan and plan[-1][1] == shape:
+                plan[-1] = ((*plan[-1][0], name), shape)
+            else:
+                plan.append(((name,), shape))
+        return plan
+
+    def _cosines(self, u: dict[str, Array]) -> None:
+        """Every cos(2 pi R) of the iteration in one ``cospi`` call (fewer numpy calls).
+
+        Coots: one per coot from its scalar R (used by scalar rows), one per component for the
+        rows that follow their leader with vector randoms (computed compactly); leaders: one per
+        component of R (a scalar repeated for scalar rows).
+        """
+        self._cosines_of = u
+        self._follow = u["c_follow"] < 0.5
+        self._vec = self._vector_rows(u["c_flag"])
+        self._rows_fv = np.nonzero(self._follow & self._vec)
+        vec_l = self._vector_rows(u["l_flag"])[..., None]
+        angles = np.concatenate(
+            (
+                u["c_S1"].ravel(),
+                u["c_V1"][self._rows_fv].ravel(),
+                np.where(vec_l, u["l_V1"], u["l_S1"][..., None]).ravel(),
+            )
+        )
+        cos = cos_angle(angles)
+        a = self.R * self.Nc
+        b = a + self._rows_fv[0].size * self.d
+        self._cos_scalar = cos[:a].reshape(self.R, self.Nc)
+        self._cos_rows = cos[a:b].reshape(-1, self.d)
+        self._cos_leaders = cos[b:].reshape(self.R, self.NL, self.d)
 
     # ---------------------------------------------------------------------------------- hooks
     def _prepare(self, u: dict[str, Array]) -> None:
@@ -265,6 +314,7 @@ class COOT(Optimizer):
         A, B = self.schedule()
         u = self._draw()
         self._prepare(u)
+        self._cosines(u)
         self._move_coots(A, u)
         self.CF = self.evaluate(self.CP)
         self._after_coot_evaluation(u)
@@ -283,10 +333,11 @@ class COOT(Optimizer):
     def _move_coots(self, A: float, u: dict[str, Array]) -> None:
         """Eqs 12-17 for every coot, as COOT.m's in-place sweep (see the module docstring)."""
         X = self.CP
-        follow = u["c_follow"] < 0.5
+        if getattr(self, "_cosines_of", None) is not u:  # called alone (tests)
+            self._cosines(u)
+        follow, vec = self._follow, self._vec
         chain = (~follow) & (u["c_chain"] < 0.5)
         chain[:, 0] = False  # COOT.m: the first coot cannot chain; it moves at random instead
-        vec = self._vector_rows(u["c_flag"])
         S1, S2, V1, V2 = u["c_S1"], u["c_S2"], u["c_V1"], u["c_V2"]
         acc = self._acc("c")
         fa: Array | float = 2.0 * acc if acc is not None else 2.0
@@ -295,7 +346,7 @@ class COOT(Optimizer):
         # LP + w (LP - X) = X + (1 + w)(LP - X); R, R1 = V1, V2 (or S1, S2). Random (eq 13):
         # T = Q = lb + V2 (ub - lb), W = A acc R2 with R2 = V1 (or S1). Chain rows: see below
         # (their W and T are computed and discarded). W per coot first, for the scalar rows:
-        w = cos_angle(S1)
+        w = self._cos_scalar.copy()
         w *= S2
         w *= fa
         w += 1.0
@@ -304,8 +355,8 @@ class COOT(Optimizer):
         W = np.multiply(V1, ra[..., None] if isinstance(ra, np.ndarray) else ra)
         rows = np.nonzero(~vec)
         W[rows] = w[rows][:, None]
-        rows = np.nonzero(follow & vec)
-        c = cos_angle(V1[rows])
+        rows = self._rows_fv
+        c = self._cos_rows
         c *= V2[rows]
         c *= fa[rows][:, None] if isinstance(fa, np.ndarray) else fa
         c += 1.0
@@ -366,8 +417,10 @@ class COOT(Optimizer):
 
     def _move_leaders(self, B: float, u: dict[str, Array]) -> None:
         """Eq 18 for every leader, then COOT.m's acceptance sweep against gBest."""
+        if getattr(self, "_cosines_of", None) is not u:  # called alone (tests)
+            self._cosines(u)
         vec = self._vector_rows(u["l_flag"])[..., None]
-        S = cos_angle(np.where(vec, u["l_V1"], u["l_S1"][..., None]))  # cos(2 pi R)
+        S = self._cos_leaders  # cos(2 pi R)
         S *= np.where(vec, u["l_V2"], u["l_S2"][..., None])  # R3
         gain = B * self._leader_gain()
         acc = self._acc("l")

@@ -88,8 +88,7 @@ class PSO(Optimizer):
         w = w_max - (self.t - 1) * (w_max - w_min) / self.T
         c1, c2 = float(p["c1"]), float(p["c2"])
         X, V, tmp = self.X, self.V, self._tmp
-        r1 = self.rng.random(self.N, self.d)
-        r2 = self.rng.random(self.N, self.d)
+        r1, r2 = self.rng.random_parts(2, self.N, self.d)
         # In place, on contiguous operands: V = w V + c1 r1 (P - X) + c2 r2 (G - X)
         np.subtract(self.pbest, X, out=tmp)
         r1 *= tmp

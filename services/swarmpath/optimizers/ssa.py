@@ -73,8 +73,7 @@ class SSA(Optimizer):
     def _iterate(self) -> None:
         NL, X = self.n_leaders, self.X
         c1 = self.c1(self.t, self.T)
-        lead = self.rng.random(NL, self.d)  # c2
-        c3 = self.rng.random(NL, self.d)
+        lead, c3 = self.rng.random_parts(2, NL, self.d)  # c2, c3
         lead *= self._span
         lead += self._lower  # (ub - lb) c2 + lb
         lead *= c1

@@ -94,22 +94,35 @@ class RunStreams:
         """Standard normal of shape (runs, *shape)."""
         return self._draw("normal", shape)
 
-    def _draw(self, kind: str, shape: tuple[int, ...]) -> Array:
-        out = np.empty((self.runs, *shape))
-        if not self.block:
-            for g, row in zip(self.generators, out, strict=True):
-                _fill(g, kind, row)
-            return out
+    def random_parts(self, parts: int, *shape: int) -> list[Array]:
+        """``parts`` consecutive uniform draws of shape (runs, *shape), in one call."""
+        return list(self._draw("random", shape, parts))
+
+    def normal_parts(self, parts: int, *shape: int) -> list[Array]:
+        """``parts`` consecutive standard normal draws of shape (runs, *shape), in one call."""
+        return list(self._draw("normal", shape, parts))
+
+    def _draw(self, kind: str, shape: tuple[int, ...], parts: int = 0) -> Array:
+        """One draw (runs, *shape), or with ``parts`` > 0 that many consecutive draws stacked
+        as (parts, runs, *shape): each part contiguous, the numbers of ``parts`` single draws."""
+        k = max(parts, 1)
+        out = np.empty((k, self.runs, *shape))
         size = math.prod(shape)
+        if not self.block:
+            for r, g in enumerate(self.generators):
+                for i in range(k):
+                    _fill(g, kind, out[i, r])
+            return out if parts else out[0]
         state = self._buffers.get(kind)
-        if state is None or state[1] + size > state[0].shape[1]:
-            state = self._refill(kind, state, size)
+        if state is None or state[1] + k * size > state[0].shape[1]:
+            state = self._refill(kind, state, k * size)
         buffer, start = state
-        state[1] = start + size
-        # a contiguous copy: numpy's in-place arithmetic on a strided view is several times
+        state[1] = start + k * size
+        # contiguous copies: numpy's in-place arithmetic on strided views is several times
         # slower than the copy, and callers work in place on their draws
-        out.reshape(self.runs, size)[...] = buffer[:, start : start + size]
-        return out
+        view = buffer[:, start : start + k * size].reshape(self.runs, k, size)
+        out.reshape(k, self.runs, size)[...] = view.transpose(1, 0, 2)
+        return out if parts else out[0]
 
     def _refill(self, kind: str, state: list[Any] | None, size: int) -> list[Any]:
         """A new buffer: the unused tail of the old one, then fresh numbers of each run's stream."""
