@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Optimizer speed: swarmpath against mealpy, and the ICOOT paper's Table 2 study.
 
-    .venv/bin/python scripts/bench/optimizers.py [--part mealpy|table2|all]
+    .venv/bin/python scripts/bench/optimizers.py [--part mealpy|table2|batch|all]
 
 Part ``mealpy``: GWO, PSO, BA and FDO on F1 (30 dims, 30 agents, 500 iterations). mealpy 3.0.3
 (the ``bench`` extra: ``pip install -e '.[bench]'``) solves one run at a time: a few runs are
@@ -10,6 +10,12 @@ run is the batch's seconds / 30. Target: swarmpath >= 30x faster per run.
 
 Part ``table2``: PSO, SSA, FDO, mCOOT, COOT, ICOOT x F1-F13 x 30 dims x 30 runs x 500
 iterations in this one process. Target: < 60 s in total.
+
+Part ``batch``: CPU milliseconds per run of the Table 2 algorithms (30 agents, 30 dims, 500
+iterations) when ``--batches`` runs (30, 100, 300 by default) are computed in one ``minimize``
+call, on ``--batch-functions`` (F1, F9, F12 by default: a cheap, a cosine and a sine kernel).
+The paper-scale target of the service (78 cells x 1000 runs in < 15 min on two worker processes)
+needs about 20 ms per run on average.
 
 Algorithms not registered yet are skipped (and listed). The output is markdown (stdout) ready to
 paste into docs/benchmarks.md, with the machine's load average next to the numbers; progress
@@ -201,13 +207,47 @@ def part_table2(runs: int, seed: int, threads: int = 1) -> list[str]:
     return lines
 
 
+# ------------------------------------------------------------------------------------ batch
+def part_batch(batches: list[int], functions: list[str], seed: int) -> list[str]:
+    algorithms, _ = available(TABLE2_ALGORITHMS)
+    load_before = load()
+    lines = [
+        f"### CPU ms per run by batch size: {DIM} dims, {AGENTS} agents, {ITERATIONS} iterations, "
+        f"mean over {', '.join(functions)}",
+        "",
+        "| algorithm | " + " | ".join(f"{b} runs" for b in batches) + " |",
+        "| --- |" + " ---: |" * len(batches),
+    ]
+    totals = dict.fromkeys(batches, 0.0)
+    for a in algorithms:
+        cells = []
+        for b in batches:
+            note(f"batch {a}: {b} runs x {len(functions)} functions ...")
+            c0 = time.process_time()
+            for fn in functions:
+                minimize(a, fn, DIM, AGENTS, ITERATIONS, runs=b, seed=seed)
+            ms = (time.process_time() - c0) * 1000.0 / (b * len(functions))
+            totals[b] += ms
+            cells.append(f"{ms:.1f}")
+        lines.append(f"| {a} | " + " | ".join(cells) + " |")
+    n = len(algorithms)
+    lines += [
+        "| **mean** | " + " | ".join(f"**{totals[b] / n:.1f}**" for b in batches) + " |",
+        "",
+        f"Load average (1/5/15 min) before: {load_before}; after: {load()}.",
+    ]
+    return lines
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--part", choices=("mealpy", "table2", "all"), default="all")
+    parser.add_argument("--part", choices=("mealpy", "table2", "batch", "all"), default="all")
     parser.add_argument("--mealpy-runs", type=int, default=3, help="mealpy runs timed each")
     parser.add_argument("--runs", type=int, default=30, help="swarmpath runs per cell (batched)")
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--threads", type=int, default=1, help="table2: cells run concurrently")
+    parser.add_argument("--batches", default="30,100,300", help="batch: runs per minimize call")
+    parser.add_argument("--batch-functions", default="F1,F9,F12", help="batch: functions")
     args = parser.parse_args(argv)
     if args.mealpy_runs < 1 or args.runs < 1:
         parser.error("--mealpy-runs and --runs must be >= 1")
@@ -222,6 +262,10 @@ def main(argv: list[str] | None = None) -> None:
         lines += [*part_mealpy(args.mealpy_runs, args.runs, args.seed), ""]
     if args.part in ("table2", "all"):
         lines += [*part_table2(args.runs, args.seed, args.threads), ""]
+    if args.part in ("batch", "all"):
+        batches = [int(b) for b in args.batches.split(",")]
+        functions = [f.strip() for f in args.batch_functions.split(",") if f.strip()]
+        lines += [*part_batch(batches, functions, args.seed), ""]
     print("\n".join(lines).rstrip())
 
 
