@@ -31,13 +31,21 @@ history, except that a node within ``goal_snap`` (0.2 m, the episode's acceptanc
 the target is replaced by the target when the segment to it is valid (or, failing that, the target
 is appended after it when that segment is valid). The first fox to reach the target returns its
 history: the cost is the iteration count at that moment (0 if a fox reaches it at
-initialisation).
+initialisation). ``arrivals`` (RFO-GWO-EA: 5, else 1) foxes: the foxes that arrived stop and the
+others go on until that many have arrived, or ``arrival_wait`` (1.0) times the first fox's
+iterations have passed since (at least one), or the search stalls; the cost is then every
+iteration consumed. The random numbers up to the first arrival are the same, so the first path is
+``RFO-GWO``'s. Without the EA the shortest of the paths is used.
 
 Clearance rules (section 4.1; the paper works in cm on 17000 cm maps, we in m, and both margins
 are *in addition to* the robot radius r, as the paper's robot is a body, not a point):
 
 * safety rule (the "more than 20 cm from the border of any barrier" rule): clearance of every
-  segment, and of every node not produced by eq 2, > r + ``safety_margin`` (0.2 m);
+  segment, and of every node not produced by eq 2, > r + s with the scale-aware margin
+  s = min(``safety_margin`` (0.2 m), ``safety_scale`` (0.01) * the larger world side)
+  (:meth:`RfoFamilyPlanner.safety_clearance`): exactly 20 cm on the paper's 170 m maps, 10 cm on
+  a 10 m map (the diff-drive robots of the ICOOT/IHPO maps leave the polyline by up to 7.5 cm at
+  corners; 3 cm let them touch);
 * node rule (the "smaller than one metre from the border of any barriers" rule that hands the
   fox to GWO): clearance of an eq 2 node > r + m with the scale-aware margin
   m = max(``safety_margin``, min(``node_margin`` (1.0 m), ``node_scale`` (0.02) * the larger
@@ -47,7 +55,7 @@ are *in addition to* the robot radius r, as the paper's robot is a body, not a p
 
 Both are the product's collision rule (:func:`~swarmpath.world.geometry.collides`, touching
 counts) applied with the enlarged radius, so every output segment is collision-free for the robot
-with at least ``safety_margin`` to spare; the final path is re-checked with
+with at least s to spare; the final path is re-checked with
 :meth:`ObstacleSet.segment_clearance` before it is handed out.
 
 When the eq 2 node is invalid:
@@ -73,17 +81,27 @@ When the eq 2 node is invalid:
 
 Phase B/C, section 4.2 (``RFO-GWO-EA`` only)
 -------------------------------------------
-An EA with the Erase mutation as its only operator (:meth:`RfoFamilyPlanner._ea`: a population
-of copies of the path; Erase picks two nodes V_i, V_j, j > i + 1, and if V_i V_j passes the safety
-rule removes the nodes between them; (mu + lambda) selection on length) runs on the path; then the
-multiphase technique cuts every segment longer than ``split_length`` into equal pieces and runs the
-EA again, ``phases`` times. Erase never lengthens a path (triangle inequality) and adds only
-checked segments; the split points lie on valid segments. Phase A draws the same random numbers as
-``RFO-GWO``, so with the same seed the EA starts from exactly ``RFO-GWO``'s path.
+Every path of the ``arrivals`` foxes is refined (side by side, independently) and the shortest
+result is the plan. An EA with the Erase mutation as its only operator
+(:meth:`RfoFamilyPlanner._ea`: a population of ``ea_population`` copies of the path; Erase picks
+two nodes V_i, V_j, j > i + 1, and if V_i V_j passes the safety rule removes the nodes between
+them; (mu + lambda) selection on length, ``ea_generations`` = 50) runs on the path; then up to
+``phases`` (4) rounds of the multiphase technique: cut every segment longer than the split length
+into equal pieces, run the EA again, and (``node_opt = "gwo"``) optimise the nodes with GWO
+(:meth:`RfoFamilyPlanner._relax`: each interior node is a sub-problem, the point of a box around
+it minimising the length of its two segments under the safety rule, odd and even nodes in turn,
+``relax_sweeps`` = 2, box half-width ``relax_box`` = 0.5 times the longer adjacent segment; a node
+moves only to a valid, shorter place). A path leaves the rounds once one shortens it by less than
+``refine_tol`` (1e-4). Finally every node whose neighbours see each other under the safety rule is
+erased (:meth:`RfoFamilyPlanner._prune`). Erase and the node moves never lengthen a path and add
+only checked segments; the split points lie on valid segments, so ``RFO-GWO-EA`` is never longer
+than ``RFO-GWO`` with the same seed.
 
 Following the path among moving obstacles
 -----------------------------------------
-The planner gets only the static map. When the observation carries a sensor reading and the
+The planner gets only the static map. A moving goal: when the path is used up and the goal is more
+than ``goal_snap`` from where it was planned to, the planner plans again from the robot to the
+goal's new place. When the observation carries a sensor reading and the
 scenario declares moving obstacles (that fact only), :meth:`RfoFamilyPlanner._follow` hands out
 decisions of ``replan`` (0.25 s) so that the robot re-senses. Hits farther than ``STATIC_HIT``
 from the static map and the border, with their positions predicted ``predict`` (1 s) ahead
@@ -97,16 +115,18 @@ current position. Without sensors or moving obstacles the waypoints are handed o
 Deviations, all parameters
 --------------------------
 ``foxes`` = 15 (section 5's text; Table 1 says 10), ``iterations`` = 2000 (Table 1),
-``radius`` = 3 m (Table 1's r in [0, 3]), ``wolves`` = 7 (Table 1). ``gwo_iterations`` = 10,
+``radius`` = 3 m (Table 1's r in [0, 3]), ``wolves`` = 7 (Table 1, also the node optimisation's
+population). ``gwo_iterations`` = 10 (also for the node optimisation),
 not Table 1's 500: 500 iterations per blocked fox per iteration costs about 50 times the planning
 time and measured no better (the box is small and 2-D). ``patience`` (RFO-GWO variants: 50,
 RFO: off) ends a search after that many iterations in which the best fox got no closer than
 before by ``STALL_TOLERANCE`` (1 cm): in successful runs RFO-GWO never stalled for more than one
 iteration, and a trapped search would otherwise call GWO for all 2000 iterations. EA:
-``ea_population`` = 10, ``ea_generations`` = 100, ``split_length`` = 2 m capped at
+``ea_population`` = 10, ``ea_generations`` = 50, ``split_length`` = 2 m capped at
 ``split_scale`` (0.025) times the larger world side (2 m on 170 m maps, 0.25 m on 10 m maps),
-``phases`` = 1 (the paper gives none of them). Randomness comes only from the planner's
-generator: the same seed gives the same path.
+``phases`` = 4 (the paper gives none of them); ``arrivals``, the node optimisation and the
+scale-aware safety margin are ours (docs/planners.md has the measurements). Randomness comes only
+from the planner's generator: the same seed gives the same path.
 """
 
 from __future__ import annotations
@@ -390,8 +410,11 @@ class RfoFamilyPlanner(Planner):
         "node_margin": 1.0,  # m beyond the robot radius: section 4.1's one-metre rule (eq 2 nodes)
         "node_scale": 0.02,  # node rule capped at this fraction of the larger world side
         "safety_margin": 0.2,  # m beyond the robot radius: section 4.1's 20 cm rule (the rest)
+        "safety_scale": 0.01,  # safety rule capped at this fraction of the larger world side
         "patience": 0,  # stop after this many iterations without progress (0: never)
         "goal_snap": 0.2,  # m: a fox this close to the target with a free segment steps onto it
+        "arrivals": 1,  # foxes that must reach the target before the search ends
+        "arrival_wait": 1.0,  # then at most this many times the first fox's iterations more
         # following the path with sensors (moving obstacles)
         "watch": 3.0,  # m: sensed points farther than this from the robot are ignored
         "dynamic_margin": 0.3,  # m beyond the robot radius kept from sensed points
@@ -403,19 +426,21 @@ class RfoFamilyPlanner(Planner):
         "alpha_bound": ("sqrt", "distance"),
         "alpha_draw": ("fox", "population"),
         "reference": ("target", "best"),
+        "node_opt": ("gwo", "off"),
     }
 
     @classmethod
     def check_params(cls, p: Mapping[str, ParamValue]) -> None:
         for key in ("foxes", "iterations", "wolves", "gwo_iterations", "ea_population",
-                    "ea_generations"):
+                    "ea_generations", "arrivals"):
             if key in p and int(p[key]) < 1:
                 raise PlannerError(f"{cls.name}.{key} must be >= 1")
-        for key in ("radius", "split_length", "watch", "replan", "side_step"):
+        for key in ("radius", "split_length", "watch", "replan", "side_step", "relax_box"):
             if key in p and not float(p[key]) > 0:
                 raise PlannerError(f"{cls.name}.{key} must be > 0")
-        for key in ("node_margin", "node_scale", "split_scale", "safety_margin", "goal_snap",
-                    "phases", "dynamic_margin", "predict"):
+        for key in ("node_margin", "node_scale", "split_scale", "safety_margin", "safety_scale",
+                    "goal_snap", "phases", "dynamic_margin", "predict", "refine_tol",
+                    "relax_sweeps", "arrival_wait"):
             if key in p and float(p[key]) < 0:
                 raise PlannerError(f"{cls.name}.{key} must be >= 0")
         if "notice" in p and not 0.0 <= float(p["notice"]) <= 1.0:
@@ -436,6 +461,7 @@ class RfoFamilyPlanner(Planner):
         self._cost = 0
         self._failure: str | None = None
         self.raw_path: Array | None = None  # phase A's path (before any smoothing)
+        self.raw_paths: list[Array] = []  # every fox's path to the target (``arrivals``)
         self.path: Array | None = None  # the path handed out, start included
         self.trace: list[float] = []  # distance of the best fox to the target, per iteration
         self._static = static_map if static_map is not None else scenario.static_obstacles()
@@ -445,19 +471,11 @@ class RfoFamilyPlanner(Planner):
     # --------------------------------------------------------------------------- contract
     def decide(self, obs: Observation) -> Decision:
         if self._waypoints is None:
-            self._plan(np.array([obs.pose.x, obs.pose.y]), np.asarray(obs.goal, dtype=float),
-                       float(obs.robot_radius))
-            if self._failure is not None:
-                return Decision(None, self._cost, None, self._failure)
-            assert self._waypoints is not None
-            self._next = 1
-            if self._watching(obs):  # watch from the first step on
-                decision = self._follow(obs)
-                return Decision(decision.target, self._cost + decision.iterations,
-                                decision.duration, decision.reason, decision.finish)
-            return Decision(self._waypoints[0].copy(), self._cost, None)
+            return self._begin(obs)
         if self._failure is not None:
             return Decision(None, 0, None, self._failure)
+        if self._next >= len(self._waypoints) and self._goal_moved(obs):
+            return self._begin(obs)
         if self._watching(obs):
             return self._follow(obs)
         if self._next >= len(self._waypoints):
@@ -466,6 +484,27 @@ class RfoFamilyPlanner(Planner):
         self._next += 1
         # the last waypoint is the goal: drive onto it so the executed path is complete
         return Decision(target, 0, None, finish=self._next >= len(self._waypoints))
+
+    def _begin(self, obs: Observation) -> Decision:
+        """Plan from the robot to the goal as observed and hand out the first waypoint."""
+        self._plan(np.array([obs.pose.x, obs.pose.y]), np.asarray(obs.goal, dtype=float),
+                   float(obs.robot_radius))
+        if self._failure is not None:
+            return Decision(None, self._cost, None, self._failure)
+        assert self._waypoints is not None
+        self._next = 1
+        if self._watching(obs):  # watch from the first step on
+            decision = self._follow(obs)
+            return Decision(decision.target, self._cost + decision.iterations,
+                            decision.duration, decision.reason, decision.finish)
+        return Decision(self._waypoints[0].copy(), self._cost, None,
+                        finish=len(self._waypoints) == 1)
+
+    def _goal_moved(self, obs: Observation) -> bool:
+        """The path is used up and the goal is more than ``goal_snap`` from where it was planned
+        to (a moving goal): the planner plans again from the robot to the goal's new place."""
+        return math.dist(np.asarray(obs.goal, dtype=float), self._goal) > float(
+            self.p["goal_snap"])
 
     # ------------------------------------------------------------- sensed moving obstacles
     def _sensed(self, obs: Observation, position: Array) -> Array:
@@ -512,6 +551,8 @@ class RfoFamilyPlanner(Planner):
         if k >= 0 and math.dist(pos, self._waypoints[k]) <= 10 * ARRIVE:
             k = self._next
             if k >= len(self._waypoints):
+                if self._goal_moved(obs):
+                    return self._begin(obs)
                 return Decision(None, 0, None, "path exhausted before the goal was reached")
             self._next = k + 1
         target = self._waypoints[k].copy()
@@ -566,6 +607,17 @@ class RfoFamilyPlanner(Planner):
         margin = min(float(self.p["node_margin"]), scaled)
         return max(margin, float(self.p["safety_margin"]))
 
+    def safety_clearance(self, width: float, height: float) -> float:
+        """Margin of the safety rule beyond the robot radius on a ``width`` x ``height`` world.
+
+        ``min(safety_margin, safety_scale * max(width, height))`` (``safety_scale = 0`` turns the
+        cap off): the paper's 20 cm on its 170 m maps (0.003 * 170 = 0.51), 3 cm on a 10 m map
+        (the margin the swarm local planners keep there).
+        """
+        margin = float(self.p["safety_margin"])
+        scale = float(self.p["safety_scale"])
+        return min(margin, scale * max(width, height)) if scale > 0 else margin
+
     @property
     def failure(self) -> str | None:
         return self._failure
@@ -583,7 +635,7 @@ class RfoFamilyPlanner(Planner):
         self._goal = goal
         w, h = self.scenario.size
         self._thr_node = radius + self.node_clearance(float(w), float(h))
-        self._thr_safe = radius + float(self.p["safety_margin"])
+        self._thr_safe = radius + self.safety_clearance(float(w), float(h))
         split = float(self.p.get("split_length", 2.0))
         scale = float(self.p.get("split_scale", 0.0))
         self._split_length = min(split, scale * max(w, h)) if scale > 0 else split
@@ -591,13 +643,14 @@ class RfoFamilyPlanner(Planner):
         self._hi = np.array([float(w), float(h)])
         self._waypoints = np.zeros((0, 2))
         self.raw_path = self.path = None
+        self.raw_paths = []
         self.trace = []
         if bool(collides(obstacles.point_clearance(start), radius)):
             self._failure = "start is in collision"
             return
         self._stall: tuple[int, float] | None = None
-        path, self._cost = self._search(start, goal)
-        if path is None:
+        found, self._cost = self._search(start, goal)
+        if not found:
             if self._stall is not None:
                 self._failure = (
                     f"no fox got closer to the goal for {self._stall[0]} iterations (best "
@@ -606,11 +659,15 @@ class RfoFamilyPlanner(Planner):
             else:
                 self._failure = f"no path to the goal within {self._cost} iterations"
             return
-        if len(path) == 1:  # already at the target: one waypoint, the target itself
-            path = np.vstack([path, goal])
-        self.raw_path = path
+        # already at the target: one waypoint, the target itself
+        found = [np.vstack([q, goal]) if len(q) == 1 else q for q in found]
+        self.raw_path = found[0]
+        self.raw_paths = found
+        path = found[int(np.argmin([path_length(q) for q in found]))]  # the first of the shortest
         if self.smooth:
-            path = self._refine(path)
+            refined = [self._prune(q) for q in self._refine(found)]
+            lengths = [path_length(q) for q in refined]
+            path = refined[int(np.argmin(lengths))]  # the first of the shortest
         # The product's rule on every output segment (the planner's own rule is stricter).
         clearance = obstacles.segment_clearance(path[:-1], path[1:])
         if np.any(collides(clearance, radius)):  # pragma: no cover - guards a geometry bug
@@ -633,13 +690,31 @@ class RfoFamilyPlanner(Planner):
         return ~collides(seg, self._thr_safe), at_goal | ~collides(end, node_threshold)
 
     # ------------------------------------------------------------ phase A: Algorithm 1
-    def _search(self, start: Array, goal: Array) -> tuple[Array | None, int]:
+    def _search(self, start: Array, goal: Array) -> tuple[list[Array], int]:
+        """Algorithm 1. Returns the histories of the foxes that reached the target, in order of
+        arrival (empty: none did), and the iterations consumed.
+
+        With ``arrivals`` = 1 (RFO, RFO-GWO) the first fox to reach the target ends the search
+        (lines 25-27). With more (RFO-GWO-EA, where the EA's population is built from them), the
+        foxes that arrived stop and the others go on until ``arrivals`` foxes have arrived, or
+        ``arrival_wait`` times the first fox's iterations (at least one) have passed since, or
+        the search stalls or runs out of iterations. Up to the first arrival the random numbers
+        drawn are the same, so the first path is the one ``arrivals`` = 1 returns.
+        """
         rng = self.rng
         N = int(self.p["foxes"])
         T = int(self.p["iterations"])
         R = float(self.p["radius"])
         snap = float(self.p["goal_snap"])
+        want = int(self.p["arrivals"])
         lo, hi = self._lo, self._hi
+        arrived: list[Array] = []
+        active = np.ones(N, dtype=bool)
+
+        def arrive(i: int) -> None:
+            arrived.append(np.array(hist[i]))
+            active[i] = False
+
         # Line 1: n foxes around the start, each at a valid node reached by a free segment.
         cand = np.clip(start + rng.uniform(-R, R, (N, 2)), lo, hi)
         starts = np.broadcast_to(start, cand.shape)
@@ -648,29 +723,40 @@ class RfoFamilyPlanner(Planner):
         hist: list[list[Array]] = [[start.copy()] for _ in range(N)]
         for i in np.flatnonzero(good).tolist():
             if self._move(i, cand[i], pos, hist, goal, snap):
-                return np.array(hist[i]), 0
+                arrive(i)
+                if len(arrived) >= want:
+                    return arrived, 0
         for i in range(N):  # a fox at the start may already see the target
-            if self._arrive(i, pos, hist, goal, snap):
-                return np.array(hist[i]), 0
+            if active[i] and self._arrive(i, pos, hist, goal, snap):
+                arrive(i)
+                if len(arrived) >= want:
+                    return arrived, 0
+        first = 0  # iteration of the first arrival
 
         patience = int(self.p["patience"])
+        wait = float(self.p["arrival_wait"])
         record, stalled = math.inf, 0
         for t in range(1, T + 1):
+            if arrived and t - 1 - first >= max(1, math.ceil(wait * first)):
+                return arrived, t - 1
             dist = np.hypot(*(pos - goal).T)  # eq 17 (monotone in the Euclidean distance)
+            dist = np.where(active, dist, np.inf)
             self.trace.append(float(dist.min()))
             if dist.min() < record - STALL_TOLERANCE:
                 record, stalled = float(dist.min()), 0
             else:
                 stalled += 1
                 if patience and stalled >= patience:
-                    self._stall = (patience, record)
-                    return None, t - 1
+                    if not arrived:
+                        self._stall = (patience, record)
+                    return arrived, t - 1
             order = np.argsort(dist, kind="stable")  # line 6
             best = order[0]  # line 7
             ref = np.broadcast_to(goal, pos.shape).copy()
             if self.p["reference"] == "best":
                 ref[np.arange(N) != best] = pos[best]
-            bound = dist if self.p["alpha_bound"] == "distance" else np.sqrt(dist)
+            reach = np.where(active, dist, 0.0)
+            bound = reach if self.p["alpha_bound"] == "distance" else np.sqrt(reach)
             u = rng.random(N) if self.p["alpha_draw"] == "fox" else np.full(N, rng.random())
             alpha = u * bound
             delta = ref - pos
@@ -680,10 +766,10 @@ class RfoFamilyPlanner(Planner):
             seg_ok, node_ok = self._moves_ok(pos, new, self._thr_node)
             ok = closer & seg_ok & node_ok
             if self.fallback == "local":
-                moved = self._local_phase(pos, new, ok, rng)
+                moved = self._local_phase(pos, new, ok, rng, active)
             else:
                 moved = ok.copy()
-                fail = order[~ok[order]]  # lines 16 and 21, in fitness order
+                fail = order[~ok[order] & active[order]]  # lines 16 and 21, in fitness order
                 if fail.size:
                     # the obstacle the segment hits, or the one too close to the node
                     seg_bad = ~seg_ok[fail]
@@ -697,9 +783,13 @@ class RfoFamilyPlanner(Planner):
                     new[fail[found]] = q[found]
                     moved[fail[found]] = True
             for i in order:
-                if moved[i] and self._move(i, new[i], pos, hist, goal, snap):  # lines 25-27
-                    return np.array(hist[i]), t
-        return None, T
+                if active[i] and moved[i] and self._move(i, new[i], pos, hist, goal, snap):
+                    arrive(i)  # lines 25-27
+                    if len(arrived) == 1:
+                        first = t
+                    if len(arrived) >= want:
+                        return arrived, t
+        return arrived, T
 
     def _move(self, i: int, q: Array, pos: Array, hist: list[list[Array]], goal: Array,
               snap: float) -> bool:
@@ -724,7 +814,7 @@ class RfoFamilyPlanner(Planner):
 
     # ------------------------------------------------- RFO alone: local search (eqs 3-5)
     def _local_phase(self, pos: Array, new: Array, ok: NDArray[np.bool_],
-                     rng: np.random.Generator) -> NDArray[np.bool_]:
+                     rng: np.random.Generator, active: NDArray[np.bool_]) -> NDArray[np.bool_]:
         """Foxes whose eq (2) node failed stay put; the unnoticed ones (mu > notice) explore."""
         N = pos.shape[0]
         mu = rng.random(N)
@@ -736,7 +826,7 @@ class RfoFamilyPlanner(Planner):
             r: Array = np.asarray(
                 np.where(phi0 > 0, rmax * np.sin(phi0) / np.where(phi0 > 0, phi0, 1.0), rmax)
             )
-        movers = ~ok & (mu > float(self.p["notice"]))
+        movers = ~ok & active & (mu > float(self.p["notice"]))
         moved = ok.copy()
         if movers.any():
             idx = np.flatnonzero(movers)
@@ -791,11 +881,115 @@ class RfoFamilyPlanner(Planner):
         return opt.best_position.copy(), opt.best_fitness < PENALTY
 
     # ------------------------------------------------ section 4.2: EA + multiphase
-    def _refine(self, path: Array) -> Array:
-        path = self._ea(path)
+    def _refine(self, paths: list[Array]) -> list[Array]:
+        """Section 4.2 on every path of ``paths`` (refined side by side, independently): the EA,
+        then up to ``phases`` rounds of split, EA and (``node_opt = "gwo"``) the GWO optimisation
+        of the path nodes (:meth:`_relax`). A path leaves the rounds once one shortens it by less
+        than ``refine_tol`` (relative)."""
+        paths = self._ea(paths)
+        tol = float(self.p["refine_tol"])
+        live = list(range(len(paths)))
         for _ in range(int(self.p["phases"])):
-            path = self._ea(self._split(path, self._split_length))
-        return path
+            if not live:
+                break
+            before = [path_length(paths[c]) for c in live]
+            out = self._ea([self._split(paths[c], self._split_length) for c in live])
+            if self.p["node_opt"] == "gwo":
+                out = self._relax(out)
+            for c, q in zip(live, out, strict=True):
+                paths[c] = q
+            live = [c for c, b in zip(live, before, strict=True)
+                    if path_length(paths[c]) <= (1.0 - tol) * b]
+        return paths
+
+    def _relax(self, paths: list[Array]) -> list[Array]:
+        """GWO optimisation of the path nodes: every interior node V_k is a sub-problem, the
+        point x in a box around V_k that minimises |V_{k-1} x| + |x V_{k+1}| with both segments
+        passing the safety rule (the neighbours fixed).
+
+        Nodes of one parity do not share a segment, so the odd nodes of every path are optimised
+        as one batch of independent GWO runs, then the even ones (``relax_sweeps`` times, fewer
+        when a sweep moves nothing). The box of V_k has half-width ``relax_box`` times its longer
+        adjacent segment (at most ``radius``), clipped to the world; a node moves only when the
+        best wolf is valid and shortens the path, so no path gets longer and every new segment
+        is checked.
+        """
+        paths = [q.copy() for q in paths]
+        for _ in range(int(self.p["relax_sweeps"])):
+            moved = False
+            for first in (1, 2):
+                ks = [np.arange(first, len(q) - 1, 2) for q in paths]
+                if not sum(k.size for k in ks):
+                    continue
+                A = np.concatenate([q[k - 1] for q, k in zip(paths, ks, strict=True)])
+                V = np.concatenate([q[k] for q, k in zip(paths, ks, strict=True)])
+                B = np.concatenate([q[k + 1] for q, k in zip(paths, ks, strict=True)])
+                best, better = self._gwo_nodes(A, V, B)
+                at = 0
+                for q, k in zip(paths, ks, strict=True):
+                    sel = better[at:at + k.size]
+                    q[k[sel]] = best[at:at + k.size][sel]
+                    at += k.size
+                moved |= bool(better.any())
+            if not moved:
+                break
+        return paths
+
+    def _gwo_nodes(self, A: Array, V: Array, B: Array) -> tuple[Array, NDArray[np.bool_]]:
+        """One batch of node sub-problems (see :meth:`_relax`): the best point per node and
+        whether it is valid and shortens the path by more than 1e-9 m."""
+        K = V.shape[0]
+        span = np.maximum(np.hypot(*(V - A).T), np.hypot(*(V - B).T))
+        half = np.minimum(float(self.p["relax_box"]) * span, float(self.p["radius"]))
+        lower = np.maximum(V - half[:, None], self._lo)
+        upper = np.minimum(V + half[:, None], self._hi)
+        # a node on the straight line between its neighbours is already optimal: skip it
+        bend = np.hypot(*(V - A).T) + np.hypot(*(B - V).T) - np.hypot(*(B - A).T)
+        live = np.all(upper - lower > 1e-9, axis=1) & (bend > 1e-9)
+        out = V.copy()
+        better = np.zeros(K, dtype=bool)
+        if not live.any():
+            return out, better
+        A, V, B, lower, upper = A[live], V[live], B[live], lower[live], upper[live]
+        m = int(self.p["wolves"])
+        thr = self._thr_safe
+        Am, Bm = np.repeat(A, m, axis=0), np.repeat(B, m, axis=0)
+
+        def objective(X: Array, streams: RunStreams) -> Array:
+            W = X.reshape(-1, 2)
+            d = self._geo.segment(np.concatenate([Am, W]), np.concatenate([W, Bm]), thr)
+            da, db = d[: len(W)], d[len(W):]
+            length = np.hypot(*(W - Am).T) + np.hypot(*(Bm - W).T)
+            valid = ~collides(da, thr) & ~collides(db, thr)
+            viol = np.maximum(thr - da, 0.0) + np.maximum(thr - db, 0.0)
+            return np.where(valid, length, PENALTY + viol).reshape(-1, m)
+
+        seeds = np.asarray(self.rng.integers(0, 2**63, size=int(live.sum())), dtype=np.int64)
+        streams = RunStreams([np.random.Generator(np.random.PCG64(int(s))) for s in seeds])
+        opt = create("GWO", Problem(objective, lower, upper), m,
+                     int(self.p["gwo_iterations"]), streams)
+        opt.initialize()
+        while not opt.done:
+            opt.step()
+        now = np.hypot(*(V - A).T) + np.hypot(*(B - V).T)
+        gain = opt.best_fitness < now - 1e-9
+        idx = np.flatnonzero(live)[gain]
+        out[idx] = opt.best_position[gain]
+        better[idx] = True
+        return out, better
+
+    def _prune(self, path: Array) -> Array:
+        """The nodes the path needs: in order, an interior node is erased when the segment from
+        the last kept node to the next node passes the safety rule (the Erase mutation with
+        j = i + 2, applied greedily; never longer). Also drops the repeated nodes that GWO can
+        produce when a node lands on its neighbour."""
+        keep = [0]
+        for k in range(1, len(path) - 1):
+            a, b = path[keep[-1]], path[k + 1]
+            if not self._segments_ok(a[None, :], b[None, :])[0]:
+                keep.append(k)
+        keep.append(len(path) - 1)
+        return path[keep]
 
     @staticmethod
     def _split(path: Array, length: float) -> Array:
@@ -809,47 +1003,51 @@ class RfoFamilyPlanner(Planner):
             out.append(pts)
         return np.concatenate(out)
 
-    def _ea(self, path: Array) -> Array:
-        """Evolutionary algorithm whose only variation is the Erase mutation (section 4.2).
+    def _ea(self, paths: list[Array]) -> list[Array]:
+        """Evolutionary algorithm whose only variation is the Erase mutation (section 4.2), run
+        on every path of ``paths`` side by side (independent populations, one random stream).
 
-        The population starts as ``ea_population`` copies of the reference path. Each generation
-        every path V_0..V_n draws two distinct node indices i < j; if j > i + 1 and the segment
-        V_i V_j passes the safety rule, its child erases V_{i+1}..V_{j-1} (never longer, by the
-        triangle inequality, and valid: its only new segment was checked). Parents and children
-        compete on length ((mu + lambda) selection, ties to fewer nodes, then to the older path).
-        Returns the shortest path found.
+        Each population starts as ``ea_population`` copies of its reference path. Each
+        generation every path V_0..V_n draws two node indices i <= j; if j > i + 1 and the
+        segment V_i V_j passes the safety rule, its child erases V_{i+1}..V_{j-1} (never longer,
+        by the triangle inequality, and valid: its only new segment was checked). Parents and
+        children compete on length ((mu + lambda) selection, ties to fewer nodes, then to the
+        older path). Returns the shortest path of each population.
         """
-        P = int(self.p["ea_population"])
-        pop = [path.copy() for _ in range(P)]
-        cums = [_cumulative(path) for _ in range(P)]
+        C, P = len(paths), int(self.p["ea_population"])
+        group = np.repeat(np.arange(C), P)
+        pop = [q for q in paths for _ in range(P)]  # never modified in place: children are new
+        cums = [c for q in paths for c in [_cumulative(q)] * P]
+        lengths = np.array([c[-1] for c in cums])
+        sizes = np.array([len(q) for q in pop])
         for _ in range(int(self.p["ea_generations"])):
-            u = self.rng.random((P, 2))
-            picks = []
-            for m, q in enumerate(pop):
-                n = len(q)
-                i, j = np.sort(np.minimum((u[m] * n).astype(np.intp), n - 1))
-                if j - i >= 2:
-                    picks.append((m, int(i), int(j)))
-            if not picks:
+            u = self.rng.random((C * P, 2))
+            ij = np.minimum((u * sizes[:, None]).astype(np.intp), sizes[:, None] - 1)
+            lo, hi = ij.min(axis=1), ij.max(axis=1)
+            picks = np.flatnonzero(hi - lo >= 2)
+            if not picks.size:
                 continue
-            A = np.array([pop[m][i] for m, i, _ in picks])
-            B = np.array([pop[m][j] for m, _, j in picks])
+            A = np.array([pop[m][lo[m]] for m in picks])
+            B = np.array([pop[m][hi[m]] for m in picks])
             ok = self._segments_ok(A, B)
-            kids, kid_cums = [], []
-            for (m, i, j), good in zip(picks, ok, strict=True):
-                if good:
-                    q = pop[m]
-                    kids.append(np.concatenate([q[: i + 1], q[j:]]))
-                    kid_cums.append(_cumulative(kids[-1]))
-            if not kids:
+            if not ok.any():
                 continue
-            pool, pool_cums = pop + kids, cums + kid_cums
-            lengths = np.array([c[-1] for c in pool_cums])
-            nodes = np.array([len(q) for q in pool])
-            keep = np.lexsort((np.arange(len(pool)), nodes, lengths))[:P]
+            picks, A, B = picks[ok], A[ok], B[ok]
+            kids = [np.concatenate([pop[m][: lo[m] + 1], pop[m][hi[m]:]]) for m in picks]
+            kid_lengths = lengths[picks] + np.hypot(*(B - A).T) - np.array(
+                [cums[m][hi[m]] - cums[m][lo[m]] for m in picks])
+            pool = pop + kids
+            pool_group = np.concatenate([group, group[picks]])
+            pool_lengths = np.concatenate([lengths, kid_lengths])
+            pool_sizes = np.concatenate([sizes, [len(q) for q in kids]])
+            order = np.lexsort((np.arange(len(pool)), pool_sizes, pool_lengths, pool_group))
+            # each group has at least P members (its parents): keep the first P of each
+            starts = np.searchsorted(pool_group[order], np.arange(C))
+            keep = order[(starts[:, None] + np.arange(P)).ravel()]
             pop = [pool[k] for k in keep]
-            cums = [pool_cums[k] for k in keep]
-        return pop[0]
+            cums = [cums[k] if k < len(cums) else _cumulative(pool[k]) for k in keep]
+            lengths, sizes = pool_lengths[keep], pool_sizes[keep]
+        return [pop[c * P] for c in range(C)]
 
 
 def _cumulative(path: Array) -> Array:
@@ -864,11 +1062,16 @@ _GWO_PARAMS: dict[str, Any] = {
     "gwo_iterations": 10,
 }
 _EA_PARAMS: dict[str, Any] = {
+    "arrivals": 5,  # the EA's population is built from the paths of the first five foxes home
     "ea_population": 10,
-    "ea_generations": 100,
+    "ea_generations": 50,
     "split_length": 2.0,  # m
     "split_scale": 0.025,  # split length capped at this fraction of the larger world side
-    "phases": 1,
+    "phases": 4,
+    "refine_tol": 1e-4,  # a path leaves the rounds once one shortens it by less than this
+    "node_opt": "gwo",  # "gwo": GWO optimisation of the path nodes in every round; "off"
+    "relax_sweeps": 2,
+    "relax_box": 0.5,  # node box half-width / its longer adjacent segment
 }
 
 
