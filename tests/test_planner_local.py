@@ -69,3 +69,31 @@ def test_no_repair_penalises():
 def test_unknown_modes_are_named():
     with pytest.raises(ValueError, match="valid: mfb, grid, none"):
         local.repair(np.zeros((1, 2)), ctx([], repair="magic"))
+
+
+def test_hit_distances_match_the_geometry_module():
+    from swarmpath.world.geometry import point_segment_distance
+
+    rng = np.random.default_rng(7)
+    p = rng.uniform(-1, 1, 2)
+    C = rng.uniform(-2, 2, (3, 5, 2))
+    C[0, 0] = p  # a zero-length segment
+    hits = rng.uniform(-2, 2, (11, 2))
+    d_seg, i_seg = local.segment_hit_distance(p, C, hits)
+    full = point_segment_distance(hits, p, C[..., None, :])
+    assert np.allclose(d_seg, full.min(axis=-1)) and np.array_equal(i_seg, full.argmin(axis=-1))
+    d_pt, i_pt = local.point_hit_distance(C, hits)
+    direct = np.hypot(*np.moveaxis(C[..., None, :] - hits, -1, 0))
+    assert np.allclose(d_pt, direct.min(axis=-1)) and np.array_equal(i_pt, direct.argmin(-1))
+
+
+@pytest.mark.parametrize("mode", ["mfb", "grid"])
+def test_score_penalises_exactly_what_stays_infeasible(mode):
+    rng = np.random.default_rng(3)
+    hits = np.array([[0.5, y] for y in np.linspace(-0.3, 0.3, 7)])
+    c = ctx(hits, repair=mode)
+    cands = rng.uniform(-1, 1, (40, 2))
+    cost, fixed = local.score(cands, c)
+    left = local.violation(fixed, c)
+    assert np.array_equal(cost >= local.PENALTY, left > 0)
+    assert np.allclose(cost[left > 0], local.PENALTY + left[left > 0])

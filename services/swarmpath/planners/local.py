@@ -36,8 +36,6 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmpath.world.geometry import point_segment_distance
-
 Array = NDArray[np.float64]
 PENALTY = 1e6
 
@@ -78,18 +76,34 @@ def point_hit_distance(C: Array, hits: Array) -> tuple[Array, NDArray[np.int64]]
     """Distance from each candidate (..., 2) to its nearest hit, and that hit's index."""
     if len(hits) == 0:
         return np.full(C.shape[:-1], np.inf), np.zeros(C.shape[:-1], dtype=np.int64)
-    d = np.hypot(C[..., None, 0] - hits[:, 0], C[..., None, 1] - hits[:, 1])
-    idx = np.argmin(d, axis=-1)
-    return np.take_along_axis(d, idx[..., None], axis=-1)[..., 0], idx
+    flat = C.reshape(-1, 2)
+    d2 = (flat[:, None, 0] - hits[:, 0]) ** 2 + (flat[:, None, 1] - hits[:, 1]) ** 2
+    idx = np.argmin(d2, axis=1)
+    best = np.sqrt(d2[np.arange(len(flat)), idx])
+    return best.reshape(C.shape[:-1]), idx.reshape(C.shape[:-1])
 
 
 def segment_hit_distance(p: Array, C: Array, hits: Array) -> tuple[Array, NDArray[np.int64]]:
-    """Distance from each segment p -> c to its nearest hit, and that hit's index."""
+    """Distance from each segment p -> c to its nearest hit, and that hit's index.
+
+    The same as :func:`swarmpath.world.geometry.point_segment_distance` against every hit,
+    written for one shared start point (the robot): this runs for every swarm evaluation.
+    """
     if len(hits) == 0:
         return np.full(C.shape[:-1], np.inf), np.zeros(C.shape[:-1], dtype=np.int64)
-    d = point_segment_distance(hits, p, C[..., None, :])
-    idx = np.argmin(d, axis=-1)
-    return np.take_along_axis(d, idx[..., None], axis=-1)[..., 0], idx
+    flat = C.reshape(-1, 2)
+    ux, uy = flat[:, 0] - p[0], flat[:, 1] - p[1]  # (n,)
+    wx, wy = hits[:, 0] - p[0], hits[:, 1] - p[1]  # (h,)
+    ux, uy = ux[:, None], uy[:, None]
+    t = ux * wx + uy * wy
+    t /= ux * ux + uy * uy + 1e-300  # a zero-length segment has t = 0 / tiny = 0
+    np.clip(t, 0.0, 1.0, out=t)
+    dx = wx - t * ux
+    dy = wy - t * uy
+    d2 = dx * dx + dy * dy
+    idx = np.argmin(d2, axis=1)
+    best = np.sqrt(d2[np.arange(len(flat)), idx])
+    return best.reshape(C.shape[:-1]), idx.reshape(C.shape[:-1])
 
 
 def _clip(C: Array, ctx: StepContext) -> Array:
@@ -159,22 +173,30 @@ def _repair_mfb(C: Array, ctx: StepContext, rounds: int) -> tuple[Array, Array]:
     return C, np.maximum(ctx.margin - np.minimum(d_pt, d_seg), 0.0)
 
 
-def repair_grid(C: Array, ctx: StepContext, reach: int = 24, chunk: int = 4) -> Array:
+def repair_grid(C: Array, ctx: StepContext, reach: int = 24, chunk: int = 8) -> Array:
     """ICOOT section 4.1 on a grid: nearest free offset (case 1), sideways slide (case 2).
 
     Offsets 0, +1, -1, +2, -2, ... (times ``resolution``) across the line's dominant axis are
     tried nearest first, ``chunk`` sizes at a time, and only for candidates not yet resolved.
     """
+    return _repair_grid(C, ctx, reach, chunk)[0]
+
+
+def _repair_grid(C: Array, ctx: StepContext, reach: int = 24, chunk: int = 8) -> tuple[
+    Array, Array
+]:
+    """(repaired candidates, their remaining violation)."""
     hits = ctx.hits
     if len(hits) == 0:
-        return C
+        return C, np.zeros(C.shape[:-1])
     p = ctx.position
     flat = C.reshape(-1, 2)
     out = flat.copy()
     d_pt, _, d_seg, _ = _distances(flat, ctx)
-    bad = np.flatnonzero((d_pt < ctx.margin) | (d_seg < ctx.margin))
+    short = np.maximum(ctx.margin - np.minimum(d_pt, d_seg), 0.0)
+    bad = np.flatnonzero(short > 0)
     if bad.size == 0:
-        return C
+        return C, short.reshape(C.shape[:-1])
     direction = flat[bad] - p
     # slide across the line's dominant axis: x for a mostly vertical line, y otherwise
     axis = np.where(np.abs(direction[:, 1]) > np.abs(direction[:, 0]), 0, 1)
@@ -188,15 +210,18 @@ def repair_grid(C: Array, ctx: StepContext, reach: int = 24, chunk: int = 4) -> 
         offsets[np.arange(idx.size), :, axis[idx]] = steps
         trial = _clip(B[:, None, :] + offsets, ctx)
         tp, _ = point_hit_distance(trial, hits)
-        ts, _ = segment_hit_distance(p, trial, hits)
-        free = (tp >= ctx.margin) & (ts >= ctx.margin)
+        free = tp >= ctx.margin
+        # segments only for the offsets whose point is free (the costlier test)
+        ts, _ = segment_hit_distance(p, trial[free], hits)
+        free[free] = ts >= ctx.margin
         found = free.any(axis=1)
         pick = np.argmax(free, axis=1)
         out[bad[idx[found]]] = trial[found, pick[found]]
+        short[bad[idx[found]]] = 0.0
         pending[idx[found]] = False
         if not pending.any():
             break
-    return out.reshape(C.shape)
+    return out.reshape(C.shape), short.reshape(C.shape[:-1])
 
 
 def repair(C: Array, ctx: StepContext) -> Array:
@@ -220,6 +245,8 @@ def score(C: Array, ctx: StepContext) -> tuple[Array, Array]:
     """(objective to minimise, repaired candidates) for candidates C (..., 2)."""
     if ctx.repair == "mfb":
         fixed, v = _repair_mfb(C, ctx, 3)
+    elif ctx.repair == "grid":
+        fixed, v = _repair_grid(C, ctx)
     else:
         fixed = repair(C, ctx)
         v = violation(fixed, ctx)

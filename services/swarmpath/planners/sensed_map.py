@@ -26,7 +26,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
-from swarmpath.world.geometry import ObstacleSet
+from swarmpath.world.geometry import ObstacleSet, point_segment_distance
 from swarmpath.world.optimum import shortest_path
 
 Array = NDArray[np.float64]
@@ -45,15 +45,60 @@ def condense(hits: Array, position: Array, reach: float, cell: float) -> Array:
     return near[np.sort(first)]
 
 
+def _to_surface(points: Array, scan: Array, surface: float) -> tuple[Array, Array]:
+    """Distance from each point to the sensed surface of ``scan`` and the nearest point of it.
+
+    The surface is the polyline through consecutive hits of the scan (adjacent rays, in the
+    sensor's order) closer than ``surface``, plus every hit as a point.
+    """
+    dist, idx = cKDTree(scan).query(points)
+    nearest = scan[idx]
+    a, b = scan[:-1], scan[1:]
+    gap = np.hypot(*(b - a).T)
+    joined = (gap < surface) & (gap > 1e-9)
+    a, b = a[joined], b[joined]
+    if len(a) == 0:
+        return dist, nearest
+    u = b - a
+    t = np.clip(np.einsum("ij,kij->ki", u, points[:, None, :] - a[None])
+                / np.einsum("ij,ij->i", u, u), 0.0, 1.0)
+    foot = a[None] + t[..., None] * u[None]  # (n_points, n_segments, 2)
+    d = np.hypot(*np.moveaxis(points[:, None, :] - foot, -1, 0))
+    k = np.argmin(d, axis=1)
+    rows = np.arange(len(points))
+    closer = d[rows, k] < dist
+    return (np.where(closer, d[rows, k], dist),
+            np.where(closer[:, None], foot[rows, k], nearest))
+
+
 def predict(
     previous: Array, current: Array, dt: float, horizons: tuple[float, ...],
-    max_speed: float = 2.0, min_speed: float = 0.05,
+    max_speed: float = 2.0, min_speed: float = 0.05, surface: float = 0.0,
 ) -> Array:
-    """Predicted positions of the moving points of ``current`` after each horizon (s)."""
+    """Predicted positions of the moving points of ``current`` after each horizon (s).
+
+    ``surface = 0``: each point moves by its displacement from the nearest point of the previous
+    scan. ``surface > 0``: each scan's consecutive hits closer than ``surface`` are joined into
+    a polyline, the sensed surface (:func:`_to_surface`); a point moves by its displacement from
+    the previous surface, and only if the previous scan's nearest hit is as far from the current
+    surface (the surface moved, both ways). A static surface then does not move however its hits
+    slide along it as the robot drives. With the point rule, a hit that landed between two
+    previous hits (5 cm apart on an obstacle 1 m away) "moves" at 0.1-0.2 m/s, above
+    ``min_speed``, and its extrapolation puts phantom points in front of a convex obstacle; a
+    surface seen further than before, or a polygon corner cut by the previous polyline, would
+    move one way only.
+    """
     if len(previous) == 0 or len(current) == 0 or dt <= 0:
         return np.zeros((0, 2))
-    dist, idx = cKDTree(previous).query(current)
-    velocity = (current - previous[idx]) / dt
+    if surface > 0:
+        dist, nearest = _to_surface(current, previous, surface)
+        back, _ = _to_surface(previous, current, surface)
+        _, idx = cKDTree(previous).query(current)
+        dist = np.where(back[idx] >= min_speed * dt, dist, 0.0)
+    else:
+        dist, idx = cKDTree(previous).query(current)
+        nearest = previous[idx]
+    velocity = (current - nearest) / dt
     speed = dist / dt
     moving = (speed >= min_speed) & (speed <= max_speed)
     if not moving.any():
@@ -101,6 +146,81 @@ def known_obstacles(hits: Array, link: float, thickness: float = 1e-3) -> Obstac
     return ObstacleSet(np.array(circles, dtype=float).reshape(-1, 3), tuple(polygons))
 
 
+def known_path(
+    position: Array,
+    goal: Array,
+    known: ObstacleSet,
+    margin: float,
+    world: tuple[float, float, float, float],
+) -> Array | None:
+    """The shortest path (polyline, arcs sampled) to the goal in the known map; None if there is
+    none (the robot or the goal inside a known inflated obstacle, or no path in the known map)."""
+    if known.is_empty:
+        return np.array([position, goal], dtype=float)
+    try:
+        best = shortest_path(position, goal, known, margin, world=world)
+    except ValueError:
+        return None
+    if not best.exact or not math.isfinite(best.length) or len(best.points) < 2:
+        return None
+    return np.asarray(best.points, dtype=float)
+
+
+def along(pts: Array, distance: float | Array) -> Array:
+    """The point(s) ``distance`` along the polyline ``pts`` (its end beyond its length)."""
+    seg = np.hypot(*np.diff(pts, axis=0).T)
+    cum = np.concatenate([[0.0], np.cumsum(seg)])
+    s = np.clip(np.asarray(distance, dtype=float), 0.0, cum[-1])
+    return np.stack([np.interp(s, cum, pts[:, 0]), np.interp(s, cum, pts[:, 1])], axis=-1)
+
+
+def rejoin(pts: Array, position: Array, tolerance: float) -> Array | None:
+    """The rest of the polyline ``pts`` from the robot, starting at ``position``, when the robot
+    is within ``tolerance`` of it (None otherwise)."""
+    a, b = pts[:-1], pts[1:]
+    u = b - a
+    uu = np.einsum("ij,ij->i", u, u)
+    t = np.clip(np.einsum("ij,ij->i", position - a, u) / np.where(uu > 0, uu, 1.0), 0.0, 1.0)
+    foot = a + t[:, None] * u
+    d = np.hypot(*(position - foot).T)
+    k = int(np.argmin(d))
+    if d[k] > tolerance:
+        return None
+    return np.vstack([position[None, :], pts[k + 1:]])
+
+
+def path_clearance(pts: Array, hits: Array, reach: float) -> float:
+    """Least distance from the hits to the part of the polyline ``pts`` within ``reach`` (along
+    it) of its start."""
+    if len(hits) == 0 or len(pts) < 2:
+        return math.inf
+    cum = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(pts, axis=0).T))])
+    n = int(np.searchsorted(cum, reach, side="right")) + 1
+    a, b = pts[: min(n, len(pts) - 1)], pts[1 : min(n, len(pts) - 1) + 1]
+    return float(point_segment_distance(hits[:, None, :], a[None], b[None]).min())
+
+
+def shortcut(
+    pts: Array, hits: Array, margin: float, lookahead: float, samples: int = 16
+) -> Array:
+    """The farthest point within ``lookahead`` along the polyline ``pts`` (from the robot at
+    ``pts[0]``) that the robot can reach in a straight line keeping ``margin`` from every hit.
+
+    A known path bends around obstacles along arcs; aiming at a point past the bend would make
+    the robot cut the corner, aiming at the next sample would make it crawl along the arc. The
+    straight shortcut (checked against the raw sensed points, not the hulls) is the longest
+    feasible chord of the path: the robot drives the path's tangents and cuts its arcs only as
+    far as the clearance allows. The first sample (1/``samples`` of the lookahead) is returned
+    when no sample is reachable.
+    """
+    candidates = along(pts, lookahead * np.arange(1, samples + 1) / samples)
+    if len(hits) == 0:
+        return np.asarray(candidates[-1], dtype=float)
+    clear = point_segment_distance(hits[None, :, :], pts[0], candidates[:, None, :]).min(axis=1)
+    ok = np.flatnonzero(clear >= margin)
+    return np.asarray(candidates[ok[-1] if ok.size else 0], dtype=float)
+
+
 def carrot(
     position: Array,
     goal: Array,
@@ -113,17 +233,7 @@ def carrot(
     the robot or the goal inside a known inflated obstacle, or no path in the known map)."""
     if known.is_empty:
         return None
-    try:
-        best = shortest_path(position, goal, known, margin, world=world)
-    except ValueError:
+    pts = known_path(position, goal, known, margin, world)
+    if pts is None:
         return None
-    if not best.exact or not math.isfinite(best.length) or len(best.points) < 2:
-        return None
-    pts = best.points
-    seg = np.hypot(*np.diff(pts, axis=0).T)
-    along = np.concatenate([[0.0], np.cumsum(seg)])
-    if along[-1] <= lookahead:
-        return np.asarray(pts[-1], dtype=float)
-    k = int(np.searchsorted(along, lookahead, side="right")) - 1
-    frac = (lookahead - along[k]) / max(seg[k], 1e-12)
-    return np.asarray(pts[k] + frac * (pts[k + 1] - pts[k]), dtype=float)
+    return along(pts, lookahead)

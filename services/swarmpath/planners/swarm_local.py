@@ -13,13 +13,15 @@ Figure 8):
    against is ``heuristic``: ``"euclidean"`` is the papers' literal objective, distance and
    heading to the goal (eqs 3 and 5). It makes the robot slide along every obstacle it meets
    (a greedy "bug" behaviour: 4% above the exact optimum on mfb-static). ``"visibility"``
-   (default) aims instead at a carrot ``lookahead`` metres along the exact shortest path to the
-   goal in the *sensed* map (hit groups wrapped in convex hulls, unseen space free:
-   :mod:`swarmpath.planners.sensed_map`), so the robot leaves obstacles along their tangents.
-   The planner still knows only what its sensors returned;
+   (default) aims instead at a point of the exact shortest path to the goal in the *sensed* map
+   (hit groups wrapped in convex hulls, unseen space free: :mod:`swarmpath.planners.sensed_map`):
+   with ``aim = "shortcut"`` the farthest point within ``lookahead`` metres along it that is
+   reachable in a straight line with the margin, so the robot drives the path's tangents and
+   leaves obstacles along them. The planner still knows only what its sensors returned;
 3. the robot drives toward the best feasible waypoint through its kinematic model for at most
    ``replan`` seconds, then senses and decides again (receding horizon, so moving obstacles are
-   re-sensed at a fixed rate);
+   re-sensed at a fixed rate). While that waypoint stays ahead, feasible and within
+   ``hold_angle`` of the aim, later decisions keep it without running the swarm;
 4. obstacle avoidance fallback: when no feasible candidate exists, the MFB paper's gap vector
    (eq 24) picks the free gap closest to the goal direction and the robot takes a short step
    into it; with no free gap it waits, unless a (predicted) obstacle comes within the margin of
@@ -45,7 +47,7 @@ from swarmpath.planners.base import Decision, Observation, Planner, PlannerError
 
 Array = np.ndarray
 HIT_CELL = 0.05  # m: sensed points closer than this are merged
-CARROT_CLEARANCE = 0.02  # m: the known-map path keeps this much beyond the planner's margin
+CARROT_CLEARANCE = 0.01  # m: the known-map path keeps this much beyond the planner's margin
 
 
 class SwarmLocalPlanner(Planner):
@@ -61,7 +63,8 @@ class SwarmLocalPlanner(Planner):
         "step": 0.8,  # m: candidate box half-width (the sensing range)
         "w1": 0.9,
         "w2": 0.1,
-        "safety": 0.03,  # m: clearance kept beyond the robot radius (ds of eqs 19-20)
+        "safety": 0.01,  # m: clearance kept beyond the robot radius (ds of eqs 19-20)
+        "diff_drive_safety": 0.03,  # m: the same for a diff-drive robot (it turns as it drives)
         "repair": "mfb",
         "objective": "cost",
         "memory": 2.0,  # s: how long sensed points are remembered
@@ -69,11 +72,21 @@ class SwarmLocalPlanner(Planner):
         "heuristic": "visibility",  # what f1 measures the distance to (see module docstring)
         "lookahead": 1.0,  # m: carrot distance along the known shortest path
         "predict": 1.0,  # s: horizon over which moving sensed points are extrapolated (0: off)
+        "surface": 0.2,  # m: previous hits joined into a surface for motion (0: nearest point)
+        "map_cell": 0.1,  # m: hits merged on this grid before they are wrapped in hulls
+        "rejoin": 0.02,  # m: reuse the last known path while the robot is this close to it (0: off)
+        "aim": "shortcut",  # point of the known path f1 aims at: "shortcut" or "carrot"
+        "carrot_clearance": CARROT_CLEARANCE,  # m beyond the margin the known path keeps
+        "hold_angle": 3.0,  # deg: keep the last waypoint while it stays this close to the aim
+        "hold_min": 0.3,  # m: ... and at least this far ahead (0 hold_angle: always re-search)
+        "patience": 0,  # stop the swarm after this many iterations without improvement (0: off)
+        "tolerance": 1e-6,  # relative improvement that counts for ``patience``
     }
     choices: ClassVar[dict[str, tuple[str, ...]]] = {
         "repair": ("mfb", "grid", "none"),
         "objective": ("cost", "inverse"),
         "heuristic": ("visibility", "euclidean"),
+        "aim": ("shortcut", "carrot"),
     }
     #: Optimizer parameters of the preset (e.g. ICOOT's two leaders), merged under user ones.
     optimizer_params: ClassVar[dict[str, Any]] = {}
@@ -83,10 +96,12 @@ class SwarmLocalPlanner(Planner):
         for key in ("agents", "iterations"):
             if int(p[key]) < 1:
                 raise PlannerError(f"{cls.name}.{key} must be >= 1")
-        for key in ("step", "replan", "lookahead"):
+        for key in ("step", "replan", "lookahead", "map_cell"):
             if not float(p[key]) > 0:
                 raise PlannerError(f"{cls.name}.{key} must be > 0")
-        for key in ("w1", "w2", "safety", "memory", "predict"):
+        for key in ("w1", "w2", "safety", "diff_drive_safety", "memory", "predict", "surface",
+                    "carrot_clearance", "rejoin", "hold_angle", "hold_min", "patience",
+                    "tolerance"):
             if float(p[key]) < 0:
                 raise PlannerError(f"{cls.name}.{key} must be >= 0")
         try:
@@ -99,6 +114,13 @@ class SwarmLocalPlanner(Planner):
         self._streams = RunStreams([rng])
         self._memory: list[tuple[float, Array]] = []
         self._last_scan: tuple[float, Array] | None = None
+        self._held: Array | None = None  # the last swarm waypoint (see ``hold_angle``)
+        self._path: Array | None = None  # the last known path (see ``rejoin``)
+        self._moving_until = -np.inf  # motion was sensed in the last ``memory`` seconds
+        # The planner knows its own robot (not the map): a differential drive turns while it
+        # drives, so its path bulges off the straight segment it was sent along.
+        diff = scenario.robot.model == "diff-drive"
+        self._safety = float(self.p["diff_drive_safety" if diff else "safety"])
         opt_cls = get_optimizer(str(self.p["optimizer"]))
         try:
             self._opt_params = opt_cls.resolve_params(
@@ -120,28 +142,92 @@ class SwarmLocalPlanner(Planner):
         if ahead > 0 and self._last_scan is not None:
             t0, previous = self._last_scan
             steps = tuple(ahead * k / 4 for k in range(1, 5))
-            parts.append(sensed_map.predict(previous, current, obs.time - t0, steps))
+            moving = sensed_map.predict(previous, current, obs.time - t0, steps,
+                                        surface=float(self.p["surface"]))
+            if len(moving):
+                self._moving_until = obs.time + float(self.p["memory"])
+            parts.append(moving)
         self._last_scan = (obs.time, current)
         if not parts:
             return np.zeros((0, 2))
         return np.concatenate(parts)
 
     # ----------------------------------------------------------------------------- deciding
+    def _aim(self, p: Array, goal: Array, hits: Array, margin: float,
+             world: tuple[float, float, float, float]) -> Array:
+        """What f1 and f2 measure against (module docstring, step 2)."""
+        if self.p["heuristic"] == "euclidean":
+            return goal
+        lookahead = float(self.p["lookahead"])
+        clearance = margin + float(self.p["carrot_clearance"])
+        path = np.array([p, goal])
+        # Nothing sensed near the straight line to the goal: that line is the known shortest path
+        # (the convex hulls are not needed to see it).
+        if len(hits) and local.segment_hit_distance(p, goal[None, :], hits)[0][0] < clearance:
+            path = self._known_path(p, goal, hits, margin, clearance, world)
+        if self.p["aim"] == "carrot":
+            return sensed_map.along(path, lookahead)
+        return sensed_map.shortcut(path, hits, margin, lookahead)
+
+    def _known_path(self, p: Array, goal: Array, hits: Array, margin: float, clearance: float,
+                    world: tuple[float, float, float, float]) -> Array:
+        """Shortest path to the goal in the sensed map (straight line if there is none).
+
+        Planned again only when needed: while the robot is within ``rejoin`` of the last known
+        path, the goal has not moved, and that path still keeps ``margin`` from every sensed
+        point within the sensing reach, the rest of it is still the shortest known path (static
+        obstacles only add to the known map), so it is reused.
+        """
+        cached = self._path
+        if cached is not None and np.allclose(cached[-1], goal):
+            rest = sensed_map.rejoin(cached, p, float(self.p["rejoin"]))
+            reach = 2 * (float(self.p["step"]) + 2 * margin)
+            if rest is not None and sensed_map.path_clearance(rest, hits, reach) >= margin:
+                return rest
+        coarse = sensed_map.condense(hits, p, np.inf, float(self.p["map_cell"]))
+        known = sensed_map.known_obstacles(coarse, link=2 * margin)
+        # The hulls grow as more of an obstacle is seen, so the robot may already be closer to
+        # one than ``clearance``: plan with what it has (the candidates still need margin).
+        room = float(known.point_clearance(p[None, :])[0])
+        path = sensed_map.known_path(p, goal, known, min(clearance, room - 1e-6), world)
+        if path is None:
+            self._path = None
+            return np.array([p, goal])
+        self._path = path if float(self.p["rejoin"]) > 0 else None
+        return path
+
+    def _hold(self, p: Array, aim: Array, ctx: local.StepContext) -> bool:
+        """Keep driving to the last swarm waypoint: still ahead, still feasible in the current
+        sensed map, and still within ``hold_angle`` of the direction to the aim."""
+        held = self._held
+        if held is None or float(self.p["hold_angle"]) <= 0:
+            return False
+        to_held, to_aim = held - p, aim - p
+        if np.hypot(*to_held) < float(self.p["hold_min"]) or np.hypot(*to_aim) < 1e-9:
+            return False
+        turn = abs(np.arctan2(to_held[0] * to_aim[1] - to_held[1] * to_aim[0],
+                              to_held @ to_aim))
+        if np.degrees(turn) > float(self.p["hold_angle"]):
+            return False
+        return bool(local.violation(held[None, :], ctx)[0] == 0)
+
     def decide(self, obs: Observation) -> Decision:
         p = np.array([obs.pose.x, obs.pose.y])
         goal = np.asarray(obs.goal, dtype=float)
         w, h = obs.world_size
         reach = float(self.p["step"])
-        margin = obs.robot_radius + float(self.p["safety"])
+        margin = obs.robot_radius + self._safety
         # Only hits that can touch a candidate segment matter; one per 5 cm cell is plenty.
         hits = sensed_map.condense(self._known_hits(obs), p, reach + 2 * margin, HIT_CELL)
-        aim = goal
-        if self.p["heuristic"] == "visibility" and len(hits):
-            known = sensed_map.known_obstacles(hits, link=2 * margin)
-            target = sensed_map.carrot(p, goal, known, margin + CARROT_CLEARANCE,
-                                       (0.0, 0.0, float(w), float(h)), float(self.p["lookahead"]))
-            if target is not None:
-                aim = target
+        # Newly seen parts of a static obstacle can put the robot inside its own safety
+        # distance; then moves that keep at least the clearance it has are feasible (never
+        # closer than now), instead of none. Not when something moved in the last ``memory``
+        # seconds (the clearance to it shrinks on its own: the gap-vector fallback steps away),
+        # nor within the body radius.
+        room = float(local.point_hit_distance(p[None, :], hits)[0][0])
+        if obs.time > self._moving_until and obs.robot_radius < room < margin:
+            margin = room - 1e-9
+        aim = self._aim(p, goal, hits, margin, (0.0, 0.0, float(w), float(h)))
         to_goal = float(np.hypot(*(goal - p)))
         lower = np.maximum(p - reach, [0.0, 0.0])
         upper = np.minimum(p + reach, [w, h])
@@ -154,7 +240,7 @@ class SwarmLocalPlanner(Planner):
             w2=float(self.p["w2"]),
             objective=str(self.p["objective"]),
             repair=str(self.p["repair"]),
-            safety=float(self.p["safety"]),
+            safety=self._safety,
             lower=lower,
             upper=upper,
         )
@@ -164,23 +250,35 @@ class SwarmLocalPlanner(Planner):
             cost, fixed = local.score(goal[None, :], ctx)
             if cost[0] < local.PENALTY and np.allclose(fixed[0], goal):
                 # drive onto the goal (the papers' runs end ~1 mm from it), re-sensing as usual
+                self._held = None
                 return Decision(goal, 0, duration, finish=True)
+        if self._hold(p, aim, ctx):
+            assert self._held is not None
+            return Decision(self._held.copy(), 0, duration)
 
         def objective(X: Array, streams: RunStreams) -> Array:
             cost, _ = local.score(X[0], ctx)
             return cost[None, :]
 
         problem = Problem(objective, lower[None, :], upper[None, :])
-        iterations = int(self.p["iterations"])
-        opt = create(str(self.p["optimizer"]), problem, int(self.p["agents"]), iterations,
-                     self._streams, self._opt_params)
+        opt = create(str(self.p["optimizer"]), problem, int(self.p["agents"]),
+                     int(self.p["iterations"]), self._streams, self._opt_params)
         opt.initialize()
+        patience, tol = int(self.p["patience"]), float(self.p["tolerance"])
+        best, stalled = float(opt.best_fitness[0]), 0
         while not opt.done:
             opt.step()
-        best_cost = float(opt.best_fitness[0])
-        if best_cost < local.PENALTY:
+            now = float(opt.best_fitness[0])
+            stalled = stalled + 1 if best - now <= tol * max(1.0, abs(best)) else 0
+            best = now
+            if patience and stalled >= patience and best < local.PENALTY:
+                break  # converged: the last ``patience`` iterations did not improve the best
+        iterations = opt.t
+        if best < local.PENALTY:
             target = local.repair(opt.best_position[0][None, :], ctx)[0]
+            self._held = target
             return Decision(target, iterations, duration)
+        self._held = None
         return self._avoid(obs, ctx, iterations, duration)
 
     def _avoid(
@@ -244,9 +342,11 @@ _preset("HPO", "HPO", "HPO in the IHPO paper's planning framework", IHPO_PAPER, 
 # MFB paper Table 1: 8 bats, 8 iterations, sensing range 0.8 m; fitness 1/(f + eps) (eq 8).
 _preset("MFB", "MFB", "Modified Frequency Bat local planner", MFB_PAPER, "mfb-12",
         {"agents": 8, "iterations": 8, "step": 0.8, "repair": "mfb", "objective": "inverse"})
-# Table 2: 5 PSO particles tuning 5 bats, 5 iterations.
+# Table 2: 5 PSO particles, each tuning its own 5 bats ("Population size PSO 5, Population size
+# MFB 5": split per_particle, 25 bats), 5 iterations.
 _preset("HPSO-MFB", "HPSO-MFB", "Hybrid PSO-MFB local planner", MFB_PAPER, "mfb-12",
-        {"agents": 5, "iterations": 5, "step": 0.8, "repair": "mfb", "objective": "inverse"})
+        {"agents": 5, "iterations": 5, "step": 0.8, "repair": "mfb", "objective": "inverse"},
+        {"split": "per_particle"})
 _preset("PSO", "PSO", "PSO in the seeds' local planning framework", MFB_PAPER, "mfb-12",
         {"agents": 20, "iterations": 20})
 _preset("GWO", "GWO", "GWO in the seeds' local planning framework", MFB_PAPER, "mfb-12",

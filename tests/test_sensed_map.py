@@ -1,0 +1,58 @@
+"""What a local planner makes of its sensor hits: motion, the known path, its shortcut."""
+
+import numpy as np
+import pytest
+
+from swarmpath.planners import sensed_map
+from swarmpath.world.geometry import ObstacleSet, point_segment_distance
+
+
+def arc(centre, radius, a0, a1, n):
+    t = np.linspace(a0, a1, n)
+    return np.stack([centre[0] + radius * np.cos(t), centre[1] + radius * np.sin(t)], axis=1)
+
+
+def test_a_static_surface_does_not_move_however_its_hits_slide():
+    previous = arc((2.0, 0.0), 0.5, 2.4, 3.9, 16)
+    current = arc((2.0, 0.0), 0.5, 2.45, 4.0, 16)  # the same circle, other rays, more of it seen
+    # the point rule sees hits between previous hits "moving" and predicts phantom points
+    assert len(sensed_map.predict(previous, current, 0.25, (1.0,))) > 0
+    assert len(sensed_map.predict(previous, current, 0.25, (1.0,), surface=0.2)) == 0
+
+
+def test_an_approaching_surface_is_extrapolated_along_its_motion():
+    previous = arc((2.0, 0.0), 0.3, 2.6, 3.7, 12)
+    current = arc((1.9, 0.0), 0.3, 2.6, 3.7, 12)  # 0.1 m toward the robot in 0.25 s
+    ahead = sensed_map.predict(previous, current, 0.25, (1.0,), surface=0.2)
+    assert len(ahead) > 0
+    # 0.4 m/s for 1 s: the predicted points are ~0.4 m closer to the robot at the origin
+    assert np.min(np.hypot(*ahead.T)) == pytest.approx(np.min(np.hypot(*current.T)) - 0.4,
+                                                      abs=0.02)
+
+
+def test_shortcut_is_the_farthest_reachable_point_of_the_path():
+    hits = arc((1.2, 0.9), 0.4, -np.pi, np.pi, 40)
+    known = ObstacleSet(np.array([[1.2, 0.9, 0.4]]), ())
+    path = sensed_map.known_path(np.array([0.0, 0.0]), np.array([2.5, 2.5]), known, 0.52,
+                                 (-1.0, -1.0, 4.0, 4.0))
+    assert path is not None and len(path) > 2
+    aim = sensed_map.shortcut(path, hits, 0.5, 1.5)
+    chord = point_segment_distance(hits, path[0], aim).min()
+    assert chord >= 0.5  # reachable in a straight line
+    # and no farther sample of the path is
+    far = sensed_map.along(path, np.linspace(0.0, 1.5, 17)[1:])
+    reach = [point_segment_distance(hits, path[0], q).min() >= 0.5 for q in far]
+    k = int(np.flatnonzero(np.all(np.isclose(far, aim), axis=1))[0])
+    assert reach[k] and not any(reach[k + 1:])
+    # nothing sensed: the lookahead point itself
+    assert np.allclose(sensed_map.shortcut(path, np.zeros((0, 2)), 0.5, 1.5),
+                       sensed_map.along(path, 1.5))
+
+
+def test_rejoin_returns_the_rest_of_the_path_from_the_robot():
+    path = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]])
+    rest = sensed_map.rejoin(path, np.array([0.5, 0.01]), 0.02)
+    assert rest is not None and np.allclose(rest, [[0.5, 0.01], [1.0, 0.0], [1.0, 1.0]])
+    assert sensed_map.rejoin(path, np.array([0.5, 0.1]), 0.02) is None
+    assert sensed_map.path_clearance(rest, np.array([[0.7, -0.3]]), 5.0) == pytest.approx(0.306,
+                                                                                          abs=0.01)
