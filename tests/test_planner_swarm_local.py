@@ -49,10 +49,18 @@ def test_hpso_mfb_reaches_the_goal_within_3_percent_without_touching():
     assert out.length <= 1.03 * 14.483
 
 
-@pytest.mark.parametrize(("scenario", "safety"), [("mfb-static", 0.01), ("icoot-map1", 0.03)])
-def test_safety_follows_the_robot_model(scenario, safety):
+@pytest.mark.parametrize(("scenario", "safety"),
+                         [("mfb-static", 0.01), ("icoot-map1", 0.05), ("rfogwo-map1", 0.03)])
+def test_safety_follows_the_robot_and_its_time_step(scenario, safety):
     planner = Episode(get_map(scenario), "MFB", seed=1).planner
-    assert planner._safety == safety  # omni: 1 cm; diff-drive (turns as it drives): 3 cm
+    # omni at 5 cm per step: 1 cm; diff-drive (turns as it drives): 5 cm; 1 m per step: 3 cm
+    assert planner._safety(0.0) == safety
+
+
+def test_a_sensed_corner_raises_the_safety_for_a_while():
+    planner = Episode(get_map("mfb-static"), "MFB", seed=1).planner
+    planner._corner_until = 4.0  # as if a corner had been sensed at t = 2 s (memory 2 s)
+    assert planner._safety(3.9) == 0.03 and planner._safety(4.1) == 0.01
 
 
 def test_hpso_mfb_preset_runs_five_bats_per_particle():

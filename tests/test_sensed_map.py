@@ -56,3 +56,13 @@ def test_rejoin_returns_the_rest_of_the_path_from_the_robot():
     assert sensed_map.rejoin(path, np.array([0.5, 0.1]), 0.02) is None
     assert sensed_map.path_clearance(rest, np.array([[0.7, -0.3]]), 5.0) == pytest.approx(0.306,
                                                                                           abs=0.01)
+
+
+def test_corners_are_told_from_circles():
+    circle = arc((2.0, 0.0), 0.5, 2.4, 3.9, 16)  # 16 hits on a 0.5 m circle
+    assert not sensed_map.has_corner(circle, 0.2, 30.0)
+    x = np.linspace(0.0, 0.5, 6)
+    corner = np.vstack([np.stack([x, np.full(6, 1.0)], 1), np.stack([np.full(5, 0.5),
+                                                                      1.0 - x[1:]], 1)])
+    assert sensed_map.has_corner(corner, 0.2, 30.0)
+    assert not sensed_map.has_corner(corner, 0.05, 30.0)  # pieces longer than surface: unjoined

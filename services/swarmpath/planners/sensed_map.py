@@ -107,6 +107,24 @@ def predict(
     return np.concatenate([base + v * h for h in horizons])
 
 
+def has_corner(scan: Array, surface: float, angle_deg: float) -> bool:
+    """Whether the sensed surface of one scan (consecutive hits closer than ``surface`` joined)
+    turns by more than ``angle_deg`` between two successive pieces: a corner, whose tip may lie
+    between two rays and stick out of the sensed points by centimetres (on a circle the
+    polyline turns by ~10 degrees per piece and stays within millimetres of the surface)."""
+    if len(scan) < 3:
+        return False
+    d = np.diff(scan, axis=0)
+    n = np.hypot(*d.T)
+    ok = (n < surface) & (n > 1e-9)
+    both = ok[:-1] & ok[1:]
+    if not both.any():
+        return False
+    a, b = d[:-1][both], d[1:][both]
+    cos = np.einsum("ij,ij->i", a, b) / (n[:-1][both] * n[1:][both])
+    return bool(np.any(cos < math.cos(math.radians(angle_deg))))
+
+
 def _hull(points: Array, thickness: float) -> Array | None:
     """Convex hull vertices of a hit group; None for a single point."""
     if len(points) == 1:

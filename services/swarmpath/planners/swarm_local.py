@@ -64,7 +64,9 @@ class SwarmLocalPlanner(Planner):
         "w1": 0.9,
         "w2": 0.1,
         "safety": 0.01,  # m: clearance kept beyond the robot radius (ds of eqs 19-20)
-        "diff_drive_safety": 0.03,  # m: the same for a diff-drive robot (it turns as it drives)
+        "corner_safety": 0.03,  # m: instead, near a sensed corner or with coarse time steps
+        "corner_angle": 30.0,  # deg: a sensed surface turning more than this is a corner
+        "diff_drive_safety": 0.05,  # m: always, for a diff-drive robot (it turns as it drives)
         "repair": "mfb",
         "objective": "cost",
         "memory": 2.0,  # s: how long sensed points are remembered
@@ -99,9 +101,9 @@ class SwarmLocalPlanner(Planner):
         for key in ("step", "replan", "lookahead", "map_cell"):
             if not float(p[key]) > 0:
                 raise PlannerError(f"{cls.name}.{key} must be > 0")
-        for key in ("w1", "w2", "safety", "diff_drive_safety", "memory", "predict", "surface",
-                    "carrot_clearance", "rejoin", "hold_angle", "hold_min", "patience",
-                    "tolerance"):
+        for key in ("w1", "w2", "safety", "corner_safety", "corner_angle", "diff_drive_safety",
+                    "memory", "predict", "surface", "carrot_clearance", "rejoin", "hold_angle",
+                    "hold_min", "patience", "tolerance"):
             if float(p[key]) < 0:
                 raise PlannerError(f"{cls.name}.{key} must be >= 0")
         try:
@@ -119,8 +121,12 @@ class SwarmLocalPlanner(Planner):
         self._moving_until = -np.inf  # motion was sensed in the last ``memory`` seconds
         # The planner knows its own robot (not the map): a differential drive turns while it
         # drives, so its path bulges off the straight segment it was sent along.
-        diff = scenario.robot.model == "diff-drive"
-        self._safety = float(self.p["diff_drive_safety" if diff else "safety"])
+        self._diff_drive = scenario.robot.model == "diff-drive"
+        self._corner_until = -np.inf  # a corner was sensed in the last ``memory`` seconds
+        # More than 5 cm per simulated step (the rfogwo maps: 1 m): the robot's motion between
+        # two commands is too coarse for a 1 cm clearance.
+        robot = scenario.robot
+        self._coarse = scenario.time_step * robot.linear_speed > 0.05 + 1e-9
         opt_cls = get_optimizer(str(self.p["optimizer"]))
         try:
             self._opt_params = opt_cls.resolve_params(
@@ -148,9 +154,22 @@ class SwarmLocalPlanner(Planner):
                 self._moving_until = obs.time + float(self.p["memory"])
             parts.append(moving)
         self._last_scan = (obs.time, current)
+        if sensed_map.has_corner(current, float(self.p["surface"]) or 0.2,
+                                 float(self.p["corner_angle"])):
+            self._corner_until = obs.time + float(self.p["memory"])
         if not parts:
             return np.zeros((0, 2))
         return np.concatenate(parts)
+
+    def _safety(self, time: float) -> float:
+        """ds: the clearance kept beyond the robot radius. Sensed points sample a surface every
+        few centimetres: a circle's polyline stays within millimetres of it, a corner's tip can
+        lie between two rays, so 1 cm is kept only while no corner was sensed recently, and
+        only when the robot moves at most 5 cm per simulated step."""
+        if self._diff_drive:
+            return float(self.p["diff_drive_safety"])
+        coarse = self._coarse or time <= self._corner_until
+        return float(self.p["corner_safety" if coarse else "safety"])
 
     # ----------------------------------------------------------------------------- deciding
     def _aim(self, p: Array, goal: Array, hits: Array, margin: float,
@@ -216,9 +235,10 @@ class SwarmLocalPlanner(Planner):
         goal = np.asarray(obs.goal, dtype=float)
         w, h = obs.world_size
         reach = float(self.p["step"])
-        margin = obs.robot_radius + self._safety
+        known_hits = self._known_hits(obs)  # first: this scan may show a corner
+        margin = obs.robot_radius + self._safety(obs.time)
         # Only hits that can touch a candidate segment matter; one per 5 cm cell is plenty.
-        hits = sensed_map.condense(self._known_hits(obs), p, reach + 2 * margin, HIT_CELL)
+        hits = sensed_map.condense(known_hits, p, reach + 2 * margin, HIT_CELL)
         # Newly seen parts of a static obstacle can put the robot inside its own safety
         # distance; then moves that keep at least the clearance it has are feasible (never
         # closer than now), instead of none. Not when something moved in the last ``memory``
@@ -240,7 +260,7 @@ class SwarmLocalPlanner(Planner):
             w2=float(self.p["w2"]),
             objective=str(self.p["objective"]),
             repair=str(self.p["repair"]),
-            safety=self._safety,
+            safety=self._safety(obs.time),
             lower=lower,
             upper=upper,
         )
