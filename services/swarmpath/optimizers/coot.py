@@ -103,8 +103,8 @@ def chain_sweep(Y: Array, old: Array, chain: NDArray[np.bool_]) -> Array:
     if flat.size == 0:
         return Y
     count = np.cumsum(chain, axis=1)
-    depth = count - np.maximum.accumulate(np.where(chain, 0, count), axis=1)
-    level = depth.ravel()[flat]
+    depth: np.ndarray = count - np.maximum.accumulate(np.where(chain, 0, count), axis=1)
+    level: np.ndarray = depth.ravel()[flat]
     rows = Y.view()
     rows.shape = (R * n, d)  # a view (raises if Y is not contiguous)
     before = old.reshape(R * n, d)
