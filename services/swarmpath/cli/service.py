@@ -184,13 +184,21 @@ def worker(
     grace: Annotated[
         float, typer.Option("--grace", help="On SIGTERM, let running leases finish this long.")
     ] = 10.0,
+    max_leases: Annotated[
+        int, typer.Option("--max-leases",
+                          help="Leases per pull: small cells come bundled up to this many.")
+    ] = 32,
+    prefetch: Annotated[
+        int, typer.Option("--prefetch",
+                          help="Bundles pulled ahead of free slots (0: pull only when idle).")
+    ] = 1,
     exit_with_parent: Annotated[int | None, typer.Option(hidden=True)] = None,
     shm: ShmOpt = False,
     zenoh_config: ZConfOpt = None,
     log_level: LogOpt = "info",
 ) -> None:
     """Run a worker: pull runs from the coordinator, execute them, report the results."""
-    from swarmpath.service.protocol import ID_PATTERN, Keys
+    from swarmpath.service.protocol import ID_PATTERN, MAX_BUNDLE_LEASES, Keys
     from swarmpath.service.worker import WorkerSettings, run_worker
 
     endpoints = _endpoints(connect, "--connect", DEFAULT_ZENOH)
@@ -207,11 +215,15 @@ def worker(
         raise InputError("--password" if user else "--user", "user and password go together")
     if grace < 0:
         raise InputError("--grace", "must be >= 0")
+    if not 1 <= max_leases <= MAX_BUNDLE_LEASES:
+        raise InputError("--max-leases", f"{max_leases} is not in [1, {MAX_BUNDLE_LEASES}]")
+    if not 0 <= prefetch <= 16:
+        raise InputError("--prefetch", f"{prefetch} is not in [0, 16]")
     settings = WorkerSettings(
         connect=endpoints, prefix=prefix, slots=slots, worker_id=worker_id,
         executor="thread" if threads else "process", user=user, password=password, shm=shm,
         zenoh_extra=_extra(zenoh_config, "--zenoh-config"), grace_seconds=grace,
-        exit_with_parent=exit_with_parent,
+        exit_with_parent=exit_with_parent, max_leases=max_leases, prefetch=prefetch,
     )
     _logging(log_level)
     raise typer.Exit(run_worker(settings))
