@@ -12,6 +12,7 @@ import contextlib
 import io
 import json
 import os
+import shutil
 import signal
 import socket
 import subprocess
@@ -27,6 +28,9 @@ import pytest
 from mcap.reader import make_reader
 
 from swarmpath.optimizers import minimize
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_mcap_foxglove_reader import accepted, check_common, topics
 
 PY = sys.executable
 ROOT = Path(__file__).resolve().parents[1]
@@ -203,7 +207,7 @@ def test_benchmark_results_equal_direct_minimize(service):
     assert {r["worker"] for r in runs} <= {"w1", "w2"}
 
 
-def test_mcap_reads_back_with_one_result_per_run(service):
+def test_mcap_reads_back_with_one_result_per_run(service, tmp_path):
     job = bench_job(service)
     service.wait_done(job, 60)
     r = service.get(f"/jobs/{job}/mcap")
@@ -217,6 +221,19 @@ def test_mcap_reads_back_with_one_result_per_run(service):
     meta = {m.name: m.metadata for m in reader.iter_metadata()}
     assert json.loads(meta["swarmpath.job"]["spec"])["seed"] == 11
     assert meta["swarmpath.summary"]["state"] == "done"
+    passes_foxglove_reader(r.content, tmp_path, {"/results": 40, "/curves": 40})
+
+
+def passes_foxglove_reader(data: bytes, tmp_path: Path, counts: dict[str, int]) -> None:
+    """The served file also passes @mcap/core (when Node.js is here; its own tests need it)."""
+    if shutil.which("node") is None:
+        return
+    path = tmp_path / "served.mcap"
+    path.write_bytes(data)
+    report = accepted(path)
+    check_common(report)
+    by_topic = topics(report)
+    assert {t: by_topic[t]["messages"] for t in counts} == counts
 
 
 def test_cli_submit_wait_and_download(service, tmp_path):
@@ -339,7 +356,7 @@ def test_cancel_a_running_job(service):
     assert service.status(job)["state"] == "cancelled"
 
 
-def test_map_job(service):
+def test_map_job(service, tmp_path):
     from swarmpath.planners import Episode
     from swarmpath.world.presets import get_map
 
@@ -362,6 +379,7 @@ def test_map_job(service):
     reader = make_reader(io.BytesIO(r.content))
     schemas = {s.name for s in reader.get_summary().schemas.values()}
     assert {"foxglove.SceneUpdate", "foxglove.PosesInFrame", "foxglove.Grid"} <= schemas
+    passes_foxglove_reader(r.content, tmp_path, {"/results": 4})
     check_complete(service, job, 4)
 
 
