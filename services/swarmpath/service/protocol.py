@@ -22,7 +22,7 @@ import importlib
 import json
 import math
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Annotated, Any, Literal, TypeVar
 
 from pydantic import (
@@ -203,22 +203,30 @@ class BenchmarkJobSpec(Model):
     def _known_params(
         cls, v: dict[str, dict[str, ParamValue]], info: ValidationInfo
     ) -> dict[str, dict[str, ParamValue]]:
-        from swarmpath.optimizers import ParameterError, get_optimizer
+        from swarmpath.optimizers import get_optimizer
 
-        algorithms = info.data.get("algorithms")
-        if algorithms is None:
-            return v
-        for name, params in v.items():
-            if name not in algorithms:
-                raise ValueError(
-                    f"params for {name!r}, which is not one of the job's algorithms "
-                    f"({', '.join(algorithms)})"
-                )
-            try:
-                get_optimizer(name).resolve_params(params)
-            except ParameterError as exc:
-                raise ValueError(str(exc)) from None
+        return _params_of_members(
+            v, info.data.get("algorithms"), "algorithms",
+            lambda name, params: get_optimizer(name).resolve_params(params),
+        )
+
+
+def _params_of_members(
+    v: dict[str, Any], members: list[str] | None, what: str, resolve: Callable[[str, Any], Any]
+) -> dict[str, Any]:
+    """Per-member parameters: only for the job's own members, each accepted by its resolver."""
+    if members is None:  # the member list itself failed validation: that error is reported
         return v
+    for name, params in v.items():
+        if name not in members:
+            raise ValueError(
+                f"params for {name!r}, which is not one of the job's {what} ({', '.join(members)})"
+            )
+        try:
+            resolve(name, params)
+        except (ValueError, TypeError, KeyError) as exc:
+            raise ValueError(str(exc)) from None
+    return v
 
 
 MapEntry = str | dict[str, Any]
@@ -284,24 +292,13 @@ class MapJobSpec(Model):
     def _known_params(
         cls, v: dict[str, dict[str, Any]], info: ValidationInfo
     ) -> dict[str, dict[str, Any]]:
-        planners = info.data.get("planners")
-        if planners is None:
-            return v
-        for name, params in v.items():
-            if name not in planners:
-                raise ValueError(
-                    f"params for {name!r}, which is not one of the job's planners "
-                    f"({', '.join(planners)})"
-                )
-            registry = _planner_registry()
-            getter = getattr(registry, "get_planner", None)
-            resolve = getattr(getter(name), "resolve_params", None) if getter else None
-            if resolve is not None:
-                try:
-                    resolve(params)
-                except (ValueError, TypeError, KeyError) as exc:
-                    raise ValueError(str(exc)) from None
-        return v
+        def resolve(name: str, params: Any) -> None:
+            getter = getattr(_planner_registry(), "get_planner", None)
+            resolver = getattr(getter(name), "resolve_params", None) if getter else None
+            if resolver is not None:
+                resolver(params)
+
+        return _params_of_members(v, info.data.get("planners"), "planners", resolve)
 
 
 JobSpec = Annotated[BenchmarkJobSpec | MapJobSpec, Field(discriminator="kind")]
