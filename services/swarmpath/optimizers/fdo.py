@@ -112,6 +112,19 @@ class FDO(Optimizer):
         u *= _LEVY_SCALE
         return u
 
+    def _levy_pair(self, m: int) -> tuple[Array, Array]:
+        """Levy steps L (R, m, d) as ``_levy``, and S = |L| sign(v) from the same draw.
+
+        sign(u), sign(v) and |L| are independent: whoever uses only sign(L) of the first may use
+        the second as an independent Levy step.
+        """
+        u, v = self.rng.normal_parts(2, m, self.d)
+        w = np.multiply(v, v)
+        np.cbrt(w, out=w)
+        np.divide(u, w, out=u)
+        u *= _LEVY_SCALE
+        return u, np.copysign(u, v, out=v)
+
     def _bound(self, C: Array) -> Array:
         """Apply the bound rule to candidates C (R, N, d) in place and return them."""
         if self.p["bound"] == "author":
@@ -138,7 +151,7 @@ class FDO(Optimizer):
         return fw, infinite
 
     def _iterate(self) -> None:
-        R, N, d = self.R, self.N, self.d
+        R, N = self.R, self.N
         X, F = self.X, self.F
         rows = np.arange(R)
         b = np.argmin(F, axis=1)
@@ -151,28 +164,32 @@ class FDO(Optimizer):
         any_special = bool(special.any())
         fw3 = fw[:, :, None]
 
-        # Random numbers, fixed shapes: the trial-1 Levy steps L, uniform signs for trial 3 and
-        # one Levy row per run for the trial 3 of special bees. A bee in the general branch uses
-        # only sign(L) in trial 1 and nothing of L in trial 2, and |L| is independent of sign(L)
-        # (symmetric law), so its trial-3 step sign' |L| with a fresh sign' is an independent Levy
-        # step: one (N, d) Levy draw per iteration instead of two.
-        L = self._levy(N)
+        # Random numbers, fixed shapes: one Levy pair draw (u, v) per bee and component and one
+        # Levy row per run for the trial 3 of special bees. L = c u / |v|^(2/3): trial 1 of a bee
+        # in the general branch uses only sign(L) = sign(u); its trial-3 step is |L| sign(v).
+        # sign(u), sign(v) and (|u|, |v|) are independent (u, v symmetric), so that step is an
+        # exact Levy step independent of trial 1, without a second Levy or a uniform draw.
+        L, S3 = self._levy_pair(N)
         row = self._levy(1)  # (R, 1, d)
-        U = self.rng.random(N, d)
 
         # ---- trial 1: x + pace
         dist = np.empty_like(X)
         np.copyto(dist, xb)  # contiguous operands: faster than broadcasting xb in numpy 1.26
         dist -= X
-        pace = np.copysign(1.0, L)  # sign(r): the code's "if r < 0: pace = -pace"
-        pace *= fw3
-        pace *= dist
         if any_special:  # few bees: index them instead of computing whole arrays
             w = np.nonzero(walk)
-            pace[w] = X[w] * L[w]
+            special_pace = [(w, X[w] * L[w])]
             if plain.any():
                 q = np.nonzero(plain)
-                pace[q] = dist[q] * L[q]
+                special_pace.append((q, dist[q] * L[q]))
+        fd = dist
+        fd *= fw3  # (x* - x) fw, shared by trials 1 and 2
+        # (x* - x) fw sign(r) has the law of |(x* - x) fw| sign(r): sign(r) is a fair coin
+        # independent of everything else, so copysign gives the pace in one pass
+        pace = np.copysign(fd, L)
+        if any_special:
+            for i, value in special_pace:
+                pace[i] = value
         cand1 = self._bound(X + pace)
         F1 = self.evaluate(cand1)
         acc1 = F1 < F
@@ -180,13 +197,11 @@ class FDO(Optimizer):
 
         # ---- trial 2: x + (x* - x) fw + previous pace (bees that have moved before)
         tried2 = ~acc1 & self.has_pace
-        cand2 = dist
-        cand2 *= fw3
+        cand2 = fd
         cand2 += X
         cand2 += self.pace
         # ---- trial 3: x + x r with a fresh Levy r per component
-        U -= 0.5
-        cand3 = np.copysign(L, U, out=L)  # |L| with a fresh random sign
+        cand3 = S3
         if any_special:
             sp = np.nonzero(special)
             cand3[sp] = row[sp[0], 0]
