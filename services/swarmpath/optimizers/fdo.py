@@ -141,13 +141,19 @@ class FDO(Optimizer):
         fbc = fb[:, None]
         with np.errstate(divide="ignore", invalid="ignore"):
             fw = fbc / F
-        infinite = (F == 0) & (fbc != 0)
-        fw -= float(self.p["weight_factor"])
+        wf = float(self.p["weight_factor"])
+        if wf:
+            fw -= wf
         if self.p["weight_rule"] == "threshold":
-            fw[fbc < 0.05 * F] = 0.2
-        fw[~np.isfinite(fw)] = 0.0
-        fw[np.broadcast_to(fbc == 0, fw.shape)] = 0.0
-        fw[infinite] = 1.0
+            np.putmask(fw, fbc < 0.05 * F, 0.2)
+        # putmask with ufunc-broadcast masks: boolean setitem with broadcast_to costs more
+        zero = np.isfinite(fw)
+        np.logical_not(zero, out=zero)
+        zero |= fbc == 0
+        np.putmask(fw, zero, 0.0)
+        infinite = F == 0
+        infinite &= fbc != 0
+        np.putmask(fw, infinite, 1.0)
         return fw, infinite
 
     def _iterate(self) -> None:
