@@ -35,11 +35,14 @@ Decisions of the vectorized port (details and evidence in docs/algorithms.md, FD
   pace = (x* - x) r, the code's fw = 0 branch). When f(x_i) = 0 but f(x*) != 0 (possible only
   with negative objective values) the ratio is infinite: we use the pace x r, as the author's
   Java code does for an infinite pace, and fw = 1 in trial 2. Other non-finite ratios give 0.
-* The trial-3 Levy step of a bee in the general branch is |L| times a fresh random sign, L being
-  its trial-1 step: trials 1 and 2 used only sign(L), and |L| is independent of sign(L), so this
-  is an exact, independent Levy step for half the cost. Bees of the fw = 1 / fw = 0 branches
-  used |L| already; they take their trial-3 step from one extra Levy row per run (shared only
-  if several such bees reach trial 3 in the same iteration: ties with the best, or f(x*) = 0).
+* The trial-3 Levy step of a bee in the general branch is |L| sign(v), L = 0.01 sigma u / |v|^(2/3)
+  being its trial-1 step: trials 1 and 2 used only sign(L) = sign(u), and sign(u), sign(v), |L|
+  are independent (u, v symmetric), so this is an exact, independent Levy step for half the cost
+  and without a uniform draw. Bees of the fw = 1 / fw = 0 branches used |L| already; they take
+  their trial-3 step from one extra Levy row per run (shared only if several such bees reach
+  trial 3 in the same iteration: ties with the best, or f(x*) = 0).
+* The general-branch pace (x* - x) fw sign(r) is computed as copysign((x* - x) fw, r), i.e.
+  |(x* - x) fw| sign(r): the same law (sign(r) is a fair coin independent of everything else).
 
 Bounds: ``bound = "clip"`` (default) clips every trial point to the box. ``bound = "author"`` is
 the author's rule: a component above ub becomes ub L, below lb becomes lb L, with L a fresh
