@@ -66,3 +66,19 @@ def test_corners_are_told_from_circles():
                                                                       1.0 - x[1:]], 1)])
     assert sensed_map.has_corner(corner, 0.2, 30.0)
     assert not sensed_map.has_corner(corner, 0.05, 30.0)  # pieces longer than surface: unjoined
+
+
+def test_surface_points_sample_every_static_surface_densely():
+    square = np.array([[4.0, 4.0], [6.0, 4.0], [6.0, 5.0], [4.0, 5.0]])
+    obstacles = ObstacleSet(np.array([[2.0, 2.0, 0.5], [8.0, 7.0, 0.3]]), (square,))
+    pts = sensed_map.surface_points(obstacles, 0.05)
+    assert np.abs(obstacles.point_clearance(pts)).max() < 1e-9  # on a surface, never off it
+    for cx, cy, r in obstacles.circles:  # every circle is sampled all round
+        mine = pts[np.abs(np.hypot(pts[:, 0] - cx, pts[:, 1] - cy) - r) < 1e-9]
+        angles = np.sort(np.arctan2(mine[:, 1] - cy, mine[:, 0] - cx))
+        gaps = np.diff(np.concatenate([angles, angles[:1] + 2 * np.pi]))
+        assert r * gaps.max() <= 0.05 + 1e-12
+    edge = pts[np.abs(pts[:, 1] - 4.0) < 1e-12]  # the square's lower edge, corners included
+    xs = np.sort(edge[:, 0])
+    assert xs[0] == 4.0 and np.diff(np.append(xs, 6.0)).max() <= 0.05 + 1e-12
+    assert sensed_map.surface_points(ObstacleSet.empty(), 0.05).shape == (0, 2)

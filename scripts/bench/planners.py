@@ -2,7 +2,7 @@
 """Path planning speed and quality on one map (mfb-static by default), every registered planner.
 
     .venv/bin/python scripts/bench/planners.py [--map mfb-static] [--seeds 10] [--planners all]
-        [--budget 120] [--ompl-time 1.0] [--no-same-budget]
+        [--budget 120] [--ompl-time 1.0] [--no-same-budget] [--params JSON]
 
 Each planner runs once per seed 1..N (run 0 of each seed) through :class:`Episode`, exactly as
 ``swarmpath plan`` does. Reported per planner: runs done, success, collisions, median planning
@@ -17,6 +17,9 @@ The OMPL baselines run at their default budget (``--ompl-time``, 1 s) and, unles
 medians ("the same budget"). OMPL's budget is wall clock, so their CPU seconds shrink on a
 loaded machine while the wall seconds do not.
 
+``--params`` takes the JSON of ``swarmpath plan --params`` (parameters per planner name, checked by
+the planner), e.g. ``'{"MFB": {"knowledge": "map"}}'``; a row with parameters says so in its label.
+
 Bounded: a planner stops taking new seeds once its runs have used ``--budget`` wall seconds (the
 table says how many ran). A planner that raises is reported with the exception, not hidden.
 Markdown on stdout (ready for docs/benchmarks.md), progress on stderr.
@@ -25,6 +28,7 @@ Markdown on stdout (ready for docs/benchmarks.md), progress on stderr.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import platform
 import statistics
@@ -141,7 +145,16 @@ def main(argv: Sequence[str] | None = None) -> None:
                     help="wall seconds per planner row before it stops taking seeds")
     ap.add_argument("--ompl-time", type=float, default=1.0)
     ap.add_argument("--no-same-budget", action="store_true")
+    ap.add_argument("--params", default="{}", help="JSON: parameters per planner name")
     args = ap.parse_args(argv)
+    try:
+        params = json.loads(args.params)
+        if not isinstance(params, dict):
+            raise ValueError("expected an object of planner names")
+        for name, values in params.items():
+            get_planner(name).resolve_params(values)  # bad names and values fail here
+    except (ValueError, KeyError) as exc:
+        ap.error(f"--params: {exc}")
 
     scenario = get_map(args.map)
     names = list_planners() if args.planners == "all" else args.planners.split(",")
@@ -155,7 +168,9 @@ def main(argv: Sequence[str] | None = None) -> None:
     rows: list[Row] = []
     for name in [n for n in names if n not in OMPL]:
         note(name)
-        rows.append(run_row(Row(name, name, {}), scenario, seeds, args.budget))
+        mine = params.get(name, {})
+        label = name + (f" {json.dumps(mine, sort_keys=True)}" if mine else "")
+        rows.append(run_row(Row(label, name, mine), scenario, seeds, args.budget))
     for name in [n for n in names if n in OMPL]:
         note(name)
         rows.append(run_row(Row(f"{name} ({args.ompl_time:g} s)", name,

@@ -2,7 +2,8 @@
 
 A planner decides where the robot goes next from an :class:`Observation`. Local planners see the
 world only through the robot's sensors (the papers' "unknown environment"); global planners are
-handed the static part of the map once, at construction, and say so (``kind = "global"``).
+handed the static part of the map once, at construction, and say so (``kind = "global"``). A local
+planner may be given the static map too when its parameters ask for it (``knows_static_map``).
 """
 
 from __future__ import annotations
@@ -82,6 +83,11 @@ class Planner(ABC):
     @classmethod  # noqa: B027 - an optional hook, empty on purpose
     def check_params(cls, p: Mapping[str, ParamValue]) -> None:
         """Range checks; raise PlannerError naming the parameter."""
+
+    @classmethod
+    def knows_static_map(cls, p: Mapping[str, ParamValue]) -> bool:
+        """Whether a planner with resolved parameters ``p`` is handed the static map."""
+        return cls.kind == "global"
 
     @abstractmethod
     def decide(self, obs: Observation) -> Decision: ...

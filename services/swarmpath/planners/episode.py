@@ -103,7 +103,8 @@ class Episode:
         self.scenario = scenario
         self.seed = int(seed)
         self.run_index = int(run)
-        static = scenario.static_obstacles() if cls.kind == "global" else None
+        known = cls.knows_static_map(cls.resolve_params(params))
+        static = scenario.static_obstacles() if known else None
         self.planner = cls(scenario, params, run_generator(seed, run, OPTIMIZER), static)
         sensors = scenario.sensors or cls.default_sensors
         self.sim = Simulator(scenario, run_generator(seed, run, SIMULATION), sensors)

@@ -45,6 +45,23 @@ def condense(hits: Array, position: Array, reach: float, cell: float) -> Array:
     return near[np.sort(first)]
 
 
+def surface_points(obstacles: ObstacleSet, spacing: float) -> Array:
+    """Points on every obstacle surface, at most ``spacing`` apart along it (a known map seen
+    as sensor hits): polygon vertices and edge points, and points around each circle."""
+    parts = [np.zeros((0, 2))]
+    for cx, cy, r in obstacles.circles:
+        n = max(8, math.ceil(2 * math.pi * r / spacing))
+        a = np.arange(n) * (2 * math.pi / n)
+        parts.append(np.stack([cx + r * np.cos(a), cy + r * np.sin(a)], axis=1))
+    for poly in obstacles.polygons:
+        ends = np.roll(poly, -1, axis=0)
+        for a, b in zip(poly, ends, strict=True):
+            n = max(1, math.ceil(math.dist(a, b) / spacing))
+            s = np.arange(n)[:, None] / n
+            parts.append(a + s * (b - a))
+    return np.concatenate(parts)
+
+
 def _to_surface(points: Array, scan: Array, surface: float) -> tuple[Array, Array]:
     """Distance from each point to the sensed surface of ``scan`` and the nearest point of it.
 

@@ -83,12 +83,14 @@ class SwarmLocalPlanner(Planner):
         "hold_min": 0.3,  # m: ... and at least this far ahead (0 hold_angle: always re-search)
         "patience": 0,  # stop the swarm after this many iterations without improvement (0: off)
         "tolerance": 1e-6,  # relative improvement that counts for ``patience``
+        "knowledge": "sensors",  # "map": the static obstacles are known from the start
     }
     choices: ClassVar[dict[str, tuple[str, ...]]] = {
         "repair": ("mfb", "grid", "none"),
         "objective": ("cost", "inverse"),
         "heuristic": ("visibility", "euclidean"),
         "aim": ("shortcut", "carrot"),
+        "knowledge": ("sensors", "map"),
     }
     #: Optimizer parameters of the preset (e.g. ICOOT's two leaders), merged under user ones.
     optimizer_params: ClassVar[dict[str, Any]] = {}
@@ -111,9 +113,18 @@ class SwarmLocalPlanner(Planner):
         except KeyError as exc:
             raise PlannerError(f"{cls.name}.optimizer: {exc.args[0]}") from None
 
+    @classmethod
+    def knows_static_map(cls, p):
+        return p["knowledge"] == "map"
+
     def __init__(self, scenario, params, rng, static_map=None):
         super().__init__(scenario, params, rng, static_map)
         self._streams = RunStreams([rng])
+        # knowledge = "map": the static obstacles' surfaces, sampled like sensor hits, are known
+        # for the whole run (as if every static surface had been sensed before the start)
+        self._prior = np.zeros((0, 2))
+        if static_map is not None:
+            self._prior = sensed_map.surface_points(static_map, HIT_CELL)
         self._memory: list[tuple[float, Array]] = []
         self._last_scan: tuple[float, Array] | None = None
         self._held: Array | None = None  # the last swarm waypoint (see ``hold_angle``)
@@ -144,6 +155,8 @@ class SwarmLocalPlanner(Planner):
         horizon = obs.time - float(self.p["memory"])
         self._memory = [(t, h) for t, h in self._memory if t >= horizon - 1e-9]
         parts = [h for _, h in self._memory]
+        if len(self._prior):
+            parts.append(self._prior)
         ahead = float(self.p["predict"])
         if ahead > 0 and self._last_scan is not None:
             t0, previous = self._last_scan
