@@ -174,3 +174,41 @@ def test_chunked_batches_give_the_same_runs(algo, monkeypatch):
     assert len(calls) == 8
     for field in ("curve", "best_fitness", "best_position", "evaluations", "shifts"):
         assert np.array_equal(getattr(whole, field), getattr(chunked, field)), field
+
+
+@pytest.mark.parametrize("shifted", [False, True])
+def test_stacked_functions_give_each_functions_own_runs(algo, shifted, monkeypatch):
+    import swarmpath.optimizers.api as api
+    from swarmpath.optimizers import minimize_many
+    from swarmpath.optimizers.problem import StackedProblem
+
+    functions = ["F1", "F9", "F7", "F12", "F8"]  # F7 (noisy) is never stacked with another
+    kw = dict(dim=4, agents=10, iterations=8, seed=3, shifted=shifted, run_ids=[4, 0, 2])
+    alone = [minimize(algo, f, **kw) for f in functions]
+    built = []
+    original = StackedProblem.of
+    monkeypatch.setattr(StackedProblem, "of", lambda parts: built.append(parts) or original(parts))
+    monkeypatch.setattr(api, "CHUNK_ELEMENTS", 5 * 10 * 4)  # chunks of five rows: mixed blocks
+    stacked = minimize_many(algo, functions, **kw)
+    assert built and all("F7" not in [p.function.name for p in parts] for parts in built)
+    assert [r.function for r in stacked] == functions
+    whole = minimize_many(algo, functions, chunk_elements=0, **kw)  # F7 still alone
+    for one, many, unsplit in zip(alone, stacked, whole, strict=True):
+        assert many.run_ids == [4, 0, 2]
+        for field in ("curve", "best_fitness", "best_position", "evaluations", "shifts"):
+            assert np.array_equal(getattr(one, field), getattr(many, field)), field
+            assert np.array_equal(getattr(one, field), getattr(unsplit, field)), field
+
+
+@pytest.mark.parametrize("bad", [-1, 1.5, True, "10"])
+def test_bad_chunk_elements_is_named(bad):
+    with pytest.raises(ParameterError, match="chunk_elements"):
+        minimize("PSO", "F1", dim=2, agents=5, iterations=2, runs=2, chunk_elements=bad)
+
+
+def test_a_noisy_function_is_refused_in_a_stack():
+    from swarmpath.optimizers.problem import BenchmarkProblem, StackedProblem
+
+    parts = [BenchmarkProblem.build(get_function(f), 3, [0, 1], 1, False) for f in ("F1", "F7")]
+    with pytest.raises(ValueError, match="noisy"):
+        StackedProblem.of(parts)

@@ -6,7 +6,7 @@
 ((2,), (2, 20))
 """
 
-from swarmpath.optimizers.api import Result, create, minimize
+from swarmpath.optimizers.api import Result, create, minimize, minimize_many
 from swarmpath.optimizers.base import Optimizer, ParameterError
 from swarmpath.optimizers.problem import BenchmarkProblem, Problem
 from swarmpath.optimizers.registry import get_optimizer, list_optimizers
@@ -23,5 +23,6 @@ __all__ = [
     "get_optimizer",
     "list_optimizers",
     "minimize",
+    "minimize_many",
     "run_generator",
 ]

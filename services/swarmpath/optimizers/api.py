@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -12,7 +13,7 @@ from numpy.typing import NDArray
 
 from swarmpath.functions import BenchmarkFunction, get_function
 from swarmpath.optimizers.base import Optimizer, ParameterError
-from swarmpath.optimizers.problem import BenchmarkProblem, Problem
+from swarmpath.optimizers.problem import BenchmarkProblem, Problem, StackedProblem
 from swarmpath.optimizers.registry import get_optimizer
 from swarmpath.optimizers.streams import RunStreams
 
@@ -80,35 +81,76 @@ def minimize(
     shifted: bool = False,
     run_ids: Sequence[int] | None = None,
     on_iteration: Callable[[Optimizer], None] | None = None,
+    chunk_elements: int | None = None,
 ) -> Result:
     """Minimise ``function`` with ``algorithm`` for runs 0..runs-1 (or the given ``run_ids``).
 
     Run r depends only on (algorithm, function, dim, agents, iterations, params, shifted, seed, r).
-    Batches larger than about ``CHUNK_ELEMENTS`` coordinates per population run as several
-    optimizers stepped in turn; ``on_iteration`` is still called once per iteration, after every
-    chunk made it, with the last chunk's optimizer.
+    Batches larger than about ``chunk_elements`` coordinates per population (default
+    ``CHUNK_ELEMENTS``; 0: never split) run as several optimizers stepped in turn;
+    ``on_iteration`` is still called once per iteration, after every chunk made it, with the last
+    chunk's optimizer. Chunking changes no number.
     """
-    fn = get_function(function) if isinstance(function, str) else function
+    return minimize_many(
+        algorithm, [function], dim, agents, iterations, runs, seed, params, shifted, run_ids,
+        on_iteration, chunk_elements,
+    )[0]
+
+
+def minimize_many(
+    algorithm: str,
+    functions: Sequence[str | BenchmarkFunction],
+    dim: int = 30,
+    agents: int = 30,
+    iterations: int = 500,
+    runs: int = 30,
+    seed: int = 1,
+    params: Mapping[str, Any] | None = None,
+    shifted: bool = False,
+    run_ids: Sequence[int] | None = None,
+    on_iteration: Callable[[Optimizer], None] | None = None,
+    chunk_elements: int | None = None,
+) -> list[Result]:
+    """``minimize`` for several functions at once: one :class:`Result` per function, in order.
+
+    Every result equals ``minimize(algorithm, function, ...)`` with the same arguments, run for
+    run. The functions' runs are stacked into one batch (:class:`StackedProblem`), chunked like
+    one function's runs: fewer, larger array operations per iteration (on two threads, the ICOOT
+    paper's Table 2 takes about a fifth less time stacked: docs/benchmarks.md). A noisy function
+    (F7) is never stacked with another. ``seconds`` of each result is the call's wall time
+    shared among the functions in proportion to their runs.
+
+    ``chunk_elements``: see :func:`minimize`. One thread runs fastest with the default; threads
+    sharing the process run faster with larger chunks (fewer numpy calls, so fewer hand-offs of
+    the GIL for the same work: docs/benchmarks.md, Table 2).
+    """
+    fns = [get_function(f) if isinstance(f, str) else f for f in functions]
+    if not fns:
+        raise ParameterError("functions must name at least one function")
     _check_sizes(dim, agents, iterations)
     ids = list(range(runs)) if run_ids is None else [int(r) for r in run_ids]
     if not ids:
         raise ParameterError("runs must be >= 1")
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise ParameterError(f"seed must be a non-negative integer, got {seed!r}")
+    elements = CHUNK_ELEMENTS if chunk_elements is None else chunk_elements
+    if isinstance(elements, bool) or not isinstance(elements, int | np.integer) or elements < 0:
+        raise ParameterError(f"chunk_elements must be an integer >= 0, got {elements!r}")
     cls = get_optimizer(algorithm)
     started = time.perf_counter()
-    # Large batches run as chunks of about CHUNK_ELEMENTS coordinates per population array,
+    # Large batches run as chunks of about ``elements`` coordinates per population array,
     # stepped in turn every iteration: the arrays of a step stay in the CPU caches. Runs are
     # independent and each has its own streams, so chunking changes no number.
-    size = max(1, CHUNK_ELEMENTS // (agents * dim))
-    chunks = [ids[i : i + size] for i in range(0, len(ids), size)]
-    problems = [BenchmarkProblem.build(fn, dim, c, int(seed), shifted) for c in chunks]
+    size = max(1, elements // (agents * dim)) if elements else len(ids) * len(fns)
+    chunks = _chunk_rows(fns, ids, size)
+    problems = [_chunk_problem(chunk, dim, int(seed), shifted) for chunk in chunks]
     opts = [
-        cls(pr, agents, iterations, RunStreams.for_runs(int(seed), c), params)
+        cls(pr, agents, iterations, RunStreams.for_runs(int(seed), [r for _, r in c]), params)
         for pr, c in zip(problems, chunks, strict=True)
     ]
-    spans = [slice(i, i + len(c)) for i, c in zip(range(0, len(ids), size), chunks, strict=True)]
-    curve = np.empty((len(ids), iterations))
+    bounds = np.cumsum([0] + [len(c) for c in chunks])
+    spans = [slice(int(a), int(b)) for a, b in itertools.pairwise(bounds)]
+    curve = np.empty((int(bounds[-1]), iterations))
     for opt in opts:
         opt.initialize()
     for i in range(iterations):
@@ -117,20 +159,79 @@ def minimize(
             curve[span, i] = opt.best_fitness
         if on_iteration is not None:
             on_iteration(opts[-1])
-    shifts = None if problems[0].shifts is None else np.concatenate([pr.shifts for pr in problems])
-    return Result(
-        algorithm=cls.name,
-        function=fn.name,
-        dim=dim,
-        agents=agents,
-        iterations=iterations,
-        seed=int(seed),
-        run_ids=ids,
-        best_fitness=np.concatenate([opt.best_fitness for opt in opts]),
-        best_position=np.concatenate([opt.best_position for opt in opts]),
-        curve=curve,
-        evaluations=np.concatenate([opt.evaluations for opt in opts]),
-        seconds=time.perf_counter() - started,
-        shifts=shifts,
-        params=dict(opts[0].p),
-    )
+    seconds = time.perf_counter() - started
+    best = np.concatenate([opt.best_fitness for opt in opts])
+    position = np.concatenate([opt.best_position for opt in opts])
+    evaluations = np.concatenate([opt.evaluations for opt in opts])
+    shifts = None
+    if shifted:
+        shifts = np.concatenate([part.shifts for pr in problems for part in _parts(pr)])
+    n = len(ids)
+    results = []
+    for k, fn in enumerate(fns):
+        rows = slice(k * n, (k + 1) * n)  # rows are function-major, as the chunks keep them
+        results.append(
+            Result(
+                algorithm=cls.name,
+                function=fn.name,
+                dim=dim,
+                agents=agents,
+                iterations=iterations,
+                seed=int(seed),
+                run_ids=list(ids),
+                best_fitness=best[rows].copy(),
+                best_position=position[rows].copy(),
+                curve=curve[rows].copy(),
+                evaluations=evaluations[rows].copy(),
+                seconds=seconds / len(fns),
+                shifts=None if shifts is None else shifts[rows].copy(),
+                params=dict(opts[0].p),
+            )
+        )
+    return results
+
+
+Row = tuple[BenchmarkFunction, int]
+
+
+def _chunk_rows(fns: list[BenchmarkFunction], ids: list[int], size: int) -> list[list[Row]]:
+    """(function, run) rows, function-major, cut into chunks of at most ``size`` rows; a noisy
+    function's rows never share a chunk with another function's."""
+    chunks: list[list[Row]] = []
+    current: list[Row] = []
+    for fn in fns:
+        if fn.noisy and current:
+            chunks.append(current)
+            current = []
+        for r in ids:
+            current.append((fn, r))
+            if len(current) == size:
+                chunks.append(current)
+                current = []
+        if fn.noisy and current:
+            chunks.append(current)
+            current = []
+    if current:
+        chunks.append(current)
+    return chunks
+
+
+def _chunk_problem(chunk: list[Row], dim: int, seed: int, shifted: bool) -> Problem:
+    parts = []
+    start = 0
+    while start < len(chunk):
+        fn = chunk[start][0]
+        stop = start
+        while stop < len(chunk) and chunk[stop][0] is fn:
+            stop += 1
+        runs = [r for _, r in chunk[start:stop]]
+        parts.append(BenchmarkProblem.build(fn, dim, runs, seed, shifted))
+        start = stop
+    return parts[0] if len(parts) == 1 else StackedProblem.of(parts)
+
+
+def _parts(problem: Problem) -> tuple[BenchmarkProblem, ...]:
+    if isinstance(problem, StackedProblem):
+        return problem.parts
+    assert isinstance(problem, BenchmarkProblem)
+    return (problem,)

@@ -95,5 +95,43 @@ class BenchmarkProblem(Problem):
         return base if self.shifts is None else base + self.shifts
 
 
+@dataclass
+class StackedProblem(Problem):
+    """Several benchmark problems' runs stacked into one batch, rows in the order of ``parts``.
+
+    An optimizer steps every row the same way whatever problem the row belongs to, and each row
+    draws from its own run's stream, so a run computed in a stack gives the numbers it gives in
+    its own batch; only the objective differs per row block. Noisy functions (F7) draw from the
+    streams inside the objective, which would move the other rows' streams: they cannot be
+    stacked with anything.
+    """
+
+    parts: tuple[BenchmarkProblem, ...] = ()
+
+    @classmethod
+    def of(cls, parts: list[BenchmarkProblem]) -> StackedProblem:
+        if not parts:
+            raise ValueError("nothing to stack")
+        if len(parts) > 1 and any(p.function is not None and p.function.noisy for p in parts):
+            raise ValueError("a noisy function cannot share a batch with other problems")
+        problem = cls(
+            objective=_unset,
+            lower=np.concatenate([p.lower for p in parts]),
+            upper=np.concatenate([p.upper for p in parts]),
+            parts=tuple(parts),
+        )
+        problem.objective = problem._evaluate
+        return problem
+
+    def _evaluate(self, X: Array, streams: RunStreams) -> Array:
+        out = np.empty(X.shape[:2])
+        start = 0
+        for part in self.parts:
+            stop = start + part.runs
+            out[start:stop] = part.objective(X[start:stop], streams)
+            start = stop
+        return out
+
+
 def _unset(X: Array, streams: RunStreams) -> Array:  # replaced in BenchmarkProblem.build
     raise RuntimeError("objective not set")
