@@ -9,7 +9,12 @@ timed (``--mealpy-runs``, 3 by default); swarmpath computes 30 runs as one batch
 run is the batch's seconds / 30. Target: swarmpath >= 30x faster per run.
 
 Part ``table2``: PSO, SSA, FDO, mCOOT, COOT, ICOOT x F1-F13 x 30 dims x 30 runs x 500
-iterations in this one process. Target: < 60 s in total.
+iterations in this one process, on ``--threads`` threads (2). Target: < 60 s in total.
+``--layout stacked`` (default) computes each algorithm's noiseless functions as one stacked
+batch and F7 alone (``minimize_many``: the same numbers as one ``minimize`` per cell),
+``cells`` one ``minimize`` per cell, ``both`` runs the two side by side and prints their ratio.
+``--chunk-elements`` (0: each stack in one chunk) is ``minimize_many``'s ``chunk_elements``: on
+two threads, large chunks mean fewer numpy calls and fewer hand-offs of the GIL.
 
 Part ``batch``: CPU milliseconds per run of the Table 2 algorithms (30 agents, 30 dims, 500
 iterations) when ``--batches`` runs (30, 100, 300 by default) are computed in one ``minimize``
@@ -39,7 +44,7 @@ from typing import Any
 import numpy as np
 
 from swarmpath.functions import get_function
-from swarmpath.optimizers import list_optimizers, minimize
+from swarmpath.optimizers import list_optimizers, minimize, minimize_many
 from swarmpath.stats import describe
 
 # swarmpath name -> (mealpy module, class): the original variant of each algorithm.
@@ -144,67 +149,94 @@ def part_mealpy(mealpy_runs: int, runs: int, seed: int) -> list[str]:
 
 
 # ----------------------------------------------------------------------------------- table 2
-def _timed_cell(algorithm: str, function: str, runs: int, seed: int) -> tuple[str, str, float]:
-    """One Table 2 cell; returns its CPU seconds (this thread's time)."""
+def table2_stacks() -> list[list[str]]:
+    """Each algorithm's functions as tasks: one stack of the noiseless functions, then each noisy
+    one (F7) alone (``minimize_many`` never stacks it; as tasks of their own, these small ones
+    fill the threads' tails)."""
+    noisy = [f for f in TABLE2_FUNCTIONS if get_function(f).noisy]
+    return [[f for f in TABLE2_FUNCTIONS if f not in noisy], *[[f] for f in noisy]]
+
+
+def _timed_task(algorithm: str, functions: list[str], runs: int, seed: int,
+                layout: str, chunk: int) -> tuple[str, list[str], float]:
+    """Table 2 cells of one algorithm; returns their CPU seconds (this thread's time).
+
+    ``cells``: one ``minimize`` call per function. ``stacked``: one ``minimize_many`` call for
+    all of them (the same numbers, run for run; see docs/algorithms.md) with ``chunk_elements``
+    = ``chunk``.
+    """
     c0 = time.thread_time()
-    minimize(algorithm, function, DIM, AGENTS, ITERATIONS, runs=runs, seed=seed)
-    return algorithm, function, time.thread_time() - c0
+    if layout == "cells":
+        for function in functions:
+            minimize(algorithm, function, DIM, AGENTS, ITERATIONS, runs=runs, seed=seed)
+    else:
+        minimize_many(algorithm, functions, DIM, AGENTS, ITERATIONS, runs=runs, seed=seed,
+                      chunk_elements=chunk)
+    return algorithm, functions, time.thread_time() - c0
 
 
-def part_table2(runs: int, seed: int, threads: int = 1) -> list[str]:
+def part_table2(runs: int, seed: int, threads: int = 2, layout: str = "stacked",
+                chunk: int = 0) -> list[str]:
+    if layout == "both":
+        cells = part_table2(runs, seed, threads, "cells", chunk)
+        stacked = part_table2(runs, seed, threads, "stacked", chunk)
+        ratio = _total_wall(cells) / _total_wall(stacked)
+        return [*cells, "", *stacked, "", f"Cells / stacked wall time, same run: {ratio:.2f}x."]
     algorithms, missing = available(TABLE2_ALGORITHMS)
-    wall: dict[str, float] = {}
     cpu = dict.fromkeys(algorithms, 0.0)
     cpu_by_function = dict.fromkeys(TABLE2_FUNCTIONS, 0.0)
     load_before = load()
     w_start, c_start = time.perf_counter(), time.process_time()
-    cells = [(a, fn) for a in algorithms for fn in TABLE2_FUNCTIONS]
-    if threads > 1:
-        # Cells are independent: numpy releases the GIL inside array operations, so a thread
-        # pool keeps both cores busy within one process.
-        note(f"table2: {len(cells)} cells x {runs} runs on {threads} threads ...")
-        with ThreadPoolExecutor(max_workers=threads) as pool:
-            done = pool.map(lambda c: _timed_cell(c[0], c[1], runs, seed), cells)
-            for a, fn, seconds in done:
-                cpu[a] += seconds
-                cpu_by_function[fn] += seconds
-        wall = dict.fromkeys(algorithms, float("nan"))
+    if layout == "cells":
+        tasks = [(a, [fn]) for a in algorithms for fn in TABLE2_FUNCTIONS]
     else:
-        for a in algorithms:
-            note(f"table2 {a}: {len(TABLE2_FUNCTIONS)} functions x {runs} runs ...")
-            w0 = time.perf_counter()
-            for fn in TABLE2_FUNCTIONS:
-                _, _, seconds = _timed_cell(a, fn, runs, seed)
-                cpu[a] += seconds
-                cpu_by_function[fn] += seconds
-            wall[a] = time.perf_counter() - w0
+        stacks = table2_stacks()  # the big stacks of every algorithm first, then the small ones
+        tasks = [(a, stack) for stack in stacks for a in algorithms]
+    # Tasks are independent: numpy releases the GIL inside array operations, so a thread pool
+    # keeps both cores busy within one process.
+    note(f"table2 ({layout}): {len(tasks)} tasks x {runs} runs on {threads} thread(s) ...")
+    with ThreadPoolExecutor(max_workers=threads) as pool:
+        done = pool.map(lambda t: _timed_task(t[0], t[1], runs, seed, layout, chunk), tasks)
+        for a, fns, seconds in done:
+            cpu[a] += seconds
+            for fn in fns:  # a stack's time is shared evenly among its functions
+                cpu_by_function[fn] += seconds / len(fns)
     total_wall, total_cpu = time.perf_counter() - w_start, time.process_time() - c_start
     n = len(TABLE2_FUNCTIONS)
     lines = [
         f"### ICOOT paper Table 2 setting: F1-F13, {DIM} dims, {AGENTS} agents, {ITERATIONS} "
-        f"iterations, {runs} runs, one process, {threads} thread(s)",
+        f"iterations, {runs} runs, one process, {threads} thread(s), {layout}"
+        + (f" (chunk_elements {chunk})" if layout == "stacked" else ""),
         "",
-        f"| algorithm | wall s ({n} functions x {runs} runs) | CPU s | CPU s per function |",
-        "| --- | ---: | ---: | ---: |",
+        f"| algorithm | CPU s ({n} functions x {runs} runs) | CPU s per function |",
+        "| --- | ---: | ---: |",
     ]
     for a in algorithms:
-        w = "-" if wall[a] != wall[a] else f"{wall[a]:.1f}"  # nan: cells ran interleaved
-        lines.append(f"| {a} | {w} | {cpu[a]:.1f} | {cpu[a] / n:.2f} |")
+        lines.append(f"| {a} | {cpu[a]:.1f} | {cpu[a] / n:.2f} |")
     for a in missing:
-        lines.append(f"| {a} | not registered yet | | |")
+        lines.append(f"| {a} | not registered yet | |")
     lines += [
         f"| **total** ({len(algorithms)} of {len(TABLE2_ALGORITHMS)} algorithms) | "
-        f"**{total_wall:.1f}** | **{total_cpu:.1f}** | |",
+        f"**{total_cpu:.1f}** | |",
         "",
-        f"Load average (1/5/15 min) before: {load_before}; after: {load()}.",
-        "",
-        "CPU seconds per function, summed over the algorithms above:",
-        "",
-        "| " + " | ".join(TABLE2_FUNCTIONS) + " |",
-        "|" + " ---: |" * n,
-        "| " + " | ".join(f"{cpu_by_function[f]:.1f}" for f in TABLE2_FUNCTIONS) + " |",
+        f"**Wall time: {total_wall:.1f} s** (target < 60 s). Load average (1/5/15 min) before: "
+        f"{load_before}; after: {load()}.",
     ]
+    if layout == "cells":
+        lines += [
+            "",
+            "CPU seconds per function, summed over the algorithms above:",
+            "",
+            "| " + " | ".join(TABLE2_FUNCTIONS) + " |",
+            "|" + " ---: |" * n,
+            "| " + " | ".join(f"{cpu_by_function[f]:.1f}" for f in TABLE2_FUNCTIONS) + " |",
+        ]
     return lines
+
+
+def _total_wall(lines: list[str]) -> float:
+    line = next(x for x in lines if x.startswith("**Wall time: "))
+    return float(line.split()[2])
 
 
 # ------------------------------------------------------------------------------------ batch
@@ -245,7 +277,12 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--mealpy-runs", type=int, default=3, help="mealpy runs timed each")
     parser.add_argument("--runs", type=int, default=30, help="swarmpath runs per cell (batched)")
     parser.add_argument("--seed", type=int, default=1)
-    parser.add_argument("--threads", type=int, default=1, help="table2: cells run concurrently")
+    parser.add_argument("--threads", type=int, default=2, help="table2: tasks run concurrently")
+    parser.add_argument("--layout", choices=("stacked", "cells", "both"), default="stacked",
+                        help="table2: one minimize_many per algorithm for its noiseless functions "
+                        "(stacked), one minimize per cell (cells), or both side by side")
+    parser.add_argument("--chunk-elements", type=int, default=0,
+                        help="table2, stacked: minimize_many's chunk_elements (0: one chunk)")
     parser.add_argument("--batches", default="30,100,300", help="batch: runs per minimize call")
     parser.add_argument("--batch-functions", default="F1,F9,F12", help="batch: functions")
     args = parser.parse_args(argv)
@@ -261,7 +298,11 @@ def main(argv: list[str] | None = None) -> None:
     if args.part in ("mealpy", "all"):
         lines += [*part_mealpy(args.mealpy_runs, args.runs, args.seed), ""]
     if args.part in ("table2", "all"):
-        lines += [*part_table2(args.runs, args.seed, args.threads), ""]
+        lines += [
+            *part_table2(args.runs, args.seed, args.threads, args.layout,
+                         args.chunk_elements),
+            "",
+        ]
     if args.part in ("batch", "all"):
         batches = [int(b) for b in args.batches.split(",")]
         functions = [f.strip() for f in args.batch_functions.split(",") if f.strip()]
