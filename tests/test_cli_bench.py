@@ -15,7 +15,7 @@ from typer.testing import CliRunner
 from swarmpath import report
 from swarmpath.cli import app
 from swarmpath.cli import bench as bench_cli
-from swarmpath.optimizers import list_optimizers, minimize
+from swarmpath.optimizers import ParameterError, list_optimizers, minimize
 from swarmpath.stats import describe
 
 # GWO and one more of whatever is registered: the command must work for any algorithm.
@@ -136,6 +136,51 @@ def test_runs_in_small_batches_give_the_same_runs(monkeypatch):
     assert steps == [3] * 5 + [3] * 5 + [1] * 5
 
 
+def test_threads_and_stacks_give_each_cells_own_runs(monkeypatch):
+    """Any threads, stacked functions and batches: the numbers of one minimize per cell."""
+    algos = [a for a in list_optimizers() if a in ("GWO", "FDO", "PSO")]
+    spec = bench_cli.make_spec(",".join(algos), "F1,F7,F9,F12", "3,4", runs=5, agents=6,
+                               iterations=6, seed=9, shifted=True)
+    monkeypatch.setattr(bench_cli, "BATCH_ELEMENTS", 3 * 2 * 6 * 4)  # mixed batch sizes
+    tasks = bench_cli.plan_tasks(spec)
+    covered = sorted((t.algorithm, f, t.dim, r) for t in tasks for f in t.functions
+                     for r in t.run_ids)
+    assert covered == sorted((a, f, d, r) for f, d, a in spec.cells() for r in range(5))
+    assert all(len(t.functions) == 1 for t in tasks if "F7" in t.functions)
+    assert any(len(t.functions) == 3 for t in tasks)  # the noiseless ones share stacks
+    assert all(t.rows * 6 * t.dim <= bench_cli.BATCH_ELEMENTS or len(t.run_ids) == 1
+               for t in tasks)
+    done: list[bench_cli.Task] = []
+    one = bench_cli.run_bench(spec, threads=1)
+    two = bench_cli.run_bench(spec, threads=2, on_done=done.append)
+    assert sorted(done, key=repr) == sorted(tasks, key=repr)
+    assert [(c.algorithm, c.function, c.dim) for c in two] == [
+        (a, f, d) for f, d, a in spec.cells()
+    ]
+    for a, b in zip(one, two, strict=True):
+        assert (a.best_fitness, a.evaluations, a.rank) == (b.best_fitness, b.evaluations, b.rank)
+        res = minimize(b.algorithm, b.function, b.dim, 6, 6, 5, seed=9, shifted=True)
+        assert b.run_ids == list(range(5))
+        assert b.best_fitness == res.best_fitness.tolist()
+        assert b.evaluations == res.evaluations.tolist()
+
+
+def test_a_failing_task_stops_the_others(monkeypatch):
+    spec = bench_cli.make_spec("GWO", "F1,F7,F9", "2", runs=2, agents=5, iterations=50, seed=1)
+    import swarmpath.optimizers as opt
+
+    real = opt.minimize_many
+
+    def failing(algorithm, functions, *args, **kw):
+        if "F7" in functions:
+            raise ParameterError("GWO.x: broken on purpose")
+        return real(algorithm, functions, *args, **kw)
+
+    monkeypatch.setattr(bench_cli, "minimize_many", failing)
+    with pytest.raises(ParameterError, match="broken on purpose"):
+        bench_cli.run_bench(spec, threads=2)
+
+
 def test_json_numbers_are_strict_json():
     assert report.json_number(math.inf) == "inf" and report.json_number(-math.inf) == "-inf"
     assert report.json_number(1.5) == 1.5
@@ -168,6 +213,8 @@ BAD_INPUT = [
     (["--params", '{"GWO": {"a_max": "high"}}'], "a_max"),
     (["--params", '{"GWO": 3}'], "--params"),
     (["--no-such-option"], "--no-such-option"),
+    (["--threads", "-1"], "--threads"),
+    (["--threads", "257"], "--threads"),
 ]
 
 

@@ -2,16 +2,20 @@
 
 The command is a thin shell over pure functions: :func:`make_spec` validates the options into a
 :class:`BenchSpec` (raising :class:`InputError` naming the option), :func:`run_bench` runs the
-cells through :func:`swarmpath.optimizers.minimize`, and :mod:`swarmpath.report` builds the table
+cells through :func:`swarmpath.optimizers.minimize_many` (stacked per algorithm and dimension,
+on one thread per CPU), and :mod:`swarmpath.report` builds the table
 and the JSON document.
 """
 
 from __future__ import annotations
 
 import json
+import os
 import sys
+import threading
 import time
 from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass, field
 from typing import Annotated, Any
 
@@ -24,12 +28,14 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from swarmpath import __version__, report
 from swarmpath.cli.core import InputError, app, parse_params_option, resolve_names
 from swarmpath.functions import expand_function_names, get_function
-from swarmpath.optimizers import ParameterError, get_optimizer, list_optimizers, minimize
+from swarmpath.optimizers import ParameterError, get_optimizer, list_optimizers, minimize_many
 from swarmpath.optimizers.api import MAX_AGENTS, MAX_DIM, MAX_ITERATIONS
 
 MAX_RUNS = 10_000
-#: Runs of one cell are computed in batches of at most this many array elements per population
-#: (runs x agents x dim): memory stays bounded and, runs being independent, results are the same.
+MAX_THREADS = 256
+#: Runs are computed in batches of at most this many array elements per population (functions x
+#: runs x agents x dim, and per curve array): memory stays bounded and, runs being independent,
+#: results are the same.
 BATCH_ELEMENTS = 1 << 22
 
 
@@ -147,6 +153,128 @@ def make_spec(
 
 
 # -------------------------------------------------------------------------------------- running
+@dataclass(frozen=True)
+class Task:
+    """Runs of one algorithm and dimension on one or several functions, computed as one
+    ``minimize_many`` batch: the same numbers as one ``minimize`` per cell, run for run."""
+
+    algorithm: str
+    dim: int
+    functions: tuple[str, ...]
+    run_ids: tuple[int, ...]
+
+    @property
+    def rows(self) -> int:
+        return len(self.functions) * len(self.run_ids)
+
+
+def plan_tasks(spec: BenchSpec, cells: Sequence[tuple[str, int, str]] | None = None) -> list[Task]:
+    """The tasks computing ``cells`` (default: every cell of ``spec``), largest first.
+
+    Per algorithm and dimension, the noiseless functions share a stack and each noisy one (F7)
+    gets its own (``minimize_many`` never stacks it). A task holds at most ``BATCH_ELEMENTS``
+    array elements per population (and per convergence-curve array), so memory stays bounded
+    whatever the runs, dimensions or iterations.
+    """
+    keys = spec.cells() if cells is None else list(cells)
+    groups: dict[tuple[str, int], list[str]] = {}
+    for function, dim, algorithm in keys:
+        groups.setdefault((algorithm, dim), []).append(function)
+    tasks: list[Task] = []
+    for (algorithm, dim), functions in groups.items():
+        noisy = [f for f in functions if get_function(f).noisy]
+        stacks = [[f for f in functions if f not in noisy], *[[f] for f in noisy]]
+        for stack in filter(None, stacks):
+            per_row = max(spec.agents * dim, spec.iterations)
+            size = max(1, min(spec.runs, BATCH_ELEMENTS // (len(stack) * per_row)))
+            for start in range(0, spec.runs, size):
+                ids = tuple(range(start, min(start + size, spec.runs)))
+                tasks.append(Task(algorithm, dim, tuple(stack), ids))
+    # largest first, so that the threads finish together (stable: table order among equals)
+    tasks.sort(key=lambda t: -t.rows * t.dim)
+    return tasks
+
+
+class _Stopped(Exception):
+    """Raised inside a task when the study was interrupted."""
+
+
+def run_bench(
+    spec: BenchSpec,
+    on_step: Callable[[int], None] | None = None,
+    threads: int = 1,
+    cells: Sequence[tuple[str, int, str]] | None = None,
+    on_done: Callable[[Task], None] | None = None,
+) -> list[report.Cell]:
+    """Every cell of the study (or the given ``cells``), in table order and ranked.
+
+    The tasks of :func:`plan_tasks` run on ``threads`` threads (numpy releases the GIL inside
+    array operations); each run depends only on (spec, seed, run), so the numbers are the same
+    for any number of threads. ``on_step(rows)`` is called after each iteration of a task with
+    the number of (function, run) rows it advanced, and ``on_done(task)`` when a task finished,
+    both under one lock, from the thread that computed it.
+    """
+    if threads < 1:
+        raise ValueError("threads must be >= 1")
+    keys = spec.cells() if cells is None else list(cells)
+    tasks = plan_tasks(spec, keys)
+    stop = threading.Event()
+    lock = threading.Lock()
+
+    def compute(task: Task) -> tuple[Task, list[Any]]:
+        def hook(_optimizer: object) -> None:
+            if stop.is_set():
+                raise _Stopped
+            if on_step is not None:
+                with lock:
+                    on_step(task.rows)
+
+        results = minimize_many(
+            task.algorithm, list(task.functions), dim=task.dim, agents=spec.agents,
+            iterations=spec.iterations, seed=spec.seed, params=spec.params.get(task.algorithm),
+            shifted=spec.shifted, run_ids=list(task.run_ids), on_iteration=hook,
+        )
+        if on_done is not None:
+            with lock:
+                on_done(task)
+        return task, results
+
+    if threads == 1:
+        done = [compute(t) for t in tasks]
+    else:
+        pool = ThreadPoolExecutor(max_workers=threads, thread_name_prefix="bench")
+        try:
+            done = list(pool.map(compute, tasks))
+        except BaseException:  # Ctrl-C or a failed task: the others stop at their next iteration
+            stop.set()
+            pool.shutdown(wait=True, cancel_futures=True)
+            raise
+        pool.shutdown()
+    parts: dict[tuple[str, str, int], list[Any]] = {}
+    for _task, results in done:
+        for res in results:
+            parts.setdefault((res.algorithm, res.function, res.dim), []).append(res)
+    out = [_cell(algorithm, function, dim, parts[(algorithm, function, dim)])
+           for function, dim, algorithm in keys]
+    report.assign_ranks(out)
+    return out
+
+
+def _cell(algorithm: str, function: str, dim: int, results: list[Any]) -> report.Cell:
+    """One table cell from its batches' results, runs in order."""
+    results = sorted(results, key=lambda r: r.run_ids[0])
+    return report.Cell(
+        algorithm=algorithm,
+        function=function,
+        dim=dim,
+        run_ids=[r for res in results for r in res.run_ids],
+        best_fitness=[float(v) for res in results for v in res.best_fitness],
+        evaluations=[int(v) for res in results for v in res.evaluations],
+        seconds=sum(res.seconds for res in results),
+        params=dict(results[-1].params or {}),
+    )
+
+
 def run_cell(
     spec: BenchSpec,
     algorithm: str,
@@ -155,64 +283,16 @@ def run_cell(
     on_step: Callable[[int], None] | None = None,
 ) -> report.Cell:
     """All runs of one cell (in memory-bounded batches); ``on_step(runs)`` after each iteration."""
-    batch = max(1, min(spec.runs, BATCH_ELEMENTS // (spec.agents * dim)))
-    best: list[float] = []
-    evaluations: list[int] = []
-    seconds = 0.0
-    params: dict[str, Any] = {}
-    for start in range(0, spec.runs, batch):
-        ids = list(range(start, min(start + batch, spec.runs)))
-        res = minimize(
-            algorithm,
-            function,
-            dim=dim,
-            agents=spec.agents,
-            iterations=spec.iterations,
-            seed=spec.seed,
-            params=spec.params.get(algorithm),
-            shifted=spec.shifted,
-            run_ids=ids,
-            on_iteration=None if on_step is None else _StepCounter(on_step, len(ids)),
-        )
-        best.extend(float(v) for v in res.best_fitness)
-        evaluations.extend(int(v) for v in res.evaluations)
-        seconds += res.seconds
-        params = dict(res.params or {})
-    return report.Cell(
-        algorithm=algorithm,
-        function=function,
-        dim=dim,
-        run_ids=list(range(spec.runs)),
-        best_fitness=best,
-        evaluations=evaluations,
-        seconds=seconds,
-        params=params,
-    )
+    (cell,) = run_bench(spec, on_step, threads=1, cells=[(function, dim, algorithm)])
+    return cell
 
 
-class _StepCounter:
-    """``minimize``'s per-iteration hook reporting how many runs advanced one iteration."""
-
-    def __init__(self, on_step: Callable[[int], None], runs: int):
-        self.on_step, self.runs = on_step, runs
-
-    def __call__(self, _optimizer: object) -> None:
-        self.on_step(self.runs)
-
-
-def run_bench(
-    spec: BenchSpec,
-    on_cell: Callable[[int, tuple[str, int, str]], None] | None = None,
-    on_step: Callable[[int], None] | None = None,
-) -> list[report.Cell]:
-    """Every cell of the study, ranked. ``on_cell(i, key)`` before cell i starts."""
-    cells = []
-    for i, (function, dim, algorithm) in enumerate(spec.cells()):
-        if on_cell is not None:
-            on_cell(i, (function, dim, algorithm))
-        cells.append(run_cell(spec, algorithm, function, dim, on_step))
-    report.assign_ranks(cells)
-    return cells
+def default_threads() -> int:
+    """One thread per CPU this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not on Linux
+        return max(1, os.cpu_count() or 1)
 
 
 def caption(spec: BenchSpec, seconds: float) -> str:
@@ -224,7 +304,7 @@ def caption(spec: BenchSpec, seconds: float) -> str:
 
 
 # -------------------------------------------------------------------------------------- command
-def _run_with_progress(spec: BenchSpec, stderr: Console) -> list[report.Cell]:
+def _run_with_progress(spec: BenchSpec, stderr: Console, threads: int) -> list[report.Cell]:
     keys = spec.cells()
     total_runs = len(keys) * spec.runs
     columns = (
@@ -236,21 +316,25 @@ def _run_with_progress(spec: BenchSpec, stderr: Console) -> list[report.Cell]:
     )
     with Progress(*columns, console=stderr, transient=stderr.is_terminal) as progress:
         task = progress.add_task(
-            "bench", total=total_runs * spec.iterations, cells=0, n_cells=len(keys), runs=0,
-            n_runs=total_runs,
+            f"bench x{threads}", total=total_runs * spec.iterations, cells=0, n_cells=len(keys),
+            runs=0, n_runs=total_runs,
         )
         done = 0  # run-iterations
+        finished: dict[tuple[str, str, int], int] = {}  # runs finished per cell
 
-        def on_cell(i: int, key: tuple[str, int, str]) -> None:
-            function, dim, algorithm = key
-            progress.update(task, description=f"{algorithm} {function} {dim}D", cells=i)
+        def on_done(t: Task) -> None:  # run_bench calls it under its lock
+            for f in t.functions:
+                key = (t.algorithm, f, t.dim)
+                finished[key] = finished.get(key, 0) + len(t.run_ids)
+            cells = sum(n == spec.runs for n in finished.values())
+            progress.update(task, cells=cells)
 
-        def on_step(runs: int) -> None:
+        def on_step(rows: int) -> None:  # run_bench calls it under its lock
             nonlocal done
-            done += runs
+            done += rows
             progress.update(task, completed=done, runs=done // spec.iterations)
 
-        cells = run_bench(spec, on_cell, on_step)
+        cells = run_bench(spec, on_step, threads, on_done=on_done)
         progress.update(task, description="done", cells=len(keys), runs=total_runs)
     return cells
 
@@ -277,13 +361,18 @@ def bench(
     params: Annotated[
         str | None, typer.Option(help='Algorithm parameters: \'{"GWO": {"a_max": 2}}\'.')
     ] = None,
+    threads: Annotated[
+        int,
+        typer.Option(help="Threads computing the study (0: one per CPU). Numbers do not change."),
+    ] = 0,
 ) -> None:
     """Run optimizers on benchmark functions; print min/max/avg/std per function and dimension."""
     spec = make_spec(algorithms, functions, dims, runs, agents, iterations, seed, shifted, params)
+    check_range("--threads", threads, 0, MAX_THREADS)
     stderr = Console(stderr=True)
     started = time.perf_counter()
     try:
-        cells = _run_with_progress(spec, stderr)
+        cells = _run_with_progress(spec, stderr, threads or default_threads())
     except ParameterError as exc:  # a check only the optimizer's constructor makes
         raise InputError("--params", str(exc)) from None
     seconds = time.perf_counter() - started
