@@ -2,7 +2,8 @@
 
 * With 1 s simulated steps (the rfogwo maps) a decision drove a whole 1 m step toward its
   waypoint, past the 0.8 m that mfb-12 senses beyond the body: the robot ran into obstacles it
-  had not seen. A move is now cut to the sensing range minus the safety distance.
+  had not seen, or into a corner's tip between two rays. A move is now cut to where the
+  sensors covered the space with less than the safety distance of error.
 * Sensed hits were merged on a 5 cm grid keeping an arbitrary one per cell, so a corner's hit
   could be dropped for one 5-7 cm away; the grid is now 1 cm.
 """
@@ -43,7 +44,11 @@ def test_a_move_never_reaches_past_what_the_sensors_covered(planner):
 
     episode.planner.decide = record  # type: ignore[method-assign]
     out = episode.run()
-    reach = float(np.max(get_sensor_model("mfb-12").ranges)) - 0.03  # range - corner safety
+    # within the range (0.8 m - 3 cm of corner safety), and where a corner between two rays 5
+    # degrees apart sticks out by less than 3 cm: 2 * 0.03 / 5 deg - 0.2 - 0.03 = 0.457 m
+    reach = min(float(np.max(get_sensor_model("mfb-12").ranges)) - 0.03,
+                2 * 0.03 / np.radians(5.0) - 0.2 - 0.03)
+    assert episode.planner._commit(0.0, 0.2) == pytest.approx(reach)
     moves = [float(np.hypot(*(d.target - p))) for p, d in made if d.target is not None]
     assert max(moves) <= reach + 1e-9
     assert out.success and out.collisions == 0 and out.min_clearance > 0
@@ -53,7 +58,7 @@ def test_fine_time_steps_are_not_cut():
     # 0.1 s steps at 1 m/s: a decision (0.25 s -> 3 steps) drives 0.3 m, well inside the range
     planner = Episode(wall_ahead(0.1), "MFB", seed=1).planner
     assert planner._travel == pytest.approx(0.3)
-    assert planner._travel < planner._range - planner._safety(0.0)
+    assert planner._travel < planner._commit(0.0, 0.2)
     planner = Episode(wall_ahead(1.0), "MFB", seed=1).planner
     assert planner._travel == pytest.approx(1.0) and planner._range == pytest.approx(0.8)
 

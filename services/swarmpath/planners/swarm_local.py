@@ -147,14 +147,21 @@ class SwarmLocalPlanner(Planner):
         self._coarse = scenario.time_step * robot.linear_speed > 0.05 + 1e-9
         # The simulator drives whole time steps: a decision of ``replan`` seconds moves the robot
         # up to ``_travel`` metres before it senses again (1 m on the rfogwo maps: one 1 s step
-        # at 1 m/s, against 0.125 m on mfb-static). Unseen space is assumed free, so the robot
-        # must not commit to more than its sensors have covered: the body at the end of a move
-        # of d reaches d + radius from where it sensed, the sensors radius + range. A move is
-        # cut to ``_commit`` = range - safety when the robot would drive further.
+        # at 1 m/s, against 0.125 m on mfb-static). Unseen space is assumed free, so with coarse
+        # steps a move is cut (``_commit``) to what the sensors covered: the body at the end of a
+        # move of d reaches d + radius from where it sensed, the sensors radius + range; and a
+        # corner's tip between two rays a gap g apart sticks out of the sensed points by up to
+        # about g / 2 (right angle), g = (d + radius + safety) x the rays' angular spacing.
         steps = max(1, math.ceil(float(self.p["replan"]) / scenario.time_step - 1e-9))
         self._travel = steps * scenario.time_step * robot.linear_speed
         sensors = scenario.sensors or self.default_sensors
-        self._range = float(np.max(get_sensor_model(sensors).ranges)) if sensors else np.inf
+        self._range, self._ray_gap = np.inf, 0.0
+        if sensors:
+            model = get_sensor_model(sensors)
+            self._range = float(np.max(model.ranges))
+            far = np.mod(model.angles[model.ranges >= self._range - 1e-9], 2 * np.pi)
+            angles = np.unique(np.round(far, 9))
+            self._ray_gap = float(np.max(np.diff(np.append(angles, angles[0] + 2 * np.pi))))
         opt_cls = get_optimizer(str(self.p["optimizer"]))
         try:
             self._opt_params = opt_cls.resolve_params(
@@ -264,8 +271,7 @@ class SwarmLocalPlanner(Planner):
         decision = self._decide(obs)
         if decision.target is None:
             return decision
-        # never commit to more than the sensors have covered (see ``_travel``)
-        commit = self._range - self._safety(obs.time)
+        commit = self._commit(obs.time, obs.robot_radius)
         if self._travel <= commit:
             return decision
         p = np.array([obs.pose.x, obs.pose.y])
@@ -276,6 +282,16 @@ class SwarmLocalPlanner(Planner):
         target = p + move * (max(commit, 0.0) / length)
         return Decision(target, decision.iterations, decision.duration, decision.reason,
                         decision.finish)
+
+    def _commit(self, time: float, radius: float) -> float:
+        """How far one decision may move the robot (see ``_travel``): within the sensing range,
+        and with coarse steps also where a corner between two rays sticks out by less than the
+        safety distance (with fine steps the robot senses again long before that)."""
+        safety = self._safety(time)
+        commit = self._range - safety
+        if self._coarse and self._ray_gap > 0:
+            commit = min(commit, 2 * safety / self._ray_gap - radius - safety)
+        return max(commit, safety)
 
     def _decide(self, obs: Observation) -> Decision:
         p = np.array([obs.pose.x, obs.pose.y])
