@@ -52,7 +52,7 @@ Array = np.ndarray
 # can lie a cell diagonal from the kept one, and the clearance checks only see the kept one: with
 # 5 cm the hit 2 cm from a polygon corner's tip was dropped for one 5 cm further along the edge
 # and the robot touched the corner (rfogwo-map3, ICOOT seed 1, t = 234 s), and on mfb-static the
-# least body gap was 0.78-0.98 cm under a 1 cm safety distance. 1 cm: at most 1.4 cm.
+# least body gap fell to 0.78 cm under a 1 cm safety distance. 1 cm: at most 1.4 cm.
 HIT_CELL = 0.01
 CARROT_CLEARANCE = 0.01  # m: the known-map path keeps this much beyond the planner's margin
 
@@ -300,7 +300,7 @@ class SwarmLocalPlanner(Planner):
         reach = float(self.p["step"])
         known_hits = self._known_hits(obs)  # first: this scan may show a corner
         margin = obs.robot_radius + self._safety(obs.time)
-        # Only hits that can touch a candidate segment matter; one per 5 cm cell is plenty.
+        # Only hits that can touch a candidate segment matter, one per HIT_CELL (1 cm) cell.
         hits = sensed_map.condense(known_hits, p, reach + 2 * margin, HIT_CELL)
         # Newly seen parts of a static obstacle can put the robot inside its own safety
         # distance; then moves that keep at least the clearance it has are feasible (never
