@@ -5,6 +5,7 @@ import math
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -136,8 +137,8 @@ def test_runs_in_small_batches_give_the_same_runs(monkeypatch):
     assert steps == [3] * 5 + [3] * 5 + [1] * 5
 
 
-def test_threads_and_stacks_give_each_cells_own_runs(monkeypatch):
-    """Any threads, stacked functions and batches: the numbers of one minimize per cell."""
+def test_processes_and_stacks_give_each_cells_own_runs(monkeypatch):
+    """Any processes, stacked functions and batches: the numbers of one minimize per cell."""
     algos = [a for a in list_optimizers() if a in ("GWO", "FDO", "PSO")]
     spec = bench_cli.make_spec(",".join(algos), "F1,F7,F9,F12", "3,4", runs=5, agents=6,
                                iterations=6, seed=9, shifted=True)
@@ -151,9 +152,12 @@ def test_threads_and_stacks_give_each_cells_own_runs(monkeypatch):
     assert all(t.rows * 6 * t.dim <= bench_cli.BATCH_ELEMENTS or len(t.run_ids) == 1
                for t in tasks)
     done: list[bench_cli.Task] = []
-    one = bench_cli.run_bench(spec, threads=1)
-    two = bench_cli.run_bench(spec, threads=2, on_done=done.append)
+    steps: list[int] = []
+    one = bench_cli.run_bench(spec, jobs=1)
+    # the children get BATCH_ELEMENTS through the tasks planned here, not the monkeypatch
+    two = bench_cli.run_bench(spec, steps.append, jobs=2, on_done=done.append)
     assert sorted(done, key=repr) == sorted(tasks, key=repr)
+    assert sum(steps) == len(spec.cells()) * 5 * 6  # every (cell, run) x iteration, once
     assert [(c.algorithm, c.function, c.dim) for c in two] == [
         (a, f, d) for f, d, a in spec.cells()
     ]
@@ -165,20 +169,32 @@ def test_threads_and_stacks_give_each_cells_own_runs(monkeypatch):
         assert b.evaluations == res.evaluations.tolist()
 
 
-def test_a_failing_task_stops_the_others(monkeypatch):
-    spec = bench_cli.make_spec("GWO", "F1,F7,F9", "2", runs=2, agents=5, iterations=50, seed=1)
-    import swarmpath.optimizers as opt
+def _sleep_or_fail(task, report):
+    """A task for parallel.run_tasks (module level: children import it)."""
+    if task == "fail":
+        raise ParameterError("broken on purpose")
+    report(1)
+    time.sleep(float(task))
+    return task
 
-    real = opt.minimize_many
 
-    def failing(algorithm, functions, *args, **kw):
-        if "F7" in functions:
-            raise ParameterError("GWO.x: broken on purpose")
-        return real(algorithm, functions, *args, **kw)
+def test_parallel_tasks_report_progress_and_keep_task_order():
+    from swarmpath.cli import parallel
 
-    monkeypatch.setattr(bench_cli, "minimize_many", failing)
+    steps: list[int] = []
+    done: list[str] = []
+    tasks = ["0.6", "0", "0.3"]
+    assert parallel.run_tasks(_sleep_or_fail, tasks, 2, steps.append, done.append) == tasks
+    assert sum(steps) == 3 and sorted(done) == sorted(tasks)
+
+
+def test_a_failing_task_stops_the_others_at_once():
+    from swarmpath.cli import parallel
+
+    started = time.monotonic()
     with pytest.raises(ParameterError, match="broken on purpose"):
-        bench_cli.run_bench(spec, threads=2)
+        parallel.run_tasks(_sleep_or_fail, ["60", "fail"], 2)
+    assert time.monotonic() - started < 30  # the 60 s task was stopped, not awaited
 
 
 def test_json_numbers_are_strict_json():
@@ -213,8 +229,8 @@ BAD_INPUT = [
     (["--params", '{"GWO": {"a_max": "high"}}'], "a_max"),
     (["--params", '{"GWO": 3}'], "--params"),
     (["--no-such-option"], "--no-such-option"),
-    (["--threads", "-1"], "--threads"),
-    (["--threads", "257"], "--threads"),
+    (["--jobs", "-1"], "--jobs"),
+    (["-j", "257"], "--jobs"),
 ]
 
 

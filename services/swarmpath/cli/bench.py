@@ -3,19 +3,16 @@
 The command is a thin shell over pure functions: :func:`make_spec` validates the options into a
 :class:`BenchSpec` (raising :class:`InputError` naming the option), :func:`run_bench` runs the
 cells through :func:`swarmpath.optimizers.minimize_many` (stacked per algorithm and dimension,
-on one thread per CPU), and :mod:`swarmpath.report` builds the table
+in one process per CPU: :mod:`swarmpath.cli.parallel`), and :mod:`swarmpath.report` builds the table
 and the JSON document.
 """
 
 from __future__ import annotations
 
 import json
-import os
 import sys
-import threading
 import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass, field
 from typing import Annotated, Any
 
@@ -26,13 +23,16 @@ from rich.measure import Measurement
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from swarmpath import __version__, report
+from swarmpath.cli import parallel
 from swarmpath.cli.core import InputError, app, parse_params_option, resolve_names
 from swarmpath.functions import expand_function_names, get_function
 from swarmpath.optimizers import ParameterError, get_optimizer, list_optimizers, minimize_many
 from swarmpath.optimizers.api import MAX_AGENTS, MAX_DIM, MAX_ITERATIONS
 
 MAX_RUNS = 10_000
-MAX_THREADS = 256
+MAX_JOBS = 256
+#: Rough CPU seconds per population element and iteration (23 ms per run of 30 x 30 x 500).
+SECONDS_PER_ELEMENT_ITERATION = 5e-8
 #: Runs are computed in batches of at most this many array elements per population (functions x
 #: runs x agents x dim, and per curve array): memory stays bounded and, runs being independent,
 #: results are the same.
@@ -190,74 +190,63 @@ def plan_tasks(spec: BenchSpec, cells: Sequence[tuple[str, int, str]] | None = N
             for start in range(0, spec.runs, size):
                 ids = tuple(range(start, min(start + size, spec.runs)))
                 tasks.append(Task(algorithm, dim, tuple(stack), ids))
-    # largest first, so that the threads finish together (stable: table order among equals)
+    # largest first, so that the processes finish together (stable: table order among equals)
     tasks.sort(key=lambda t: -t.rows * t.dim)
     return tasks
-
-
-class _Stopped(Exception):
-    """Raised inside a task when the study was interrupted."""
 
 
 def run_bench(
     spec: BenchSpec,
     on_step: Callable[[int], None] | None = None,
-    threads: int = 1,
+    jobs: int = 1,
     cells: Sequence[tuple[str, int, str]] | None = None,
     on_done: Callable[[Task], None] | None = None,
 ) -> list[report.Cell]:
     """Every cell of the study (or the given ``cells``), in table order and ranked.
 
-    The tasks of :func:`plan_tasks` run on ``threads`` threads (numpy releases the GIL inside
-    array operations); each run depends only on (spec, seed, run), so the numbers are the same
-    for any number of threads. ``on_step(rows)`` is called after each iteration of a task with
-    the number of (function, run) rows it advanced, and ``on_done(task)`` when a task finished,
-    both under one lock, from the thread that computed it.
+    The tasks of :func:`plan_tasks` run in this process (``jobs`` = 1) or in ``jobs`` spawned
+    processes (:mod:`swarmpath.cli.parallel`); each run depends only on (spec, seed, run), so the
+    numbers are the same for any ``jobs``. ``on_step(rows)`` reports (function, run) rows that
+    advanced one iteration, ``on_done(task)`` a finished task; both are called in this process.
     """
-    if threads < 1:
-        raise ValueError("threads must be >= 1")
     keys = spec.cells() if cells is None else list(cells)
     tasks = plan_tasks(spec, keys)
-    stop = threading.Event()
-    lock = threading.Lock()
-
-    def compute(task: Task) -> tuple[Task, list[Any]]:
-        def hook(_optimizer: object) -> None:
-            if stop.is_set():
-                raise _Stopped
-            if on_step is not None:
-                with lock:
-                    on_step(task.rows)
-
-        results = minimize_many(
-            task.algorithm, list(task.functions), dim=task.dim, agents=spec.agents,
-            iterations=spec.iterations, seed=spec.seed, params=spec.params.get(task.algorithm),
-            shifted=spec.shifted, run_ids=list(task.run_ids), on_iteration=hook,
-        )
-        if on_done is not None:
-            with lock:
-                on_done(task)
-        return task, results
-
-    if threads == 1:
-        done = [compute(t) for t in tasks]
-    else:
-        pool = ThreadPoolExecutor(max_workers=threads, thread_name_prefix="bench")
-        try:
-            done = list(pool.map(compute, tasks))
-        except BaseException:  # Ctrl-C or a failed task: the others stop at their next iteration
-            stop.set()
-            pool.shutdown(wait=True, cancel_futures=True)
-            raise
-        pool.shutdown()
+    done = parallel.run_tasks(
+        _compute, [(spec, t) for t in tasks], jobs, on_step,
+        None if on_done is None else (lambda job: on_done(job[1])),
+    )
     parts: dict[tuple[str, str, int], list[Any]] = {}
-    for _task, results in done:
+    for results in done:
         for res in results:
             parts.setdefault((res.algorithm, res.function, res.dim), []).append(res)
     out = [_cell(algorithm, function, dim, parts[(algorithm, function, dim)])
            for function, dim, algorithm in keys]
     report.assign_ranks(out)
     return out
+
+
+def _compute(job: tuple[BenchSpec, Task], report_rows: Callable[[int], None]) -> list[Any]:
+    """One task: ``minimize_many`` over its functions and runs (in a child process or here)."""
+    spec, task = job
+
+    def hook(_optimizer: object) -> None:
+        report_rows(task.rows)
+
+    return minimize_many(
+        task.algorithm, list(task.functions), dim=task.dim, agents=spec.agents,
+        iterations=spec.iterations, seed=spec.seed, params=spec.params.get(task.algorithm),
+        shifted=spec.shifted, run_ids=list(task.run_ids), on_iteration=hook,
+    )
+
+
+def auto_jobs(spec: BenchSpec) -> int:
+    """Processes for ``--jobs 0``: one per CPU, but one for a study of a few seconds (starting a
+    process and importing numpy there costs about half a second)."""
+    elements = sum(t.rows * spec.agents * t.dim for t in plan_tasks(spec))
+    seconds = elements * spec.iterations * SECONDS_PER_ELEMENT_ITERATION
+    if seconds < 2.0:
+        return 1
+    return parallel.usable_cpus()
 
 
 def _cell(algorithm: str, function: str, dim: int, results: list[Any]) -> report.Cell:
@@ -283,16 +272,8 @@ def run_cell(
     on_step: Callable[[int], None] | None = None,
 ) -> report.Cell:
     """All runs of one cell (in memory-bounded batches); ``on_step(runs)`` after each iteration."""
-    (cell,) = run_bench(spec, on_step, threads=1, cells=[(function, dim, algorithm)])
+    (cell,) = run_bench(spec, on_step, jobs=1, cells=[(function, dim, algorithm)])
     return cell
-
-
-def default_threads() -> int:
-    """One thread per CPU this process may use."""
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # not on Linux
-        return max(1, os.cpu_count() or 1)
 
 
 def caption(spec: BenchSpec, seconds: float) -> str:
@@ -304,7 +285,7 @@ def caption(spec: BenchSpec, seconds: float) -> str:
 
 
 # -------------------------------------------------------------------------------------- command
-def _run_with_progress(spec: BenchSpec, stderr: Console, threads: int) -> list[report.Cell]:
+def _run_with_progress(spec: BenchSpec, stderr: Console, jobs: int) -> list[report.Cell]:
     keys = spec.cells()
     total_runs = len(keys) * spec.runs
     columns = (
@@ -316,25 +297,25 @@ def _run_with_progress(spec: BenchSpec, stderr: Console, threads: int) -> list[r
     )
     with Progress(*columns, console=stderr, transient=stderr.is_terminal) as progress:
         task = progress.add_task(
-            f"bench x{threads}", total=total_runs * spec.iterations, cells=0, n_cells=len(keys),
+            f"bench x{jobs}", total=total_runs * spec.iterations, cells=0, n_cells=len(keys),
             runs=0, n_runs=total_runs,
         )
         done = 0  # run-iterations
         finished: dict[tuple[str, str, int], int] = {}  # runs finished per cell
 
-        def on_done(t: Task) -> None:  # run_bench calls it under its lock
+        def on_done(t: Task) -> None:
             for f in t.functions:
                 key = (t.algorithm, f, t.dim)
                 finished[key] = finished.get(key, 0) + len(t.run_ids)
             cells = sum(n == spec.runs for n in finished.values())
             progress.update(task, cells=cells)
 
-        def on_step(rows: int) -> None:  # run_bench calls it under its lock
+        def on_step(rows: int) -> None:
             nonlocal done
             done += rows
             progress.update(task, completed=done, runs=done // spec.iterations)
 
-        cells = run_bench(spec, on_step, threads, on_done=on_done)
+        cells = run_bench(spec, on_step, jobs, on_done=on_done)
         progress.update(task, description="done", cells=len(keys), runs=total_runs)
     return cells
 
@@ -361,18 +342,22 @@ def bench(
     params: Annotated[
         str | None, typer.Option(help='Algorithm parameters: \'{"GWO": {"a_max": 2}}\'.')
     ] = None,
-    threads: Annotated[
+    jobs: Annotated[
         int,
-        typer.Option(help="Threads computing the study (0: one per CPU). Numbers do not change."),
+        typer.Option(
+            "--jobs", "-j",
+            help="Processes computing the study (0: one per CPU, one for a short study). "
+            "Numbers do not change.",
+        ),
     ] = 0,
 ) -> None:
     """Run optimizers on benchmark functions; print min/max/avg/std per function and dimension."""
     spec = make_spec(algorithms, functions, dims, runs, agents, iterations, seed, shifted, params)
-    check_range("--threads", threads, 0, MAX_THREADS)
+    check_range("--jobs", jobs, 0, MAX_JOBS)
     stderr = Console(stderr=True)
     started = time.perf_counter()
     try:
-        cells = _run_with_progress(spec, stderr, threads or default_threads())
+        cells = _run_with_progress(spec, stderr, jobs or auto_jobs(spec))
     except ParameterError as exc:  # a check only the optimizer's constructor makes
         raise InputError("--params", str(exc)) from None
     seconds = time.perf_counter() - started
