@@ -139,6 +139,32 @@ def test_deterministic_mode_gives_the_same_paths():
     assert [r["path"] for r in docs[0]["runs"]] == [r["path"] for r in docs[1]["runs"]]
 
 
+def test_processes_do_not_change_the_runs():
+    args = ("-p", "MFB,RFO-GWO-EA", "-m", "mfb-dynamic", "--runs", "2", "--seed", "5", "--json")
+    one, two = (json.loads(invoke(*args, "-j", j).stdout)["runs"] for j in ("1", "2"))
+    assert [(r["planner"], r["run"]) for r in two] == [
+        (p, r) for p in ("MFB", "RFO-GWO-EA") for r in (0, 1)]
+    for a, b in zip(one, two, strict=True):
+        a.pop("seconds"), b.pop("seconds")  # wall time: the only field allowed to differ
+        assert a == b
+
+
+def test_the_plotted_world_is_the_one_the_episode_simulated():
+    from swarmpath.cli.plan import simulated_world
+    from swarmpath.planners import Episode
+    from swarmpath.world import get_map
+
+    scenario = get_map("icoot-map4")  # ten obstacles and the goal on a random walk
+    episode = Episode(scenario, "MFB", 7, 3, step_limit=5)
+    rebuilt = simulated_world(scenario, 7, 3)
+    for t in (0.0, 0.35, 4.0, 31.7):
+        assert np.array_equal(rebuilt.obstacle_positions_at(t),
+                              episode.sim.world.obstacle_positions_at(t))
+        assert np.array_equal(rebuilt.goal_at(t), episode.sim.world.goal_at(t))
+    other = simulated_world(scenario, 7, 4)
+    assert not np.array_equal(other.obstacle_positions_at(4.0), rebuilt.obstacle_positions_at(4.0))
+
+
 @pytest.mark.parametrize(
     ("args", "option"),
     [
@@ -150,6 +176,8 @@ def test_deterministic_mode_gives_the_same_paths():
         (["--params", '{"MFB": {"agents": 3}}'], "--params"),
         (["--runs", "0"], "--runs"),
         (["--seed", "-1"], "--seed"),
+        (["--jobs", "-1"], "--jobs"),
+        (["-j", "257"], "--jobs"),
     ],
 )
 def test_bad_input_is_one_line_naming_the_option(args, option):

@@ -29,9 +29,11 @@ from rich.measure import Measurement
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from swarmpath.cli import parallel
 from swarmpath.cli.core import InputError, app, parse_params_option, resolve_names
 
 MAX_RUNS = 10_000
+MAX_JOBS = 256
 MAP_SUFFIXES = (".json", ".yaml", ".yml", ".map")
 
 
@@ -193,27 +195,49 @@ def run_episode(spec: PlanSpec, planner: str, scenario: Any, run: int,
 
 def run_plan(
     spec: PlanSpec,
-    on_run: Callable[[int, str, str, int], None] | None = None,
-    on_step: Callable[[], None] | None = None,
+    on_step: Callable[[int], None] | None = None,
+    jobs: int = 1,
+    on_done: Callable[[int], None] | None = None,
 ) -> list[CellResult]:
-    """Every run of every planner x map, in table order. ``on_run(i, planner, map, run)``
-    before the i-th run starts."""
+    """Every run of every planner x map, in table order, in this process (``jobs`` = 1) or in
+    ``jobs`` spawned processes (:mod:`swarmpath.cli.parallel`). A run depends only on (scenario,
+    planner, seed, run), so the results are the same for any ``jobs``; with more processes than
+    cores the planning times grow, and the planners that plan against a wall-clock budget (OMPL)
+    get less done. ``on_step(n)``: n simulated steps done; ``on_done(runs)``: runs finished."""
+    tasks = [(spec, i, run) for i in range(len(spec.cells())) for run in range(spec.runs)]
+    finished = 0
+
+    def done(_task: Any) -> None:
+        nonlocal finished
+        finished += 1
+        if on_done is not None:
+            on_done(finished)
+
+    outcomes = parallel.run_tasks(_episode, tasks, jobs, on_step, done)
+    cells = []
+    for i, (planner, scenario) in enumerate(spec.cells()):
+        runs = outcomes[i * spec.runs:(i + 1) * spec.runs]
+        cells.append(CellResult(planner, scenario, runs, simulated_world(scenario, spec.seed, 0)))
+    return cells
+
+
+def _episode(task: tuple[PlanSpec, int, int], report: Callable[[int], None]) -> dict[str, Any]:
+    """One run of one cell as a JSON-ready dict (in a child process or here)."""
     from swarmpath.planners.summary import json_safe
 
-    cells = []
-    i = 0
-    for planner, scenario in spec.cells():
-        cell = CellResult(planner, scenario, [])
-        for run in range(spec.runs):
-            if on_run is not None:
-                on_run(i, planner, scenario.name, run)
-            outcome, world = run_episode(spec, planner, scenario, run, on_step)
-            cell.runs.append(json_safe(outcome))
-            if run == 0:
-                cell.world = world
-            i += 1
-        cells.append(cell)
-    return cells
+    spec, index, run = task
+    planner, scenario = spec.cells()[index]
+    outcome, _world = run_episode(spec, planner, scenario, run, lambda: report(1))
+    return dict(json_safe(outcome))
+
+
+def simulated_world(scenario: Any, seed: int, run: int) -> Any:
+    """The moving obstacles and goal of run ``run`` as its simulator saw them (the episode draws
+    its world from stream (seed, run, SIMULATION)): for the plots, rebuilt here rather than sent
+    back from the process that ran the episode."""
+    from swarmpath.optimizers.streams import SIMULATION, run_generator
+
+    return scenario.instantiate(run_generator(seed, run, SIMULATION))
 
 
 def document(cells: Sequence[CellResult]) -> dict[str, Any]:
@@ -369,32 +393,28 @@ def plot_cell(cell: CellResult, directory: Path) -> Path:
 
 
 # -------------------------------------------------------------------------------------- command
-def _run_with_progress(spec: PlanSpec, stderr: Console) -> list[CellResult]:
+def _run_with_progress(spec: PlanSpec, stderr: Console, jobs: int) -> list[CellResult]:
     total = len(spec.cells()) * spec.runs
     columns = (
-        TextColumn("{task.description:<28}"),
+        TextColumn("{task.description:<12}"),
         BarColumn(),
         TextColumn("runs {task.completed:.0f}/{task.total:.0f}"),
         TextColumn("steps {task.fields[steps]}"),
         TimeElapsedColumn(),
     )
     with Progress(*columns, console=stderr, transient=stderr.is_terminal) as progress:
-        task = progress.add_task("plan", total=total, steps=0)
+        task = progress.add_task(f"plan x{jobs}", total=total, steps=0)
         steps = 0
 
-        def on_run(i: int, planner: str, name: str, run: int) -> None:
+        def on_step(n: int) -> None:
             nonlocal steps
-            steps = 0
-            progress.update(task, completed=i, description=f"{planner} {name} #{run + 1}",
-                            steps=0)
+            steps += n
+            progress.update(task, steps=steps)
 
-        def on_step() -> None:
-            nonlocal steps
-            steps += 1
-            if steps % 10 == 0:
-                progress.update(task, steps=steps)
+        def on_done(runs: int) -> None:
+            progress.update(task, completed=runs)
 
-        cells = run_plan(spec, on_run, on_step)
+        cells = run_plan(spec, on_step, jobs, on_done)
         progress.update(task, completed=total, description="done", steps=steps)
     return cells
 
@@ -443,6 +463,11 @@ def plan(
     list_planners: Annotated[
         bool, typer.Option("--list-planners", help="List the registered planners and exit.")
     ] = False,
+    jobs: Annotated[
+        int,
+        typer.Option("--jobs", "-j", help="Processes running the episodes (0: one per CPU). "
+                     "Results do not change; planning times are per process."),
+    ] = 0,
 ) -> None:
     """Run path planners on maps; print the papers' run tables (Run / Distance / Error / Elapsed
     time) with success, collisions and the gap to the exact optimum."""
@@ -455,6 +480,8 @@ def plan(
             _list_planners()
         return
     spec = make_spec(planners, maps, runs, seed, params)
+    if not 0 <= jobs <= MAX_JOBS:
+        raise InputError("--jobs", f"{jobs} is not in [0, {MAX_JOBS}]")
     if plot is not None:
         try:
             plot.mkdir(parents=True, exist_ok=True)
@@ -464,7 +491,8 @@ def plan(
             raise InputError("--plot", f"{str(plot)!r} is not a directory")
     stderr = Console(stderr=True)
     started = time.perf_counter()
-    cells = _run_with_progress(spec, stderr)
+    total = len(spec.cells()) * spec.runs
+    cells = _run_with_progress(spec, stderr, jobs or min(parallel.usable_cpus(), total))
     seconds = time.perf_counter() - started
     if plot is not None:
         for cell in cells:
