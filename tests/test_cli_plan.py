@@ -29,7 +29,10 @@ PNG = b"\x89PNG\r\n\x1a\n"
 
 
 def invoke(*args: str):
-    return runner.invoke(app, ["plan", *args])
+    # one process unless a test asks for more: the OMPL runs here have 0.1 s wall-clock budgets,
+    # and extra processes next to pytest-xdist's would starve them
+    jobs = [] if {"-j", "--jobs"} & set(args) else ["-j", "1"]
+    return runner.invoke(app, ["plan", *jobs, *args])
 
 
 def test_table_has_the_papers_columns_and_a_mean_row():
