@@ -87,6 +87,14 @@ _IDENTITY = {
     "seed": {"type": "integer", "description": "job seed"},
 }
 
+# who ran the run and how it ended: the same fields on both kinds of result
+_OUTCOME: dict[str, Any] = {
+    "worker": {"type": "string"},
+    "status": {"type": "string", "description": "ok or failed"},
+    "failure": {"type": "string", "description": "exception text; empty unless failed"},
+    "seconds": {"type": "number"},
+}
+
 BENCHMARK_RESULT_SCHEMA: dict[str, Any] = {
     "title": "swarmpath.BenchmarkRunResult",
     "description": "One finished benchmark run (non-finite metrics are left out)",
@@ -96,10 +104,7 @@ BENCHMARK_RESULT_SCHEMA: dict[str, Any] = {
         "algorithm": {"type": "string"},
         "function": {"type": "string"},
         "dim": {"type": "integer"},
-        "worker": {"type": "string"},
-        "status": {"type": "string", "description": "ok or failed"},
-        "failure": {"type": "string", "description": "exception text; empty unless failed"},
-        "seconds": {"type": "number"},
+        **_OUTCOME,
         "best_fitness": {"type": "number"},
         "evaluations": {"type": "integer"},
     },
@@ -113,10 +118,7 @@ MAP_RESULT_SCHEMA: dict[str, Any] = {
         **_IDENTITY,
         "planner": {"type": "string"},
         "map": {"type": "string"},
-        "worker": {"type": "string"},
-        "status": {"type": "string", "description": "ok or failed"},
-        "failure": {"type": "string", "description": "exception text; empty unless failed"},
-        "seconds": {"type": "number"},
+        **_OUTCOME,
         "success": {"type": "boolean"},
         "collisions": {"type": "integer"},
         "length": {"type": "number"},
