@@ -30,7 +30,6 @@ from swarmpath.optimizers import ParameterError, get_optimizer, list_optimizers,
 from swarmpath.optimizers.api import MAX_AGENTS, MAX_DIM, MAX_ITERATIONS
 
 MAX_RUNS = 10_000
-MAX_JOBS = 256
 #: Rough CPU seconds per population element and iteration (23 ms per run of 30 x 30 x 500).
 SECONDS_PER_ELEMENT_ITERATION = 5e-8
 #: Runs are computed in batches of at most this many array elements per population (functions x
@@ -353,7 +352,7 @@ def bench(
 ) -> None:
     """Run optimizers on benchmark functions; print min/max/avg/std per function and dimension."""
     spec = make_spec(algorithms, functions, dims, runs, agents, iterations, seed, shifted, params)
-    check_range("--jobs", jobs, 0, MAX_JOBS)
+    check_range("--jobs", jobs, 0, parallel.MAX_JOBS)
     stderr = Console(stderr=True)
     started = time.perf_counter()
     try:

@@ -25,6 +25,8 @@ R = TypeVar("R")
 Compute = Callable[[T, Callable[[int], None]], R]
 
 PROGRESS_SECONDS = 0.2
+#: Most processes a command accepts (--jobs).
+MAX_JOBS = 256
 _SINGLE_THREADED = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 _progress: Any = None  # in a child: the parent's progress queue (set by _init_child)
 

@@ -33,7 +33,6 @@ from swarmpath.cli import parallel
 from swarmpath.cli.core import InputError, app, parse_params_option, resolve_names
 
 MAX_RUNS = 10_000
-MAX_JOBS = 256
 MAP_SUFFIXES = (".json", ".yaml", ".yml", ".map")
 
 
@@ -480,8 +479,8 @@ def plan(
             _list_planners()
         return
     spec = make_spec(planners, maps, runs, seed, params)
-    if not 0 <= jobs <= MAX_JOBS:
-        raise InputError("--jobs", f"{jobs} is not in [0, {MAX_JOBS}]")
+    if not 0 <= jobs <= parallel.MAX_JOBS:
+        raise InputError("--jobs", f"{jobs} is not in [0, {parallel.MAX_JOBS}]")
     if plot is not None:
         try:
             plot.mkdir(parents=True, exist_ok=True)
