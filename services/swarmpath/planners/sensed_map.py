@@ -88,6 +88,29 @@ def _to_surface(points: Array, scan: Array, surface: float) -> tuple[Array, Arra
             np.where(closer[:, None], foot[rows, k], nearest))
 
 
+def motion(
+    previous: Array, current: Array, dt: float,
+    max_speed: float = 2.0, min_speed: float = 0.05, surface: float = 0.0,
+) -> tuple[NDArray[np.bool_], Array]:
+    """Which points of ``current`` moved since ``previous`` (``dt`` seconds earlier), and their
+    measured velocities (n, 2) (rule: :func:`predict`)."""
+    none = (np.zeros(len(current), dtype=bool), np.zeros((len(current), 2)))
+    if len(previous) == 0 or len(current) == 0 or dt <= 0:
+        return none
+    if surface > 0:
+        dist, nearest = _to_surface(current, previous, surface)
+        back, _ = _to_surface(previous, current, surface)
+        _, idx = cKDTree(previous).query(current)
+        dist = np.where(back[idx] >= min_speed * dt, dist, 0.0)
+    else:
+        dist, idx = cKDTree(previous).query(current)
+        nearest = previous[idx]
+    velocity = (current - nearest) / dt
+    speed = dist / dt
+    moving = (speed >= min_speed) & (speed <= max_speed)
+    return moving, velocity
+
+
 def predict(
     previous: Array, current: Array, dt: float, horizons: tuple[float, ...],
     max_speed: float = 2.0, min_speed: float = 0.05, surface: float = 0.0,
@@ -105,23 +128,47 @@ def predict(
     surface seen further than before, or a polygon corner cut by the previous polyline, would
     move one way only.
     """
-    if len(previous) == 0 or len(current) == 0 or dt <= 0:
-        return np.zeros((0, 2))
-    if surface > 0:
-        dist, nearest = _to_surface(current, previous, surface)
-        back, _ = _to_surface(previous, current, surface)
-        _, idx = cKDTree(previous).query(current)
-        dist = np.where(back[idx] >= min_speed * dt, dist, 0.0)
-    else:
-        dist, idx = cKDTree(previous).query(current)
-        nearest = previous[idx]
-    velocity = (current - nearest) / dt
-    speed = dist / dt
-    moving = (speed >= min_speed) & (speed <= max_speed)
+    moving, velocity = motion(previous, current, dt, max_speed, min_speed, surface)
     if not moving.any():
         return np.zeros((0, 2))
     base, v = current[moving], velocity[moving]
     return np.concatenate([base + v * h for h in horizons])
+
+
+def group_velocity(points: Array, velocity: Array, link: float, max_speed: float = 2.0,
+                   conditioning: float = 0.1) -> Array:
+    """Whole-obstacle velocities of moving points from their measured surface motion.
+
+    :func:`motion` measures each point's displacement from the previous surface: the component
+    of the obstacle's velocity along the surface normal n_i only (a circle crossing the robot's
+    way at 0.3 m/s showed 0.12 m/s). Points closer than ``link`` are one rigid obstacle moving by
+    one velocity V with n_i . V = s_i (s_i the measured normal speed, n_i its direction); the
+    least-squares V is taken when the normals span enough directions (the smaller eigenvalue of
+    the mean n n^T at least ``conditioning``), else the points keep their measured velocities.
+    """
+    out = velocity.copy()
+    if len(points) < 2:
+        return out
+    pairs = cKDTree(points).query_pairs(link, output_type="ndarray")
+    n_pts = len(points)
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n_pts, n_pts))
+    count, labels = connected_components(graph, directed=False)
+    speed = np.hypot(*velocity.T)
+    for k in range(count):
+        idx = np.flatnonzero(labels == k)
+        if len(idx) < 2:
+            continue
+        s = speed[idx]
+        n = velocity[idx] / np.where(s > 1e-12, s, 1.0)[:, None]
+        A = n.T @ n / len(idx)
+        if float(np.linalg.eigvalsh(A)[0]) < conditioning:
+            continue
+        V = np.linalg.solve(A, n.T @ s / len(idx))
+        norm = float(np.hypot(*V))
+        if norm > max_speed:
+            V = V * (max_speed / norm)
+        out[idx] = V
+    return out
 
 
 def has_corner(scan: Array, surface: float, angle_deg: float) -> bool:

@@ -28,8 +28,12 @@ Figure 8):
    its spot: then it steps to where it keeps the most clearance.
 
 Moving obstacles: sensed points that moved between the last two scans are extrapolated over
-``predict`` seconds and added to the known points (:func:`sensed_map.predict`), so candidates
-that an approaching obstacle is about to occupy are infeasible.
+``predict`` seconds and added to the known points (:func:`sensed_map.motion`), so candidates
+that an approaching obstacle is about to occupy are infeasible. An obstacle whose whole velocity
+(:func:`sensed_map.group_velocity`) stays steady over ``track_scans`` scans is *tracked*: the aim
+plans around it where it will be when the robot can get there (``lead``; behind a crossing
+obstacle instead of ahead of it) and its remembered trail is forgotten (``moving_memory``,
+``trail``). Erratic motion (a random walk) is not tracked and is handled as before.
 
 The run ends within 0.2 m of the goal, or fails at the episode's step or time limit.
 """
@@ -40,12 +44,15 @@ import math
 from typing import Any, ClassVar
 
 import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial import cKDTree
 
 from swarmpath.optimizers import Problem, RunStreams, create, get_optimizer
 from swarmpath.optimizers.base import ParameterError
 from swarmpath.planners import local, sensed_map
 from swarmpath.planners.base import Decision, Observation, Planner, PlannerError, register
 from swarmpath.robot.sensors import get_sensor_model
+from swarmpath.world.geometry import point_segment_distance
 
 Array = np.ndarray
 # m: sensed points in one cell of this grid are merged (the first one is kept). A merged point
@@ -77,6 +84,12 @@ class SwarmLocalPlanner(Planner):
         "repair": "mfb",
         "objective": "cost",
         "memory": 2.0,  # s: how long sensed points are remembered
+        "moving_memory": 0.0,  # s: ... tracked moving points (then only where they are now)
+        "trail": 0.05,  # m: remembered points this close to a tracked surface's trail are dropped
+        "consistency": 0.15,  # m/s: a moving obstacle is tracked when its velocity is this steady
+        "track_scans": 2,  # ... in this many scans in a row
+        "track_gap": 0.3,  # m: ... between two scans' moving points this close
+        "lead": 2.0,  # s: the aim plans around tracked points where they will be (0: off)
         "replan": 0.25,  # s: drive time per decision
         "heuristic": "visibility",  # what f1 measures the distance to (see module docstring)
         "lookahead": 1.0,  # m: carrot distance along the known shortest path
@@ -111,7 +124,8 @@ class SwarmLocalPlanner(Planner):
             if not float(p[key]) > 0:
                 raise PlannerError(f"{cls.name}.{key} must be > 0")
         for key in ("w1", "w2", "safety", "corner_safety", "corner_angle", "diff_drive_safety",
-                    "memory", "predict", "surface", "carrot_clearance", "rejoin", "hold_angle",
+                    "memory", "moving_memory", "trail", "lead", "consistency", "track_gap",
+                    "track_scans", "predict", "surface", "carrot_clearance", "rejoin", "hold_angle",
                     "hold_min", "patience", "tolerance"):
             if float(p[key]) < 0:
                 raise PlannerError(f"{cls.name}.{key} must be >= 0")
@@ -132,11 +146,17 @@ class SwarmLocalPlanner(Planner):
         self._prior = np.zeros((0, 2))
         if static_map is not None:
             self._prior = sensed_map.surface_points(static_map, HIT_CELL)
-        self._memory: list[tuple[float, Array]] = []
+        self._memory: list[tuple[float, Array, np.ndarray]] = []  # (time, hits, moving)
         self._last_scan: tuple[float, Array] | None = None
         self._held: Array | None = None  # the last swarm waypoint (see ``hold_angle``)
         self._path: Array | None = None  # the last known path (see ``rejoin``)
         self._moving_until = -np.inf  # motion was sensed in the last ``memory`` seconds
+        self._moving: tuple[Array, Array] = (np.zeros((0, 2)), np.zeros((0, 2)))  # this scan's
+        self._settled = np.zeros((0, 2))  # the known points but this scan's tracked ones
+        # the last scan's moving points, their whole-obstacle velocities and steady scans in a row
+        self._tracks: tuple[Array, Array, NDArray[np.int64]] = (
+            np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0, dtype=np.int64))
+        self._speed = float(scenario.robot.linear_speed)
         # The planner knows its own robot (not the map): a differential drive turns while it
         # drives, so its path bulges off the straight segment it was sent along.
         self._diff_drive = scenario.robot.model == "diff-drive"
@@ -175,21 +195,48 @@ class SwarmLocalPlanner(Planner):
         current = np.zeros((0, 2))
         if obs.reading is not None and len(obs.reading.hit_points):
             current = obs.reading.hit_points
-            self._memory.append((obs.time, current))
+        moving = np.zeros(len(current), dtype=bool)
+        velocity = np.zeros((len(current), 2))
+        if self._last_scan is not None:
+            t0, previous = self._last_scan
+            moving, velocity = sensed_map.motion(previous, current, obs.time - t0,
+                                                 surface=float(self.p["surface"]))
+        whole = velocity.copy()
+        tracked = self._track(current, moving, whole)
+        self._moving = (current[tracked], whole[tracked])
+        if moving.any():
+            self._moving_until = obs.time + float(self.p["memory"])
+        if tracked.any():
+            self._erase_trail(obs.time, current[tracked], whole[tracked])
+        if len(current):
+            self._memory.append((obs.time, current, tracked))
         horizon = obs.time - float(self.p["memory"])
-        self._memory = [(t, h) for t, h in self._memory if t >= horizon - 1e-9]
-        parts = [h for _, h in self._memory]
+        fade = obs.time - float(self.p["moving_memory"])
+        kept = []
+        for t, h, m in self._memory:
+            if t < horizon - 1e-9:
+                continue
+            if t < fade - 1e-9 and m.any():
+                h, m = h[~m], m[~m]  # a moving point is remembered ``moving_memory`` s only
+            if len(h):
+                kept.append((t, h, m))
+        self._memory = kept
+        parts = [h for _, h, _ in self._memory]
         if len(self._prior):
             parts.append(self._prior)
+        # everything but this scan's tracked points and their predictions (see ``lead``)
+        settled = [h[~m] if t == obs.time else h for t, h, m in self._memory]
+        if len(self._prior):
+            settled.append(self._prior)
+        self._settled = np.concatenate(settled) if settled else np.zeros((0, 2))
         ahead = float(self.p["predict"])
-        if ahead > 0 and self._last_scan is not None:
-            t0, previous = self._last_scan
-            steps = tuple(ahead * k / 4 for k in range(1, 5))
-            moving = sensed_map.predict(previous, current, obs.time - t0, steps,
-                                        surface=float(self.p["surface"]))
-            if len(moving):
-                self._moving_until = obs.time + float(self.p["memory"])
-            parts.append(moving)
+        if ahead > 0 and moving.any():
+            base, v = current[moving], velocity[moving]
+            parts.extend(base + v * (ahead * k / 4) for k in range(1, 5))
+            # tracked points: also along their whole-obstacle velocity (the measured surface
+            # velocity is the approach component, the one that matters most for contact)
+            base, v = current[tracked], whole[tracked]
+            parts.extend(base + v * (ahead * k / 4) for k in range(1, 5))
         self._last_scan = (obs.time, current)
         if sensed_map.has_corner(current, float(self.p["surface"]) or 0.2,
                                  float(self.p["corner_angle"])):
@@ -197,6 +244,75 @@ class SwarmLocalPlanner(Planner):
         if not parts:
             return np.zeros((0, 2))
         return np.concatenate(parts)
+
+    def _track(self, current: Array, moving: NDArray[np.bool_], velocity: Array) -> NDArray[
+        np.bool_
+    ]:
+        """Which moving points of this scan move steadily (updates ``velocity`` in place).
+
+        Each moving obstacle's velocity is estimated as a whole (:func:`sensed_map.
+        group_velocity`); a point is *tracked* when the previous scan had a moving point within
+        ``track_gap`` whose estimate differs by at most ``consistency`` (m/s). Tracked points get
+        the whole-obstacle velocity (for the ``predict`` extrapolation and the ``lead`` plan) and
+        are remembered only ``moving_memory`` seconds; other moving points (an obstacle on a
+        random walk, whose next step its last one does not tell) keep their measured surface
+        velocity and are remembered like static ones, so their recent positions stay a buffer.
+        """
+        tracked = np.zeros(len(current), dtype=bool)
+        if float(self.p["lead"]) <= 0 or not moving.any():
+            self._tracks = (np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0, dtype=np.int64))
+            return tracked
+        idx = np.flatnonzero(moving)
+        whole = sensed_map.group_velocity(current[idx], velocity[idx],
+                                          1.5 * (float(self.p["surface"]) or 0.2))
+        previous, before, streak = self._tracks
+        runs = np.zeros(len(idx), dtype=np.int64)
+        self._tracks = (current[idx], whole, runs)
+        if not len(previous):
+            return tracked
+        d, j = cKDTree(previous).query(current[idx])
+        steady = (d <= float(self.p["track_gap"])) & (
+            np.hypot(*(whole - before[j]).T) <= float(self.p["consistency"]))
+        runs[steady] = streak[j[steady]] + 1
+        steady = runs >= int(self.p["track_scans"])
+        tracked[idx[steady]] = True
+        velocity[idx[steady]] = whole[steady]
+        return tracked
+
+    def _plan_hits(self, p: Array) -> Array:
+        """The sensed points the aim plans around (``lead``): each point x of this scan that
+        moves at v is put where it will be when the robot, driving at full speed S, could reach
+        it: x + v tau, |x + v tau - p| = S tau (tau at most ``lead``), instead of where it is and
+        its short prediction. An obstacle crossing the robot's way is then planned around where
+        it will be: behind it rather than ahead of it. The candidates' feasibility keeps every
+        sensed and predicted point."""
+        points, v = self._moving
+        rel = points - p
+        a = np.einsum("ij,ij->i", v, v) - self._speed**2
+        b = np.einsum("ij,ij->i", rel, v)
+        c = np.einsum("ij,ij->i", rel, rel)
+        lead = float(self.p["lead"])
+        slow = a < -1e-9  # slower than the robot: one positive root
+        root = np.sqrt(np.maximum(b * b - a * c, 0.0))
+        tau = np.where(slow, (-b - root) / np.where(slow, a, -1.0), lead)
+        tau = np.clip(tau, 0.0, lead)
+        return np.concatenate([self._settled, points + v * tau[:, None]])
+
+    def _erase_trail(self, time: float, points: Array, velocity: Array) -> None:
+        """Forget remembered points where a moving surface has been (``moving_memory``): a point
+        sensed ``a`` seconds ago within ``trail`` of the segment from a moving point x back to
+        x - v (a + 0.25 s). Such a point is where the obstacle was, not where it is; kept, the
+        trail of its surface (0.6 m for 0.3 m/s over the 2 s memory) blocks the way behind it."""
+        tol = float(self.p["trail"])
+        if tol <= 0 or float(self.p["moving_memory"]) >= float(self.p["memory"]):
+            return
+        kept = []
+        for t, h, m in self._memory:
+            back = velocity * (time - t + float(self.p["replan"]))
+            d = point_segment_distance(h[:, None, :], (points - back)[None], points[None])
+            trail = d.min(axis=1) < tol
+            kept.append((t, h[~trail], m[~trail]))
+        self._memory = [(t, h, m) for t, h, m in kept if len(h)]
 
     def _safety(self, time: float) -> float:
         """ds: the clearance kept beyond the robot radius. Sensed points sample a surface every
@@ -310,7 +426,11 @@ class SwarmLocalPlanner(Planner):
         room = float(local.point_hit_distance(p[None, :], hits)[0][0])
         if obs.time > self._moving_until and obs.robot_radius < room < margin:
             margin = room - 1e-9
-        aim = self._aim(p, goal, hits, margin, (0.0, 0.0, float(w), float(h)))
+        plan_hits = hits
+        if float(self.p["lead"]) > 0 and len(self._moving[0]):
+            plan_hits = sensed_map.condense(self._plan_hits(p), p, reach + 2 * margin,
+                                            HIT_CELL)
+        aim = self._aim(p, goal, plan_hits, margin, (0.0, 0.0, float(w), float(h)))
         to_goal = float(np.hypot(*(goal - p)))
         lower = np.maximum(p - reach, [0.0, 0.0])
         upper = np.minimum(p + reach, [w, h])
