@@ -34,7 +34,7 @@ def test_the_robot_passes_behind_a_crossing_obstacle(planner):
     straight = float(np.hypot(6.0, 6.0))
     now = Episode(crossing(), planner, seed=1).run()
     assert now.success and now.collisions == 0 and now.min_clearance > 0
-    assert now.length < 1.15 * straight  # 8.72 m (MFB), 9.47 m (ICOOT); straight 8.49 m
+    assert now.length < 1.15 * straight  # 8.80 m (MFB), 8.98 m (ICOOT); straight 8.49 m
     before = Episode(crossing(), planner, seed=1, params=OLD).run()
     assert before.collisions == 0
     # fleeing alongside it: 14.23 m (MFB), 12.18 m (ICOOT)

@@ -86,7 +86,7 @@ class SwarmLocalPlanner(Planner):
         "memory": 2.0,  # s: how long sensed points are remembered
         "moving_memory": 0.0,  # s: ... tracked moving points (then only where they are now)
         "trail": 0.05,  # m: remembered points this close to a tracked surface's trail are dropped
-        "consistency": 0.15,  # m/s: a moving obstacle is tracked when its velocity is this steady
+        "consistency": 0.25,  # m/s: a moving obstacle is tracked when its velocity is this steady
         "track_scans": 2,  # ... in this many scans in a row
         "track_gap": 0.3,  # m: ... between two scans' moving points this close
         "lead": 2.0,  # s: the aim plans around tracked points where they will be (0: off)
