@@ -11,6 +11,7 @@
 import numpy as np
 import pytest
 
+from decision_log import run_recording
 from swarmpath import metrics
 from swarmpath.planners import Episode, sensed_map, swarm_local
 from swarmpath.robot.sensors import get_sensor_model
@@ -34,16 +35,7 @@ def wall_ahead(time_step: float) -> object:
 def test_a_move_never_reaches_past_what_the_sensors_covered(planner):
     # before the cut, HPSO-MFB, ICOOT and IHPO (seed 1) touched the wall (MFB missed it by luck)
     episode = Episode(wall_ahead(1.0), planner, seed=1, step_limit=40)
-    made = []
-    decide = episode.planner.decide
-
-    def record(obs):
-        d = decide(obs)
-        made.append((np.array([obs.pose.x, obs.pose.y]), d))
-        return d
-
-    episode.planner.decide = record  # type: ignore[method-assign]
-    out = episode.run()
+    out, made = run_recording(episode)
     # within the range (0.8 m - 3 cm of corner safety), and where a corner between two rays 5
     # degrees apart sticks out by less than 3 cm: 2 * 0.03 / 5 deg - 0.2 - 0.03 = 0.457 m
     reach = min(float(np.max(get_sensor_model("mfb-12").ranges)) - 0.03,

@@ -3,23 +3,14 @@
 import numpy as np
 import pytest
 
+from decision_log import run_recording
 from swarmpath.planners import Episode
 from swarmpath.world import get_map
 
 
 def decisions(planner, scenario="mfb-static", params=None, steps=60):
     episode = Episode(get_map(scenario), planner, seed=2, run=0, params=params, step_limit=steps)
-    made = []
-    decide = episode.planner.decide
-
-    def record(obs):
-        d = decide(obs)
-        made.append((np.array([obs.pose.x, obs.pose.y]), d))
-        return d
-
-    episode.planner.decide = record  # type: ignore[method-assign]
-    out = episode.run()
-    return out, made
+    return run_recording(episode)
 
 
 def test_free_space_aim_is_the_lookahead_point_toward_the_goal():
