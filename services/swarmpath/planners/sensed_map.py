@@ -19,6 +19,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -129,10 +130,14 @@ def predict(
     move one way only.
     """
     moving, velocity = motion(previous, current, dt, max_speed, min_speed, surface)
-    if not moving.any():
+    return extrapolate(current[moving], velocity[moving], horizons)
+
+
+def extrapolate(points: Array, velocity: Array, horizons: Sequence[float]) -> Array:
+    """``points`` moved at ``velocity`` for each horizon (s), horizon after horizon."""
+    if len(points) == 0:
         return np.zeros((0, 2))
-    base, v = current[moving], velocity[moving]
-    return np.concatenate([base + v * h for h in horizons])
+    return np.concatenate([points + velocity * h for h in horizons])
 
 
 def group_velocity(points: Array, velocity: Array, link: float, max_speed: float = 2.0,

@@ -231,12 +231,11 @@ class SwarmLocalPlanner(Planner):
         self._settled = np.concatenate(settled) if settled else np.zeros((0, 2))
         ahead = float(self.p["predict"])
         if ahead > 0 and moving.any():
-            base, v = current[moving], velocity[moving]
-            parts.extend(base + v * (ahead * k / 4) for k in range(1, 5))
+            horizons = [ahead * k / 4 for k in range(1, 5)]
+            parts.append(sensed_map.extrapolate(current[moving], velocity[moving], horizons))
             # tracked points: also along their whole-obstacle velocity (the measured surface
             # velocity is the approach component, the one that matters most for contact)
-            base, v = current[tracked], whole[tracked]
-            parts.extend(base + v * (ahead * k / 4) for k in range(1, 5))
+            parts.append(sensed_map.extrapolate(current[tracked], whole[tracked], horizons))
         self._last_scan = (obs.time, current)
         if sensed_map.has_corner(current, float(self.p["surface"]) or 0.2,
                                  float(self.p["corner_angle"])):
