@@ -241,7 +241,7 @@ def _compute(job: tuple[BenchSpec, Task], report_rows: Callable[[int], None]) ->
 def auto_jobs(spec: BenchSpec) -> int:
     """Processes for ``--jobs 0``: one per CPU, but one for a study of a few seconds (starting a
     process and importing numpy there costs about half a second)."""
-    elements = sum(t.rows * spec.agents * t.dim for t in plan_tasks(spec))
+    elements = sum(spec.runs * spec.agents * dim for _, dim, _ in spec.cells())
     seconds = elements * spec.iterations * SECONDS_PER_ELEMENT_ITERATION
     if seconds < 2.0:
         return 1

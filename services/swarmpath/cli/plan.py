@@ -53,7 +53,7 @@ class CellResult:
     planner: str
     scenario: Any
     runs: list[dict[str, Any]]
-    world: Any = None  # run 0's simulated world (obstacle and goal motion), for plots
+    seed: int  # the study seed (plots rebuild run 0's moving obstacles from it)
 
 
 # ------------------------------------------------------------------------------ input parsing
@@ -155,8 +155,8 @@ def make_spec(planners: str, maps: str, runs: int = 10, seed: int = 1,
 
 # -------------------------------------------------------------------------------------- running
 def run_episode(spec: PlanSpec, planner: str, scenario: Any, run: int,
-                on_step: Callable[[], None] | None = None) -> tuple[dict[str, Any], Any]:
-    """One run as a JSON-ready dict (``RunOutcome`` fields), and its simulated world.
+                on_step: Callable[[], None] | None = None) -> dict[str, Any]:
+    """One run as a JSON-ready dict (``RunOutcome`` fields).
 
     A planner that raises (a bug: planners report failures as results) gives a failed run whose
     reason names the exception; the error is also noted on stderr.
@@ -170,7 +170,7 @@ def run_episode(spec: PlanSpec, planner: str, scenario: Any, run: int,
             ep.step()
             if on_step is not None:
                 on_step()
-        return ep.outcome().to_dict(), ep.sim.world
+        return ep.outcome().to_dict()
     except Exception as exc:  # recorded as a failed run, never hidden
         reason = f"internal error: {type(exc).__name__}: {exc}"
         typer.echo(f"swarmpath plan: warning: {planner} on {scenario.name} run {run}: {reason}",
@@ -179,7 +179,7 @@ def run_episode(spec: PlanSpec, planner: str, scenario: Any, run: int,
             try:
                 out = ep.outcome().to_dict()
                 out.update(success=False, reason=reason)
-                return out, ep.sim.world
+                return out
             except Exception:
                 pass
         return {
@@ -189,7 +189,7 @@ def run_episode(spec: PlanSpec, planner: str, scenario: Any, run: int,
             "ompl_smoothness": 0.0, "min_clearance": None, "steps": 0, "iterations": 0,
             "seconds": 0.0, "travel_time": 0.0, "optimum": None, "gap": None,
             "path": [[float(scenario.start[0]), float(scenario.start[1]), 0.0]],
-        }, None
+        }
 
 
 def run_plan(
@@ -216,7 +216,7 @@ def run_plan(
     cells = []
     for i, (planner, scenario) in enumerate(spec.cells()):
         runs = outcomes[i * spec.runs:(i + 1) * spec.runs]
-        cells.append(CellResult(planner, scenario, runs, simulated_world(scenario, spec.seed, 0)))
+        cells.append(CellResult(planner, scenario, runs, spec.seed))
     return cells
 
 
@@ -226,14 +226,13 @@ def _episode(task: tuple[PlanSpec, int, int], report: Callable[[int], None]) -> 
 
     spec, index, run = task
     planner, scenario = spec.cells()[index]
-    outcome, _world = run_episode(spec, planner, scenario, run, lambda: report(1))
-    return dict(json_safe(outcome))
+    return dict(json_safe(run_episode(spec, planner, scenario, run, lambda: report(1))))
 
 
 def simulated_world(scenario: Any, seed: int, run: int) -> Any:
     """The moving obstacles and goal of run ``run`` as its simulator saw them (the episode draws
-    its world from stream (seed, run, SIMULATION)): for the plots, rebuilt here rather than sent
-    back from the process that ran the episode."""
+    its world from stream (seed, run, SIMULATION)): for the plots, rebuilt when one is drawn
+    rather than sent back from the process that ran the episode."""
     from swarmpath.optimizers.streams import SIMULATION, run_generator
 
     return scenario.instantiate(run_generator(seed, run, SIMULATION))
@@ -341,8 +340,8 @@ def plot_cell(cell: CellResult, directory: Path) -> Path:
                 xs, ys = outline.exterior.xy
                 ax.plot(xs, ys, color="#616161", ls="--", lw=0.8)
         t_end = max((run["path"][-1][2] for run in cell.runs if run["path"]), default=0.0)
-        world = cell.world
-        if world is not None and s.is_dynamic and t_end > 0:
+        if s.is_dynamic and t_end > 0:
+            world = simulated_world(s, cell.seed, 0)
             times = np.linspace(0.0, t_end, 200)
             # columns of obstacle_positions_at (ObstacleSet order) that belong to movers
             movers = [j for j, k in enumerate(world.set_order) if s.obstacles[k].is_moving]
@@ -408,7 +407,8 @@ def _run_with_progress(spec: PlanSpec, stderr: Console, jobs: int) -> list[CellR
         def on_step(n: int) -> None:
             nonlocal steps
             steps += n
-            progress.update(task, steps=steps)
+            if steps // 10 != (steps - n) // 10:  # a redraw per 10 steps is plenty
+                progress.update(task, steps=steps)
 
         def on_done(runs: int) -> None:
             progress.update(task, completed=runs)
