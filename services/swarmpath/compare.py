@@ -1,0 +1,354 @@
+"""Statistical comparison of algorithms, as the field reports it: pure functions, no I/O.
+
+Following Derrac, Garcia, Molina and Herrera, "A practical tutorial on the use of nonparametric
+statistical tests as a methodology for comparing evolutionary and swarm intelligence algorithms",
+Swarm and Evolutionary Computation 1 (2011) 3-18, and Demsar, JMLR 7 (2006) 1-30:
+
+* **Per cell** (one function and dimension, or one map): each algorithm's runs against the
+  reference algorithm's runs with the two-sided Wilcoxon rank-sum test (Mann-Whitney U,
+  :func:`scipy.stats.mannwhitneyu`, its default ``method="auto"``: exact for small samples without
+  ties, otherwise the normal approximation with tie and continuity correction). The p-values of
+  every test of the table (cells x algorithms other than the reference) are adjusted together
+  with Holm's step-down method; an adjusted p below ``alpha`` gives ``+`` (the algorithm is
+  significantly better than the reference) or ``-`` (significantly worse), else ``=``. The
+  direction comes from the U statistic itself: with lower values better, U < n m / 2 means the
+  algorithm's runs tend to be lower. Success counts are compared with Fisher's exact test
+  (:func:`scipy.stats.fisher_exact`, two-sided) the same way (higher rates better).
+* **Per dimension** (or over maps): the Friedman test (:func:`scipy.stats.friedmanchisquare`) with
+  the functions as blocks and each cell's average as its value, the algorithms' mean ranks (1 =
+  best, ties share the average rank), and two post-hoc procedures: the Nemenyi critical difference
+  ``q_alpha sqrt(k (k + 1) / (6 N))`` (``q_alpha`` from the studentized range distribution
+  divided by sqrt 2, Demsar's Table 5) and Holm-adjusted z tests of every algorithm's mean rank
+  against the reference's.
+
+Edge cases, on purpose:
+
+* NaN values are missing runs (a crashed run has no value) and are dropped before a test; an
+  infinite value is a real, worst possible result and is ranked as such.
+* A cell where either sample is empty is not tested: marker ``None``, left out of Holm's family
+  and of the counts. Identical samples (every value equal, e.g. all zeros) give p = 1 and ``=``.
+* With fewer than two algorithms there is nothing to test (no tests, empty counts). The Friedman
+  test needs at least 3 algorithms and 2 complete blocks; otherwise its statistic and p are None
+  and ``note`` says why (mean ranks are still given). Blocks where an algorithm has no finite or
+  infinite value (missing cell, or NaN average) are left out of the Friedman test. When every
+  block is a complete tie the statistic is 0 and p = 1.
+* The reference defaults to the last algorithm listed (the papers list the proposed one last).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Hashable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, TypeVar
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy import stats
+
+__all__ = [
+    "ALPHA", "BETTER", "MARKERS", "SAME", "WORSE", "Comparison", "Friedman", "PairTest",
+    "cliques", "compare_samples", "compare_success", "friedman", "holm", "nemenyi_cd",
+    "rank_sum", "resolve_reference",
+]
+
+ALPHA = 0.05
+BETTER, SAME, WORSE = "+", "=", "-"
+MARKERS = (BETTER, SAME, WORSE)
+#: A cell or block key: (function, dim), a map name, ...
+K = TypeVar("K", bound=Hashable)
+
+
+def resolve_reference(algorithms: Sequence[str], reference: str | None = None) -> str:
+    """The reference among ``algorithms``: ``reference`` (exact name, else case-insensitive) or,
+    when None, the last one. Raises ValueError naming the valid choices."""
+    if not algorithms:
+        raise ValueError("no algorithms to compare")
+    if reference is None:
+        return algorithms[-1]
+    if reference in algorithms:
+        return reference
+    by_lower = {a.lower(): a for a in algorithms}
+    if reference.lower() in by_lower:
+        return by_lower[reference.lower()]
+    names = ", ".join(algorithms)
+    raise ValueError(f"{reference!r} is not one of the compared algorithms ({names})")
+
+
+def holm(pvalues: ArrayLike) -> np.ndarray:
+    """Holm's step-down adjusted p-values (same order as given, capped at 1).
+
+    Sorted ascending, the i-th smallest (i from 0) is multiplied by m - i, then a running maximum
+    keeps the adjusted values monotone; rejecting where adjusted p < alpha is Holm's procedure."""
+    p = np.asarray(pvalues, dtype=float).ravel()
+    m = p.size
+    if m == 0:
+        return p.copy()
+    order = np.argsort(p, kind="stable")
+    scaled = np.minimum(1.0, np.maximum.accumulate(p[order] * (m - np.arange(m))))
+    out = np.empty(m)
+    out[order] = scaled
+    return out
+
+
+def _clean(values: ArrayLike) -> np.ndarray:
+    x = np.asarray(values, dtype=float).ravel()
+    return x[~np.isnan(x)]
+
+
+def rank_sum(x: ArrayLike, reference: ArrayLike) -> tuple[float, float] | None:
+    """Two-sided Wilcoxon rank-sum test of ``x`` against ``reference``: (U of x, p).
+
+    U counts the pairs (x_i, ref_j) with x_i > ref_j, ties counting half (scipy's U1). NaN values
+    are dropped; None when either sample is then empty. Identical samples give (n m / 2, 1.0)."""
+    a, b = _clean(x), _clean(reference)
+    if a.size == 0 or b.size == 0:
+        return None
+    pooled = np.concatenate([a, b])
+    if np.all(pooled == pooled[0]):
+        return a.size * b.size / 2.0, 1.0
+    res = stats.mannwhitneyu(a, b, alternative="two-sided")
+    return float(res.statistic), float(res.pvalue)
+
+
+@dataclass(frozen=True)
+class PairTest:
+    """One algorithm against the reference in one cell."""
+
+    key: Hashable  # the cell: (function, dim), a map name, ...
+    algorithm: str
+    n: int  # values tested (NaN dropped)
+    n_reference: int
+    statistic: float | None  # Mann-Whitney U of the algorithm, or Fisher's odds ratio
+    p: float | None  # two-sided, unadjusted
+    p_holm: float | None = None
+    marker: str | None = None  # "+", "=", "-"; None when not tested
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Every algorithm against the reference over a table of cells (one Holm family)."""
+
+    test: str  # "wilcoxon rank-sum" or "fisher exact"
+    algorithms: tuple[str, ...]
+    reference: str
+    alpha: float
+    lower_is_better: bool
+    tests: tuple[PairTest, ...]
+    _index: dict[tuple[Hashable, str], PairTest] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "_index", {(t.key, t.algorithm): t for t in self.tests})
+
+    def get(self, key: Hashable, algorithm: str) -> PairTest | None:
+        return self._index.get((key, algorithm))
+
+    def marker(self, key: Hashable, algorithm: str) -> str | None:
+        """``+``, ``=``, ``-``; None for the reference itself or an untested cell."""
+        t = self._index.get((key, algorithm))
+        return None if t is None else t.marker
+
+    def counts(self) -> dict[str, dict[str, int]]:
+        """Per algorithm other than the reference: how many cells are ``+``, ``=``, ``-``."""
+        out = {a: dict.fromkeys(MARKERS, 0) for a in self.algorithms if a != self.reference}
+        for t in self.tests:
+            if t.marker is not None:
+                out[t.algorithm][t.marker] += 1
+        return out
+
+    def to_json(self, key_fields: Sequence[str] = ("key",)) -> dict[str, Any]:
+        """JSON-ready: the settings, the counts and one entry per test (tuple keys are spread
+        over ``key_fields``)."""
+
+        def key_dict(key: Hashable) -> dict[str, Any]:
+            parts = key if isinstance(key, tuple) else (key,)
+            return dict(zip(key_fields, parts, strict=True))
+
+        return {
+            "test": self.test, "reference": self.reference, "alpha": self.alpha,
+            "correction": "holm", "lower_is_better": self.lower_is_better,
+            "counts": self.counts(),
+            "tests": [
+                {**key_dict(t.key), "algorithm": t.algorithm, "n": t.n,
+                 "n_reference": t.n_reference, "statistic": _finite(t.statistic), "p": t.p,
+                 "p_holm": t.p_holm, "marker": t.marker}
+                for t in self.tests
+            ],
+        }
+
+
+def _finite(v: float | None) -> float | None:
+    return None if v is None or not math.isfinite(v) else v
+
+
+def _adjust(
+    raw: list[PairTest], alpha: float, direction: Mapping[int, int]
+) -> tuple[PairTest, ...]:
+    """Holm over the tested entries of ``raw``; ``direction[i]`` is +1 when entry i leans better."""
+    tested = [i for i, t in enumerate(raw) if t.p is not None]
+    adjusted = holm([float(raw[i].p or 0.0) for i in tested])
+    out = list(raw)
+    for i, q in zip(tested, adjusted, strict=True):
+        q = float(q)
+        marker = SAME if q >= alpha else (BETTER if direction[i] > 0 else WORSE)
+        t = raw[i]
+        out[i] = PairTest(t.key, t.algorithm, t.n, t.n_reference, t.statistic, t.p, q, marker)
+    return tuple(out)
+
+
+def compare_samples(
+    samples: Mapping[K, Mapping[str, ArrayLike]],
+    algorithms: Sequence[str],
+    reference: str | None = None,
+    alpha: float = ALPHA,
+    lower_is_better: bool = True,
+) -> Comparison:
+    """Rank-sum tests of every algorithm against ``reference`` in every cell of ``samples``
+    (cell key -> algorithm -> values of its runs), Holm-adjusted over the whole table."""
+    algos = tuple(algorithms)
+    ref = resolve_reference(algos, reference) if algos else ""
+    raw: list[PairTest] = []
+    direction: dict[int, int] = {}
+    for key, per_algo in samples.items():
+        ref_values = per_algo.get(ref)
+        for a in algos:
+            if a == ref or a not in per_algo:
+                continue
+            x = _clean(per_algo[a])
+            y = _clean(ref_values) if ref_values is not None else np.empty(0)
+            res = rank_sum(x, y)
+            if res is None:
+                raw.append(PairTest(key, a, x.size, y.size, None, None))
+                continue
+            u, p = res
+            leans_lower = u < x.size * y.size / 2.0
+            direction[len(raw)] = 1 if leans_lower == lower_is_better else -1
+            raw.append(PairTest(key, a, x.size, y.size, u, p))
+    return Comparison("wilcoxon rank-sum", algos, ref, alpha, lower_is_better,
+                      _adjust(raw, alpha, direction))
+
+
+def compare_success(
+    counts: Mapping[K, Mapping[str, tuple[int, int]]],
+    algorithms: Sequence[str],
+    reference: str | None = None,
+    alpha: float = ALPHA,
+) -> Comparison:
+    """Fisher's exact test (two-sided) of every algorithm's success rate against the reference's
+    in every cell (cell key -> algorithm -> (successes, runs)), Holm-adjusted over the table.
+    ``+`` = a significantly higher success rate than the reference."""
+    algos = tuple(algorithms)
+    ref = resolve_reference(algos, reference) if algos else ""
+    raw: list[PairTest] = []
+    direction: dict[int, int] = {}
+    for key, per_algo in counts.items():
+        ref_counts = per_algo.get(ref)
+        for a in algos:
+            if a == ref or a not in per_algo:
+                continue
+            s, n = (int(v) for v in per_algo[a])
+            rs, rn = (int(v) for v in ref_counts) if ref_counts is not None else (0, 0)
+            if not (0 <= s <= n and 0 <= rs <= rn):
+                raise ValueError(f"{key}: successes must be within [0, runs]")
+            if n == 0 or rn == 0:
+                raw.append(PairTest(key, a, n, rn, None, None))
+                continue
+            res = stats.fisher_exact([[s, n - s], [rs, rn - rs]], alternative="two-sided")
+            direction[len(raw)] = 1 if s * rn > rs * n else -1
+            raw.append(PairTest(key, a, n, rn, float(res.statistic), float(res.pvalue)))
+    return Comparison("fisher exact", algos, ref, alpha, False, _adjust(raw, alpha, direction))
+
+
+def nemenyi_cd(k: int, n: int, alpha: float = ALPHA) -> float:
+    """Nemenyi's critical difference of mean ranks for k algorithms over n blocks."""
+    if k < 2 or n < 1:
+        raise ValueError("the critical difference needs k >= 2 algorithms and n >= 1 blocks")
+    q = float(stats.studentized_range.ppf(1.0 - alpha, k, np.inf)) / math.sqrt(2.0)
+    return q * math.sqrt(k * (k + 1) / (6.0 * n))
+
+
+@dataclass(frozen=True)
+class Friedman:
+    """The Friedman test over blocks (functions or maps) with its post-hoc procedures."""
+
+    algorithms: tuple[str, ...]
+    reference: str
+    alpha: float
+    blocks: tuple[Hashable, ...]  # the complete blocks used
+    mean_ranks: dict[str, float]  # 1 = best
+    statistic: float | None
+    p: float | None
+    cd: float | None  # Nemenyi critical difference (None with fewer than 2 algorithms)
+    posthoc: dict[str, dict[str, Any]]  # algorithm -> z, p, p_holm, marker (vs the reference)
+    note: str = ""
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "test": "friedman", "reference": self.reference, "alpha": self.alpha,
+            "blocks": len(self.blocks), "mean_ranks": dict(self.mean_ranks),
+            "statistic": self.statistic, "p": self.p, "nemenyi_cd": self.cd,
+            "posthoc": {a: dict(v) for a, v in self.posthoc.items()}, "note": self.note,
+        }
+
+
+def friedman(
+    values: Mapping[K, Mapping[str, float]],
+    algorithms: Sequence[str],
+    reference: str | None = None,
+    alpha: float = ALPHA,
+    lower_is_better: bool = True,
+) -> Friedman:
+    """Friedman test of ``algorithms`` over the blocks of ``values`` (block -> algorithm -> one
+    value, e.g. the average best fitness of a function), with mean ranks and post-hoc tests."""
+    algos = tuple(algorithms)
+    ref = resolve_reference(algos, reference) if algos else ""
+    k = len(algos)
+    blocks, rows = [], []
+    for key, per_algo in values.items():
+        row = [per_algo.get(a, math.nan) for a in algos]
+        if k and not any(v is None or math.isnan(float(v)) for v in row):
+            blocks.append(key)
+            rows.append([float(v) for v in row])
+    n = len(blocks)
+    if k == 0 or n == 0:
+        return Friedman(algos, ref, alpha, tuple(blocks), dict.fromkeys(algos, math.nan), None,
+                        None, None, {}, "no complete block")
+    table = np.array(rows) if lower_is_better else -np.array(rows)
+    ranks = stats.rankdata(table, axis=1)  # ties share the average rank
+    mean = ranks.mean(axis=0)
+    mean_ranks = {a: float(r) for a, r in zip(algos, mean, strict=True)}
+    statistic = p = None
+    note = ""
+    if k < 3:
+        note = "the Friedman test needs at least 3 algorithms"
+    elif n < 2:
+        note = "the Friedman test needs at least 2 blocks"
+    elif np.all(ranks == ranks[:, :1]):
+        statistic, p, note = 0.0, 1.0, "every block is a complete tie"
+    else:
+        res = stats.friedmanchisquare(*table.T)
+        statistic, p = float(res.statistic), float(res.pvalue)
+    cd = nemenyi_cd(k, n, alpha) if k >= 2 else None
+    posthoc: dict[str, dict[str, Any]] = {}
+    if k >= 2:
+        se = math.sqrt(k * (k + 1) / (6.0 * n))
+        others = [a for a in algos if a != ref]
+        z = [(mean_ranks[a] - mean_ranks[ref]) / se for a in others]
+        raw = [float(2.0 * stats.norm.sf(abs(v))) for v in z]
+        adjusted = holm(raw)
+        for a, zi, pi, qi in zip(others, z, raw, adjusted, strict=True):
+            marker = SAME if qi >= alpha else (BETTER if zi < 0 else WORSE)
+            posthoc[a] = {"z": zi, "p": pi, "p_holm": float(qi), "marker": marker}
+    return Friedman(algos, ref, alpha, tuple(blocks), mean_ranks, statistic, p, cd, posthoc, note)
+
+
+def cliques(mean_ranks: Mapping[str, float], cd: float) -> list[tuple[str, ...]]:
+    """Maximal groups of algorithms whose mean ranks all lie within ``cd`` of each other (the
+    bars of a critical-difference diagram), ordered by rank; single algorithms are left out."""
+    order = sorted(mean_ranks, key=lambda a: mean_ranks[a])
+    groups: list[tuple[str, ...]] = []
+    for i, a in enumerate(order):
+        group = tuple(b for b in order[i:] if mean_ranks[b] - mean_ranks[a] <= cd)
+        if len(group) > 1 and not any(set(group) <= set(g) for g in groups):
+            groups.append(group)
+    return groups
