@@ -2,6 +2,7 @@
 
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,8 +11,10 @@ from swarmpath.planners import Episode, PlannerError, get_planner, list_planners
 from swarmpath.planners import ompl_baselines as ompl_mod
 from swarmpath.world import Obstacle, RobotSpec, Scenario, get_map
 from swarmpath.world.geometry import ObstacleSet, collides
+from swarmpath.world.scenario_io import load_scenario
 
-BASELINES = ["OMPL-RRTstar", "OMPL-BITstar"]
+BASELINES = [n for n in list_planners() if issubclass(get_planner(n), ompl_mod.OmplPlanner)]
+TWO_WALLS = Path(__file__).parent / "data" / "two_walls.json"
 FAST = {"time": 0.2}
 
 
@@ -32,6 +35,7 @@ def walled_goal() -> Scenario:
 
 
 def test_registered_as_global_planners_given_the_static_map():
+    assert len(BASELINES) >= 2
     for name in BASELINES:
         assert name in list_planners()
         cls = get_planner(name)
@@ -80,6 +84,49 @@ def test_walled_in_goal_is_a_failure_with_a_reason(name):
     assert not out.success
     assert out.collisions == 0
     assert name in out.reason and "no path" in out.reason
+
+
+def test_timeout_reason_names_the_budget_and_the_iterations_done():
+    res = ompl_mod.plan_path("BITstar", walled_goal().static_obstacles(), np.array([1.0, 1.0]),
+                             np.array([5.0, 5.0]), 0.2, (10.0, 10.0),
+                             {**ompl_mod.OmplPlanner.defaults, "iterations": 40}, seed=2)
+    assert res.path is None
+    assert "within 40 iterations (40 iterations done)" in res.reason
+
+
+@pytest.mark.parametrize("name", BASELINES)
+@pytest.mark.parametrize(("map_name", "seed", "run"), [
+    ("icoot-map1", 3, 9),  # collided 17 times: the diff drive cut the corners it turned at
+    (TWO_WALLS, 1, 0),  # stalled at a corner until the time limit
+])
+def test_diff_drive_follows_the_checked_path_exactly(name, map_name, seed, run):
+    scenario = load_scenario(map_name) if isinstance(map_name, Path) else get_map(map_name)
+    assert scenario.robot.model == "diff-drive"
+    out = Episode(scenario, name, seed=seed, run=run, params={"iterations": 20000}).run()
+    assert out.success, out.reason
+    assert out.collisions == 0
+    # turn in place at each vertex, then drive the checked segment: executed = planned
+    assert out.planned_length is not None
+    assert abs(out.length - out.planned_length) < 1e-3
+    assert out.min_clearance >= 0.02 - 1e-6  # the planner's margin, kept while driving
+
+
+def test_start_without_clearance_for_the_planner_is_named():
+    # a start 1.4e-17 m outside the inflated square: valid for the product's collision rule,
+    # not for a planner whose states must be strictly clear (BIT* reported "Timeout, 0 iterations")
+    square = np.array([[1.3512936187542919, 0.8087067104500392],
+                       [2.191293289549961, 1.3512936187542919],
+                       [1.6487063812457081, 2.191293289549961],
+                       [0.8087067104500392, 1.6487063812457081]])
+    obstacles = ObstacleSet(np.zeros((0, 3)), [square])
+    start = np.array([1.629434778351066, 0.8633683412269666])
+    assert not collides(obstacles.point_clearance(start[None])[0], 0.105)
+    for algorithm in ("BITstar", "RRTstar"):
+        res = ompl_mod.plan_path(algorithm, obstacles, start, np.array([4.0, 4.0]), 0.105,
+                                 (5.0, 5.0), ompl_mod.OmplPlanner.defaults, seed=1)
+        assert res.path is None
+        assert "start (1.62943, 0.863368) is not a valid state for the planner" in res.reason
+        assert "beyond the robot radius" in res.reason
 
 
 def test_plan_path_rejects_start_inside_an_inflated_obstacle():

@@ -1,5 +1,6 @@
 """Kinematics invariants and virtual sensors."""
 
+import itertools
 import math
 
 import numpy as np
@@ -9,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from swarmpath.robot import DiffDrive, Omni, Pose, get_sensor_model, read_sensors
-from swarmpath.robot.kinematics import diff_drive_command
+from swarmpath.robot.kinematics import aligned_drive_command, diff_drive_command
 from swarmpath.robot.sensors import ray_circle_distance, ray_segment_distance
 
 BURGER = DiffDrive(wheel_radius=0.033, wheel_separation=0.160, max_linear=0.22, max_angular=2.84)
@@ -79,6 +80,32 @@ def test_waypoint_controller_reaches_target():
 
 
 # ------------------------------------------------------------------------------ sensors
+def test_aligned_drive_follows_a_polyline_exactly():
+    model = DiffDrive(0.033, 0.16, 0.22, 2.84)
+    corners = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (-0.5, 0.2), (0.3, -0.7)]
+    pose, dt = Pose(0.0, 0.0, 2.0), 0.1
+    worst = 0.0
+    for (ax, ay), (bx, by) in itertools.pairwise(corners):
+        for _ in range(500):
+            v, w = aligned_drive_command(model, pose, (bx, by), dt)
+            if v == 0.0 and w == 0.0:
+                break
+            pose = model.advance(pose, v, w, dt)
+            # distance of the centre from the segment it was sent along
+            d = abs((bx - ax) * (pose.y - ay) - (by - ay) * (pose.x - ax)) / math.hypot(
+                bx - ax, by - ay)
+            worst = max(worst, d)
+        assert math.hypot(pose.x - bx, pose.y - by) < 1e-4
+    assert worst < 1e-9
+    # the ordinary controller turns while driving and leaves the segment at the corners
+    pose, off = Pose(1.0, 0.0, 0.0), 0.0
+    for _ in range(200):
+        v, w = diff_drive_command(model, pose, (1.0, 1.0), dt)
+        pose = model.advance(pose, v, w, dt)
+        off = max(off, abs(pose.x - 1.0))
+    assert off > 1e-3
+
+
 def test_mfb12_layout_and_gap_vector():
     model = get_sensor_model("mfb-12")
     assert model.n_sensors == 12 and np.all(model.ranges == 0.8)

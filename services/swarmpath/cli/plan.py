@@ -188,6 +188,7 @@ def run_episode(spec: PlanSpec, planner: str, scenario: Any, run: int,
             "error": math.dist(scenario.start, scenario.goal), "smoothness": 0.0,
             "ompl_smoothness": 0.0, "min_clearance": None, "steps": 0, "iterations": 0,
             "seconds": 0.0, "travel_time": 0.0, "optimum": None, "gap": None,
+            "planned_length": None,
             "path": [[float(scenario.start[0]), float(scenario.start[1]), 0.0]],
         }
 
@@ -260,6 +261,9 @@ def render_cell(cell: CellResult, row: dict[str, Any]) -> Table:
     for name in ("Run", "Distance (m)", "Error (m)", "Elapsed time (s)", "Success",
                  "Collisions", "Gap (%)", "Steps", "Iterations"):
         table.add_column(name, justify="left" if name == "Success" else "right", no_wrap=True)
+    planned = any(r.get("planned_length") is not None for r in cell.runs)
+    if planned:  # global planners: the length they planned beside the one driven
+        table.add_column("Planned (m)", justify="right", no_wrap=True)
     failed = any(not r["success"] for r in cell.runs)
     if failed:
         table.add_column("Reason")
@@ -268,6 +272,8 @@ def render_cell(cell: CellResult, row: dict[str, Any]) -> Table:
         cols = [str(r["run"] + 1), _num(r["length"]), _num(r["error"]), _num(r["seconds"], 3),
                 "yes" if r["success"] else "no", str(r["collisions"]), _num(gap, 2),
                 str(r["steps"]), str(r["iterations"])]
+        if planned:
+            cols.append(_num(r.get("planned_length")))
         if failed:
             cols.append("" if r["success"] else str(r["reason"]))
         table.add_row(*cols)
@@ -275,6 +281,8 @@ def render_cell(cell: CellResult, row: dict[str, Any]) -> Table:
     mean = ["Mean", _num(row["length_mean"]), _num(row["error_mean"]), _num(row["seconds_mean"], 3),
             f"{row['successes']}/{row['runs']}", str(row["collisions"]), _num(gap_mean, 2),
             f"{row['steps_mean']:.1f}", f"{row['iterations_mean']:.0f}"]
+    if planned:
+        mean.append("")
     if failed:
         mean.append("")
     table.add_row(*mean, style="bold", end_section=True)
@@ -295,9 +303,10 @@ def print_tables(cells: Sequence[CellResult], spec: PlanSpec, seconds: float) ->
     for t in tables:
         console.print(t)
     console.print(
-        f"{spec.runs} runs per planner x map, seed {spec.seed}; Distance = executed path length, "
-        "Error = final distance to the goal, Elapsed time = planning wall time; the Mean row "
-        f"averages Distance and Gap over successful runs; {seconds:.1f} s",
+        f"{spec.runs} runs per planner x map, seed {spec.seed}; Distance = executed path length "
+        "(Planned: the global planner's plan), Error = final distance to the goal, Elapsed time = "
+        "planning wall time; the Mean row averages Distance and Gap over successful runs; "
+        f"{seconds:.1f} s",
         highlight=False,
     )
 

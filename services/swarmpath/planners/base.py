@@ -49,6 +49,10 @@ class Decision:
     reason: str | None = None  # why target is None
     #: The target is the goal: keep driving onto it instead of stopping at the goal tolerance.
     finish: bool = False
+    #: Follow the straight segment to ``target`` exactly: a differential drive turns in place
+    #: until it faces the target, then drives straight (global planners whose segments were
+    #: collision-checked); otherwise it turns while driving and its path bulges off the segment.
+    align: bool = False
 
 
 class Planner(ABC):
@@ -88,6 +92,11 @@ class Planner(ABC):
     def knows_static_map(cls, p: Mapping[str, ParamValue]) -> bool:
         """Whether a planner with resolved parameters ``p`` is handed the static map."""
         return cls.kind == "global"
+
+    @property
+    def planned_length(self) -> float | None:
+        """Length of the path a global planner planned (None: no plan, or a local planner)."""
+        return None
 
     @abstractmethod
     def decide(self, obs: Observation) -> Decision: ...

@@ -52,6 +52,9 @@ class RunOutcome:
     travel_time: float  # simulated seconds
     optimum: float | None
     gap: float | None
+    #: Length of the path a global planner planned (None for local planners); ``length`` is
+    #: what the robot executed.
+    planned_length: float | None = None
     path: list[list[float]] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
@@ -135,7 +138,8 @@ class Episode:
         if decision.target is None:
             self.reason = f"planner gave up: {decision.reason or 'no feasible move'}"
             return
-        self.sim.drive(decision.target, decision.duration, self.time_limit, decision.finish)
+        self.sim.drive(decision.target, decision.duration, self.time_limit, decision.finish,
+                       decision.align)
         # A final approach onto a static goal runs until the robot is on it (the papers report
         # errors of ~1 mm); a moving goal counts as reached within the tolerance.
         on_goal = self.sim.distance_to_goal() <= FINISH_TOLERANCE
@@ -183,5 +187,6 @@ class Episode:
             travel_time=float(path[-1, 2]),
             optimum=optimum,
             gap=gap,
+            planned_length=self.planner.planned_length,
             path=[[float(x), float(y), float(t)] for x, y, t in path],
         )

@@ -252,6 +252,15 @@ def plan_path(
     # Keep the margin, unless the start or goal is closer than that to an obstacle.
     margin = min(float(params["margin"]), 0.5 * (float(ends.min()) - radius))
     checker = FastChecker(obstacles, radius + margin)
+    for label, p, c in zip(("start", "goal"), (start, goal), ends, strict=True):
+        if not checker.point_ok(float(p[0]), float(p[1])):
+            # only when the clearance beyond the radius is lost in round-off (e.g. 1e-17 m)
+            return fail(
+                f"{label} ({p[0]:g}, {p[1]:g}) is not a valid state for the planner: its "
+                f"clearance {c:.6g} m leaves {c - radius:.3g} m beyond the robot radius "
+                f"{radius:g} m, too little for a state strictly clear of the obstacles; move "
+                f"the {label} away from the obstacle"
+            )
 
     _seed_ompl(seed)
     level = ou.getLogLevel()
@@ -326,7 +335,7 @@ def _solve(
     name = status.asString()
     iterations = int(planner.numIterations())
     if not ss.haveSolutionPath():
-        return None, iterations, f"no path found ({name}, {iterations} iterations)"
+        return None, iterations, _no_path_reason(name, iterations, params)
     path = ss.getSolutionPath()
     if not ss.haveExactSolutionPath():
         last = path.getState(path.getStateCount() - 1)
@@ -349,6 +358,23 @@ def _solve(
     raw = np.array([[s[0], s[1]] for s in path.getStates()], dtype=float)
     raw[0], raw[-1] = start, goal  # exact ends (OMPL stores the same doubles)
     return raw, iterations, name
+
+
+def _no_path_reason(status: str, iterations: int, params: Mapping[str, Any]) -> str:
+    """Why OMPL returned no path, in words (OMPL's status alone said "Timeout, 0 iterations"
+    for a start it considered invalid)."""
+    budget = int(params["iterations"])
+    limit = f"{budget} iterations" if budget > 0 else f"the {float(params['time']):g} s budget"
+    if status == "Invalid start":
+        return (f"no path found: OMPL rejected the start state (clearance within the planner's "
+                f"margin {float(params['margin']):g} m of the inflated obstacles)")
+    if status == "Invalid goal":
+        return (f"no path found: OMPL rejected the goal state (clearance within the planner's "
+                f"margin {float(params['margin']):g} m of the inflated obstacles)")
+    if status == "Timeout":
+        return (f"no path found within {limit} ({iterations} iterations done); a larger budget "
+                "may find one, or the goal is unreachable at this clearance")
+    return f"no path found (OMPL status {status!r}, {iterations} iterations done)"
 
 
 class _IterationBudget:
@@ -421,6 +447,10 @@ class OmplPlanner(Planner):
             return None
         return float(np.sum(np.hypot(*np.diff(self.path, axis=0).T)))
 
+    @property
+    def planned_length(self) -> float | None:
+        return self.path_length
+
     def plan(self, start: Array, goal: Array, radius: float) -> PlanResult:
         obstacles = self.static_map if self.static_map is not None else ObstacleSet.empty()
         return plan_path(self.algorithm, obstacles, start, goal, radius, self.scenario.size,
@@ -447,8 +477,10 @@ class OmplPlanner(Planner):
                             "goal moved: the OMPL baselines plan once, to the goal at t = 0)")
         target = self.path[self._next].copy()
         self._next += 1
-        # the last waypoint is the goal: drive onto it rather than stop at the goal tolerance
-        return Decision(target, iterations, None, finish=self._next == len(self.path))
+        # The last waypoint is the goal: drive onto it rather than stop at the goal tolerance.
+        # align: turn in place at each vertex, then drive the checked segment straight.
+        return Decision(target, iterations, None, finish=self._next == len(self.path),
+                        align=True)
 
 
 def _baseline(name: str, algorithm: str, description: str) -> type[OmplPlanner]:

@@ -19,6 +19,7 @@ from swarmpath.robot.kinematics import (
     DiffDrive,
     Omni,
     Pose,
+    aligned_drive_command,
     diff_drive_command,
     omni_command,
 )
@@ -91,12 +92,18 @@ class Simulator:
         )
 
     def drive(
-        self, target: Array, duration: float | None, time_limit: float, finish: bool = False
+        self,
+        target: Array,
+        duration: float | None,
+        time_limit: float,
+        finish: bool = False,
+        align: bool = False,
     ) -> None:
         """Drive toward ``target`` for ``duration`` seconds (the robot waits there if it arrives
         early: the world keeps moving), or until it arrives when ``duration`` is None; stop early
         when the goal is reached (unless ``finish``: the target is the goal, drive onto it) or at
-        the episode's ``time_limit``."""
+        the episode's ``time_limit``. ``align``: a differential drive turns in place until it
+        faces the target and then drives straight (:func:`aligned_drive_command`)."""
         end = time_limit if duration is None else min(time_limit, self.time + duration)
         tx, ty = float(target[0]), float(target[1])
         while self.time < end - 1e-12:
@@ -109,7 +116,8 @@ class Simulator:
                 vx, vy, w = omni_command(self.model, self.pose, (tx, ty), self.dt)
                 self.pose = self.model.advance(self.pose, vx, vy, w, self.dt)
             else:
-                v, w = diff_drive_command(self.model, self.pose, (tx, ty), self.dt)
+                command = aligned_drive_command if align else diff_drive_command
+                v, w = command(self.model, self.pose, (tx, ty), self.dt)
                 self.pose = self.model.advance(self.pose, v, w, self.dt)
             self.world.advance(self.dt)
             self.trajectory.append((self.pose.x, self.pose.y, self.time))

@@ -149,6 +149,37 @@ def diff_drive_command(
     return v, w
 
 
+#: Heading error (rad) below which :func:`aligned_drive_command` drives instead of turning.
+ALIGN_TOLERANCE = 1e-9
+
+
+def aligned_drive_command(
+    model: DiffDrive,
+    pose: Pose,
+    target: tuple[float, float],
+    dt: float,
+    tolerance: float = ALIGN_TOLERANCE,
+) -> tuple[float, float]:
+    """Turn in place until facing the target, then drive straight at it (a polyline follower).
+
+    While the heading error exceeds ``tolerance`` the robot turns in place at up to
+    ``max_angular``, landing exactly on the heading in the last step (w = error / dt); then it
+    drives at up to ``max_linear`` without overshooting, correcting the (round-off) error with
+    w = error / dt. The centre therefore moves along the straight segment from where it stands to
+    the target, which is what a planner whose segments were collision-checked needs: unlike
+    :func:`diff_drive_command`, no arc bulges off the checked segment.
+    """
+    dx, dy = target[0] - pose.x, target[1] - pose.y
+    dist = math.hypot(dx, dy)
+    if dist < ARRIVE:
+        return 0.0, 0.0
+    err = wrap_angle(math.atan2(dy, dx) - pose.theta)
+    w = max(-model.max_angular, min(model.max_angular, err / dt))
+    if abs(err) > tolerance:
+        return 0.0, w
+    return min(model.max_linear, dist / dt), w
+
+
 def omni_command(model: Omni, pose: Pose, target: tuple[float, float], dt: float) -> tuple[
     float, float, float
 ]:
