@@ -13,7 +13,7 @@ import pytest
 from rich.console import Console
 from typer.testing import CliRunner
 
-from swarmpath import report
+from swarmpath import compare, report
 from swarmpath.cli import app
 from swarmpath.cli import bench as bench_cli
 from swarmpath.optimizers import ParameterError, list_optimizers, minimize
@@ -30,15 +30,32 @@ def invoke(*args: str):
 
 
 def parse_table(stdout: str) -> dict[tuple[str, int, str], list[str]]:
-    """{(function, dim, stat): [cell text per algorithm]} from the printed table."""
-    rows: dict[tuple[str, int, str], list[str]] = {}
+    """{(function, dim, stat): [cell text per algorithm]} from the printed table (without the
+    +/=/- markers: see parse_markers)."""
+    return {k: [v for v, _ in cells] for k, cells in _parse(stdout).items()}
+
+
+def parse_markers(stdout: str) -> dict[tuple[str, int], list[str | None]]:
+    """{(function, dim): [marker per algorithm, None for the reference]} from the avg rows."""
+    return {(f, d): [m for _, m in cells] for (f, d, s), cells in _parse(stdout).items()
+            if s == "avg"}
+
+
+def _parse(stdout: str) -> dict[tuple[str, int, str], list[tuple[str, str | None]]]:
+    rows: dict[tuple[str, int, str], list[tuple[str, str | None]]] = {}
     function, dim = "", 0
     for line in stdout.splitlines():
         tokens = line.split()
         if len(tokens) > 3 and tokens[0].startswith("F") and tokens[1].isdigit():
             function, dim, tokens = tokens[0], int(tokens[1]), tokens[2:]
         if tokens and tokens[0] in report.TABLE_STATS and function:
-            rows[(function, dim, tokens[0])] = tokens[1:]
+            cells: list[tuple[str, str | None]] = []
+            for t in tokens[1:]:  # a marker follows its value as a token of its own
+                if t in compare.MARKERS and cells and cells[-1][1] is None:
+                    cells[-1] = (cells[-1][0], t)
+                else:
+                    cells.append((t, None))
+            rows[(function, dim, tokens[0])] = cells
     return rows
 
 

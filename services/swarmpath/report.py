@@ -17,6 +17,7 @@ from rich import box
 from rich.table import Table
 from rich.text import Text
 
+from swarmpath import compare
 from swarmpath.stats import describe, rank
 
 #: Rows of the table, in the papers' order.
@@ -53,6 +54,41 @@ def assign_ranks(cells: Iterable[Cell]) -> None:
         ranks = rank({c.algorithm: c.stats["avg"] for c in group})
         for c in group:
             c.rank = ranks[c.algorithm]
+
+
+@dataclass(frozen=True)
+class Statistics:
+    """The study's tests (:mod:`swarmpath.compare`): every algorithm against the reference in
+    every (function, dim) cell, one Holm family over the whole table, and per dimension the
+    Friedman test over the functions on the cells' average best fitness."""
+
+    comparison: compare.Comparison
+    friedman: dict[int, compare.Friedman]  # per dim, in table order
+
+    @property
+    def reference(self) -> str:
+        return self.comparison.reference
+
+    def marker(self, c: Cell) -> str | None:
+        return self.comparison.marker((c.function, c.dim), c.algorithm)
+
+
+def statistics(
+    cells: Sequence[Cell],
+    algorithms: Sequence[str],
+    reference: str | None = None,
+    alpha: float = compare.ALPHA,
+) -> Statistics:
+    """The tests of a study (reference: default the last algorithm; ValueError if unknown)."""
+    samples: dict[tuple[str, int], dict[str, list[float]]] = {}
+    averages: dict[int, dict[str, dict[str, float]]] = {}
+    for c in cells:
+        samples.setdefault((c.function, c.dim), {})[c.algorithm] = c.best_fitness
+        averages.setdefault(c.dim, {}).setdefault(c.function, {})[c.algorithm] = c.stats["avg"]
+    comparison = compare.compare_samples(samples, algorithms, reference, alpha)
+    ref = comparison.reference
+    per_dim = {d: compare.friedman(v, algorithms, ref, alpha) for d, v in averages.items()}
+    return Statistics(comparison, per_dim)
 
 
 def format_value(v: float, digits: int = 2) -> str:
@@ -103,8 +139,10 @@ def render_table(
     title: str | None = None,
     caption: str | None = None,
     digits: int = 2,
+    tests: Statistics | None = None,
 ) -> Table:
-    """The paper-style table as a rich Table (print it with any rich Console)."""
+    """The paper-style table as a rich Table (print it with any rich Console). With ``tests``,
+    each average is followed by its marker against the reference (``+``, ``=``, ``-``)."""
     table = Table(title=title, caption=caption, box=box.SIMPLE_HEAD, pad_edge=False)
     table.add_column("F", no_wrap=True)
     table.add_column("D", justify="right", no_wrap=True)
@@ -112,6 +150,7 @@ def render_table(
     for a in algorithms:
         table.add_column(a, justify="right", no_wrap=True)
     rows = table_rows(cells, algorithms)
+    show = tests is not None and len(algorithms) > 1
     for i, row in enumerate(rows):
         first = i == 0 or (rows[i - 1].function, rows[i - 1].dim) != (row.function, row.dim)
         last = i + 1 == len(rows) or (rows[i + 1].function, rows[i + 1].dim) != (
@@ -119,10 +158,14 @@ def render_table(
             row.dim,
         )
         texts = []
-        for v, marked in zip(row.values, row.best, strict=True):
+        for a, v, marked in zip(algorithms, row.values, row.best, strict=True):
             s = "-" if math.isnan(v) else format_value(v, digits)
-            # Every number gets one trailing character so that marked and unmarked ones align.
-            texts.append(Text(s + BEST_MARK, style="bold") if marked else Text(s + " "))
+            # Every number gets the same trailing characters so that marked ones align.
+            s += BEST_MARK if marked else " "
+            if show:
+                m = tests.comparison.marker((row.function, row.dim), a) if tests else None
+                s += " " + (m if row.stat == "avg" and m else " ")
+            texts.append(Text(s, style="bold") if marked else Text(s))
         table.add_row(
             row.function if first else "",
             str(row.dim) if first else "",
@@ -149,14 +192,82 @@ def ranking(cells: Sequence[Cell], algorithms: Sequence[str]) -> list[dict[str, 
     return out
 
 
-def render_ranking(cells: Sequence[Cell], algorithms: Sequence[str]) -> Table:
+def render_ranking(
+    cells: Sequence[Cell], algorithms: Sequence[str], tests: Statistics | None = None
+) -> Table:
+    """Per algorithm: best averages, mean rank over the cells and, with ``tests``, the +/=/-
+    counts against the reference and the Friedman mean rank per dimension (with the marker of
+    the Holm post-hoc against the reference)."""
     table = Table(box=box.SIMPLE_HEAD, pad_edge=False)
     table.add_column("algorithm")
     table.add_column("best avg", justify="right")
     table.add_column("mean rank", justify="right")
+    counts = tests.comparison.counts() if tests else {}
+    if tests:
+        table.add_column(f"+/=/- vs {tests.reference}", justify="right")
+        for dim in tests.friedman:
+            table.add_column(f"Friedman D={dim}", justify="right")
     for r in ranking(cells, algorithms):
-        table.add_row(r["algorithm"], f"{r['best']}/{r['of']}", f"{r['mean_rank']:.2f}")
+        a = r["algorithm"]
+        cols = [a, f"{r['best']}/{r['of']}", f"{r['mean_rank']:.2f}"]
+        if tests:
+            n = counts.get(a)
+            cols.append("ref" if n is None else f"{n['+']}/{n['=']}/{n['-']}")
+            for f in tests.friedman.values():
+                post = f.posthoc.get(a, {}).get("marker", " ")
+                cols.append(f"{f.mean_ranks[a]:.2f} {post}")
+        table.add_row(*cols)
     return table
+
+
+def format_p(p: float | None) -> str:
+    return "-" if p is None else (f"{p:.3g}" if p >= 1e-3 else f"{p:.2e}")
+
+
+def friedman_lines(tests: Statistics) -> list[str]:
+    """One line per dimension: the Friedman statistic, p and Nemenyi critical difference."""
+    lines = []
+    for dim, f in tests.friedman.items():
+        text = f"Friedman D={dim} over {len(f.blocks)} functions: "
+        if f.statistic is None:
+            text += f.note
+        else:
+            text += f"chi2 = {f.statistic:.3g}, p = {format_p(f.p)}"
+            if f.note:
+                text += f" ({f.note})"
+        if f.cd is not None:
+            text += f"; Nemenyi CD = {f.cd:.3g}"
+        lines.append(text)
+    return lines
+
+
+def legend(tests: Statistics) -> str:
+    c = tests.comparison
+    return (
+        f"+/=/-: significantly better / no significant difference / worse than {c.reference} "
+        f"(two-sided Wilcoxon rank-sum test, Holm-adjusted over the table, alpha {c.alpha:g}); "
+        f"Friedman columns: mean rank over the functions (1 = best), +/- = differs from "
+        f"{c.reference} by Holm's post-hoc test"
+    )
+
+
+def tests_to_json(tests: Statistics) -> dict[str, Any]:
+    """The study's tests as JSON: the comparison (every test, its p and Holm-adjusted p, its
+    marker, the counts) and the Friedman test per dimension."""
+
+    def clean(v: Any) -> Any:
+        if isinstance(v, float):
+            return json_number(v)
+        if isinstance(v, dict):
+            return {k: clean(x) for k, x in v.items()}
+        if isinstance(v, list):
+            return [clean(x) for x in v]
+        return v
+
+    return clean({
+        "comparison": tests.comparison.to_json(key_fields=("function", "dim")),
+        "friedman": [{"dim": d, **f.to_json()} for d, f in tests.friedman.items()],
+    })
 
 
 def json_number(v: float) -> float | str:
@@ -168,8 +279,8 @@ def json_number(v: float) -> float | str:
     return "nan" if math.isnan(v) else ("inf" if v > 0 else "-inf")
 
 
-def cell_to_json(c: Cell) -> dict[str, Any]:
-    return {
+def cell_to_json(c: Cell, tests: Statistics | None = None) -> dict[str, Any]:
+    out = {
         "algorithm": c.algorithm,
         "function": c.function,
         "dim": c.dim,
@@ -182,19 +293,34 @@ def cell_to_json(c: Cell) -> dict[str, Any]:
         "best_fitness": [json_number(v) for v in c.best_fitness],
         "run_evaluations": c.evaluations,
     }
+    if tests is not None:
+        t = tests.comparison.get((c.function, c.dim), c.algorithm)
+        out["test"] = {
+            "reference": tests.reference, "marker": None if t is None else t.marker,
+            "p": None if t is None else t.p, "p_holm": None if t is None else t.p_holm,
+        }
+    return out
 
 
 def study_to_json(
-    settings: Mapping[str, Any], cells: Sequence[Cell], seconds: float, version: str
+    settings: Mapping[str, Any],
+    cells: Sequence[Cell],
+    seconds: float,
+    version: str,
+    tests: Statistics | None = None,
 ) -> dict[str, Any]:
-    """The whole study as one JSON-ready document."""
+    """The whole study as one JSON-ready document (with ``tests``: each cell's ``test`` and the
+    document's ``statistics``, see :func:`tests_to_json`)."""
     algorithms = list(settings.get("algorithms", dict.fromkeys(c.algorithm for c in cells)))
-    return {
+    doc = {
         "swarmpath": version,
         "settings": dict(settings),
         "seconds": seconds,
-        "cells": [cell_to_json(c) for c in cells],
+        "cells": [cell_to_json(c, tests) for c in cells],
         "ranking": [
             {**r, "mean_rank": json_number(r["mean_rank"])} for r in ranking(cells, algorithms)
         ],
     }
+    if tests is not None:
+        doc["statistics"] = tests_to_json(tests)
+    return doc

@@ -14,6 +14,7 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
+from pathlib import Path
 from typing import Annotated, Any
 
 import numpy as np
@@ -22,7 +23,7 @@ from rich.console import Console
 from rich.measure import Measurement
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-from swarmpath import __version__, report
+from swarmpath import __version__, compare, report
 from swarmpath.cli import parallel
 from swarmpath.cli.core import InputError, app, parse_params_option, resolve_names
 from swarmpath.functions import expand_function_names, get_function
@@ -49,6 +50,8 @@ class BenchSpec:
     seed: int = 1
     shifted: bool = False
     params: dict[str, dict[str, Any]] = field(default_factory=dict)
+    #: the algorithm the statistical tests compare against (None: the last of ``algorithms``)
+    reference: str | None = None
 
     def cells(self) -> list[tuple[str, int, str]]:
         """(function, dim, algorithm) in table order."""
@@ -118,9 +121,14 @@ def make_spec(
     seed: int = 1,
     shifted: bool = False,
     params: str | None = None,
+    reference: str | None = None,
 ) -> BenchSpec:
     """Validate the command's options; raises :class:`InputError` naming the bad one."""
     algos = resolve_algorithms(algorithms)
+    try:
+        ref = compare.resolve_reference(algos, reference)
+    except ValueError as exc:
+        raise InputError("--reference", str(exc)) from None
     fns = resolve_functions(functions)
     ds = parse_dims(dims)
     check_range("--runs", runs, 1, MAX_RUNS)
@@ -148,6 +156,7 @@ def make_spec(
         seed=seed,
         shifted=shifted,
         params=parse_params(params, algos),
+        reference=ref,
     )
 
 
@@ -349,10 +358,26 @@ def bench(
             "Numbers do not change.",
         ),
     ] = 0,
+    reference: Annotated[
+        str | None,
+        typer.Option(
+            "--reference", metavar="NAME",
+            help="Algorithm the +/=/- markers compare against (default: the last one listed).",
+        ),
+    ] = None,
+    plot: Annotated[
+        Path | None,
+        typer.Option("--plot", metavar="DIR",
+                     help="Write a critical-difference diagram per dimension into DIR."),
+    ] = None,
 ) -> None:
-    """Run optimizers on benchmark functions; print min/max/avg/std per function and dimension."""
-    spec = make_spec(algorithms, functions, dims, runs, agents, iterations, seed, shifted, params)
+    """Run optimizers on benchmark functions; print min/max/avg/std per function and dimension,
+    with Wilcoxon rank-sum markers against a reference and Friedman mean ranks."""
+    spec = make_spec(algorithms, functions, dims, runs, agents, iterations, seed, shifted, params,
+                     reference)
     check_range("--jobs", jobs, 0, parallel.MAX_JOBS)
+    if plot is not None:
+        plot = plot_dir(plot)
     stderr = Console(stderr=True)
     started = time.perf_counter()
     try:
@@ -360,21 +385,50 @@ def bench(
     except ParameterError as exc:  # a check only the optimizer's constructor makes
         raise InputError("--params", str(exc)) from None
     seconds = time.perf_counter() - started
+    tests = report.statistics(cells, spec.algorithms, spec.reference)
+    if plot is not None:
+        from swarmpath.cli.cdplot import draw_cd
+
+        for dim, f in tests.friedman.items():
+            out = draw_cd(f, plot / f"cd-D{dim}.png", f"D = {dim}")
+            if out is not None:
+                stderr.print(f"wrote {out}", highlight=False)
 
     if as_json:
-        doc = report.study_to_json(spec.settings(), cells, seconds, __version__)
+        doc = report.study_to_json(spec.settings(), cells, seconds, __version__, tests)
         sys.stdout.write(json.dumps(doc, allow_nan=False) + "\n")
         return
-    print_tables(spec, cells, seconds)
+    print_tables(spec, cells, seconds, tests)
 
 
-def print_tables(spec: BenchSpec, cells: Sequence[report.Cell], seconds: float) -> None:
-    table = report.render_table(cells, spec.algorithms)
+def plot_dir(path: Path) -> Path:
+    """``--plot DIR``, created if needed; InputError naming ``--plot`` otherwise."""
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError("--plot", f"cannot create {str(path)!r}: {exc.strerror}") from None
+    if not path.is_dir():
+        raise InputError("--plot", f"{str(path)!r} is not a directory")
+    return path
+
+
+def print_tables(
+    spec: BenchSpec,
+    cells: Sequence[report.Cell],
+    seconds: float,
+    tests: report.Statistics | None = None,
+) -> None:
+    multi = len(spec.algorithms) > 1
+    table = report.render_table(cells, spec.algorithms, tests=tests if multi else None)
     console = Console()
     if not console.is_terminal:  # pipes and files: never squeeze the numbers to 80 columns
         width = Measurement.get(console, console.options.update(width=100_000), table).maximum
         console = Console(width=max(80, width))
     console.print(table)
     console.print(caption(spec, seconds), highlight=False)
-    if len(spec.algorithms) > 1:
-        console.print(report.render_ranking(cells, spec.algorithms))
+    if multi:
+        console.print(report.render_ranking(cells, spec.algorithms, tests))
+        if tests is not None:
+            for line in report.friedman_lines(tests):
+                console.print(line, highlight=False)
+            console.print(report.legend(tests), highlight=False)
