@@ -45,11 +45,13 @@ F8_REL = 0.25
 # Documented exceptions: (algorithm, function) -> sign of log10(ours / published) beyond the
 # tolerance (+1: we are worse, -1: we are better). See docs/algorithms.md.
 EXCEPTIONS = {
-    # Mirjalili-group PSO (Vmax = 6 absolute) lands on the GWO paper's PSO column, not the
-    # seeds' one, on these: worse on the sphere-like F1/F6, and stuck at the bounds on F2.
+    # No PSO setting reproduces the seeds' 30-D sphere-like F1/F6 together with their F7
+    # (docs/algorithms.md, PSO; services/swarmpath/reference/reasons.yaml).
     ("PSO", "F1"): +1,
-    ("PSO", "F2"): +1,
     ("PSO", "F6"): +1,
+    # Velocity clamped to 0.1 of the box lets PSO search F8's wide box better than the seeds'
+    # (-7.1e3 vs -5.2e3; the gap to F8's minimum is 0.13 decades smaller: same decade).
+    ("PSO", "F8"): -1,
     # SSA.m as coded is ~25 % better on F8 than the seeds' SSA (-7.3e3 vs -5.9e3 over 30 runs).
     ("SSA", "F8"): -1,
     # The published FDO column is far worse than FDO (ours, the author's rules, and mealpy's
@@ -89,7 +91,7 @@ def _sphere_problem(runs, dim, low=-100.0, high=100.0):
     )
 
 
-@pytest.mark.parametrize(("mode", "bound"), [("absolute", 6.0), ("range", 0.2 * 200.0)])
+@pytest.mark.parametrize(("mode", "bound"), [("absolute", 6.0), ("range", 0.1 * 200.0)])
 def test_pso_velocity_clamp(mode, bound):
     opt = create(
         "PSO",
@@ -134,6 +136,45 @@ def test_pso_inertia_weight_schedule(t0):
     opt.step()
     w = 0.9 - t0 * 0.7 / T
     assert np.allclose(opt.V, 0.5 * w, rtol=0, atol=1e-15)
+
+
+def test_pso_fly_lets_particles_leave_but_records_only_points_of_the_box():
+    """bounds = "fly": positions are never clipped, outside particles are neither counted nor
+    remembered as pbest, and every point the objective sees is in the box."""
+    seen = []
+
+    def objective(X, streams):
+        seen.append(X.copy())
+        return np.sum(X * X, axis=-1)
+
+    R, N, d, T = 3, 10, 4, 40
+    problem = Problem(objective, np.full((R, d), 1.0), np.full((R, d), 5.0))  # optimum on a face
+    opt = create("PSO", problem, agents=N, iterations=T, streams=RunStreams.for_runs(4, R))
+    left = False
+    while not opt.done:
+        opt.step()
+        outside = (opt.X < 1.0) | (opt.X > 5.0)
+        left = left or bool(outside.any())
+        assert np.all((opt.pbest >= 1.0) & (opt.pbest <= 5.0))
+    assert left
+    assert all(np.all((x >= 1.0) & (x <= 5.0)) for x in seen)
+    assert np.all(opt.evaluations < N * (T + 1))  # the outside points were not counted
+    assert np.all((opt.best_position >= 1.0) & (opt.best_position <= 5.0))
+
+
+@pytest.mark.parametrize("bounds", ["fly", "clip"])
+def test_pso_clip_pins_coordinates_on_the_bounds_fly_does_not(bounds):
+    """The former rule (clip, keep the velocity, absolute Vmax = 6) ends 30-D F2 runs with
+    coordinates exactly on +-10; free flight never does (issue 10, audit item 1)."""
+    res = minimize(
+        "PSO", "F2", dim=30, agents=30, iterations=300, runs=10, seed=1,
+        params={"bounds": bounds, "vmax_mode": "absolute"},
+    )
+    pinned = np.count_nonzero(np.any(np.abs(res.best_position) == 10.0, axis=1))
+    if bounds == "clip":
+        assert pinned >= 3 and np.median(res.best_fitness) > 1.0
+    else:
+        assert pinned == 0 and np.median(res.best_fitness) < 1.0
 
 
 # ------------------------------------------------------------------------------------------ SSA
