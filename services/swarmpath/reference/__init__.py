@@ -1,0 +1,226 @@
+"""The seed papers' result tables as data, and the reviewed reasons for cells that differ.
+
+Each reproducible table is one YAML file in this package (transcribed by hand from the seed
+texts; see each file's ``source`` and ``notes``). A benchmark table holds, per function and
+algorithm, the printed ``[min, max, avg, std]``; a map table holds, per planner and map, the
+printed runs and mean row. A value the seed text does not let us read is ``illegible`` and loads
+as ``None``.
+
+``reasons.yaml`` maps a cell key -- ``<table>/<algorithm>/<function>/<dim>`` for benchmark
+tables, ``<table>/<planner>/<map>`` for map tables -- to ``{reason, evidence}``: why the measured
+value differs from the published one by more than the tolerance, and the command that shows it.
+
+Pure: reads package data only (no network, no global state besides the read-only files).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from importlib import resources
+from typing import Any
+
+import yaml
+
+#: The reproducible tables, in the order ``swarmpath reproduce --list`` names them.
+TABLES: tuple[str, ...] = (
+    "icoot-table2",
+    "icoot-table3",
+    "icoot-table4",
+    "ihpo-table2",
+    "icoot-maps",
+    "ihpo-maps",
+    "rfogwo-maps",
+    "mfb-maps",
+)
+ILLEGIBLE = "illegible"
+REASONS_FILE = "reasons.yaml"
+
+
+class ReferenceError(ValueError):
+    """A malformed reference file (names the file and the entry)."""
+
+
+@dataclass(frozen=True)
+class BenchmarkTable:
+    name: str
+    source: dict[str, Any]
+    setting: dict[str, Any]
+    algorithms: tuple[str, ...]
+    functions: tuple[str, ...]
+    stats: tuple[str, ...]
+    notes: tuple[str, ...]
+    cell_notes: dict[str, str]
+    #: (function, algorithm) -> {stat: value or None when illegible}
+    cells: dict[tuple[str, str], dict[str, float | None]]
+    kind: str = "benchmark"
+
+    @property
+    def dim(self) -> int:
+        (d,) = self.setting["dims"]
+        return int(d)
+
+    def cell_keys(self) -> list[str]:
+        return [
+            cell_key(self.name, a, f, self.dim) for f in self.functions for a in self.algorithms
+        ]
+
+    def note_for(self, function: str, algorithm: str) -> str | None:
+        return self.cell_notes.get(f"{function}/{algorithm}")
+
+
+@dataclass(frozen=True)
+class MapCell:
+    planner: str
+    map: str
+    #: column -> the printed runs (empty when only a mean is printed)
+    runs: dict[str, list[float]] = field(default_factory=dict)
+    #: column -> the printed mean (the mean of the runs when the table prints none)
+    mean: dict[str, float] = field(default_factory=dict)
+    printed_mean: bool = True
+
+
+@dataclass(frozen=True)
+class MapTable:
+    name: str
+    source: dict[str, Any]
+    setting: dict[str, Any]
+    columns: dict[str, str]
+    compare: str
+    notes: tuple[str, ...]
+    cells: dict[tuple[str, str], MapCell]
+    extra: dict[str, Any] = field(default_factory=dict)
+    kind: str = "map"
+
+    @property
+    def planners(self) -> tuple[str, ...]:
+        return tuple(dict.fromkeys(p for p, _ in self.cells))
+
+    @property
+    def maps(self) -> tuple[str, ...]:
+        return tuple(dict.fromkeys(m for _, m in self.cells))
+
+    def cell_keys(self) -> list[str]:
+        return [cell_key(self.name, p, m) for p, m in self.cells]
+
+
+Table = BenchmarkTable | MapTable
+
+
+@dataclass(frozen=True)
+class Reason:
+    reason: str
+    evidence: str
+
+
+def cell_key(table: str, who: str, where: str, dim: int | None = None) -> str:
+    """``icoot-table2/PSO/F2/30`` (benchmark) or ``icoot-maps/ICOOT/icoot-map1`` (map)."""
+    return f"{table}/{who}/{where}" if dim is None else f"{table}/{who}/{where}/{dim}"
+
+
+def _read(filename: str) -> Any:
+    text = resources.files(__name__).joinpath(filename).read_text(encoding="utf-8")
+    return yaml.safe_load(text)
+
+
+def _value(raw: Any, where: str) -> float | None:
+    if raw == ILLEGIBLE:
+        return None
+    if isinstance(raw, bool) or not isinstance(raw, int | float):
+        raise ReferenceError(f"{where}: {raw!r} is neither a number nor {ILLEGIBLE!r}")
+    value = float(raw)
+    if not math.isfinite(value):
+        raise ReferenceError(f"{where}: {raw!r} is not finite")
+    return value
+
+
+def _benchmark(name: str, doc: dict[str, Any]) -> BenchmarkTable:
+    stats = tuple(doc["stats"])
+    algorithms = tuple(doc["algorithms"])
+    cells: dict[tuple[str, str], dict[str, float | None]] = {}
+    for function, row in doc["cells"].items():
+        if tuple(row) != algorithms:
+            raise ReferenceError(f"{name}.yaml: {function}: algorithms {list(row)} != {algorithms}")
+        for algorithm, values in row.items():
+            where = f"{name}.yaml: {function}/{algorithm}"
+            if not isinstance(values, list) or len(values) != len(stats):
+                raise ReferenceError(f"{where}: expected {len(stats)} values {list(stats)}")
+            cells[(function, algorithm)] = {
+                s: _value(v, f"{where}/{s}") for s, v in zip(stats, values, strict=True)
+            }
+    return BenchmarkTable(
+        name=name, source=doc["source"], setting=doc["setting"], algorithms=algorithms,
+        functions=tuple(doc["cells"]), stats=stats, notes=tuple(doc.get("notes") or ()),
+        cell_notes=dict(doc.get("cell_notes") or {}), cells=cells,
+    )
+
+
+def _map(name: str, doc: dict[str, Any]) -> MapTable:
+    columns = dict(doc["columns"])
+    cells: dict[tuple[str, str], MapCell] = {}
+    for key, entry in doc["cells"].items():
+        planner, _, map_name = str(key).partition("/")
+        where = f"{name}.yaml: {key}"
+        clean: dict[str, list[float]] = {}
+        for c, raw in (entry.get("runs") or {}).items():
+            values = [_value(v, f"{where}/{c}") for v in raw]
+            if c not in columns:
+                raise ReferenceError(f"{where}: unknown column {c!r}")
+            clean[c] = [v for v in values if v is not None]
+            if len(clean[c]) != len(values):
+                raise ReferenceError(f"{where}: an illegible run of {c!r}")
+        printed = "mean" in entry
+        if printed:
+            mean = {c: float(v) for c, v in entry["mean"].items() if _value(v, where) is not None}
+        else:
+            mean = {c: sum(vs) / len(vs) for c, vs in clean.items()}
+        if doc["compare"] not in mean:
+            raise ReferenceError(f"{where}: no {doc['compare']!r} value")
+        cells[(planner, map_name)] = MapCell(planner, map_name, clean, mean, printed)
+    extra = {k: v for k, v in doc.items() if k not in {
+        "table", "kind", "source", "setting", "columns", "compare", "notes", "cells"}}
+    return MapTable(
+        name=name, source=doc["source"], setting=doc["setting"], columns=columns,
+        compare=doc["compare"], notes=tuple(doc.get("notes") or ()), cells=cells, extra=extra,
+    )
+
+
+def load(name: str) -> Table:
+    """The table ``name`` (one of :data:`TABLES`); KeyError naming the valid ones otherwise."""
+    if name not in TABLES:
+        raise KeyError(f"unknown table {name!r}; reproducible: {', '.join(TABLES)}")
+    doc = _read(f"{name}.yaml")
+    if doc.get("table") != name:
+        raise ReferenceError(f"{name}.yaml: 'table' is {doc.get('table')!r}")
+    if doc["kind"] == "benchmark":
+        return _benchmark(name, doc)
+    if doc["kind"] == "map":
+        return _map(name, doc)
+    raise ReferenceError(f"{name}.yaml: unknown kind {doc['kind']!r}")
+
+
+def list_tables() -> list[str]:
+    return list(TABLES)
+
+
+def load_reasons() -> dict[str, Reason]:
+    """Every entry of ``reasons.yaml`` (ReferenceError on a malformed entry)."""
+    doc = _read(REASONS_FILE) or {}
+    if not isinstance(doc, dict):
+        raise ReferenceError(f"{REASONS_FILE}: expected a mapping of cell keys")
+    out: dict[str, Reason] = {}
+    for key, entry in doc.items():
+        if not isinstance(entry, dict) or set(entry) != {"reason", "evidence"}:
+            raise ReferenceError(f"{REASONS_FILE}: {key}: expected exactly reason and evidence")
+        reason, evidence = entry["reason"], entry["evidence"]
+        if not (isinstance(reason, str) and reason.strip()):
+            raise ReferenceError(f"{REASONS_FILE}: {key}: empty reason")
+        if not (isinstance(evidence, str) and evidence.strip()):
+            raise ReferenceError(f"{REASONS_FILE}: {key}: empty evidence")
+        out[str(key)] = Reason(" ".join(reason.split()), " ".join(evidence.split()))
+    return out
+
+
+def all_cell_keys() -> set[str]:
+    """The key of every cell of every table (what a reason may be attached to)."""
+    return {k for name in TABLES for k in load(name).cell_keys()}

@@ -1,0 +1,168 @@
+"""The transcribed tables of the seed papers (swarmpath.reference): integrity, the facts about
+the prints that the files' notes state, and the reasons file."""
+
+from __future__ import annotations
+
+import math
+from importlib import resources
+
+import pytest
+
+from swarmpath import reference
+from swarmpath.functions import get_function
+from swarmpath.optimizers import list_optimizers
+from swarmpath.planners import list_planners
+from swarmpath.reference import BenchmarkTable, MapTable
+from swarmpath.world import list_maps
+
+BENCH = [n for n in reference.TABLES if isinstance(reference.load(n), BenchmarkTable)]
+MAPS = [n for n in reference.TABLES if isinstance(reference.load(n), MapTable)]
+
+
+def test_every_table_file_is_listed_and_every_listed_table_has_a_file():
+    files = {
+        p.name.removesuffix(".yaml")
+        for p in resources.files("swarmpath.reference").iterdir()
+        if p.name.endswith(".yaml") and p.name != reference.REASONS_FILE
+    }
+    assert files == set(reference.TABLES)
+
+
+@pytest.mark.parametrize("name", reference.TABLES)
+def test_source_and_setting_are_stated(name):
+    table = reference.load(name)
+    assert {"paper", "seed", "table", "caption"} <= set(table.source)
+    assert table.setting["runs"] > 0
+    assert table.notes
+
+
+@pytest.mark.parametrize("name", BENCH)
+def test_benchmark_table_is_complete_and_names_what_swarmpath_runs(name):
+    table = reference.load(name)
+    assert table.stats == ("min", "max", "avg", "std")
+    assert table.functions == tuple(f"F{i}" for i in range(1, 14))
+    assert set(table.algorithms) <= set(list_optimizers())
+    assert len(table.cells) == len(table.functions) * len(table.algorithms)
+    for f in table.functions:
+        get_function(f)  # a registered function
+    for key in table.cell_notes:
+        function, algorithm = key.split("/")
+        assert (function, algorithm) in table.cells, key
+
+
+@pytest.mark.parametrize("name", BENCH)
+def test_min_avg_max_in_order_unless_a_note_explains_it(name):
+    table = reference.load(name)
+    unexplained = []
+    for (function, algorithm), cell in table.cells.items():
+        lo, hi, avg, std = cell["min"], cell["max"], cell["avg"], cell["std"]
+        ordered = [v for v in (lo, avg, hi) if v is not None]
+        ok = ordered == sorted(ordered) and (std is None or std >= 0)
+        if not ok and table.note_for(function, algorithm) is None:
+            unexplained.append(f"{function}/{algorithm} {cell}")
+    assert unexplained == []
+
+
+@pytest.mark.parametrize("name", BENCH)
+def test_cell_notes_only_where_the_print_is_inconsistent(name):
+    table = reference.load(name)
+    for key in table.cell_notes:
+        cell = table.cells[tuple(key.split("/"))]  # type: ignore[index]
+        lo, hi, avg = cell["min"], cell["max"], cell["avg"]
+        values = [v for v in (lo, avg, hi) if v is not None]
+        assert values != sorted(values) or lo == hi or avg == hi, key
+
+
+def _mantissa_ratio(a: float, b: float) -> float:
+    """a / b scaled into [1, 10)."""
+    r = abs(a / b)
+    return r / 10 ** math.floor(math.log10(r))
+
+
+@pytest.mark.parametrize("name", ["icoot-table2", "icoot-table3", "icoot-table4"])
+def test_published_mcoot_is_coot_times_6296_times_a_power_of_ten(name):
+    """The fact the files' notes state: every non-zero legible mCOOT cell is COOT's x 6.296 x
+    10^k, except the two listed."""
+    table = reference.load(name)
+    exceptions = []
+    checked = 0
+    for f in table.functions:
+        m, c = table.cells[(f, "mCOOT")], table.cells[(f, "COOT")]
+        for s in table.stats:
+            if m[s] in (None, 0.0) or c[s] in (None, 0.0):
+                continue
+            checked += 1
+            if abs(_mantissa_ratio(m[s], c[s]) - 6.296) > 0.003:
+                exceptions.append(f"{f}/{s}")
+    assert checked > 15
+    assert exceptions == {"icoot-table2": ["F7/std"], "icoot-table4": ["F3/min"]}.get(name, [])
+
+
+def test_ihpo_paper_copies_the_icoot_papers_columns():
+    icoot, ihpo = reference.load("icoot-table2"), reference.load("ihpo-table2")
+    compared = 0
+    for algorithm in ("PSO", "SSA", "FDO", "COOT"):
+        for f in icoot.functions:
+            a, b = icoot.cells[(f, algorithm)], ihpo.cells[(f, algorithm)]
+            for s in icoot.stats:
+                if a[s] is not None and b[s] is not None:
+                    compared += 1
+                    assert a[s] == b[s], (algorithm, f, s)
+    assert compared == 4 * 13 * 4 - 4  # all but ICOOT's illegible PSO F8
+
+
+def test_pso_f9_prints_min_equal_max_but_a_different_average():
+    cell = reference.load("icoot-table2").cells[("F9", "PSO")]
+    assert cell["min"] == cell["max"] == 76.413 and cell["avg"] == 38.604
+
+
+@pytest.mark.parametrize("name", MAPS)
+def test_map_table_names_what_swarmpath_runs(name):
+    table = reference.load(name)
+    assert set(table.planners) <= set(list_planners())
+    assert set(table.maps) <= set(list_maps())
+    assert set(table.maps) == set(table.setting["maps"])
+    for cell in table.cells.values():
+        for column, runs in cell.runs.items():
+            assert len(runs) == table.setting["runs"], (cell.planner, cell.map, column)
+
+
+@pytest.mark.parametrize("name", MAPS)
+def test_printed_mean_rows_agree_with_the_printed_runs(name):
+    """A printed Mean row equals the mean of the printed runs to the printed precision."""
+    table = reference.load(name)
+    for cell in table.cells.values():
+        for column, runs in cell.runs.items():
+            mean = sum(runs) / len(runs)
+            assert cell.mean[column] == pytest.approx(mean, rel=2e-4, abs=1e-4), (
+                cell.planner, cell.map, column)
+
+
+def test_static_map_distances_shorter_than_the_straight_line():
+    """The fact the map files state: the static-goal maps' published distances are below the
+    14.1421 m from (0, 0) to (10, 10)."""
+    line = math.hypot(10, 10)
+    for name, map_name in (("icoot-maps", "icoot-map1"), ("ihpo-maps", "ihpo-map1")):
+        table = reference.load(name)
+        (cell,) = [c for c in table.cells.values() if c.map == map_name]
+        assert max(cell.runs["distance_m"]) < line
+        assert cell.mean["distance_m"] < line
+
+
+def test_mfb_table5_std_exceeds_the_range_it_describes():
+    table = reference.load("mfb-maps")
+    for hi, lo, _mean, std in table.extra["table5"].values():
+        assert std > hi - lo
+
+
+def test_reasons_name_existing_cells_and_carry_reason_and_evidence():
+    reasons = reference.load_reasons()
+    keys = reference.all_cell_keys()
+    assert sorted(set(reasons) - keys) == []
+    for entry in reasons.values():
+        assert entry.reason and entry.evidence
+
+
+def test_unknown_table_is_refused_with_the_valid_names():
+    with pytest.raises(KeyError, match="icoot-table2"):
+        reference.load("icoot-table9")
