@@ -22,9 +22,10 @@ def fast(*planners: str) -> str:
 
 RUN_FIELDS = {"planner", "map", "run", "seed", "success", "collisions", "length", "error",
               "smoothness", "min_clearance", "steps", "iterations", "seconds", "optimum", "gap",
-              "path"}
+              "planned_length", "robot_driven_contacts", "obstacle_driven_contacts", "path"}
 SUMMARY_FIELDS = {"planner", "map", "runs", "success_rate", "length_mean", "length_std",
-                  "error_mean", "seconds_mean"}
+                  "error_mean", "seconds_mean", "robot_driven_contacts",
+                  "obstacle_driven_contacts"}
 PNG = b"\x89PNG\r\n\x1a\n"
 
 
@@ -42,7 +43,8 @@ def test_table_has_the_papers_columns_and_a_mean_row():
     out = result.stdout
     assert "OMPL-RRTstar on mfb-static" in out and "exact optimum" in out
     header = next(line for line in out.splitlines() if line.split()[:1] == ["Run"])
-    for column in ("Distance", "Error", "Elapsed time", "Success", "Collisions", "Gap"):
+    for column in ("Distance", "Error", "Elapsed time", "Success", "Collisions",
+                   "Robot/obstacle-driven", "Gap", "Planned"):
         assert column in header
     lines = [line.split() for line in out.splitlines()]
     at = next(i for i, r in enumerate(lines) if r[:1] == ["Mean"])  # the caption comes after
@@ -64,6 +66,8 @@ def test_json_document_has_exactly_runs_and_summary():
         assert run["planner"] == ["OMPL-RRTstar", "OMPL-BITstar"][i // 2]
         assert (run["map"], run["run"], run["seed"]) == ("mfb-static", i % 2, 3)
         assert run["success"] is True and run["collisions"] == 0
+        assert run["robot_driven_contacts"] == run["obstacle_driven_contacts"] == 0
+        assert run["length"] == pytest.approx(run["planned_length"], abs=1e-3)  # omni: straight
         assert all(len(row) == 3 for row in run["path"])
         assert run["path"][0] == [0.0, 0.0, 0.0]
         assert run["optimum"] == pytest.approx(doc["runs"][0]["optimum"])

@@ -9,6 +9,8 @@ import pytest
 
 from swarmpath.metrics import (
     ClearanceResult,
+    ContactCauses,
+    contact_causes,
     final_error,
     gap,
     heading_smoothness,
@@ -199,3 +201,30 @@ def test_invalid_inputs() -> None:
         )
     with pytest.raises(ValueError):
         path_length(np.zeros(3))
+
+
+def test_contact_causes_static_obstacle_is_robot_driven() -> None:
+    obs = ObstacleSet(np.array([[5.0, 0.0, 0.5]]), ())
+    p = _traj((3, 0, 0), (4.4, 0, 1), (4.4, 0, 2))  # drives in, then stands in contact
+    assert min_clearance(p, obs, 0.2).collisions == 2
+    assert contact_causes(p, obs, 0.2) == ContactCauses(2, 0)
+    assert contact_causes(p, obs, 0.05) == ContactCauses(0, 0)
+
+
+def test_contact_causes_moving_obstacle_reaching_a_still_or_fleeing_robot() -> None:
+    def obs_at(t: float) -> ObstacleSet:  # a circle closing in at 3 m/s along -x
+        return ObstacleSet(np.array([[4.0 - 3.0 * t, 0.0, 0.5]]), ())
+
+    still = _traj((0, 0, 0), (0, 0, 1), (0, 0, 2))  # passed over in the second step
+    assert min_clearance(still, obs_at, 0.3).collisions == 1
+    assert contact_causes(still, obs_at, 0.3) == ContactCauses(0, 1)
+    fleeing = _traj((0, 0, 0), (-0.5, 0, 1), (-1.0, 0, 2))  # away at 0.5 m/s: still caught
+    assert min_clearance(fleeing, obs_at, 0.3).collisions == 1
+    assert contact_causes(fleeing, obs_at, 0.3) == ContactCauses(0, 1)
+    sideways = _traj((0, 0, 0), (0, 0.1, 1), (0, 0.2, 2))  # moves off the obstacle's line
+    assert contact_causes(sideways, obs_at, 0.3) == ContactCauses(0, 1)
+    # head-on: in the first step the robot drives into it; in the second it is inside and
+    # leaves it (moving away from where the obstacle was) while the obstacle passes
+    head_on = _traj((0, 0, 0), (1, 0, 1), (2, 0, 2))
+    assert min_clearance(head_on, obs_at, 0.3).collisions == 2
+    assert contact_causes(head_on, obs_at, 0.3) == ContactCauses(1, 1)

@@ -11,7 +11,7 @@ from swarmpath.planners import Episode, PlannerError, get_planner, list_planners
 from swarmpath.planners import ompl_baselines as ompl_mod
 from swarmpath.world import Obstacle, RobotSpec, Scenario, get_map
 from swarmpath.world.geometry import ObstacleSet, collides
-from swarmpath.world.scenario_io import load_scenario
+from swarmpath.world.scenario_io import load_scenario, scenario_from_dict
 
 BASELINES = [n for n in list_planners() if issubclass(get_planner(n), ompl_mod.OmplPlanner)]
 TWO_WALLS = Path(__file__).parent / "data" / "two_walls.json"
@@ -200,3 +200,17 @@ def test_no_nanobind_leak_report_at_exit():
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=120, check=True)
     assert "leaked" not in done.stderr
+
+
+def test_contacts_are_counted_by_cause():
+    # a circle crossing the start at 3 m/s while the TurtleBot3 turns in place toward the goal
+    # behind it: every contact is obstacle-driven; the counts add up to the collisions
+    scenario = scenario_from_dict({
+        "name": "run-over", "size": [10, 10], "start": [5, 5], "goal": [1, 5],
+        "robot": {"preset": "turtlebot3-burger"},
+        "obstacles": [{"shape": "circle", "center": [5, 8], "radius": 0.3, "speed": 3.0,
+                       "heading_deg": -90}]})
+    out = Episode(scenario, "OMPL-RRTstar", seed=1, params={"iterations": 200}).run()
+    assert out.collisions > 0 and not out.success
+    assert out.robot_driven_contacts == 0
+    assert out.obstacle_driven_contacts == out.collisions

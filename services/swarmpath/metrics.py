@@ -41,6 +41,8 @@ Array = NDArray[np.float64]
 
 __all__ = [
     "ClearanceResult",
+    "ContactCauses",
+    "contact_causes",
     "final_error",
     "gap",
     "heading_smoothness",
@@ -124,19 +126,11 @@ def _snapshots(
     return [obstacles_at(float(t)) for t in times]
 
 
-def step_clearances(
+def _obstacle_frames(
     path: ArrayLike, obstacles_at: Callable[[float], ObstacleSet] | ObstacleSet
-) -> Array:
-    """Exact clearance of the robot centre during each step, shape (max(n - 1, 1),).
-
-    Between rows i and i+1 every obstacle is assumed to translate at constant velocity from its
-    pose in ``obstacles_at(t_i)`` to its pose in ``obstacles_at(t_{i+1})`` (shapes and radii must
-    not change; obstacle order must be stable). In an obstacle's own frame the robot then moves
-    along the straight segment from p_i - o(t_i) to p_{i+1} - o(t_{i+1}) (o the obstacle's
-    offset), so the step's clearance to that obstacle is an exact segment-to-static-obstacle
-    distance (0 when touching, crossing or inside). The step clearance is the minimum over
-    obstacles (+inf if there are none). A single-row path is one zero-length step.
-    """
+) -> tuple[Array, ObstacleSet, Array]:
+    """Trajectory rows (at least two), the obstacles at t_0 and each obstacle's offset from its
+    t_0 pose at every row, shape (n, k + n_poly, 2) (circles first, then polygons)."""
     P = np.asarray(path, dtype=np.float64)
     if P.ndim != 2 or P.shape[1] != 3:
         raise ValueError(f"trajectory must be an (n, 3) array of [x, y, t], got {P.shape}")
@@ -153,15 +147,12 @@ def step_clearances(
     for s in snaps:
         if len(s.circles) != k or len(s.polygons) != n_poly:
             raise ValueError("obstacles_at must return the same obstacles at every time")
-    out = np.full(len(P) - 1, np.inf)
-    xy = P[:, :2]
+    offsets = np.zeros((len(P), k + n_poly, 2))
     if k:
         circ = np.stack([s.circles for s in snaps])  # (n, k, 3)
         if np.any(np.abs(circ[:, :, 2] - ref.circles[:, 2]) > _SHAPE_TOL):
             raise ValueError("circle radii must not change over time")
-        rel = xy[:, None, :] - circ[:, :, :2]  # robot relative to each centre, (n, k, 2)
-        d = point_segment_distance(np.zeros(2), rel[:-1], rel[1:]) - ref.circles[:, 2]
-        out = np.minimum(out, np.maximum(d, 0.0).min(axis=1))
+        offsets[:, :k] = circ[:, :, :2] - ref.circles[:, :2]
     for j, shape in enumerate(ref.polygons):
         verts = np.stack([s.polygons[j] for s in snaps])  # (n, m, 2)
         if verts.shape[1:] != shape.shape:
@@ -169,9 +160,87 @@ def step_clearances(
         offset = verts[:, 0, :] - shape[0]  # (n, 2)
         if np.any(np.abs(verts - offset[:, None, :] - shape) > _SHAPE_TOL):
             raise ValueError(f"polygon {j} changes shape over time (only translation allowed)")
-        rel = xy - offset
-        out = np.minimum(out, segment_polygon_distance(rel[:-1], rel[1:], shape))
+        offsets[:, k + j] = offset
+    return P, ref, offsets
+
+
+def _clearance_matrix(xy_a: Array, xy_b: Array, ref: ObstacleSet, off_a: Array,
+                      off_b: Array) -> Array:
+    """Clearance of the robot moving xy_a -> xy_b while each obstacle translates off_a -> off_b
+    (rows: steps, columns: obstacles; exact, as in :func:`step_clearances`)."""
+    k = len(ref.circles)
+    out = np.empty((len(xy_a), k + len(ref.polygons)))
+    if k:
+        a = xy_a[:, None, :] - ref.circles[:, :2] - off_a[:, :k]
+        b = xy_b[:, None, :] - ref.circles[:, :2] - off_b[:, :k]
+        out[:, :k] = np.maximum(point_segment_distance(np.zeros(2), a, b) - ref.circles[:, 2], 0.0)
+    for j, shape in enumerate(ref.polygons):
+        out[:, k + j] = segment_polygon_distance(xy_a - off_a[:, k + j], xy_b - off_b[:, k + j],
+                                                 shape)
     return out
+
+
+def step_clearances(
+    path: ArrayLike, obstacles_at: Callable[[float], ObstacleSet] | ObstacleSet
+) -> Array:
+    """Exact clearance of the robot centre during each step, shape (max(n - 1, 1),).
+
+    Between rows i and i+1 every obstacle is assumed to translate at constant velocity from its
+    pose in ``obstacles_at(t_i)`` to its pose in ``obstacles_at(t_{i+1})`` (shapes and radii must
+    not change; obstacle order must be stable). In an obstacle's own frame the robot then moves
+    along the straight segment from p_i - o(t_i) to p_{i+1} - o(t_{i+1}) (o the obstacle's
+    offset), so the step's clearance to that obstacle is an exact segment-to-static-obstacle
+    distance (0 when touching, crossing or inside). The step clearance is the minimum over
+    obstacles (+inf if there are none). A single-row path is one zero-length step.
+    """
+    P, ref, off = _obstacle_frames(path, obstacles_at)
+    if off.shape[1] == 0:
+        return np.full(len(P) - 1, np.inf)
+    xy = P[:, :2]
+    return np.asarray(_clearance_matrix(xy[:-1], xy[1:], ref, off[:-1], off[1:]).min(axis=1))
+
+
+class ContactCauses(NamedTuple):
+    """Colliding steps by cause; ``robot_driven + obstacle_driven`` = the collisions.
+
+    robot_driven: in the step the robot moved closer to an obstacle it touches (its own motion
+    with that obstacle held where it was at the start of the step), or the obstacle is static;
+    obstacle_driven: the robot was still or moved tangentially or away from every obstacle it
+    touches, and each of them moved during the step (a moving obstacle reached it)."""
+
+    robot_driven: int
+    obstacle_driven: int
+
+
+#: m: a robot displacement that changes its distance to an obstacle by less is not an approach.
+APPROACH_TOL = 1e-9
+
+
+def contact_causes(
+    path: ArrayLike,
+    obstacles_at: Callable[[float], ObstacleSet] | ObstacleSet,
+    radius: float,
+) -> ContactCauses:
+    """Classify every colliding step (see :class:`ContactCauses`); touching counts, as in
+    :func:`min_clearance`."""
+    P, ref, off = _obstacle_frames(path, obstacles_at)
+    if off.shape[1] == 0:
+        return ContactCauses(0, 0)
+    xy = P[:, :2]
+    swept = _clearance_matrix(xy[:-1], xy[1:], ref, off[:-1], off[1:])
+    touching = collides(swept, radius)
+    rows = np.flatnonzero(touching.any(axis=1))
+    if rows.size == 0:
+        return ContactCauses(0, 0)
+    a, b = xy[rows], xy[rows + 1]
+    frozen = off[rows]  # every obstacle held at its pose at the start of the step
+    before = _clearance_matrix(a, a, ref, frozen, frozen)
+    after = _clearance_matrix(b, b, ref, frozen, frozen)
+    approached = after < before - APPROACH_TOL
+    moved = np.hypot(*(off[rows + 1] - off[rows]).transpose(2, 0, 1)) > 0.0
+    robot = touching[rows] & (approached | ~moved)
+    n_robot = int(np.count_nonzero(robot.any(axis=1)))
+    return ContactCauses(n_robot, int(rows.size) - n_robot)
 
 
 def min_clearance(

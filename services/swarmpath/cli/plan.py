@@ -188,7 +188,7 @@ def run_episode(spec: PlanSpec, planner: str, scenario: Any, run: int,
             "error": math.dist(scenario.start, scenario.goal), "smoothness": 0.0,
             "ompl_smoothness": 0.0, "min_clearance": None, "steps": 0, "iterations": 0,
             "seconds": 0.0, "travel_time": 0.0, "optimum": None, "gap": None,
-            "planned_length": None,
+            "planned_length": None, "robot_driven_contacts": 0, "obstacle_driven_contacts": 0,
             "path": [[float(scenario.start[0]), float(scenario.start[1]), 0.0]],
         }
 
@@ -252,6 +252,11 @@ def _num(v: Any, digits: int = 4) -> str:
     return "-" if v is None else f"{float(v):.{digits}f}"
 
 
+def _causes(r: dict[str, Any]) -> str:
+    """Collisions by cause, robot-driven / obstacle-driven (see metrics.contact_causes)."""
+    return f"{r.get('robot_driven_contacts') or 0}/{r.get('obstacle_driven_contacts') or 0}"
+
+
 def render_cell(cell: CellResult, row: dict[str, Any]) -> Table:
     """The paper-style run table of one planner x map (``row``: its summary)."""
     optimum = row["optimum"]
@@ -259,7 +264,7 @@ def render_cell(cell: CellResult, row: dict[str, Any]) -> Table:
     title += f" (exact optimum {optimum:.4f} m)" if optimum is not None else " (no exact optimum)"
     table = Table(title=title, box=box.SIMPLE_HEAD, pad_edge=False)
     for name in ("Run", "Distance (m)", "Error (m)", "Elapsed time (s)", "Success",
-                 "Collisions", "Gap (%)", "Steps", "Iterations"):
+                 "Collisions", "Robot/obstacle-driven", "Gap (%)", "Steps", "Iterations"):
         table.add_column(name, justify="left" if name == "Success" else "right", no_wrap=True)
     planned = any(r.get("planned_length") is not None for r in cell.runs)
     if planned:  # global planners: the length they planned beside the one driven
@@ -270,7 +275,7 @@ def render_cell(cell: CellResult, row: dict[str, Any]) -> Table:
     for r in cell.runs:
         gap = None if r["gap"] is None else 100.0 * r["gap"]
         cols = [str(r["run"] + 1), _num(r["length"]), _num(r["error"]), _num(r["seconds"], 3),
-                "yes" if r["success"] else "no", str(r["collisions"]), _num(gap, 2),
+                "yes" if r["success"] else "no", str(r["collisions"]), _causes(r), _num(gap, 2),
                 str(r["steps"]), str(r["iterations"])]
         if planned:
             cols.append(_num(r.get("planned_length")))
@@ -279,7 +284,8 @@ def render_cell(cell: CellResult, row: dict[str, Any]) -> Table:
         table.add_row(*cols)
     gap_mean = None if row["gap_mean"] is None else 100.0 * row["gap_mean"]
     mean = ["Mean", _num(row["length_mean"]), _num(row["error_mean"]), _num(row["seconds_mean"], 3),
-            f"{row['successes']}/{row['runs']}", str(row["collisions"]), _num(gap_mean, 2),
+            f"{row['successes']}/{row['runs']}", str(row["collisions"]), _causes(row),
+            _num(gap_mean, 2),
             f"{row['steps_mean']:.1f}", f"{row['iterations_mean']:.0f}"]
     if planned:
         mean.append("")
@@ -304,7 +310,9 @@ def print_tables(cells: Sequence[CellResult], spec: PlanSpec, seconds: float) ->
         console.print(t)
     console.print(
         f"{spec.runs} runs per planner x map, seed {spec.seed}; Distance = executed path length "
-        "(Planned: the global planner's plan), Error = final distance to the goal, Elapsed time = "
+        "(Planned: the global planner's plan), Robot/obstacle-driven = colliding steps where the "
+        "robot moved into the obstacle / a moving obstacle reached a still or retreating robot, "
+        "Error = final distance to the goal, Elapsed time = "
         "planning wall time; the Mean row averages Distance and Gap over successful runs; "
         f"{seconds:.1f} s",
         highlight=False,

@@ -55,6 +55,10 @@ class RunOutcome:
     #: Length of the path a global planner planned (None for local planners); ``length`` is
     #: what the robot executed.
     planned_length: float | None = None
+    #: ``collisions`` by cause (:func:`swarmpath.metrics.contact_causes`): the robot moved into
+    #: the obstacle, or it was still / moving away and a moving obstacle reached it.
+    robot_driven_contacts: int = 0
+    obstacle_driven_contacts: int = 0
     path: list[list[float]] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
@@ -159,6 +163,8 @@ class Episode:
         path = self.sim.path()
         world = self.sim.world
         gap_body, collisions = metrics.min_clearance(path, world.obstacles_at, self.sim.radius)
+        causes = (metrics.contact_causes(path, world.obstacles_at, self.sim.radius)
+                  if collisions else metrics.ContactCauses(0, 0))
         length = metrics.path_length(path)
         error = metrics.final_error(path, world.goal_at(float(path[-1, 2])))
         reached = self.reason == "goal reached"
@@ -188,5 +194,7 @@ class Episode:
             optimum=optimum,
             gap=gap,
             planned_length=self.planner.planned_length,
+            robot_driven_contacts=causes.robot_driven,
+            obstacle_driven_contacts=causes.obstacle_driven,
             path=[[float(x), float(y), float(t)] for x, y, t in path],
         )

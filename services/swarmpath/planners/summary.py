@@ -3,8 +3,9 @@
 Pure functions over run records (``RunOutcome.to_dict()`` dicts, or any mapping with the same
 keys), shared by ``swarmpath plan`` and the REST service. Rules:
 
-* ``success_rate``, ``collisions`` (total), ``error_*``, ``seconds_*``, ``iterations_mean`` and
-  ``steps_mean`` are over **all** runs;
+* ``success_rate``, ``collisions`` (total; by cause ``robot_driven_contacts`` and
+  ``obstacle_driven_contacts``, see :func:`swarmpath.metrics.contact_causes`), ``error_*``,
+  ``seconds_*``, ``iterations_mean`` and ``steps_mean`` are over **all** runs;
 * ``length_*``, ``gap_*`` and ``smoothness_mean`` are over the **successful** runs only (a failed
   run's length measures how far it got, not a path), and are ``None`` when no run succeeded;
 * ``std`` is the sample standard deviation (ddof=1, 0 for one value), as in
@@ -86,6 +87,9 @@ def summarize_cell(runs: Iterable[Any]) -> dict[str, Any]:
         "successes": len(ok),
         "success_rate": len(ok) / len(rows),
         "collisions": sum(int(_get(r, "collisions") or 0) for r in rows),
+        "robot_driven_contacts": sum(int(_get(r, "robot_driven_contacts") or 0) for r in rows),
+        "obstacle_driven_contacts": sum(int(_get(r, "obstacle_driven_contacts") or 0)
+                                        for r in rows),
         "length_mean": length["mean"],
         "length_std": length["std"],
         "length_median": length["median"],
