@@ -9,6 +9,7 @@ from PIL import Image
 from typer.testing import CliRunner
 
 from swarmpath.cli import app
+from swarmpath.compare_maps import map_statistics
 from swarmpath.planners import list_planners
 from swarmpath.planners.summary import summarize
 from swarmpath.world import list_maps
@@ -54,12 +55,12 @@ def test_table_has_the_papers_columns_and_a_mean_row():
     assert mean[4] == "2/2"
 
 
-def test_json_document_has_exactly_runs_and_summary():
+def test_json_document_has_exactly_runs_summary_and_statistics():
     result = invoke("-p", "OMPL-RRTstar,OMPL-BITstar", "-m", "mfb-static", "--runs", "2",
                     "--seed", "3", "--params", fast("OMPL-RRTstar", "OMPL-BITstar"), "--json")
     assert result.exit_code == 0, result.stderr
     doc = json.loads(result.stdout)
-    assert set(doc) == {"runs", "summary"}
+    assert set(doc) == {"runs", "summary", "statistics"}
     assert len(doc["runs"]) == 4
     for i, run in enumerate(doc["runs"]):
         assert RUN_FIELDS <= set(run)
@@ -77,6 +78,8 @@ def test_json_document_has_exactly_runs_and_summary():
         assert SUMMARY_FIELDS <= set(s)
         assert s["runs"] == 2 and s["success_rate"] == 1.0
     assert doc["summary"] == summarize(doc["runs"])  # the pure function the service reuses
+    assert doc["statistics"] == map_statistics(doc["runs"]).to_json()
+    assert doc["statistics"]["reference"] == "OMPL-BITstar"  # the last planner listed
 
 
 def test_plot_writes_one_png_per_planner_and_map(tmp_path):

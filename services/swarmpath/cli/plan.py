@@ -43,6 +43,8 @@ class PlanSpec:
     runs: int = 10
     seed: int = 1
     params: dict[str, dict[str, Any]] = field(default_factory=dict)
+    #: the planner the statistical tests compare against (None: the last of ``planners``)
+    reference: str | None = None
 
     def cells(self) -> list[tuple[str, Any]]:
         return [(p, m) for p in self.planners for m in self.maps]
@@ -142,15 +144,21 @@ def parse_params(text: str | None, planners: Sequence[str]) -> dict[str, dict[st
 
 
 def make_spec(planners: str, maps: str, runs: int = 10, seed: int = 1,
-              params: str | None = None) -> PlanSpec:
+              params: str | None = None, reference: str | None = None) -> PlanSpec:
     """Validate the command's options; raises :class:`InputError` naming the bad one."""
+    from swarmpath.compare import resolve_reference
+
     names = resolve_planners(planners)
+    try:
+        ref = resolve_reference(names, reference)
+    except ValueError as exc:
+        raise InputError("--reference", str(exc)) from None
     scenarios = resolve_maps(maps)
     if not 1 <= runs <= MAX_RUNS:
         raise InputError("--runs", f"{runs} is not in [1, {MAX_RUNS}]")
     if seed < 0:
         raise InputError("--seed", f"{seed} is negative")
-    return PlanSpec(names, scenarios, runs, seed, parse_params(params, names))
+    return PlanSpec(names, scenarios, runs, seed, parse_params(params, names), ref)
 
 
 # -------------------------------------------------------------------------------------- running
@@ -239,12 +247,16 @@ def simulated_world(scenario: Any, seed: int, run: int) -> Any:
     return scenario.instantiate(run_generator(seed, run, SIMULATION))
 
 
-def document(cells: Sequence[CellResult]) -> dict[str, Any]:
-    """The ``--json`` document: exactly {"runs": [...], "summary": [...]}."""
+def document(cells: Sequence[CellResult], reference: str | None = None) -> dict[str, Any]:
+    """The ``--json`` document: exactly {"runs": [...], "summary": [...], "statistics": {...}}
+    (statistics: :meth:`swarmpath.compare_maps.MapStatistics.to_json`)."""
+    from swarmpath.compare_maps import map_statistics
     from swarmpath.planners.summary import summarize
 
     runs = [r for c in cells for r in c.runs]
-    return {"runs": runs, "summary": summarize(runs)}
+    planners = list(dict.fromkeys(c.planner for c in cells))
+    return {"runs": runs, "summary": summarize(runs),
+            "statistics": map_statistics(runs, planners, reference).to_json()}
 
 
 # --------------------------------------------------------------------------------------- tables
@@ -317,6 +329,16 @@ def print_tables(cells: Sequence[CellResult], spec: PlanSpec, seconds: float) ->
         f"{seconds:.1f} s",
         highlight=False,
     )
+    if len(spec.planners) > 1:
+        from swarmpath.cli import plan_stats
+        from swarmpath.compare_maps import map_statistics
+
+        runs = [r for c in cells for r in c.runs]
+        tests = map_statistics(runs, spec.planners, spec.reference)
+        console.print(plan_stats.render_comparison(tests, summarize(runs), spec.planners))
+        console.print(plan_stats.render_counts(tests, spec.planners))
+        for line in plan_stats.lines(tests):
+            console.print(line, highlight=False)
 
 
 # ---------------------------------------------------------------------------------------- plots
@@ -484,6 +506,11 @@ def plan(
         typer.Option("--jobs", "-j", help="Processes running the episodes (0: one per CPU). "
                      "Results do not change; planning times are per process."),
     ] = 0,
+    reference: Annotated[
+        str | None,
+        typer.Option("--reference", metavar="NAME", help="Planner the +/=/- markers compare "
+                     "against (default: the last one listed)."),
+    ] = None,
 ) -> None:
     """Run path planners on maps; print the papers' run tables (Run / Distance / Error / Elapsed
     time) with success, collisions and the gap to the exact optimum."""
@@ -495,7 +522,7 @@ def plan(
         if list_planners:
             _list_planners()
         return
-    spec = make_spec(planners, maps, runs, seed, params)
+    spec = make_spec(planners, maps, runs, seed, params, reference)
     if not 0 <= jobs <= parallel.MAX_JOBS:
         raise InputError("--jobs", f"{jobs} is not in [0, {parallel.MAX_JOBS}]")
     if plot is not None:
@@ -515,6 +542,6 @@ def plan(
             out = plot_cell(cell, plot)
             stderr.print(f"wrote {out}", highlight=False)
     if as_json:
-        sys.stdout.write(json.dumps(document(cells), allow_nan=False) + "\n")
+        sys.stdout.write(json.dumps(document(cells, spec.reference), allow_nan=False) + "\n")
         return
     print_tables(cells, spec, seconds)
