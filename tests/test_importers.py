@@ -99,14 +99,16 @@ def test_ros_pgm_trinary(tmp_path: Path) -> None:
     assert m.to_scenario_frame((-1.0, 2.0)) == (0.0, 0.0)
     assert s.robot == RobotSpec.preset("turtlebot3-burger")
     # Obstacles: top wall, the block, the unknown cell (unknown counts as blocked by default).
-    assert set(s.obstacles) == {
-        Obstacle.rectangle(0.0, 2.5, 4.0, 3.0),
-        Obstacle.rectangle(1.0, 1.0, 2.5, 2.0),
-        Obstacle.rectangle(3.5, 0.0, 4.0, 0.5),
+    assert {frozenset(o.points or ()) for o in s.obstacles} == {
+        frozenset(Obstacle.rectangle(0.0, 2.5, 4.0, 3.0).points or ()),
+        frozenset(Obstacle.rectangle(1.0, 1.0, 2.5, 2.0).points or ()),
+        frozenset(Obstacle.rectangle(3.5, 0.0, 4.0, 0.5).points or ()),
     }
-    # Defaults: free cell nearest the bottom-left corner; nearest the top-right reachable one.
+    # Defaults: the cell nearest the lower-left corner among those keeping radius + margin
+    # (0.155 m, half a cell diagonal included: 0.51 m from blocked cell centres), then the one
+    # farthest from it in the same region.
     assert s.start == (0.25, 0.25)
-    assert s.goal == (3.75, 2.25)
+    assert s.goal == (3.75, 1.75)
     assert s.problems() == []
     # Rasterizing the rectangles reproduces the blocked cells.
     spec = GridSpec((0, 0), 0.5, g.shape)
@@ -230,11 +232,15 @@ def test_movingai_map(tmp_path: Path) -> None:
     np.testing.assert_array_equal(m.blocked, blocked[::-1])  # text row 0 is the top
     s = m.scenario
     assert s.size == (3.0, 2.0) and s.name == "tiny"
+    # 0.5 m cells: only cells not 4-adjacent to a blocked one keep 0.155 m + half a diagonal;
+    # the lower-left region is (0, 0), (1, 0), (0, 1) and its farthest cell comes first by row
     assert s.start == (0.25, 0.25)
-    assert s.goal == (2.25, 1.25)  # nearest free cell to the top-right corner
-    assert Obstacle.rectangle(0.0, 1.5, 3.0, 2.0) in s.obstacles  # top wall: one rectangle
-    assert Obstacle.rectangle(2.5, 0.5, 3.0, 1.5) in s.obstacles  # 'O' over 'W': merged
-    assert len(s.obstacles) == 4
+    assert s.goal == (0.75, 0.25)
+    # top wall, 'T' below it and 'O' over 'W': one polygon; the '@@' block: another
+    assert len(s.obstacles) == 2
+    assert {len(o.points or ()) for o in s.obstacles} == {10, 4}
+    spec = GridSpec((0, 0), 0.5, g.shape)
+    np.testing.assert_array_equal(rasterize(obstacle_set(s.obstacles), spec), m.blocked)
     assert movingai_cell_center(0, 3, 4, 0.5) == (0.25, 0.25)
     assert movingai_cell_center(4, 1, 4) == (4.5, 2.5)
     m2 = load_movingai_map(
@@ -262,5 +268,5 @@ def test_movingai_errors(text: str, message: str) -> None:
 def test_movingai_all_blocked(tmp_path: Path) -> None:
     p = tmp_path / "solid.map"
     p.write_text("type octile\nheight 2\nwidth 2\nmap\n@@\n@@\n")
-    with pytest.raises(MapImportError, match="no free cell"):
+    with pytest.raises(MapImportError, match="no cell keeps a clearance"):
         load_movingai_map(p)

@@ -2,8 +2,9 @@
 
 Both importers return an :class:`ImportedMap`: the occupancy grid as read (ROS values, row 0 at the
 bottom, see :mod:`swarmpath.world.raster`) and a :class:`~swarmpath.world.scenario.Scenario` whose
-obstacles are axis-aligned rectangles covering the blocked cells (runs of blocked cells along each
-row, then identical runs in consecutive rows merged into one rectangle, which keeps the count low).
+obstacles are simple orthogonal polygons covering exactly the blocked cells
+(:func:`swarmpath.world.grid_polygons.grid_polygons`: 64 x 64-cell tiles, 4-connected parts, holes
+cut open).
 
 Frames: the scenario world is ``[0, w] x [0, h]`` with ``w = cols * resolution`` and
 ``h = rows * resolution``; its (0, 0) is the lower-left corner of the map. For ROS maps that corner
@@ -12,10 +13,20 @@ is the YAML ``origin`` (x, y) in the map frame, kept as :attr:`ImportedMap.offse
 :meth:`ImportedMap.to_scenario_frame` on map-frame points). The origin's yaw is ignored (recorded
 in ``meta``), as most of the ROS navigation stack does.
 
-Default start and goal: the free cell (clearance of its centre > robot radius) nearest the
-bottom-left corner, and the free cell nearest the top-right corner among those 8-connected to the
-start through free cells (any free cell if none is). Unknown cells (and graded 1..99 cells of scale
+Default start and goal (:func:`default_endpoints`): candidates are the cells whose centre keeps a
+clearance of at least ``robot radius + endpoint_margin`` (0.05 m) from every blocked cell (and from
+the map border) and, on ROS maps, that read free even with ROS 1's ``free_thresh`` (occupancy below
+0.19: map_saver's unknown grey 205, which nav2's 0.25 reads as free, is never a candidate, so an
+endpoint never lands in the unknown area outside a building). Of the 8-connected regions of
+candidates the largest is used; the start is its cell nearest the map's lower-left corner, the goal
+its cell farthest (straight line) from the start. Unknown cells (and graded 1..99 cells of scale
 maps) count as blocked unless ``unknown_as_occupied=False``.
+
+Limits: a grid of more than ``max_cells`` cells, or whose blocked cells form more than
+``max_obstacles`` polygons, is refused with a :class:`MapLimitError` naming the limit (both are
+keyword arguments; the CLI has ``--max-cells`` / ``--max-obstacles``). The polygon count is bounded
+below by the 4-connected components, counted before any polygon is built, so a huge noisy grid is
+refused at once.
 
 ROS rules (nav2 map_io): a pixel's shade is the mean of its colour channels / 255 (in trinary mode
 an alpha channel is averaged in too); occupancy ``p = 1 - shade``, or ``shade`` when ``negate``.
@@ -29,6 +40,7 @@ Image row 0 is the top of the map (highest y). Missing ``negate`` / thresholds d
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -41,21 +53,27 @@ from numpy.typing import NDArray
 from PIL import Image
 from scipy import ndimage
 
-from swarmpath.world.raster import FREE, OCCUPIED, UNKNOWN, GridSpec, OccupancyGrid, rasterize
+from swarmpath.world.grid_polygons import blocked_components, grid_polygons
+from swarmpath.world.raster import FREE, OCCUPIED, UNKNOWN, GridSpec, OccupancyGrid
 from swarmpath.world.scenario import (
     ROBOT_PRESETS,
     Obstacle,
     RobotSpec,
     Scenario,
-    obstacle_set,
     scenario_problems,
 )
 from swarmpath.world.scenario_io import ScenarioError
 
 __all__ = [
+    "ENDPOINT_MARGIN",
+    "MAX_CELLS",
+    "MAX_OBSTACLES",
     "ImportedMap",
     "MapImportError",
+    "MapLimitError",
     "blocked_rectangles",
+    "check_limits",
+    "default_endpoints",
     "load_movingai_map",
     "load_ros_map",
     "movingai_cell_center",
@@ -63,12 +81,23 @@ __all__ = [
     "ros_occupancy",
 ]
 
+MAX_CELLS = 4_194_304  # 2048 x 2048
+MAX_OBSTACLES = 5_000
+ENDPOINT_MARGIN = 0.05  # m of clearance above the robot radius for default start and goal
+SURE_FREE = 0.19  # ROS occupancy below which a cell may hold a default endpoint (205 grey: 0.196)
 MOVINGAI_PASSABLE = frozenset(".GS")
 MOVINGAI_BLOCKED = frozenset("@OTW")
+_MOVINGAI_KIND = np.full(256, 2, dtype=np.int8)  # byte -> 0 passable, 1 blocked, 2 unknown
+_MOVINGAI_KIND[[ord(ch) for ch in MOVINGAI_PASSABLE]] = 0
+_MOVINGAI_KIND[[ord(ch) for ch in MOVINGAI_BLOCKED]] = 1
 
 
 class MapImportError(ValueError):
     """A map file that cannot be imported; the message names the file and the key or line."""
+
+
+class MapLimitError(MapImportError):
+    """A map over a size limit; the message names the limit and how to raise it."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -115,34 +144,76 @@ def blocked_rectangles(blocked: NDArray[np.bool_]) -> list[tuple[int, int, int, 
     return out
 
 
-def _rect_obstacles(rects: list[tuple[int, int, int, int]], res: float) -> tuple[Obstacle, ...]:
+def _polygon_obstacles(blocked: NDArray[np.bool_], res: float) -> tuple[Obstacle, ...]:
     return tuple(
-        Obstacle.rectangle(c0 * res, r0 * res, c1 * res, r1 * res) for r0, c0, r1, c1 in rects
+        Obstacle.polygon([(float(x) * res, float(y) * res) for x, y in poly])
+        for poly in grid_polygons(blocked)
     )
 
 
-def _default_endpoints(
-    obstacles: tuple[Obstacle, ...], spec: GridSpec, radius: float
+def check_limits(
+    blocked: NDArray[np.bool_], source: str, max_cells: int, max_obstacles: int
+) -> None:
+    """Refuse a grid over the limits before any polygon is built (:class:`MapLimitError`)."""
+    cells = int(blocked.size)
+    if cells > max_cells:
+        raise MapLimitError(
+            f"{source}: {blocked.shape[1]} x {blocked.shape[0]} = {cells:,} cells exceed "
+            f"max_cells={max_cells:,} (raise it with max_cells= / --max-cells)"
+        )
+    parts = blocked_components(blocked)
+    if parts > max_obstacles:
+        raise MapLimitError(
+            f"{source}: the blocked cells form at least {parts:,} obstacles (4-connected "
+            f"components), more than max_obstacles={max_obstacles:,} (raise it with "
+            "max_obstacles= / --max-obstacles)"
+        )
+
+
+def default_endpoints(
+    blocked: NDArray[np.bool_],
+    res: float,
+    radius: float,
+    margin: float = ENDPOINT_MARGIN,
+    allowed: NDArray[np.bool_] | None = None,
 ) -> tuple[tuple[float, float], tuple[float, float]]:
-    free = ~rasterize(obstacle_set(obstacles), spec, radius)
-    if not free.any():
-        raise MapImportError(f"no free cell for the robot (radius {radius:g} m) anywhere")
-    centres = spec.centres()
-    x0, y0, x1, y1 = spec.extent
+    """Default start and goal of a grid map (scenario frame); the rule is in the module docstring.
 
-    def nearest(mask: NDArray[np.bool_], corner: tuple[float, float]) -> tuple[int, int]:
-        d = np.hypot(centres[..., 0] - corner[0], centres[..., 1] - corner[1])
-        d = np.where(mask, d, np.inf)
-        r, c = np.unravel_index(int(np.argmin(d)), d.shape)
-        return int(r), int(c)
-
-    s = nearest(free, (x0, y0))
-    labels, _ = ndimage.label(free, structure=np.ones((3, 3), dtype=bool))
-    same = labels == labels[s]
-    g = nearest(same if same.sum() > 1 else free, (x1, y1))
-    sx, sy = spec.cell_to_world(np.array(s))
-    gx, gy = spec.cell_to_world(np.array(g))
-    return (float(sx), float(sy)), (float(gx), float(gy))
+    The clearance of a cell centre is bounded from below by its distance to the nearest blocked
+    cell centre minus half a cell diagonal, so the chosen cells keep at least
+    ``radius + margin``. ``allowed`` (default: every cell) restricts the candidates further
+    (ROS maps: cells that read free even at ROS 1's free_thresh, see :data:`SURE_FREE`).
+    Raises :class:`MapImportError` if no cell qualifies.
+    """
+    need = radius + margin
+    if blocked.any():
+        edt = ndimage.distance_transform_edt(~blocked)
+        ok = (edt - 0.5 * math.sqrt(2.0)) * res >= need
+    else:
+        ok = np.ones(blocked.shape, dtype=bool)
+    # the world border is no obstacle, but the robot's body stays inside the map
+    rows, cols = blocked.shape
+    ys = (np.arange(rows) + 0.5) * res
+    xs = (np.arange(cols) + 0.5) * res
+    ok &= ((ys >= need) & (ys <= rows * res - need))[:, None]
+    ok &= ((xs >= need) & (xs <= cols * res - need))[None, :]
+    if allowed is not None:
+        ok &= allowed
+    if not ok.any():
+        raise MapImportError(
+            f"no cell keeps a clearance of robot radius {radius:g} + margin {margin:g} m; "
+            "give start and goal explicitly"
+        )
+    labels, n = ndimage.label(ok, structure=np.ones((3, 3), dtype=bool))
+    sizes = np.bincount(labels.ravel(), minlength=n + 1)
+    sizes[0] = 0
+    region = int(np.argmax(sizes))
+    rr, cc = np.nonzero(labels == region)  # row-major: ties resolve to the lowest row, column
+    i = int(np.argmin(np.hypot(rr + 0.5, cc + 0.5)))
+    j = int(np.argmax(np.hypot(rr - rr[i], cc - cc[i])))
+    start = (float((cc[i] + 0.5) * res), float((rr[i] + 0.5) * res))
+    goal = (float((cc[j] + 0.5) * res), float((rr[j] + 0.5) * res))
+    return start, goal
 
 
 def _build(
@@ -159,14 +230,26 @@ def _build(
     source: str,
     offset: tuple[float, float] = (0.0, 0.0),
     meta: dict[str, Any] | None = None,
+    max_obstacles: int = MAX_OBSTACLES,
+    endpoint_margin: float = ENDPOINT_MARGIN,
+    allowed: NDArray[np.bool_] | None = None,
 ) -> ImportedMap:
     spec = GridSpec((0.0, 0.0), res, (data.shape[0], data.shape[1]))
     grid = OccupancyGrid(spec, data)
     blocked = grid.blocked(unknown_as_occupied)
+    check_limits(blocked, source, blocked.size, max_obstacles)
     robot = robot or ROBOT_PRESETS["turtlebot3-burger"]
-    obstacles = _rect_obstacles(blocked_rectangles(blocked), res)
+    obstacles = _polygon_obstacles(blocked, res)
+    if len(obstacles) > max_obstacles:
+        raise MapLimitError(
+            f"{source}: the blocked cells make {len(obstacles):,} polygons, more than "
+            f"max_obstacles={max_obstacles:,} (raise it with max_obstacles= / --max-obstacles)"
+        )
     if start is None or goal is None:
-        s0, g0 = _default_endpoints(obstacles, spec, robot.radius)
+        try:
+            s0, g0 = default_endpoints(blocked, res, robot.radius, endpoint_margin, allowed)
+        except MapImportError as e:
+            raise MapImportError(f"{source}: {e}") from None
         start = s0 if start is None else start
         goal = g0 if goal is None else goal
     scenario = Scenario(
@@ -187,9 +270,21 @@ def _build(
 
 
 # ------------------------------------------------------------------------------------ ROS maps
-def _image_shade(path: Path, with_alpha: bool) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+def _image_shade(
+    path: Path, with_alpha: bool, max_cells: int = MAX_CELLS
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
     """Per-pixel shade in [0, 1] (image order, row 0 = top) and an 'is opaque' mask."""
-    with Image.open(path) as im:
+    try:
+        im_ctx = Image.open(path)
+    except (OSError, Image.DecompressionBombError) as e:
+        raise MapImportError(f"{path}: cannot read the image: {e}") from None
+    with im_ctx as im:
+        w, h = im.size
+        if w * h > max_cells:
+            raise MapLimitError(
+                f"{path}: {w} x {h} = {w * h:,} cells exceed max_cells={max_cells:,} "
+                "(raise it with max_cells= / --max-cells)"
+            )
         im.load()
         has_alpha = im.mode in ("LA", "RGBA", "PA", "La", "RGBa") or (
             im.mode == "P" and "transparency" in im.info
@@ -252,6 +347,9 @@ def load_ros_map(
     unknown_as_occupied: bool = True,
     sensors: str | None = None,
     time_step: float = 0.1,
+    max_cells: int = MAX_CELLS,
+    max_obstacles: int = MAX_OBSTACLES,
+    endpoint_margin: float = ENDPOINT_MARGIN,
 ) -> ImportedMap:
     """Import a ROS map_server / nav2 map (YAML + PGM/PNG/BMP image).
 
@@ -295,9 +393,13 @@ def load_ros_map(
         raise MapImportError(f"{src}: mode: must be trinary, scale or raw, got {mode!r}")
     if not image.is_file():
         raise MapImportError(f"{src}: image: file not found: {image}")
-    shade, opaque = _image_shade(image, with_alpha=(mode == "trinary"))
+    shade, opaque = _image_shade(image, with_alpha=(mode == "trinary"), max_cells=max_cells)
     values = ros_occupancy(shade, opaque, mode, bool(neg), occ_t, free_t)
     data = values[::-1]  # image row 0 is the top of the map; grid row 0 is the bottom
+    occ = shade if neg else 1.0 - shade
+    sure_free = np.ascontiguousarray(((occ < SURE_FREE) & opaque)[::-1])
+    if mode == "raw":
+        sure_free = data == FREE
     return _build(
         name or ypath.stem,
         np.ascontiguousarray(data),
@@ -319,11 +421,16 @@ def load_ros_map(
             "occupied_thresh": occ_t,
             "free_thresh": free_t,
         },
+        max_obstacles=max_obstacles,
+        endpoint_margin=endpoint_margin,
+        allowed=sure_free,
     )
 
 
 # ------------------------------------------------------------------------------------ MovingAI
-def parse_movingai_map(text: str, source: str = "<map>") -> NDArray[np.bool_]:
+def parse_movingai_map(
+    text: str, source: str = "<map>", max_cells: int = MAX_CELLS
+) -> NDArray[np.bool_]:
     """Blocked mask of a MovingAI ``.map`` in *text* order (row 0 = top line of the grid)."""
     lines = text.splitlines()
     header: dict[str, str] = {}
@@ -348,23 +455,36 @@ def parse_movingai_map(text: str, source: str = "<map>") -> NDArray[np.bool_]:
         raise MapImportError(f"{source}: header: height and width must be integers") from None
     if height < 1 or width < 1:
         raise MapImportError(f"{source}: header: height and width must be >= 1")
+    if height * width > max_cells:
+        raise MapLimitError(
+            f"{source}: {width} x {height} = {height * width:,} cells exceed "
+            f"max_cells={max_cells:,} (raise it with max_cells= / --max-cells)"
+        )
     grid = [ln.rstrip("\r\n") for ln in lines[i : i + height]]
     if len(grid) < height:
         raise MapImportError(f"{source}: expected {height} grid lines, found {len(grid)}")
-    blocked = np.zeros((height, width), dtype=bool)
     for r, row in enumerate(grid):
         if len(row) < width:
             raise MapImportError(
                 f"{source}: line {i + r + 1}: expected {width} characters, got {len(row)}"
             )
-        for c, ch in enumerate(row[:width]):
-            if ch in MOVINGAI_BLOCKED:
-                blocked[r, c] = True
-            elif ch not in MOVINGAI_PASSABLE:
-                raise MapImportError(
-                    f"{source}: line {i + r + 1}, column {c + 1}: unknown terrain {ch!r}"
-                )
-    return blocked
+    raw = "".join(row[:width] for row in grid).encode("utf-8", errors="replace")
+    codes = np.frombuffer(raw, dtype=np.uint8)
+    if len(codes) != height * width:  # a multi-byte character somewhere: find it
+        for r, row in enumerate(grid):
+            for c, ch in enumerate(row[:width]):
+                if ch not in MOVINGAI_BLOCKED and ch not in MOVINGAI_PASSABLE:
+                    raise MapImportError(
+                        f"{source}: line {i + r + 1}, column {c + 1}: unknown terrain {ch!r}"
+                    )
+    kind = _MOVINGAI_KIND[codes].reshape(height, width)
+    bad = np.flatnonzero(kind.ravel() == 2)
+    if len(bad):
+        r, c = divmod(int(bad[0]), width)
+        raise MapImportError(
+            f"{source}: line {i + r + 1}, column {c + 1}: unknown terrain {grid[r][c]!r}"
+        )
+    return np.asarray(kind == 1)
 
 
 def movingai_cell_center(
@@ -384,6 +504,9 @@ def load_movingai_map(
     name: str | None = None,
     sensors: str | None = None,
     time_step: float = 0.1,
+    max_cells: int = MAX_CELLS,
+    max_obstacles: int = MAX_OBSTACLES,
+    endpoint_margin: float = ENDPOINT_MARGIN,
 ) -> ImportedMap:
     """Import a MovingAI ``.map`` grid; each cell is ``resolution`` metres wide.
 
@@ -393,7 +516,11 @@ def load_movingai_map(
     p = Path(path)
     if not (resolution > 0):
         raise MapImportError(f"{p}: resolution must be > 0")
-    blocked_text = parse_movingai_map(p.read_text(encoding="utf-8"), str(p))
+    try:
+        text = p.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise MapImportError(f"{p}: not a text file (UTF-8)") from None
+    blocked_text = parse_movingai_map(text, str(p), max_cells)
     data = np.where(blocked_text[::-1], OCCUPIED, FREE).astype(np.int8)
     return _build(
         name or p.stem,
@@ -407,4 +534,6 @@ def load_movingai_map(
         time_step=time_step,
         source=str(p),
         meta={"format": "movingai", "height": data.shape[0], "width": data.shape[1]},
+        max_obstacles=max_obstacles,
+        endpoint_margin=endpoint_margin,
     )
