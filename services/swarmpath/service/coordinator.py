@@ -1,48 +1,30 @@
-"""The coordinator: the REST API (FastAPI), the job queue (SQLite), the MCAP recorder and the Zenoh
-router, in one process.
+"""The coordinator core: the protocol logic as plain methods over bytes (no network).
 
-Three layers, the lower ones usable without the upper ones:
+:class:`Coordinator` handles lease requests, result batches, progress, worker liveliness, the 1 s
+tick, submit/cancel. It answers through ``publish(key, payload)``, a callable the transport
+provides (a no-op without Zenoh). Tests drive it directly. The layers around it live in their own
+modules: :mod:`~swarmpath.service.bridge` (Zenoh), :mod:`~swarmpath.service.ticker` (the 1 s tick),
+:mod:`~swarmpath.service.http` (the FastAPI application, ``create_app``),
+:mod:`~swarmpath.service.lease_sizer`, :mod:`~swarmpath.service.settings`. The names they had
+when they all lived here are still importable from this module.
 
-* :class:`Coordinator` - the protocol logic as plain methods over bytes (no network): lease
-  requests, result batches, progress, worker liveliness, the 1 s tick, submit/cancel. It answers
-  through ``publish(key, payload)``, a callable the transport provides (a no-op without Zenoh).
-  Tests drive it directly.
-* :class:`ZenohBridge` - opens the Zenoh session as a router in this process and wires it to the
-  Coordinator: the ``work`` queryable, the ``results/*`` and ``progress/*`` subscribers, the
-  liveliness subscriber (with history). Zenoh callbacks only copy the payload into a queue; two
-  threads do the work (one answers lease queries, one handles results, progress and liveliness in
-  arrival order), so a callback never blocks the network.
-* :func:`create_app` - the FastAPI application; its lifespan opens the store, recovers after a
-  crash, starts the bridge and the 1 s :class:`Ticker`, and undoes all of that on shutdown.
-
-The wire protocol is documented in ``schemas/README.md``; the decisions in docs/service.md
-and docs/service.md.
+The wire protocol is documented in ``schemas/README.md``; the decisions in docs/service.md.
 """
 
-import asyncio
-import json
+from __future__ import annotations
+
 import logging
-import math
-import os
-import queue
-import secrets
 import threading
 import time
 from collections import Counter, OrderedDict, deque
-from collections.abc import AsyncIterator, Callable, Mapping, Sequence
-from contextlib import asynccontextmanager
-from dataclasses import dataclass, field
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import TYPE_CHECKING, Any
 
-from fastapi import Body, Depends, FastAPI, HTTPException, Query, Request
-from fastapi.exceptions import RequestValidationError
-from fastapi.responses import FileResponse, JSONResponse, PlainTextResponse, Response
-
-from swarmpath import __version__
+from swarmpath.service.catalog import build_catalog
+from swarmpath.service.lease_sizer import LeaseSizer
+from swarmpath.service.metrics import metrics_text
 from swarmpath.service.protocol import (
-    DEFAULT_PREFIX,
-    MAX_BODY_BYTES,
     PROTOCOL_VERSION,
     Ack,
     BenchmarkCell,
@@ -50,7 +32,6 @@ from swarmpath.service.protocol import (
     Cancel,
     JobStatus,
     Keys,
-    Lease,
     LeaseBundle,
     LeaseRequest,
     MapCell,
@@ -65,146 +46,33 @@ from swarmpath.service.protocol import (
     encode,
 )
 from swarmpath.service.recorder import Recorders
+from swarmpath.service.settings import DEFAULT_HTTP, CoordinatorSettings
 from swarmpath.service.store import FINAL_STATES, Store
-from swarmpath.service.zenoh_config import DEFAULT_ZENOH, router_config
+from swarmpath.service.util import json_safe
+from swarmpath.service.util import short as _short
+
+if TYPE_CHECKING:
+    from swarmpath.service.bridge import ZenohBridge
+    from swarmpath.service.http.app import create_app
+    from swarmpath.service.http.middleware import BodyLimit
+    from swarmpath.service.ticker import Ticker
 
 log = logging.getLogger("swarmpath.coordinator")
 
-DEFAULT_HTTP = "127.0.0.1:8000"
+__all__ = [
+    "DEFAULT_HTTP",
+    "BodyLimit",
+    "Coordinator",
+    "CoordinatorSettings",
+    "LeaseSizer",
+    "Ticker",
+    "ZenohBridge",
+    "build_catalog",
+    "create_app",
+    "json_safe",
+]
 
 
-# ----------------------------------------------------------------------------------- settings
-@dataclass
-class CoordinatorSettings:
-    """Everything a coordinator process is configured with (the CLI fills it)."""
-
-    data_dir: Path = field(default_factory=lambda: Path("swarmpath-data"))
-    zenoh_listen: list[str] = field(default_factory=lambda: [DEFAULT_ZENOH])
-    prefix: str = DEFAULT_PREFIX
-    lease_seconds: float = 30.0  # a lease without heartbeat for this long is requeued
-    heartbeat_seconds: float | None = None  # default lease_seconds / 3
-    target_lease_seconds: float = 10.0  # a lease (or bundle of leases) is about this much work
-    min_lease_runs: int = 8  # benchmark leases: at least this many runs (vectorization)
-    retry_after: float = 0.5  # NoWork: ask again after this long
-    token: str | None = None  # bearer token of mutating endpoints (None: $SWARMPATH_TOKEN)
-    shm: bool = False
-    dictionary_file: str | None = None  # Zenoh usrpwd authentication of workers
-    zenoh_extra: dict[str, Any] | None = None
-    synchronous: str = "FULL"  # SQLite durability (FULL: acks survive a power cut)
-    tick_seconds: float = 1.0
-    require_liveliness: bool = True  # lease only to workers whose liveliness token is seen
-
-    def zenoh_config(self) -> dict[str, Any]:
-        return router_config(
-            self.zenoh_listen, shm=self.shm, dictionary_file=self.dictionary_file,
-            extra=self.zenoh_extra,
-        )
-
-
-def _short(exc: BaseException, limit: int = 300) -> str:
-    """One line: a validation error as 'field: message; ...', anything else as its text."""
-    errors = getattr(exc, "errors", None)
-    if callable(errors):
-        try:
-            items = errors(include_url=False, include_input=False)
-        except TypeError:  # pragma: no cover - not a pydantic error after all
-            items = None
-        if items:
-            parts = [f"{'.'.join(str(p) for p in e['loc']) or '(message)'}: {e['msg']}"
-                     for e in items[:3]]
-            more = f" (+{len(items) - 3} more)" if len(items) > 3 else ""
-            text = "; ".join(parts) + more
-            return text if len(text) <= limit else text[: limit - 3] + "..."
-    text = " ".join(str(exc).split())
-    return text if len(text) <= limit else text[: limit - 3] + "..."
-
-
-def json_safe(value: Any) -> Any:
-    """Non-finite floats -> 'inf'/'-inf'/'nan' (the store's REST convention), recursively."""
-    if isinstance(value, float):
-        if math.isfinite(value):
-            return value
-        return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
-    if isinstance(value, dict):
-        return {k: json_safe(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [json_safe(v) for v in value]
-    return value
-
-
-# ------------------------------------------------------------------------------- lease sizing
-class LeaseSizer:
-    """How many runs of a cell make about ``target_seconds`` of work.
-
-    The cost of a run is learned from the results (``RunResult.seconds``, the run's share of its
-    vectorized batch), per cell spec, as an exponential moving average; before the first result a
-    rough prior is used (benchmark: from agents x iterations x dim; map: 5 s, i.e. one run).
-    Benchmark leases get at least ``min_runs`` runs: runs of one cell are computed vectorized and a
-    batch of one is several times slower per run than a batch of 30.
-
-    Near the end of a job the target shrinks (guided self-scheduling): a lease takes at most
-    ``remaining / (2 * slots)`` of the job's unleased work, ``slots`` being the slots of the live
-    workers, so the last leases are small and no worker is left computing a big one alone while
-    the others idle. A bundle (several leases in one reply) is filled until its leases' estimated
-    seconds reach that target."""
-
-    MAP_PRIOR_SECONDS = 5.0
-
-    def __init__(self, target_seconds: float = 10.0, min_runs: int = 8, alpha: float = 0.3):
-        self.target_seconds = float(target_seconds)
-        self.min_runs = max(1, int(min_runs))
-        self.alpha = alpha
-        self.slots = 1  # slots of the live workers (the coordinator keeps it current)
-        self._estimates: dict[str, float] = {}
-        self._lock = threading.Lock()
-
-    @staticmethod
-    def cost_key(spec: BenchmarkCell | MapCell) -> str:
-        return spec.model_dump_json()
-
-    @classmethod
-    def prior(cls, spec: BenchmarkCell | MapCell) -> float:
-        if isinstance(spec, BenchmarkCell):
-            return spec.iterations * spec.agents * (2.5e-6 + 5e-7 * spec.dim)
-        return cls.MAP_PRIOR_SECONDS
-
-    def estimate(self, spec: BenchmarkCell | MapCell) -> float:
-        with self._lock:
-            est = self._estimates.get(self.cost_key(spec))
-        return self.prior(spec) if est is None else est
-
-    def runs_for(
-        self,
-        spec: BenchmarkCell | MapCell,
-        remaining: int | None = None,
-        bundle: Sequence[Lease] = (),
-    ) -> int:
-        """Runs of a lease of ``spec``; 0 when ``bundle`` (the leases already in this reply)
-        holds enough work. ``remaining``: the job's runs not leased yet (None: no tail rule)."""
-        est = max(self.estimate(spec), 1e-6)
-        budget = self.target_seconds
-        if remaining is not None:
-            budget = min(budget, remaining * est / (2 * max(1, self.slots)))
-        if bundle:
-            budget -= sum(len(lease.runs) * max(self.estimate(lease.spec), 1e-6)
-                          for lease in bundle)
-            if budget <= 0:
-                return 0
-        low = self.min_runs if isinstance(spec, BenchmarkCell) else 1
-        return max(low, int(budget / est))
-
-    def observe(self, spec: BenchmarkCell | MapCell, seconds_per_run: float) -> None:
-        if not (seconds_per_run > 0 and math.isfinite(seconds_per_run)):
-            return
-        key = self.cost_key(spec)
-        with self._lock:
-            old = self._estimates.get(key)
-            self._estimates[key] = (
-                seconds_per_run if old is None else old + self.alpha * (seconds_per_run - old)
-            )
-
-
-# -------------------------------------------------------------------------------- coordinator
 class Coordinator:
     """The protocol logic (see the module docstring). Thread-safe: the store serializes its
     transactions; the registries here have their own lock."""
@@ -609,532 +477,30 @@ class Coordinator:
         return n / span
 
     def metrics_text(self, now: float | None = None) -> str:
-        now = time.time() if now is None else now
-        counters = self.store.counters()
-        with self._lock:
-            alive = len(self._alive)
-        active = self.store.active_leases()
-        lines: list[str] = []
-
-        def metric(name: str, kind: str, help_: str, value: float) -> None:
-            lines.append(f"# HELP {name} {help_}")
-            lines.append(f"# TYPE {name} {kind}")
-            lines.append(f"{name} {value:g}" if isinstance(value, float) else f"{name} {value}")
-
-        metric("swarmpath_queue_depth", "gauge",
-               "Runs waiting to be leased (never leased, or requeued).", self.store.queue_depth())
-        metric("swarmpath_runs_leased", "gauge", "Runs in active leases.",
-               sum(len(x["runs"]) for x in active))
-        metric("swarmpath_leases_active", "gauge", "Active leases.", len(active))
-        metric("swarmpath_runs_per_second", "gauge",
-               "Results accepted per second over the last minute.",
-               round(self.runs_per_second(now), 3))
-        metric("swarmpath_workers", "gauge", "Workers with a live liveliness token.", alive)
-        metric("swarmpath_jobs_active", "gauge", "Queued or running jobs.",
-               len(self.store.unfinished_jobs()))
-        metric("swarmpath_lease_requeues_total", "counter",
-               "Runs requeued because their lease expired or their worker vanished.",
-               counters.get("requeued_runs", 0))
-        metric("swarmpath_leases_total", "counter", "Leases granted.", counters.get("leases", 0))
-        metric("swarmpath_results_accepted_total", "counter", "Results stored.",
-               counters.get("results_accepted", 0))
-        metric("swarmpath_results_duplicate_total", "counter", "Duplicate results ignored.",
-               counters.get("duplicates", 0) + self.stats["duplicates_fast"])
-        metric("swarmpath_results_stale_total", "counter", "Stale results rejected.",
-               counters.get("stale", 0))
-        metric("swarmpath_messages_malformed_total", "counter",
-               "Malformed messages dropped since this process started.", self.stats["malformed"])
-        return "\n".join(lines) + "\n"
+        """Prometheus text exposition of the queue, leases, workers and counters."""
+        return metrics_text(self, now)
 
 
 def _cell(spec: Mapping[str, Any]) -> BenchmarkCell | MapCell:
     return BenchmarkCell(**spec) if spec.get("kind") == "benchmark" else MapCell(**spec)
 
 
-# --------------------------------------------------------------------------------- transport
-_NOTHING = object()
-
-
-class ZenohBridge:
-    """The coordinator's Zenoh side (see the module docstring)."""
-
-    GROUP_MESSAGES = 64  # result batches stored in one transaction at most ...
-    GROUP_BYTES = 8_000_000  # ... and at most this many bytes of them
-
-    def __init__(self, core: Coordinator, config: Mapping[str, Any]):
-        self.core = core
-        self.config = dict(config)
-        self.keys = core.keys
-        self.session: Any = None
-        self._entities: list[Any] = []
-        self._work: queue.SimpleQueue[Any] = queue.SimpleQueue()
-        self._events: queue.SimpleQueue[Any] = queue.SimpleQueue()
-        self._threads: list[threading.Thread] = []
-        self._closed = False
-
-    def start(self) -> None:
-        import zenoh
-
-        from swarmpath.service.zenoh_config import describe, to_zenoh
-
-        self.session = zenoh.open(to_zenoh(self.config))
-        self._zenoh = zenoh
-        log.info("%s", describe(self.config))
-        self.core.publish = self.put
-        for target, name in ((self._serve_work, "lease"), (self._serve_events, "events")):
-            t = threading.Thread(target=target, name=f"coordinator-{name}", daemon=True)
-            t.start()
-            self._threads.append(t)
-        s = self.session
-        self._entities = [
-            s.declare_queryable(self.keys.work, self._on_query, complete=True),
-            s.declare_subscriber(self.keys.all_results, self._on_results),
-            s.declare_subscriber(self.keys.all_progress, self._on_progress),
-            s.liveliness().declare_subscriber(
-                self.keys.all_workers, self._on_liveliness, history=True),
-        ]
-
-    def put(self, key: str, payload: bytes) -> None:
-        if self._closed or self.session is None:
-            return
-        self.session.put(
-            key, payload, encoding=self._zenoh.Encoding.APPLICATION_JSON,
-            congestion_control=self._zenoh.CongestionControl.BLOCK,
-        )
-
-    # Zenoh callbacks: copy and queue, nothing else (they run on Zenoh's threads).
-    def _on_query(self, query: Any) -> None:
-        try:
-            self._work.put(query)
-        except Exception:  # pragma: no cover
-            log.exception("queueing a lease request failed")
-
-    def _on_results(self, sample: Any) -> None:
-        self._queue_sample("results", sample)
-
-    def _on_progress(self, sample: Any) -> None:
-        self._queue_sample("progress", sample)
-
-    def _queue_sample(self, kind: str, sample: Any) -> None:
-        try:
-            self._events.put((kind, str(sample.key_expr), sample.payload.to_bytes()))
-        except Exception:  # pragma: no cover
-            log.exception("queueing a %s message failed", kind)
-
-    def _on_liveliness(self, sample: Any) -> None:
-        try:
-            worker = Keys.last_chunk(str(sample.key_expr))
-            if sample.kind == self._zenoh.SampleKind.DELETE:
-                self.core.worker_mark_gone(worker)  # instant: no more leases for it
-                self._events.put(("gone", worker, b""))
-            else:
-                self.core.worker_alive(worker)
-        except Exception:  # pragma: no cover
-            log.exception("handling a liveliness change failed")
-
-    # worker threads
-    def _serve_work(self) -> None:
-        while True:
-            query = self._work.get()
-            if query is None:
-                return
-            try:
-                payload = query.payload.to_bytes() if query.payload is not None else b""
-                if len(payload) > MAX_BODY_BYTES:
-                    reply = self.core._no_work("lease request too large", 5.0)
-                else:
-                    reply = self.core.handle_lease_request(payload)
-                query.reply(query.key_expr, reply,
-                            encoding=self._zenoh.Encoding.APPLICATION_JSON)
-            except Exception:
-                log.exception("answering a lease request failed")
-            finally:
-                try:
-                    query.drop()
-                except Exception:  # pragma: no cover
-                    pass
-
-    def _serve_events(self) -> None:
-        held: Any = _NOTHING  # an item taken from the queue while grouping results
-        while True:
-            item = self._events.get() if held is _NOTHING else held
-            held = _NOTHING
-            if item is None:
-                return
-            kind, key, payload = item
-            try:
-                if kind == "results":
-                    # group commit: the result batches already queued share one transaction
-                    group = [(key, payload)]
-                    size = len(payload)
-                    while len(group) < self.GROUP_MESSAGES and size < self.GROUP_BYTES:
-                        try:
-                            nxt = self._events.get_nowait()
-                        except queue.Empty:
-                            break
-                        if nxt is None or nxt[0] != "results":
-                            held = nxt
-                            break
-                        group.append((nxt[1], nxt[2]))
-                        size += len(nxt[2])
-                    self.core.handle_result_batches(group)
-                elif kind == "progress":
-                    self.core.handle_progress(key, payload)
-                elif kind == "gone" and not self.core.is_alive(key):  # not back meanwhile
-                    self.core.worker_gone(key)
-            except Exception:
-                log.exception("handling a %s message on %s failed", kind, key)
-
-    def close(self) -> None:
-        """Stop taking input, finish what was queued, close the session."""
-        if self._closed:
-            return
-        for entity in reversed(self._entities):
-            try:
-                entity.undeclare()
-            except Exception:  # pragma: no cover
-                log.debug("undeclare failed", exc_info=True)
-        self._entities = []
-        self._work.put(None)
-        self._events.put(None)
-        for t in self._threads:
-            t.join(timeout=10.0)
-        self._closed = True
-        if self.session is not None:
-            try:
-                self.session.close()
-            except Exception:  # pragma: no cover
-                log.debug("closing the zenoh session failed", exc_info=True)
-        self.core.publish = lambda key, payload: None
-
-
-class Ticker:
-    """Calls ``core.tick()`` every ``seconds`` in a daemon thread; errors are logged."""
-
-    def __init__(self, core: Coordinator, seconds: float = 1.0):
-        self.core = core
-        self.seconds = seconds
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, name="coordinator-tick", daemon=True)
-
-    def start(self) -> None:
-        self._thread.start()
-
-    def _run(self) -> None:
-        while not self._stop.wait(self.seconds):
-            try:
-                self.core.tick()
-            except Exception:
-                log.exception("the 1 s tick failed")
-
-    def stop(self) -> None:
-        self._stop.set()
-        if self._thread.is_alive():
-            self._thread.join(timeout=10.0)
-
-
-# ------------------------------------------------------------------------------------- REST
-_STATE = Literal["queued", "running", "done", "failed", "cancelled"]
-
-
-class BodyLimit:
-    """ASGI middleware: request bodies over ``limit`` bytes get a 422 naming the body (checked
-    on Content-Length and on the bytes actually received; the body is buffered, at most
-    ``limit`` bytes, and replayed to the application)."""
-
-    def __init__(self, app: Any, limit: int = MAX_BODY_BYTES):
-        self.app = app
-        self.limit = limit
-
-    async def __call__(self, scope: dict[str, Any], receive: Any, send: Any) -> None:
-        if scope["type"] != "http" or scope["method"] not in ("POST", "PUT", "PATCH"):
-            await self.app(scope, receive, send)
-            return
-        length = dict(scope.get("headers") or []).get(b"content-length")
-        if length is not None and length.isdigit() and int(length) > self.limit:
-            await self._reject(send, int(length))
-            return
-        chunks: list[bytes] = []
-        size = 0
-        while True:
-            message = await receive()
-            if message["type"] == "http.disconnect":
-                return
-            body = message.get("body", b"")
-            size += len(body)
-            if size > self.limit:
-                await self._reject(send, size)
-                return
-            chunks.append(body)
-            if not message.get("more_body", False):
-                break
-        replayed = False
-
-        async def replay() -> dict[str, Any]:
-            nonlocal replayed
-            if not replayed:
-                replayed = True
-                return {"type": "http.request", "body": b"".join(chunks), "more_body": False}
-            return await receive()
-
-        await self.app(scope, replay, send)
-
-    async def _reject(self, send: Any, size: int) -> None:
-        body = json.dumps({"detail": [{
-            "loc": ["body"], "type": "body_too_large",
-            "msg": f"the request body ({size} bytes or more) exceeds {self.limit} bytes",
-        }]}).encode()
-        await send({"type": "http.response.start", "status": 422, "headers": [
-            (b"content-type", b"application/json"), (b"content-length", str(len(body)).encode()),
-            (b"connection", b"close"),
-        ]})
-        await send({"type": "http.response.body", "body": body})
-
-
-def _validation_detail(errors: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    out = []
-    for e in errors:
-        item = {"loc": list(e.get("loc", ())), "msg": str(e.get("msg", "")),
-                "type": str(e.get("type", ""))}
-        out.append(item)
-    return out
-
-
-def create_app(
-    settings: CoordinatorSettings | None = None,
-    *,
-    use_zenoh: bool = True,
-    on_started: Callable[[], None] | None = None,
-    on_stopping: Callable[[], None] | None = None,
-) -> FastAPI:
-    """The FastAPI application. ``use_zenoh=False`` serves REST only (tests); ``on_started`` runs
-    once the router is up (``swarmpath up`` starts its workers there) and ``on_stopping`` before
-    it goes down."""
-
-    settings = settings or CoordinatorSettings()
-    token = settings.token if settings.token is not None else os.environ.get("SWARMPATH_TOKEN")
-    token = token or None
-
-    @asynccontextmanager
-    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-        core = await asyncio.to_thread(Coordinator, settings)
-        bridge: ZenohBridge | None = None
-        ticker = Ticker(core, settings.tick_seconds)
-        try:
-            await asyncio.to_thread(core.startup)
-            await asyncio.to_thread(_warm_registries)
-            if use_zenoh:
-                bridge = ZenohBridge(core, settings.zenoh_config())
-                await asyncio.to_thread(bridge.start)
-            ticker.start()
-            app.state.core = core
-            app.state.bridge = bridge
-            if on_started is not None:
-                await asyncio.to_thread(on_started)
-            yield
-        finally:
-            core.accepting = False
-            if on_stopping is not None:
-                try:
-                    await asyncio.to_thread(on_stopping)
-                except Exception:
-                    log.exception("stopping the local workers failed")
-            ticker.stop()
-            if bridge is not None:
-                await asyncio.to_thread(bridge.close)
-            await asyncio.to_thread(core.close)
-            log.info("coordinator stopped")
-
-    app = FastAPI(
-        title="swarmpath coordinator",
-        version=__version__,
-        summary="Benchmark and map studies of swarm optimizers and path planners, run by workers.",
-        lifespan=lifespan,
-    )
-    app.add_middleware(BodyLimit, limit=MAX_BODY_BYTES)
-
-    @app.exception_handler(RequestValidationError)
-    async def _invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
-        return JSONResponse({"detail": _validation_detail(list(exc.errors()))}, status_code=422)
-
-    def core_of(request: Request) -> Coordinator:
-        return request.app.state.core
-
-    def authorized(request: Request) -> None:
-        if token is None:
-            return
-        header = request.headers.get("authorization", "")
-        scheme, _, given = header.partition(" ")
-        if scheme.lower() != "bearer" or not secrets.compare_digest(given.strip(), token):
-            raise HTTPException(
-                401, "a valid 'Authorization: Bearer <token>' header is required",
-                headers={"WWW-Authenticate": "Bearer"},
-            )
-
-    CoreDep = Annotated[Coordinator, Depends(core_of)]
-
-    def status_or_404(core: Coordinator, job_id: str) -> JobStatus:
-        status = core.store.job_status(job_id)
-        if status is None:
-            raise HTTPException(404, f"unknown job {job_id!r}")
-        return status
-
-    @app.post("/jobs", status_code=201, dependencies=[Depends(authorized)], tags=["jobs"])
-    def submit_job(
-        spec: Annotated[BenchmarkJobSpec | MapJobSpec, Body(discriminator="kind")],
-        core: CoreDep,
-    ) -> dict[str, Any]:
-        """Submit a benchmark or map job (a JobSpec). 201 with its id, state and runs_total."""
-        status = core.submit(spec)
-        return {"id": status.id, "state": status.state, "runs_total": status.runs_total}
-
-    @app.get("/jobs", tags=["jobs"])
-    def list_jobs(
-        core: CoreDep,
-        state: _STATE | None = None,
-        limit: Annotated[int, Query(ge=1, le=1000)] = 100,
-        offset: Annotated[int, Query(ge=0)] = 0,
-    ) -> list[JobStatus]:
-        """Jobs, newest first, optionally only those in one state."""
-        return core.store.list_jobs(state, limit, offset)
-
-    @app.get("/jobs/{job_id}", tags=["jobs"])
-    def job_status(job_id: str, core: CoreDep) -> JobStatus:
-        return status_or_404(core, job_id)
-
-    @app.delete("/jobs/{job_id}", dependencies=[Depends(authorized)], tags=["jobs"])
-    def cancel_job(job_id: str, core: CoreDep) -> JobStatus:
-        """Cancel a queued or running job (a finished job is returned unchanged)."""
-        status = core.cancel(job_id)
-        if status is None:
-            raise HTTPException(404, f"unknown job {job_id!r}")
-        return status
-
-    @app.get("/jobs/{job_id}/summary", tags=["results"])
-    def job_summary(
-        job_id: str, core: CoreDep, format: Literal["json", "csv"] = "json"
-    ) -> Any:
-        """The statistics tables (partial while the job runs); ``?format=csv`` for CSV."""
-        summary = core.store.summary(job_id)
-        if summary is None:
-            raise HTTPException(404, f"unknown job {job_id!r}")
-        if format == "csv":
-            from swarmpath.service.store import summary_to_csv
-
-            return PlainTextResponse(summary_to_csv(summary), media_type="text/csv")
-        return json_safe(summary)
-
-    @app.get("/jobs/{job_id}/runs", tags=["results"])
-    def job_runs(
-        job_id: str,
-        core: CoreDep,
-        limit: Annotated[int, Query(ge=1, le=1000)] = 100,
-        offset: Annotated[int, Query(ge=0)] = 0,
-    ) -> dict[str, Any]:
-        """One item per run (finished or not), in run_id order."""
-        status = status_or_404(core, job_id)
-        items = core.store.runs(job_id, limit, offset) or []
-        return {"job_id": job_id, "total": status.runs_total, "limit": limit, "offset": offset,
-                "items": json_safe(items)}
-
-    @app.get("/jobs/{job_id}/runs/{run_id}", tags=["results"])
-    def job_run(job_id: str, run_id: int, core: CoreDep) -> dict[str, Any]:
-        """One run with its convergence curve (benchmark) or path rows [x, y, t] (map)."""
-        status_or_404(core, job_id)
-        item = core.store.run(job_id, run_id)
-        if item is None:
-            raise HTTPException(404, f"job {job_id} has no run {run_id}")
-        return json_safe(item)
-
-    @app.get("/jobs/{job_id}/mcap", tags=["results"], response_class=FileResponse,
-             responses={409: {"description": "the job has not ended yet"}})
-    def job_mcap(job_id: str, core: CoreDep) -> Any:
-        """The job's MCAP file, once the job has ended (409 with the reason before)."""
-        status_or_404(core, job_id)
-        path, reason = core.mcap_path(job_id)
-        if path is None:
-            raise HTTPException(409, reason)
-        return FileResponse(path, media_type="application/octet-stream",
-                            filename=f"{job_id}.mcap")
-
-    @app.get("/workers", tags=["service"])
-    def workers(core: CoreDep) -> list[WorkerStatus]:
-        return core.workers()
-
-    @app.get("/catalog", tags=["service"])
-    def catalog() -> dict[str, Any]:
-        """Optimizers (with parameters), functions, planners (with parameters) and maps."""
-        return build_catalog()
-
-    @app.get("/healthz", tags=["service"])
-    def healthz(request: Request) -> dict[str, Any]:
-        core = getattr(request.app.state, "core", None)
-        bridge = getattr(request.app.state, "bridge", None)
-        return {
-            "status": "ok" if core is not None and core.accepting else "stopping",
-            "version": __version__, "protocol": PROTOCOL_VERSION,
-            "zenoh": bridge is not None, "listen": settings.zenoh_listen if bridge else [],
-            "prefix": settings.prefix,
-            "uptime": round(time.time() - core.started, 3) if core else 0.0,
-        }
-
-    @app.get("/metrics", tags=["service"], response_class=PlainTextResponse)
-    def metrics(core: CoreDep) -> Response:
-        """Prometheus text exposition."""
-        return PlainTextResponse(core.metrics_text(),
-                                 media_type="text/plain; version=0.0.4; charset=utf-8")
-
-    return app
-
-
-def _warm_registries() -> None:
-    """Import the registries once at startup (validation imports them lazily)."""
-    try:
-        import swarmpath.planners  # noqa: F401
-    except Exception as exc:
-        log.warning("planners unavailable: map jobs will be rejected (%s)", _short(exc))
-
-
-def build_catalog() -> dict[str, Any]:
-    from swarmpath.functions import get_function, list_functions
-    from swarmpath.optimizers import get_optimizer, list_optimizers
-
-    out: dict[str, Any] = {"optimizers": [], "functions": [], "planners": [], "maps": []}
-    for name in list_optimizers():
-        cls = get_optimizer(name)
-        out["optimizers"].append({
-            "name": name, "summary": cls.summary, "reference": cls.reference,
-            "min_agents": cls.min_agents, "params": dict(cls.defaults),
-            "choices": {k: list(v) for k, v in cls.choices.items()},
-        })
-    for name in list_functions():
-        fn = get_function(name)
-        out["functions"].append({
-            "name": name, "description": fn.description, "lower": fn.lower, "upper": fn.upper,
-            "f_min_per_dim": fn.f_min_per_dim, "f_min_constant": fn.f_min_constant,
-            "noisy": fn.noisy,
-        })
-    try:
-        from swarmpath.planners import get_planner, list_planners
-
-        for name in list_planners():
-            cls = get_planner(name)
-            out["planners"].append({
-                "name": name, "kind": cls.kind, "description": cls.description,
-                "reference": cls.reference, "params": dict(cls.defaults),
-                "choices": {k: list(v) for k, v in cls.choices.items()},
-            })
-    except Exception as exc:
-        out["planners_unavailable"] = _short(exc)
-    try:
-        from swarmpath.world.presets import get_map, list_maps
-
-        for name in list_maps():
-            sc = get_map(name)
-            out["maps"].append({
-                "name": name, "description": sc.description,
-                "size": [float(v) for v in sc.size], "dynamic": bool(sc.is_dynamic),
-            })
-    except Exception as exc:
-        out["maps_unavailable"] = _short(exc)
-    return json_safe(out)
+def __getattr__(name: str) -> Any:
+    """The transport layers import this module, so they are re-exported lazily."""
+    if name == "create_app":
+        from swarmpath.service.http.app import create_app
+
+        return create_app
+    if name == "ZenohBridge":
+        from swarmpath.service.bridge import ZenohBridge
+
+        return ZenohBridge
+    if name == "BodyLimit":
+        from swarmpath.service.http.middleware import BodyLimit
+
+        return BodyLimit
+    if name == "Ticker":
+        from swarmpath.service.ticker import Ticker
+
+        return Ticker
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

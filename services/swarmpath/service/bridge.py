@@ -1,0 +1,173 @@
+"""The coordinator's Zenoh side: opens the session as a router in this process and wires it to the
+:class:`~swarmpath.service.coordinator.Coordinator`: the ``work`` queryable, the ``results/*`` and
+``progress/*`` subscribers, the liveliness subscriber (with history). Zenoh callbacks only copy the
+payload into a queue; two threads do the work (one answers lease queries, one handles results,
+progress and liveliness in arrival order), so a callback never blocks the network."""
+
+from __future__ import annotations
+
+import logging
+import queue
+import threading
+from collections.abc import Mapping
+from typing import Any
+
+from swarmpath.service.coordinator import Coordinator
+from swarmpath.service.protocol import MAX_BODY_BYTES, Keys
+
+log = logging.getLogger("swarmpath.coordinator")
+
+_NOTHING = object()  # nothing held back while grouping results
+
+
+class ZenohBridge:
+    """The coordinator's Zenoh side (see the module docstring)."""
+
+    GROUP_MESSAGES = 64  # result batches stored in one transaction at most ...
+    GROUP_BYTES = 8_000_000  # ... and at most this many bytes of them
+
+    def __init__(self, core: Coordinator, config: Mapping[str, Any]):
+        self.core = core
+        self.config = dict(config)
+        self.keys = core.keys
+        self.session: Any = None
+        self._entities: list[Any] = []
+        self._work: queue.SimpleQueue[Any] = queue.SimpleQueue()
+        self._events: queue.SimpleQueue[Any] = queue.SimpleQueue()
+        self._threads: list[threading.Thread] = []
+        self._closed = False
+
+    def start(self) -> None:
+        import zenoh
+
+        from swarmpath.service.zenoh_config import describe, to_zenoh
+
+        self.session = zenoh.open(to_zenoh(self.config))
+        self._zenoh = zenoh
+        log.info("%s", describe(self.config))
+        self.core.publish = self.put
+        for target, name in ((self._serve_work, "lease"), (self._serve_events, "events")):
+            t = threading.Thread(target=target, name=f"coordinator-{name}", daemon=True)
+            t.start()
+            self._threads.append(t)
+        s = self.session
+        self._entities = [
+            s.declare_queryable(self.keys.work, self._on_query, complete=True),
+            s.declare_subscriber(self.keys.all_results, self._on_results),
+            s.declare_subscriber(self.keys.all_progress, self._on_progress),
+            s.liveliness().declare_subscriber(
+                self.keys.all_workers, self._on_liveliness, history=True),
+        ]
+
+    def put(self, key: str, payload: bytes) -> None:
+        if self._closed or self.session is None:
+            return
+        self.session.put(
+            key, payload, encoding=self._zenoh.Encoding.APPLICATION_JSON,
+            congestion_control=self._zenoh.CongestionControl.BLOCK,
+        )
+
+    # Zenoh callbacks: copy and queue, nothing else (they run on Zenoh's threads).
+    def _on_query(self, query: Any) -> None:
+        try:
+            self._work.put(query)
+        except Exception:  # pragma: no cover
+            log.exception("queueing a lease request failed")
+
+    def _on_results(self, sample: Any) -> None:
+        self._queue_sample("results", sample)
+
+    def _on_progress(self, sample: Any) -> None:
+        self._queue_sample("progress", sample)
+
+    def _queue_sample(self, kind: str, sample: Any) -> None:
+        try:
+            self._events.put((kind, str(sample.key_expr), sample.payload.to_bytes()))
+        except Exception:  # pragma: no cover
+            log.exception("queueing a %s message failed", kind)
+
+    def _on_liveliness(self, sample: Any) -> None:
+        try:
+            worker = Keys.last_chunk(str(sample.key_expr))
+            if sample.kind == self._zenoh.SampleKind.DELETE:
+                self.core.worker_mark_gone(worker)  # instant: no more leases for it
+                self._events.put(("gone", worker, b""))
+            else:
+                self.core.worker_alive(worker)
+        except Exception:  # pragma: no cover
+            log.exception("handling a liveliness change failed")
+
+    # worker threads
+    def _serve_work(self) -> None:
+        while True:
+            query = self._work.get()
+            if query is None:
+                return
+            try:
+                payload = query.payload.to_bytes() if query.payload is not None else b""
+                if len(payload) > MAX_BODY_BYTES:
+                    reply = self.core._no_work("lease request too large", 5.0)
+                else:
+                    reply = self.core.handle_lease_request(payload)
+                query.reply(query.key_expr, reply,
+                            encoding=self._zenoh.Encoding.APPLICATION_JSON)
+            except Exception:
+                log.exception("answering a lease request failed")
+            finally:
+                try:
+                    query.drop()
+                except Exception:  # pragma: no cover
+                    pass
+
+    def _serve_events(self) -> None:
+        held: Any = _NOTHING  # an item taken from the queue while grouping results
+        while True:
+            item = self._events.get() if held is _NOTHING else held
+            held = _NOTHING
+            if item is None:
+                return
+            kind, key, payload = item
+            try:
+                if kind == "results":
+                    # group commit: the result batches already queued share one transaction
+                    group = [(key, payload)]
+                    size = len(payload)
+                    while len(group) < self.GROUP_MESSAGES and size < self.GROUP_BYTES:
+                        try:
+                            nxt = self._events.get_nowait()
+                        except queue.Empty:
+                            break
+                        if nxt is None or nxt[0] != "results":
+                            held = nxt
+                            break
+                        group.append((nxt[1], nxt[2]))
+                        size += len(nxt[2])
+                    self.core.handle_result_batches(group)
+                elif kind == "progress":
+                    self.core.handle_progress(key, payload)
+                elif kind == "gone" and not self.core.is_alive(key):  # not back meanwhile
+                    self.core.worker_gone(key)
+            except Exception:
+                log.exception("handling a %s message on %s failed", kind, key)
+
+    def close(self) -> None:
+        """Stop taking input, finish what was queued, close the session."""
+        if self._closed:
+            return
+        for entity in reversed(self._entities):
+            try:
+                entity.undeclare()
+            except Exception:  # pragma: no cover
+                log.debug("undeclare failed", exc_info=True)
+        self._entities = []
+        self._work.put(None)
+        self._events.put(None)
+        for t in self._threads:
+            t.join(timeout=10.0)
+        self._closed = True
+        if self.session is not None:
+            try:
+                self.session.close()
+            except Exception:  # pragma: no cover
+                log.debug("closing the zenoh session failed", exc_info=True)
+        self.core.publish = lambda key, payload: None

@@ -1,0 +1,65 @@
+"""The catalog: what can be run (optimizers, functions, planners, maps) with their parameters,
+read from the registries."""
+
+from __future__ import annotations
+
+import logging
+from typing import Any
+
+from swarmpath.service.util import json_safe
+from swarmpath.service.util import short as _short
+
+log = logging.getLogger("swarmpath.coordinator")
+
+
+def warm_registries() -> None:
+    """Import the registries once at startup (validation imports them lazily)."""
+    try:
+        import swarmpath.planners  # noqa: F401
+    except Exception as exc:
+        log.warning("planners unavailable: map jobs will be rejected (%s)", _short(exc))
+
+
+def build_catalog() -> dict[str, Any]:
+    from swarmpath.functions import get_function, list_functions
+    from swarmpath.optimizers import get_optimizer, list_optimizers
+
+    out: dict[str, Any] = {"optimizers": [], "functions": [], "planners": [], "maps": []}
+    for name in list_optimizers():
+        cls = get_optimizer(name)
+        out["optimizers"].append({
+            "name": name, "summary": cls.summary, "reference": cls.reference,
+            "min_agents": cls.min_agents, "params": dict(cls.defaults),
+            "choices": {k: list(v) for k, v in cls.choices.items()},
+        })
+    for name in list_functions():
+        fn = get_function(name)
+        out["functions"].append({
+            "name": name, "description": fn.description, "lower": fn.lower, "upper": fn.upper,
+            "f_min_per_dim": fn.f_min_per_dim, "f_min_constant": fn.f_min_constant,
+            "noisy": fn.noisy,
+        })
+    try:
+        from swarmpath.planners import get_planner, list_planners
+
+        for name in list_planners():
+            planner = get_planner(name)
+            out["planners"].append({
+                "name": name, "kind": planner.kind, "description": planner.description,
+                "reference": planner.reference, "params": dict(planner.defaults),
+                "choices": {k: list(v) for k, v in planner.choices.items()},
+            })
+    except Exception as exc:
+        out["planners_unavailable"] = _short(exc)
+    try:
+        from swarmpath.world.presets import get_map, list_maps
+
+        for name in list_maps():
+            sc = get_map(name)
+            out["maps"].append({
+                "name": name, "description": sc.description,
+                "size": [float(v) for v in sc.size], "dynamic": bool(sc.is_dynamic),
+            })
+    except Exception as exc:
+        out["maps_unavailable"] = _short(exc)
+    return json_safe(out)

@@ -1,0 +1,74 @@
+"""ASGI middleware of the coordinator's HTTP side."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+from swarmpath.service.protocol import MAX_BODY_BYTES
+
+
+class BodyLimit:
+    """ASGI middleware: request bodies over ``limit`` bytes get a 422 naming the body (checked
+    on Content-Length and on the bytes actually received; the body is buffered, at most
+    ``limit`` bytes, and replayed to the application)."""
+
+    def __init__(self, app: Any, limit: int = MAX_BODY_BYTES):
+        self.app = app
+        self.limit = limit
+
+    async def __call__(self, scope: dict[str, Any], receive: Any, send: Any) -> None:
+        if scope["type"] != "http" or scope["method"] not in ("POST", "PUT", "PATCH"):
+            await self.app(scope, receive, send)
+            return
+        length = dict(scope.get("headers") or []).get(b"content-length")
+        if length is not None and length.isdigit() and int(length) > self.limit:
+            await self._reject(send, int(length))
+            return
+        chunks: list[bytes] = []
+        size = 0
+        while True:
+            message = await receive()
+            if message["type"] == "http.disconnect":
+                return
+            body = message.get("body", b"")
+            size += len(body)
+            if size > self.limit:
+                await self._reject(send, size)
+                return
+            chunks.append(body)
+            if not message.get("more_body", False):
+                break
+        replayed = False
+
+        async def replay() -> dict[str, Any]:
+            nonlocal replayed
+            if not replayed:
+                replayed = True
+                return {"type": "http.request", "body": b"".join(chunks), "more_body": False}
+            return await receive()
+
+        await self.app(scope, replay, send)
+
+    async def _reject(self, send: Any, size: int) -> None:
+        body = json.dumps({"detail": [{
+            "loc": ["body"], "type": "body_too_large",
+            "msg": f"the request body ({size} bytes or more) exceeds {self.limit} bytes",
+        }]}).encode()
+        await send({"type": "http.response.start", "status": 422, "headers": [
+            (b"content-type", b"application/json"), (b"content-length", str(len(body)).encode()),
+            (b"connection", b"close"),
+        ]})
+        await send({"type": "http.response.body", "body": body})
+
+
+
+
+def _validation_detail(errors: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    out = []
+    for e in errors:
+        item = {"loc": list(e.get("loc", ())), "msg": str(e.get("msg", "")),
+                "type": str(e.get("type", ""))}
+        out.append(item)
+    return out
+

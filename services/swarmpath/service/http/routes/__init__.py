@@ -1,0 +1,8 @@
+"""One router per resource; :func:`swarmpath.service.http.app.create_app` includes them in this
+order (the order of the OpenAPI document)."""
+
+from swarmpath.service.http.routes import catalog, health, jobs, runs, workers
+
+ROUTERS = (jobs.router, runs.router, workers.router, catalog.router, health.router)
+
+__all__ = ["ROUTERS"]

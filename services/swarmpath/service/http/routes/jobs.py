@@ -1,0 +1,47 @@
+"""/jobs: submit, list, read and cancel jobs."""
+
+from typing import Annotated, Any, Literal
+
+from fastapi import APIRouter, Body, Depends, HTTPException, Query
+
+from swarmpath.service.http.deps import CoreDep, authorized, status_or_404
+from swarmpath.service.protocol import BenchmarkJobSpec, JobStatus, MapJobSpec
+
+router = APIRouter(tags=["jobs"])
+
+_STATE = Literal["queued", "running", "done", "failed", "cancelled"]
+
+
+@router.post("/jobs", status_code=201, dependencies=[Depends(authorized)])
+def submit_job(
+    spec: Annotated[BenchmarkJobSpec | MapJobSpec, Body(discriminator="kind")],
+    core: CoreDep,
+) -> dict[str, Any]:
+    """Submit a benchmark or map job (a JobSpec). 201 with its id, state and runs_total."""
+    status = core.submit(spec)
+    return {"id": status.id, "state": status.state, "runs_total": status.runs_total}
+
+
+@router.get("/jobs")
+def list_jobs(
+    core: CoreDep,
+    state: _STATE | None = None,
+    limit: Annotated[int, Query(ge=1, le=1000)] = 100,
+    offset: Annotated[int, Query(ge=0)] = 0,
+) -> list[JobStatus]:
+    """Jobs, newest first, optionally only those in one state."""
+    return core.store.list_jobs(state, limit, offset)
+
+
+@router.get("/jobs/{job_id}")
+def job_status(job_id: str, core: CoreDep) -> JobStatus:
+    return status_or_404(core, job_id)
+
+
+@router.delete("/jobs/{job_id}", dependencies=[Depends(authorized)])
+def cancel_job(job_id: str, core: CoreDep) -> JobStatus:
+    """Cancel a queued or running job (a finished job is returned unchanged)."""
+    status = core.cancel(job_id)
+    if status is None:
+        raise HTTPException(404, f"unknown job {job_id!r}")
+    return status

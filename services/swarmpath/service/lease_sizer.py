@@ -1,0 +1,82 @@
+"""Lease sizing: how many runs of a cell make one lease (learned run costs, guided
+self-scheduling near the end of a job)."""
+
+from __future__ import annotations
+
+import math
+import threading
+from collections.abc import Sequence
+
+from swarmpath.service.protocol import BenchmarkCell, Lease, MapCell
+
+
+class LeaseSizer:
+    """How many runs of a cell make about ``target_seconds`` of work.
+
+    The cost of a run is learned from the results (``RunResult.seconds``, the run's share of its
+    vectorized batch), per cell spec, as an exponential moving average; before the first result a
+    rough prior is used (benchmark: from agents x iterations x dim; map: 5 s, i.e. one run).
+    Benchmark leases get at least ``min_runs`` runs: runs of one cell are computed vectorized and a
+    batch of one is several times slower per run than a batch of 30.
+
+    Near the end of a job the target shrinks (guided self-scheduling): a lease takes at most
+    ``remaining / (2 * slots)`` of the job's unleased work, ``slots`` being the slots of the live
+    workers, so the last leases are small and no worker is left computing a big one alone while
+    the others idle. A bundle (several leases in one reply) is filled until its leases' estimated
+    seconds reach that target."""
+
+    MAP_PRIOR_SECONDS = 5.0
+
+    def __init__(self, target_seconds: float = 10.0, min_runs: int = 8, alpha: float = 0.3):
+        self.target_seconds = float(target_seconds)
+        self.min_runs = max(1, int(min_runs))
+        self.alpha = alpha
+        self.slots = 1  # slots of the live workers (the coordinator keeps it current)
+        self._estimates: dict[str, float] = {}
+        self._lock = threading.Lock()
+
+    @staticmethod
+    def cost_key(spec: BenchmarkCell | MapCell) -> str:
+        return spec.model_dump_json()
+
+    @classmethod
+    def prior(cls, spec: BenchmarkCell | MapCell) -> float:
+        if isinstance(spec, BenchmarkCell):
+            return spec.iterations * spec.agents * (2.5e-6 + 5e-7 * spec.dim)
+        return cls.MAP_PRIOR_SECONDS
+
+    def estimate(self, spec: BenchmarkCell | MapCell) -> float:
+        with self._lock:
+            est = self._estimates.get(self.cost_key(spec))
+        return self.prior(spec) if est is None else est
+
+    def runs_for(
+        self,
+        spec: BenchmarkCell | MapCell,
+        remaining: int | None = None,
+        bundle: Sequence[Lease] = (),
+    ) -> int:
+        """Runs of a lease of ``spec``; 0 when ``bundle`` (the leases already in this reply)
+        holds enough work. ``remaining``: the job's runs not leased yet (None: no tail rule)."""
+        est = max(self.estimate(spec), 1e-6)
+        budget = self.target_seconds
+        if remaining is not None:
+            budget = min(budget, remaining * est / (2 * max(1, self.slots)))
+        if bundle:
+            budget -= sum(len(lease.runs) * max(self.estimate(lease.spec), 1e-6)
+                          for lease in bundle)
+            if budget <= 0:
+                return 0
+        low = self.min_runs if isinstance(spec, BenchmarkCell) else 1
+        return max(low, int(budget / est))
+
+    def observe(self, spec: BenchmarkCell | MapCell, seconds_per_run: float) -> None:
+        if not (seconds_per_run > 0 and math.isfinite(seconds_per_run)):
+            return
+        key = self.cost_key(spec)
+        with self._lock:
+            old = self._estimates.get(key)
+            self._estimates[key] = (
+                seconds_per_run if old is None else old + self.alpha * (seconds_per_run - old)
+            )
+

@@ -1,0 +1,49 @@
+"""The coordinator's Prometheus metrics (``GET /metrics``)."""
+
+from __future__ import annotations
+
+import time
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from swarmpath.service.coordinator import Coordinator
+
+
+def metrics_text(core: Coordinator, now: float | None = None) -> str:
+    """The coordinator's metrics in the Prometheus text exposition format (version 0.0.4)."""
+    now = time.time() if now is None else now
+    counters = core.store.counters()
+    with core._lock:
+        alive = len(core._alive)
+    active = core.store.active_leases()
+    lines: list[str] = []
+
+    def metric(name: str, kind: str, help_: str, value: float) -> None:
+        lines.append(f"# HELP {name} {help_}")
+        lines.append(f"# TYPE {name} {kind}")
+        lines.append(f"{name} {value:g}" if isinstance(value, float) else f"{name} {value}")
+
+    metric("swarmpath_queue_depth", "gauge",
+           "Runs waiting to be leased (never leased, or requeued).", core.store.queue_depth())
+    metric("swarmpath_runs_leased", "gauge", "Runs in active leases.",
+           sum(len(x["runs"]) for x in active))
+    metric("swarmpath_leases_active", "gauge", "Active leases.", len(active))
+    metric("swarmpath_runs_per_second", "gauge",
+           "Results accepted per second over the last minute.",
+           round(core.runs_per_second(now), 3))
+    metric("swarmpath_workers", "gauge", "Workers with a live liveliness token.", alive)
+    metric("swarmpath_jobs_active", "gauge", "Queued or running jobs.",
+           len(core.store.unfinished_jobs()))
+    metric("swarmpath_lease_requeues_total", "counter",
+           "Runs requeued because their lease expired or their worker vanished.",
+           counters.get("requeued_runs", 0))
+    metric("swarmpath_leases_total", "counter", "Leases granted.", counters.get("leases", 0))
+    metric("swarmpath_results_accepted_total", "counter", "Results stored.",
+           counters.get("results_accepted", 0))
+    metric("swarmpath_results_duplicate_total", "counter", "Duplicate results ignored.",
+           counters.get("duplicates", 0) + core.stats["duplicates_fast"])
+    metric("swarmpath_results_stale_total", "counter", "Stale results rejected.",
+           counters.get("stale", 0))
+    metric("swarmpath_messages_malformed_total", "counter",
+           "Malformed messages dropped since this process started.", core.stats["malformed"])
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,40 @@
+"""The coordinator's configuration (the CLI fills it)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from swarmpath.service.protocol import DEFAULT_PREFIX
+from swarmpath.service.zenoh_config import DEFAULT_ZENOH, router_config
+
+DEFAULT_HTTP = "127.0.0.1:8000"
+
+
+@dataclass
+class CoordinatorSettings:
+    """Everything a coordinator process is configured with (the CLI fills it)."""
+
+    data_dir: Path = field(default_factory=lambda: Path("swarmpath-data"))
+    zenoh_listen: list[str] = field(default_factory=lambda: [DEFAULT_ZENOH])
+    prefix: str = DEFAULT_PREFIX
+    lease_seconds: float = 30.0  # a lease without heartbeat for this long is requeued
+    heartbeat_seconds: float | None = None  # default lease_seconds / 3
+    target_lease_seconds: float = 10.0  # a lease (or bundle of leases) is about this much work
+    min_lease_runs: int = 8  # benchmark leases: at least this many runs (vectorization)
+    retry_after: float = 0.5  # NoWork: ask again after this long
+    token: str | None = None  # bearer token of mutating endpoints (None: $SWARMPATH_TOKEN)
+    shm: bool = False
+    dictionary_file: str | None = None  # Zenoh usrpwd authentication of workers
+    zenoh_extra: dict[str, Any] | None = None
+    synchronous: str = "FULL"  # SQLite durability (FULL: acks survive a power cut)
+    tick_seconds: float = 1.0
+    require_liveliness: bool = True  # lease only to workers whose liveliness token is seen
+
+    def zenoh_config(self) -> dict[str, Any]:
+        return router_config(
+            self.zenoh_listen, shm=self.shm, dictionary_file=self.dictionary_file,
+            extra=self.zenoh_extra,
+        )
+
