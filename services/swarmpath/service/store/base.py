@@ -1,0 +1,254 @@
+"""The store's plumbing: schema, connection, transactions, counters."""
+
+from __future__ import annotations
+
+import json
+import math
+import sqlite3
+import threading
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any, Self
+
+from swarmpath.service.protocol import (
+    BenchmarkCell,
+    JobState,
+    Lease,
+    MapCell,
+)
+
+SCHEMA_VERSION = 1
+DB_NAME = "swarmpath.sqlite3"
+JOB_STATES: tuple[JobState, ...] = ("queued", "running", "done", "failed", "cancelled")
+FINAL_STATES = frozenset({"done", "failed", "cancelled"})
+
+_SCHEMA = """
+CREATE TABLE IF NOT EXISTS meta (
+    key   TEXT PRIMARY KEY,
+    value TEXT NOT NULL
+);
+CREATE TABLE IF NOT EXISTS jobs (
+    seq           INTEGER PRIMARY KEY AUTOINCREMENT,   -- FIFO order, internal foreign key
+    id            TEXT NOT NULL UNIQUE,                -- public id
+    kind          TEXT NOT NULL CHECK (kind IN ('benchmark', 'map')),
+    spec          TEXT NOT NULL,                       -- normalized JobSpec JSON
+    state         TEXT NOT NULL
+                  CHECK (state IN ('queued', 'running', 'done', 'failed', 'cancelled')),
+    runs_per_cell INTEGER NOT NULL,
+    cells_total   INTEGER NOT NULL,
+    runs_total    INTEGER NOT NULL,
+    runs_done     INTEGER NOT NULL DEFAULT 0,
+    runs_failed   INTEGER NOT NULL DEFAULT 0,
+    lease_turn    INTEGER NOT NULL DEFAULT 0,          -- fairness: turn of its last lease
+    created       REAL NOT NULL,
+    started       REAL,
+    finished      REAL
+);
+CREATE INDEX IF NOT EXISTS jobs_by_state ON jobs (state, lease_turn, seq);
+CREATE TABLE IF NOT EXISTS cells (
+    job_seq  INTEGER NOT NULL REFERENCES jobs (seq),
+    idx      INTEGER NOT NULL,
+    key      TEXT NOT NULL,
+    spec     TEXT NOT NULL,                            -- CellSpec JSON
+    runs     INTEGER NOT NULL,
+    next_run INTEGER NOT NULL DEFAULT 0,               -- runs below it were leased once
+    done     INTEGER NOT NULL DEFAULT 0,
+    failed   INTEGER NOT NULL DEFAULT 0,
+    PRIMARY KEY (job_seq, idx),
+    UNIQUE (job_seq, key)
+) WITHOUT ROWID;
+CREATE INDEX IF NOT EXISTS cells_open ON cells (job_seq, idx) WHERE next_run < runs;
+CREATE TABLE IF NOT EXISTS requeue (
+    job_seq  INTEGER NOT NULL,
+    cell_idx INTEGER NOT NULL,
+    run      INTEGER NOT NULL,
+    since    REAL NOT NULL,
+    PRIMARY KEY (job_seq, cell_idx, run)
+) WITHOUT ROWID;
+CREATE TABLE IF NOT EXISTS leases (
+    lease_id TEXT PRIMARY KEY,
+    worker   TEXT NOT NULL,
+    job_seq  INTEGER NOT NULL,
+    cell_idx INTEGER NOT NULL,
+    runs     TEXT NOT NULL,                            -- JSON list of run indices
+    pending  INTEGER NOT NULL,                         -- runs of it without a result
+    created  REAL NOT NULL,
+    deadline REAL NOT NULL,
+    state    TEXT NOT NULL
+             CHECK (state IN ('active', 'done', 'expired', 'released', 'cancelled')),
+    ended    REAL
+);
+CREATE INDEX IF NOT EXISTS leases_active ON leases (deadline) WHERE state = 'active';
+CREATE INDEX IF NOT EXISTS leases_active_worker ON leases (worker) WHERE state = 'active';
+CREATE INDEX IF NOT EXISTS leases_active_cell ON leases (job_seq, cell_idx)
+    WHERE state = 'active';
+CREATE TABLE IF NOT EXISTS results (
+    job_seq  INTEGER NOT NULL,
+    cell_idx INTEGER NOT NULL,
+    run      INTEGER NOT NULL,
+    lease_id TEXT NOT NULL,
+    worker   TEXT NOT NULL,
+    status   TEXT NOT NULL CHECK (status IN ('ok', 'failed')),
+    failure  TEXT,                                     -- exception text of a failed run
+    value    REAL,                                     -- best_fitness (benchmark), for summaries
+    seconds  REAL NOT NULL,
+    metrics  TEXT NOT NULL,                            -- JSON object
+    series   BLOB,                                     -- encode_series: curve, path, ...
+    created  REAL NOT NULL,
+    UNIQUE (job_seq, cell_idx, run)                    -- a run has at most one result
+);
+"""
+
+_COUNTERS = ("leases", "requeued_runs", "results_accepted", "duplicates", "stale")
+
+CellSpec = BenchmarkCell | MapCell
+#: Lease sizing: ``runs_for(cell_spec, job_runs_not_leased, leases_already_in_bundle) -> runs``.
+RunsFor = Callable[[CellSpec, int, Sequence[Lease]], int]
+
+
+class StoreError(RuntimeError):
+    pass
+
+
+def _dumps(obj: Any) -> str:
+    return json.dumps(obj, separators=(",", ":"), allow_nan=True)
+
+
+def _json_number(v: Any) -> Any:
+    """JSON-safe numbers for REST: non-finite floats become the strings 'inf', '-inf', 'nan'."""
+    if isinstance(v, float) and not math.isfinite(v):
+        return "nan" if math.isnan(v) else ("inf" if v > 0 else "-inf")
+    return v
+
+
+def _safe(d: dict[str, Any]) -> dict[str, Any]:
+    return {k: _json_number(v) for k, v in d.items()}
+
+
+class StoreBase:
+    """The connection, its lock and transactions, the schema and small shared lookups; the
+    mixins of :class:`~swarmpath.service.store.Store` build on it."""
+
+    def __init__(self, data_dir: Path | str, *, synchronous: str = "FULL"):
+        self.data_dir = Path(data_dir)
+        self.data_dir.mkdir(parents=True, exist_ok=True)
+        self.path = self.data_dir / DB_NAME
+        self._lock = threading.RLock()
+        self._db = sqlite3.connect(
+            self.path, timeout=30.0, isolation_level=None, check_same_thread=False
+        )
+        self._db.row_factory = sqlite3.Row
+        mode = self._db.execute("PRAGMA journal_mode=WAL").fetchone()[0]
+        if str(mode).lower() != "wal":
+            raise StoreError(f"cannot put {self.path} in WAL mode (got {mode})")
+        if synchronous.upper() not in ("FULL", "NORMAL", "EXTRA"):
+            raise ValueError(f"synchronous must be FULL, NORMAL or EXTRA, not {synchronous!r}")
+        self.synchronous = synchronous.upper()
+        self._db.execute(f"PRAGMA synchronous={self.synchronous}")
+        self._db.execute("PRAGMA foreign_keys=ON")
+        self._lease_runs: dict[str, frozenset[int]] = {}
+        self._cell_specs: dict[tuple[int, int], tuple[str, CellSpec]] = {}
+        self._closed = False
+        self._migrate()
+
+    # ------------------------------------------------------------------------------ plumbing
+    def _migrate(self) -> None:
+        with self._tx() as db:
+            for statement in _SCHEMA.split(";"):
+                if statement.strip():
+                    db.execute(statement)
+            row = db.execute("SELECT value FROM meta WHERE key = 'schema_version'").fetchone()
+            if row is None:
+                db.execute(
+                    "INSERT INTO meta (key, value) VALUES ('schema_version', ?)",
+                    (str(SCHEMA_VERSION),),
+                )
+                db.executemany(
+                    "INSERT OR IGNORE INTO meta (key, value) VALUES (?, '0')",
+                    [(f"counter.{c}",) for c in (*_COUNTERS, "lease_turn")],
+                )
+            elif int(row[0]) != SCHEMA_VERSION:
+                raise StoreError(
+                    f"{self.path} has store schema version {row[0]}; this code reads "
+                    f"version {SCHEMA_VERSION}"
+                )
+
+    @contextmanager
+    def _tx(self, durable: bool = True) -> Iterator[sqlite3.Connection]:
+        """A write transaction (BEGIN IMMEDIATE) holding the lock.
+
+        ``durable=False`` commits without waiting for the disk (``synchronous=NORMAL`` for this
+        transaction): it still survives a process kill, and the next durable commit makes it
+        durable too (the WAL is written in order), but a power cut may lose it. Leases and
+        lease renewals use it: losing them only means runs are leased again (see
+        :meth:`lease_many`)."""
+        with self._lock:
+            if self._closed:
+                raise StoreError("store is closed")
+            relaxed = not durable and self.synchronous != "NORMAL"
+            if relaxed:
+                self._db.execute("PRAGMA synchronous=NORMAL")
+            try:
+                self._db.execute("BEGIN IMMEDIATE")
+                try:
+                    yield self._db
+                except BaseException:
+                    self._db.execute("ROLLBACK")
+                    raise
+                self._db.execute("COMMIT")
+            finally:
+                if relaxed:
+                    self._db.execute(f"PRAGMA synchronous={self.synchronous}")
+
+    @contextmanager
+    def _read(self) -> Iterator[sqlite3.Connection]:
+        """A consistent read snapshot holding the lock."""
+        with self._lock:
+            if self._closed:
+                raise StoreError("store is closed")
+            self._db.execute("BEGIN")
+            try:
+                yield self._db
+            finally:
+                self._db.execute("COMMIT")
+
+    def close(self) -> None:
+        with self._lock:
+            if not self._closed:
+                self._closed = True
+                self._db.close()
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    @staticmethod
+    def _bump(db: sqlite3.Connection, counter: str, n: int = 1) -> int:
+        db.execute(
+            "UPDATE meta SET value = CAST(value AS INTEGER) + ? WHERE key = ?",
+            (n, f"counter.{counter}"),
+        )
+        return int(db.execute("SELECT value FROM meta WHERE key = ?", (f"counter.{counter}",))
+                   .fetchone()[0])
+
+    def _runs_of(self, lease_id: str, runs_json: str) -> frozenset[int]:
+        cached = self._lease_runs.get(lease_id)
+        if cached is None:
+            if len(self._lease_runs) > 50_000:
+                self._lease_runs.clear()
+            cached = frozenset(json.loads(runs_json))
+            self._lease_runs[lease_id] = cached
+        return cached
+
+    @staticmethod
+    def _job_row(db: sqlite3.Connection, job_id: str) -> sqlite3.Row | None:
+        return db.execute("SELECT * FROM jobs WHERE id = ?", (job_id,)).fetchone()
+
+    def counters(self) -> dict[str, int]:
+        """Monotonic counters since the data dir was created (for Prometheus)."""
+        with self._read() as db:
+            rows = db.execute("SELECT key, value FROM meta WHERE key LIKE 'counter.%'").fetchall()
+        return {r[0].split(".", 1)[1]: int(r[1]) for r in rows if r[0] != "counter.lease_turn"}

@@ -1,0 +1,219 @@
+"""Runs as REST and MCAP read them: one item per run, one run, records for the recorder."""
+
+from __future__ import annotations
+
+import json
+import sqlite3
+from collections.abc import Iterator
+from typing import Any
+
+from swarmpath.service.store.base import StoreBase, _safe
+from swarmpath.service.store.series import decode_series
+
+
+class RunViewsMixin(StoreBase):
+    """Runs as REST and MCAP read them: one item per run, one run, records for the recorder."""
+
+    @staticmethod
+    def _identity(kind: str, spec: dict[str, Any]) -> dict[str, Any]:
+        if kind == "benchmark":
+            return {
+                "algorithm": spec["algorithm"], "function": spec["function"], "dim": spec["dim"],
+            }
+        return {"planner": spec["planner"], "map": spec["map"]}
+
+    def _item(
+        self,
+        job: sqlite3.Row,
+        seed: int,
+        cell_idx: int,
+        key: str,
+        cell_spec: dict[str, Any],
+        run: int,
+        result: sqlite3.Row | None,
+        state: str,
+        worker: str | None,
+    ) -> dict[str, Any]:
+        item: dict[str, Any] = {
+            "run_id": cell_idx * job["runs_per_cell"] + run,
+            "run": run,
+            "cell": key,
+            **self._identity(job["kind"], cell_spec),
+            "seed": seed,
+            "state": state,
+            "worker": worker,
+        }
+        if result is not None:
+            metrics = json.loads(result["metrics"])
+            item.update({k: v for k, v in metrics.items() if k not in item})
+            item["seconds"] = metrics.get("seconds", result["seconds"])
+            item["failure"] = result["failure"]
+            item["lease_id"] = result["lease_id"]
+            item["completed"] = result["created"]
+        return _safe(item)
+
+    def runs(self, job_id: str, limit: int = 100, offset: int = 0) -> list[dict[str, Any]] | None:
+        """One item per run in run_id order (all runs, finished or not); None for unknown jobs."""
+        limit, offset = max(0, int(limit)), max(0, int(offset))
+        with self._read() as db:
+            job = self._job_row(db, job_id)
+            if job is None:
+                return None
+            seq, rpc = job["seq"], job["runs_per_cell"]
+            lo, hi = offset, min(offset + limit, job["runs_total"])
+            if lo >= hi:
+                return []
+            seed = json.loads(job["spec"])["seed"]
+            cells = {
+                c["idx"]: (c["key"], json.loads(c["spec"]))
+                for c in db.execute(
+                    "SELECT idx, key, spec FROM cells WHERE job_seq = ? AND idx BETWEEN ? AND ?",
+                    (seq, lo // rpc, (hi - 1) // rpc),
+                )
+            }
+            results = {
+                (r["cell_idx"], r["run"]): r
+                for r in db.execute(
+                    "SELECT cell_idx, run, lease_id, worker, status, failure, seconds, metrics,"
+                    " created FROM results WHERE job_seq = ? AND (cell_idx, run) >= (?, ?)"
+                    " AND (cell_idx, run) <= (?, ?)",
+                    (seq, lo // rpc, lo % rpc, (hi - 1) // rpc, (hi - 1) % rpc),
+                )
+            }
+            leased = self._leased_runs(db, seq)
+        items = []
+        for run_id in range(lo, hi):
+            cell_idx, run = divmod(run_id, rpc)
+            key, cell_spec = cells[cell_idx]
+            res = results.get((cell_idx, run))
+            state, worker = self._run_state(job["state"], cell_idx, run, res, leased)
+            items.append(self._item(job, seed, cell_idx, key, cell_spec, run, res, state, worker))
+        return items
+
+    def _leased_runs(self, db: sqlite3.Connection, seq: int) -> dict[tuple[int, int], str]:
+        out: dict[tuple[int, int], str] = {}
+        for lease in db.execute(
+            "SELECT lease_id, worker, cell_idx, runs FROM leases WHERE job_seq = ? "
+            "AND state = 'active'",
+            (seq,),
+        ):
+            for r in self._runs_of(lease["lease_id"], lease["runs"]):
+                out[(lease["cell_idx"], r)] = lease["worker"]
+        return out
+
+    @staticmethod
+    def _run_state(
+        job_state: str,
+        cell_idx: int,
+        run: int,
+        result: sqlite3.Row | None,
+        leased: dict[tuple[int, int], str],
+    ) -> tuple[str, str | None]:
+        """done/failed (has a result), cancelled, leased (in an active lease) or queued."""
+        if result is not None:
+            return ("done" if result["status"] == "ok" else "failed"), result["worker"]
+        if job_state == "cancelled":
+            return "cancelled", None
+        if (cell_idx, run) in leased:
+            return "leased", leased[(cell_idx, run)]
+        return "queued", None
+
+    def run(self, job_id: str, run_id: int) -> dict[str, Any] | None:
+        """One run's item plus its series (curve and best_position, or path); None if unknown."""
+        with self._read() as db:
+            job = self._job_row(db, job_id)
+            if job is None or not 0 <= run_id < job["runs_total"]:
+                return None
+            seq = job["seq"]
+            cell_idx, run = divmod(run_id, job["runs_per_cell"])
+            cell = db.execute(
+                "SELECT key, spec FROM cells WHERE job_seq = ? AND idx = ?", (seq, cell_idx)
+            ).fetchone()
+            res = db.execute(
+                "SELECT * FROM results WHERE job_seq = ? AND cell_idx = ? AND run = ?",
+                (seq, cell_idx, run),
+            ).fetchone()
+            leased = self._leased_runs(db, seq)
+        seed = json.loads(job["spec"])["seed"]
+        state, worker = self._run_state(job["state"], cell_idx, run, res, leased)
+        item = self._item(
+            job, seed, cell_idx, cell["key"], json.loads(cell["spec"]), run, res, state, worker
+        )
+        if res is not None and res["series"] is not None:
+            item.update(decode_series(res["series"]))
+        return item
+
+    def iter_run_records(self, job_id: str, batch: int = 500) -> Iterator[dict[str, Any]]:
+        """Every stored result of a job, in acceptance order, as recorder records (raw numbers,
+        series included). Reads in batches without holding the lock in between."""
+        with self._read() as db:
+            job = self._job_row(db, job_id)
+            if job is None:
+                return
+            seq, rpc, kind = job["seq"], job["runs_per_cell"], job["kind"]
+            seed = json.loads(job["spec"])["seed"]
+            cells = {
+                c["idx"]: (c["key"], json.loads(c["spec"]))
+                for c in db.execute("SELECT idx, key, spec FROM cells WHERE job_seq = ?", (seq,))
+            }
+        last = 0
+        while True:
+            with self._read() as db:
+                rows = db.execute(
+                    "SELECT rowid, * FROM results WHERE job_seq = ? AND rowid > ? "
+                    "ORDER BY rowid LIMIT ?",
+                    (seq, last, batch),
+                ).fetchall()
+            if not rows:
+                return
+            for r in rows:
+                key, spec = cells[r["cell_idx"]]
+                yield self._record(job_id, kind, seed, rpc, r, key, spec)
+            last = rows[-1]["rowid"]
+
+    def run_record(self, job_id: str, run_id: int) -> dict[str, Any] | None:
+        """The recorder record of one finished run (None if unknown or not finished)."""
+        with self._read() as db:
+            job = self._job_row(db, job_id)
+            if job is None or not 0 <= run_id < job["runs_total"]:
+                return None
+            cell_idx, run = divmod(run_id, job["runs_per_cell"])
+            r = db.execute(
+                "SELECT * FROM results WHERE job_seq = ? AND cell_idx = ? AND run = ?",
+                (job["seq"], cell_idx, run),
+            ).fetchone()
+            cell = db.execute(
+                "SELECT key, spec FROM cells WHERE job_seq = ? AND idx = ?",
+                (job["seq"], cell_idx),
+            ).fetchone()
+        if r is None:
+            return None
+        seed = json.loads(job["spec"])["seed"]
+        return self._record(
+            job_id, job["kind"], seed, job["runs_per_cell"], r, cell["key"],
+            json.loads(cell["spec"]),
+        )
+
+    @staticmethod
+    def _record(
+        job_id: str, kind: str, seed: int, rpc: int, r: sqlite3.Row, key: str, spec: dict[str, Any]
+    ) -> dict[str, Any]:
+        series = decode_series(r["series"])
+        return {
+            "job_id": job_id,
+            "kind": kind,
+            "run_id": r["cell_idx"] * rpc + r["run"],
+            "cell_index": r["cell_idx"],
+            "cell": key,
+            "spec": spec,
+            "run": r["run"],
+            "seed": seed,
+            "worker": r["worker"],
+            "lease_id": r["lease_id"],
+            "status": r["status"],
+            "failure": r["failure"],
+            "seconds": r["seconds"],
+            "metrics": json.loads(r["metrics"]),
+            "created": r["created"],
+            **series,
+        }

@@ -1,0 +1,152 @@
+"""Summaries: the statistics tables of a job, and CSV."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+from collections.abc import Sequence
+from typing import Any
+
+from swarmpath.service.store.base import StoreBase, _safe
+
+BENCHMARK_COLUMNS = (
+    "algorithm", "function", "dim", "runs", "failed", "min", "max", "avg", "std", "median", "rank",
+)
+MAP_COLUMNS = (
+    "planner", "map", "runs", "failed", "success_rate", "collisions", "length_mean", "length_std",
+    "error_mean", "seconds_mean", "gap_mean",
+)
+
+
+def _mean(xs: Sequence[float]) -> float | None:
+    return sum(xs) / len(xs) if xs else None
+
+
+def _numbers(runs: Sequence[dict[str, Any]], key: str) -> list[float]:
+    out = []
+    for m in runs:
+        v = m.get(key)
+        if isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v):
+            out.append(float(v))
+    return out
+
+
+def map_cell_summary(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """Statistics of one planner x map from its runs' metrics (``swarmpath plan --json`` fields).
+
+    success_rate over all finished runs; length mean/std (ddof=1) and gap mean over the successful
+    runs; error, seconds and collisions over all runs. Missing values are left out; None when no
+    run has the value."""
+    from swarmpath.stats import describe
+
+    ok = [m for m in runs if m.get("success") is True]
+    lengths = _numbers(ok, "length")
+    stats = describe(lengths) if lengths else None
+    collisions = _numbers(runs, "collisions")
+    return {
+        "runs": len(runs),
+        "success_rate": len(ok) / len(runs) if runs else None,
+        "collisions": int(sum(collisions)) if collisions else (0 if runs else None),
+        "length_mean": stats["avg"] if stats else None,
+        "length_std": stats["std"] if stats else None,
+        "error_mean": _mean(_numbers(runs, "error")),
+        "seconds_mean": _mean(_numbers(runs, "seconds")),
+        "gap_mean": _mean(_numbers(ok, "gap")),
+    }
+
+
+def summary_to_csv(summary: dict[str, Any]) -> str:
+    """A summary's rows as CSV (header = its columns; empty cells for missing values)."""
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    columns = summary["columns"]
+    writer.writerow(columns)
+    for row in summary["rows"]:
+        writer.writerow(["" if row.get(c) is None else row.get(c) for c in columns])
+    return buf.getvalue()
+
+
+class SummariesMixin(StoreBase):
+    """Summaries: the statistics tables of a job, and CSV."""
+
+    def summary(self, job_id: str) -> dict[str, Any] | None:
+        """The tables of the CLI for a job (partial while it runs); None for unknown jobs.
+
+        benchmark rows: algorithm, function, dim, runs, failed, min, max, avg, std, median, rank
+        (rank of the avg among the algorithms at that function and dim; 1 = best).
+        map rows: planner, map, runs, failed, success_rate, collisions, length_mean, length_std,
+        error_mean, seconds_mean, gap_mean (length and gap over successful runs)."""
+        from swarmpath.stats import describe, rank
+
+        with self._read() as db:
+            job = self._job_row(db, job_id)
+            if job is None:
+                return None
+            seq, kind = job["seq"], job["kind"]
+            cells = db.execute(
+                "SELECT idx, spec, failed FROM cells WHERE job_seq = ? ORDER BY idx", (seq,)
+            ).fetchall()
+            if kind == "benchmark":
+                values: dict[int, list[float]] = {}
+                for idx, value in db.execute(
+                    "SELECT cell_idx, value FROM results WHERE job_seq = ? AND status = 'ok' "
+                    "ORDER BY cell_idx, run",
+                    (seq,),
+                ):
+                    values.setdefault(idx, []).append(math.inf if value is None else value)
+            else:
+                metrics: dict[int, list[dict[str, Any]]] = {}
+                for idx, m in db.execute(
+                    "SELECT cell_idx, metrics FROM results WHERE job_seq = ? AND status = 'ok' "
+                    "ORDER BY cell_idx, run",
+                    (seq,),
+                ):
+                    metrics.setdefault(idx, []).append(json.loads(m))
+        rows: list[dict[str, Any]] = []
+        if kind == "benchmark":
+            groups: dict[tuple[str, int], dict[str, float]] = {}
+            for c in cells:
+                spec = json.loads(c["spec"])
+                row: dict[str, Any] = {
+                    "algorithm": spec["algorithm"], "function": spec["function"],
+                    "dim": spec["dim"], "runs": len(values.get(c["idx"], ())),
+                    "failed": c["failed"],
+                }
+                if c["idx"] in values:
+                    row.update(describe(values[c["idx"]]))
+                    groups.setdefault((row["function"], row["dim"]), {})[row["algorithm"]] = row[
+                        "avg"
+                    ]
+                rows.append(row)
+            ranks = {g: rank(avgs) for g, avgs in groups.items()}
+            for row in rows:
+                if "avg" in row:
+                    row["rank"] = ranks[(row["function"], row["dim"])][row["algorithm"]]
+                else:
+                    row.update(dict.fromkeys(("min", "max", "avg", "std", "median", "rank")))
+        else:
+            for c in cells:
+                spec = json.loads(c["spec"])
+                rows.append(
+                    {"planner": spec["planner"], "map": spec["map"], "failed": c["failed"],
+                     **map_cell_summary(metrics.get(c["idx"], []))}
+                )
+        return {
+            "job_id": job_id,
+            "kind": kind,
+            "state": job["state"],
+            "partial": job["runs_done"] + job["runs_failed"] < job["runs_total"],
+            "runs_total": job["runs_total"],
+            "runs_done": job["runs_done"],
+            "runs_failed": job["runs_failed"],
+            "columns": list(BENCHMARK_COLUMNS if kind == "benchmark" else MAP_COLUMNS),
+            "rows": [_safe(r) for r in rows],
+        }
+
+    def summary_csv(self, job_id: str) -> str | None:
+        s = self.summary(job_id)
+        if s is None:
+            return None
+        return summary_to_csv(s)
