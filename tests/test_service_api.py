@@ -334,7 +334,7 @@ def make_lease(spec, runs, seed=4) -> Lease:
 
 def test_execute_lease_equals_minimize_and_splits_batches(monkeypatch):
     spec = BenchmarkCell(algorithm="GWO", function="F9", dim=4, agents=6, iterations=10)
-    import swarmpath.service.worker as w
+    import swarmpath.service.worker.execution as w
 
     monkeypatch.setattr(w, "BATCH_ELEMENTS", 6 * 4 * 2)  # batches of two runs
     assert benchmark_batches([3, 5, 7], 6, 4) == [[3, 5], [7]]

@@ -1,0 +1,177 @@
+"""The work itself, plain functions: a benchmark lease is one vectorized
+``minimize(..., run_ids=lease.runs)`` (split into memory-bounded batches, as ``swarmpath bench``
+does; runs are independent so the numbers are the same), a map lease one
+``Episode(scenario, planner, seed, run, params)`` per run. A run that raises is a ``failed`` result
+(not retried); cancellation is checked every iteration/step."""
+
+from __future__ import annotations
+
+import logging
+import time
+import traceback
+from collections.abc import Callable, Sequence
+from typing import Any
+
+from swarmpath.service.protocol import (
+    BenchmarkCell,
+    Lease,
+    MapCell,
+    RunResult,
+)
+from swarmpath.service.worker.packing import _scalar, fit_result
+
+log = logging.getLogger("swarmpath.worker")
+
+
+#: Runs of a benchmark lease are computed in batches of at most this many array elements per
+#: population (runs x agents x dim), like ``swarmpath bench``.
+BATCH_ELEMENTS = 1 << 22
+
+
+class Cancelled(Exception):
+    """The lease was dropped or cancelled while it ran."""
+
+
+def _never() -> bool:
+    return False
+
+
+def execute_lease(
+    lease: Lease,
+    cancelled: Callable[[], bool] = _never,
+    progress: Callable[[int], None] | None = None,
+) -> list[tuple[int, bytes]]:
+    """Run every run of ``lease``; returns ``(run, encoded RunResult)`` in run order.
+
+    Raises :class:`Cancelled` when ``cancelled()`` turns true. ``progress(n)`` is called with the
+    number of iterations (benchmark) or planner steps (map) done so far in the lease."""
+    if isinstance(lease.spec, BenchmarkCell):
+        results = _benchmark(lease, lease.spec, cancelled, progress)
+    else:
+        results = _map(lease, lease.spec, cancelled, progress)
+    return [(r.run, fit_result(r)) for r in results]
+
+
+def _result(lease: Lease, run: int, seconds: float, **fields: Any) -> RunResult:
+    return RunResult(
+        lease_id=lease.lease_id, job_id=lease.job_id, cell=lease.cell, run=run,
+        worker=lease.worker, seconds=max(0.0, seconds), **fields,
+    )
+
+
+def _failure_text(exc: BaseException) -> str:
+    text = "".join(traceback.format_exception_only(type(exc), exc)).strip()
+    return text[:20_000]
+
+
+def benchmark_batches(runs: Sequence[int], agents: int, dim: int) -> list[list[int]]:
+    """The lease's runs in memory-bounded batches (at most BATCH_ELEMENTS per population)."""
+    size = max(1, BATCH_ELEMENTS // max(1, agents * dim))
+    runs = list(runs)
+    return [runs[i:i + size] for i in range(0, len(runs), size)]
+
+
+def _benchmark(
+    lease: Lease,
+    spec: BenchmarkCell,
+    cancelled: Callable[[], bool],
+    progress: Callable[[int], None] | None,
+) -> list[RunResult]:
+    from swarmpath.optimizers import minimize
+
+    out: list[RunResult] = []
+    done = 0
+
+    def hook(_optimizer: object) -> None:
+        nonlocal done
+        done += 1
+        if progress is not None:
+            progress(done)
+        if cancelled():
+            raise Cancelled(lease.lease_id)
+
+    for batch in benchmark_batches(lease.runs, spec.agents, spec.dim):
+        if cancelled():
+            raise Cancelled(lease.lease_id)
+        started = time.perf_counter()
+        try:
+            res = minimize(
+                spec.algorithm, spec.function, dim=spec.dim, agents=spec.agents,
+                iterations=spec.iterations, seed=lease.seed, params=spec.params,
+                shifted=spec.shifted, run_ids=batch, on_iteration=hook,
+            )
+        except Cancelled:
+            raise
+        except Exception as exc:
+            seconds = (time.perf_counter() - started) / len(batch)
+            failure = _failure_text(exc)
+            log.warning("lease %s: runs %s of %s failed: %s", lease.lease_id, batch, lease.cell,
+                        failure.splitlines()[-1] if failure else "")
+            out += [_result(lease, r, seconds, status="failed", failure=failure) for r in batch]
+            continue
+        share = res.seconds / len(batch)
+        for i, r in enumerate(batch):
+            out.append(_result(
+                lease, r, share,
+                metrics={"best_fitness": float(res.best_fitness[i]),
+                         "evaluations": int(res.evaluations[i])},
+                curve=res.curve[i].tolist(),  # float64 -> float, exact (and 20x faster
+                best_position=res.best_position[i].tolist(),  # than a Python loop)
+            ))
+    return out
+
+
+def load_scenario(spec: MapCell) -> Any:
+    """The cell's scenario: the inline object, or the preset named ``spec.map``."""
+    if spec.scenario is not None:
+        from swarmpath.world.scenario_io import scenario_from_dict
+
+        return scenario_from_dict(dict(spec.scenario))
+    from swarmpath.world.presets import get_map
+
+    return get_map(spec.map)
+
+
+def _map(
+    lease: Lease,
+    spec: MapCell,
+    cancelled: Callable[[], bool],
+    progress: Callable[[int], None] | None,
+) -> list[RunResult]:
+    out: list[RunResult] = []
+    steps = 0
+    try:
+        from swarmpath.planners import Episode
+
+        scenario = load_scenario(spec)
+    except Exception as exc:
+        failure = _failure_text(exc)
+        return [_result(lease, r, 0.0, status="failed", failure=failure) for r in lease.runs]
+    for r in lease.runs:
+        if cancelled():
+            raise Cancelled(lease.lease_id)
+        started = time.perf_counter()
+        try:
+            episode = Episode(scenario, spec.planner, lease.seed, r, spec.params)
+            while not episode.done:
+                episode.step()
+                steps += 1
+                if progress is not None:
+                    progress(steps)
+                if cancelled():
+                    raise Cancelled(lease.lease_id)
+            outcome = episode.outcome()
+        except Cancelled:
+            raise
+        except Exception as exc:
+            out.append(_result(lease, r, time.perf_counter() - started, status="failed",
+                               failure=_failure_text(exc)))
+            continue
+        data = outcome.to_dict()
+        path = data.pop("path", None) or []
+        metrics = {k: v for k, v in data.items() if _scalar(v)}
+        out.append(_result(
+            lease, r, time.perf_counter() - started, metrics=metrics,
+            path=[(float(p[0]), float(p[1]), float(p[2])) for p in path],
+        ))
+    return out

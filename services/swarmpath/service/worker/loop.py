@@ -1,0 +1,370 @@
+"""The worker process: a Zenoh client that pulls leases from the coordinator, runs them in its
+slots and reports results (schemas/README.md): liveliness token, pull loop with backoff,
+heartbeats (RunProgress) for running leases, results put with CongestionControl.BLOCK and re-sent
+until acknowledged, ``drop_leases`` and ``Cancel`` honoured, graceful stop on SIGTERM/SIGINT: stop
+pulling, let running leases finish for ``grace_seconds`` (then abort them), wait for the acks,
+undeclare the token (the coordinator requeues whatever was not reported)."""
+
+from __future__ import annotations
+
+import logging
+import os
+import signal
+import socket
+import threading
+import time
+from collections import deque
+from collections.abc import Sequence
+from typing import Any
+
+from swarmpath.service.protocol import (
+    MAX_BUNDLE_LEASES,
+    PROTOCOL_VERSION,
+    BenchmarkCell,
+    Keys,
+    Lease,
+    LeaseBundle,
+    LeaseRequest,
+    NoWork,
+    RunProgress,
+    decode_work_reply,
+    encode,
+)
+from swarmpath.service.worker.execution import benchmark_batches
+from swarmpath.service.worker.reporting import Reporting, _Active, _Pending
+from swarmpath.service.worker.settings import WorkerSettings, default_worker_id
+from swarmpath.service.worker.slots import ProcessSlot, Slot, ThreadSlot
+
+log = logging.getLogger("swarmpath.worker")
+
+
+class Worker(Reporting):
+    """See the module docstring. ``run()`` blocks until ``stop()`` (or a signal)."""
+
+    def __init__(self, settings: WorkerSettings):
+        self.settings = settings
+        self.id = settings.worker_id or default_worker_id()
+        Keys(settings.prefix).worker_token(self.id)  # validates the id
+        self.keys = Keys(settings.prefix)
+        self.host = socket.gethostname()
+        self._lock = threading.RLock()
+        self._wake = threading.Condition(self._lock)
+        self._stop = threading.Event()
+        self._abort = threading.Event()
+        self._active: dict[str, _Active] = {}  # leases held: running or queued
+        self._queue: deque[list[Lease]] = deque()  # groups waiting for a free slot
+        self._pending: dict[tuple[str, int], _Pending] = {}
+        self._dropped: set[str] = set()
+        self._cancelled_jobs: set[str] = set()
+        self._slots: list[Slot] = []
+        self._session: Any = None
+        self._zenoh: Any = None
+        self.runs_done = 0
+        self.leases_done = 0
+        self._closing = False
+        self._seq = 0  # puts of results so far
+        self._acked_seq = 0  # highest put with an acknowledged result
+        self._last_ack = time.monotonic()
+
+    # ------------------------------------------------------------------------------ control
+    def stop(self) -> None:
+        """Graceful stop (idempotent); a second call aborts running leases at once."""
+        if self._stop.is_set():
+            self._abort.set()
+        self._stop.set()
+        with self._wake:
+            self._wake.notify_all()
+
+    def install_signal_handlers(self) -> None:
+        def handler(signum: int, _frame: Any) -> None:
+            name = signal.Signals(signum).name
+            if self._stop.is_set():
+                log.warning("%s again: aborting running leases", name)
+            else:
+                log.info("%s: finishing (at most %.0f s), then leaving", name,
+                         self.settings.grace_seconds)
+            self.stop()
+
+        signal.signal(signal.SIGTERM, handler)
+        signal.signal(signal.SIGINT, handler)
+
+    # ---------------------------------------------------------------------------------- run
+    def run(self) -> int:
+        slot_cls = ProcessSlot if self.settings.executor == "process" else ThreadSlot
+        self._slots = [slot_cls(i, self._on_slot_done) for i in range(self.settings.slots)]
+        for slot in self._slots:
+            if isinstance(slot, ProcessSlot):
+                slot.on_ready = self._slot_ready
+            slot.start()
+        if self.settings.exit_with_parent:
+            threading.Thread(target=self._watch_parent, daemon=True).start()
+        try:
+            if not self._open():
+                return 1
+            self._declare()
+            threads = [
+                threading.Thread(target=self._heartbeat_loop, name="heartbeat", daemon=True),
+                threading.Thread(target=self._resend_loop, name="resend", daemon=True),
+            ]
+            for t in threads:
+                t.start()
+            log.info("worker %s ready: %d %s slot(s), pulling from %s", self.id,
+                     len(self._slots), self.settings.executor, ", ".join(self.settings.connect))
+            self._pull_loop()
+            self._drain()
+            return 0
+        finally:
+            self._shutdown()
+
+    def _slot_ready(self) -> None:
+        with self._wake:
+            self._wake.notify_all()
+
+    def _watch_parent(self) -> None:
+        while not self._stop.wait(0.5):
+            if os.getppid() != self.settings.exit_with_parent:
+                log.warning("parent process %s is gone: stopping", self.settings.exit_with_parent)
+                self.stop()
+                return
+
+    def _open(self) -> bool:
+        import zenoh
+
+        from swarmpath.service.zenoh_config import describe, to_zenoh
+
+        self._zenoh = zenoh
+        conf = self.settings.zenoh_config()
+        complained = False
+        while not self._stop.is_set():
+            try:
+                self._session = zenoh.open(to_zenoh(conf))
+                log.info("%s", describe(conf))
+                return True
+            except Exception as exc:
+                if not complained:
+                    log.warning("cannot open %s (%s); retrying until it answers",
+                                describe(conf), " ".join(str(exc).split())[:200])
+                    complained = True
+                self._stop.wait(1.0)
+        return False
+
+    def _declare(self) -> None:
+        s = self._session
+        self._token = s.liveliness().declare_token(self.keys.worker_token(self.id))
+        self._subs = [
+            s.declare_subscriber(self.keys.ack(self.id), self._on_ack),
+            s.declare_subscriber(self.keys.cancel, self._on_cancel),
+        ]
+        self._querier = s.declare_querier(
+            self.keys.work, timeout=self.settings.query_timeout,
+            target=self._zenoh.QueryTarget.BEST_MATCHING,
+        )
+
+    # ----------------------------------------------------------------------------- pulling
+    def _free_slot(self) -> Slot | None:
+        for slot in self._slots:
+            if not slot.busy and not any(a.slot is slot for a in self._active.values()):
+                return slot
+        return None
+
+    def _wants_work(self) -> bool:
+        """Pull while fewer groups are held (running or queued) than ready slots + prefetch
+        (nothing before a slot is ready: work is not taken before it can start)."""
+        ready = [slot for slot in self._slots if slot.ready]
+        if not ready:
+            return False
+        running = sum(1 for slot in ready if slot.busy)
+        return running + len(self._queue) < len(ready) + max(0, self.settings.prefetch)
+
+    def request(self) -> bytes:
+        return encode(LeaseRequest(
+            worker=self.id, max_runs=self.settings.max_runs,
+            max_leases=max(1, min(self.settings.max_leases, MAX_BUNDLE_LEASES)),
+            host=self.host, pid=os.getpid(), slots=len(self._slots), version=_version(),
+            protocol=PROTOCOL_VERSION,
+        ))
+
+    def _ask(self) -> Lease | LeaseBundle | NoWork | None:
+        """One lease request; None when nobody answered."""
+        replies = list(self._querier.get(payload=self.request()))
+        for reply in replies:
+            ok = reply.ok
+            if ok is None:
+                err = reply.err
+                log.warning("lease request failed: %s",
+                            err.payload.to_bytes()[:200] if err is not None else "?")
+                continue
+            try:
+                return decode_work_reply(ok.payload.to_bytes())
+            except Exception as exc:
+                log.warning("ignored a malformed lease reply: %s", " ".join(str(exc).split())[:200])
+        return None
+
+    def _pull_loop(self) -> None:
+        """Ask for work whenever fewer groups are held than slots + prefetch: with prefetch the
+        next group is already here when a slot finishes, so no slot waits for a round trip."""
+        backoff = 0.0
+        while not self._stop.is_set():
+            with self._wake:
+                while not self._stop.is_set() and not self._wants_work():
+                    self._wake.wait(0.5)
+            if self._stop.is_set():
+                return
+            try:
+                reply = self._ask()
+            except Exception as exc:
+                log.warning("lease request failed: %s", exc)
+                reply = None
+            if reply is None:
+                backoff = min(self.settings.max_backoff, max(1.0, backoff * 2))
+                if backoff <= 1.0:
+                    log.warning("no coordinator answers on %s; retrying", self.keys.work)
+                self._stop.wait(backoff)
+                continue
+            if backoff:
+                log.info("coordinator reachable again")
+                backoff = 0.0
+                self._resend_all()
+            if isinstance(reply, NoWork):
+                self._stop.wait(reply.retry_after)
+                continue
+            self._take(reply.leases if isinstance(reply, LeaseBundle) else [reply])
+
+    def _take(self, leases: Sequence[Lease]) -> None:
+        """Hold a group of granted leases and start it as soon as a slot is free."""
+        mine = [lease for lease in leases if lease.worker == self.id]
+        if len(mine) < len(leases):  # pragma: no cover - we asked for ourselves
+            log.warning("ignored %d leases granted to another worker", len(leases) - len(mine))
+        if not mine:
+            return
+        with self._lock:
+            now = time.monotonic()
+            for lease in mine:
+                self._active[lease.lease_id] = _Active(lease, None, now, now)
+                log.debug("lease %s: %s runs %s", lease.lease_id, lease.cell, lease.runs)
+            self._queue.append(mine)
+        self._dispatch()
+
+    def _start(self, lease: Lease) -> None:
+        """Run one lease (as a group of one)."""
+        self._take([lease])
+
+    def _dispatch(self) -> None:
+        """Start queued groups on free slots."""
+        while True:
+            with self._lock:
+                if not self._queue or self._stop.is_set():  # stopping: _drain forgets them
+                    return
+                slot = self._free_slot()
+                if slot is None:
+                    return
+                group = [lease for lease in self._queue.popleft()
+                         if lease.lease_id in self._active]
+                if not group:
+                    continue
+                for lease in group:
+                    self._active[lease.lease_id].slot = slot
+                slot.leases = group  # busy from now on (submit sets it again)
+            slot.submit(group)
+
+    # --------------------------------------------------------------------------- heartbeat
+    def _heartbeat_loop(self) -> None:
+        while not self._closing:
+            time.sleep(0.25)
+            self.heartbeat_due()
+
+    def heartbeat_due(self, now: float | None = None) -> int:
+        """RunProgress for each running lease not reported for half its heartbeat_seconds."""
+        now = time.monotonic() if now is None else now
+        with self._lock:
+            due = [a for a in self._active.values()
+                   if now - a.last_progress >= 0.5 * a.lease.heartbeat_seconds]
+            for a in due:
+                a.last_progress = now
+        for a in due:
+            lease = a.lease
+            spec = lease.spec
+            total = spec.iterations * len(
+                benchmark_batches(lease.runs, spec.agents, spec.dim)
+            ) if isinstance(spec, BenchmarkCell) else 0
+            msg = RunProgress(
+                lease_id=lease.lease_id, job_id=lease.job_id, worker=self.id,
+                cell=lease.cell, runs=list(lease.runs),
+                iteration=a.slot.iteration(lease.lease_id) if a.slot is not None else 0,
+                iterations=total,
+            )
+            self._put(self.keys.progress(lease.job_id), encode(msg))
+        return len(due)
+
+    # ---------------------------------------------------------------------------- stopping
+    def _drain(self) -> None:
+        """Stop: let running leases finish (grace), abort the rest, wait for the acks."""
+        deadline = time.monotonic() + self.settings.grace_seconds
+        with self._wake:
+            # leases not started yet are left to the coordinator (requeued when we leave)
+            for group in self._queue:
+                for lease in group:
+                    a = self._active.get(lease.lease_id)
+                    if a is not None and a.slot is None:
+                        self._dropped.add(lease.lease_id)
+                        del self._active[lease.lease_id]
+            self._queue.clear()
+            while self._active and not self._abort.is_set() and time.monotonic() < deadline:
+                self._wake.wait(0.25)
+            if self._active:
+                log.info("aborting %d running leases; the coordinator requeues them",
+                         len(self._active))
+                for a in list(self._active.values()):
+                    self._dropped.add(a.lease.lease_id)
+                    self._abandon(a)
+            stop_at = time.monotonic() + 3.0
+            while self._active and time.monotonic() < stop_at:
+                self._wake.wait(0.25)
+            ack_deadline = time.monotonic() + self.settings.ack_timeout
+            if self._pending:
+                self._resend_all()
+            while self._pending and not self._abort.is_set() and time.monotonic() < ack_deadline:
+                self._wake.wait(0.25)
+            if self._pending:
+                log.warning("%d results not acknowledged at exit: the coordinator requeues "
+                            "their runs", len(self._pending))
+
+    def _shutdown(self) -> None:
+        self._closing = True
+        for entity in (getattr(self, "_querier", None), *getattr(self, "_subs", []),
+                       getattr(self, "_token", None)):
+            if entity is None:
+                continue
+            try:
+                entity.undeclare()
+            except Exception:  # pragma: no cover
+                log.debug("undeclare failed", exc_info=True)
+        self._subs = []
+        self._token = None
+        self._querier = None
+        if self._session is not None:
+            try:
+                self._session.close()
+            except Exception:  # pragma: no cover
+                log.debug("closing the session failed", exc_info=True)
+            self._session = None
+        for slot in self._slots:
+            slot.close(timeout=3.0)
+        log.info("worker %s stopped: %d leases, %d runs", self.id, self.leases_done,
+                 self.runs_done)
+
+
+def _version() -> str:
+    try:
+        from swarmpath import __version__
+    except ImportError:  # pragma: no cover
+        return ""
+    return __version__
+
+
+def run_worker(settings: WorkerSettings, *, signals: bool = True) -> int:
+    """Run a worker until SIGTERM/SIGINT (the ``swarmpath worker`` command)."""
+    worker = Worker(settings)
+    if signals:
+        worker.install_signal_handlers()
+    return worker.run()

@@ -1,0 +1,321 @@
+"""Slots - where leases execute, ``--slots N`` of them: spawned child processes by default (never
+forked: the parent runs Zenoh), or threads (``executor="thread"``, for tests and debugging).
+A child ignores SIGINT (the parent decides), and exits by itself when its parent disappears."""
+
+from __future__ import annotations
+
+import logging
+import os
+import signal
+import threading
+import time
+from collections.abc import Callable, Sequence
+from typing import Any
+
+from swarmpath.service.protocol import (
+    MAX_BUNDLE_LEASES,
+    BenchmarkCell,
+    Lease,
+    LeaseBundle,
+    decode_work_reply,
+    encode,
+)
+from swarmpath.service.worker.execution import Cancelled, _failure_text, execute_lease
+
+log = logging.getLogger("swarmpath.worker")
+
+
+class NotRun(Exception):
+    """A lease of a group that never started (its slot process died before): run it again."""
+
+
+#: What a slot reports for each lease of a group: ``(lease, outcome)`` with outcome the list of
+#: ``(run, encoded RunResult)``, or a :class:`Cancelled`, :class:`NotRun` or other exception.
+Outcomes = list[tuple[Lease, Any]]
+
+
+class Slot:
+    """Executes one group of leases at a time, one lease after the other (a group is the leases
+    of one LeaseBundle, or a single lease); ``on_done(slot, outcomes)`` is called once per group
+    from a thread of the slot. Each lease of a group can be cancelled on its own."""
+
+    def __init__(self, index: int, on_done: Callable[[Slot, Outcomes], None]):
+        self.index = index
+        self.on_done = on_done
+        self.leases: list[Lease] = []
+
+    @property
+    def busy(self) -> bool:
+        return bool(self.leases)
+
+    @property
+    def ready(self) -> bool:
+        """Started and able to take a group (a process slot: after its warm-up)."""
+        return True
+
+    def start(self) -> None: ...
+    def submit(self, leases: Sequence[Lease]) -> None: ...
+    def cancel(self, lease_id: str | None = None) -> None: ...
+    def iteration(self, lease_id: str | None = None) -> int:
+        return 0
+
+    def close(self, timeout: float = 5.0) -> None: ...
+
+    def _position(self, lease_id: str | None) -> list[int]:
+        return [i for i, lease in enumerate(self.leases)
+                if lease_id is None or lease.lease_id == lease_id]
+
+
+class ThreadSlot(Slot):
+    """Leases run in a thread of the worker process (shares the GIL: for tests and debugging)."""
+
+    def __init__(self, index: int, on_done: Callable[[Slot, Outcomes], None]):
+        super().__init__(index, on_done)
+        self._cancel: list[threading.Event] = []
+        self._current = -1
+        self._done = 0
+        self._thread: threading.Thread | None = None
+
+    def submit(self, leases: Sequence[Lease]) -> None:
+        group = list(leases)
+        self._cancel = [threading.Event() for _ in group]
+        self._current, self._done = -1, 0
+        self.leases = group
+        self._thread = threading.Thread(
+            target=self._run, args=(group, self._cancel), name=f"slot-{self.index}", daemon=True)
+        self._thread.start()
+
+    def _run(self, group: list[Lease], flags: list[threading.Event]) -> None:
+        def progress(n: int) -> None:
+            self._done = n
+
+        outcomes: Outcomes = []
+        for i, lease in enumerate(group):
+            self._current, self._done = i, 0
+            try:
+                outcome: Any = execute_lease(lease, flags[i].is_set, progress)
+            except Cancelled as exc:
+                outcome = exc
+            except Exception as exc:  # pragma: no cover - execute_lease reports run failures
+                outcome = exc
+            outcomes.append((lease, outcome))
+        self.leases = []
+        self.on_done(self, outcomes)
+
+    def cancel(self, lease_id: str | None = None) -> None:
+        for i in self._position(lease_id):
+            self._cancel[i].set()
+
+    def iteration(self, lease_id: str | None = None) -> int:
+        current = self._current
+        if 0 <= current < len(self.leases) and (
+                lease_id is None or self.leases[current].lease_id == lease_id):
+            return self._done
+        return 0
+
+    def close(self, timeout: float = 5.0) -> None:
+        for flag in self._cancel:
+            flag.set()
+        if self._thread is not None:
+            self._thread.join(timeout)
+
+
+def warm_up() -> None:
+    """One tiny run, so that the first lease does not pay for lazy imports and first-use setup
+    (tens of milliseconds; a whole lease of tiny runs costs less)."""
+    spec = BenchmarkCell(algorithm="PSO", function="F1", dim=2, agents=5, iterations=1)
+    lease = Lease(lease_id="warm-up", worker="warm-up", job_id="warm-up", cell=spec.key,
+                  cell_index=0, runs_per_cell=1, seed=0, runs=[0], spec=spec, deadline=0.0,
+                  lease_seconds=1.0, heartbeat_seconds=1.0)
+    try:
+        execute_lease(lease)
+    except Exception:  # pragma: no cover - a broken core shows up in the first real lease
+        log.debug("warm-up run failed", exc_info=True)
+
+
+def _slot_main(conn: Any, cancel: Any, done: Any, current: Any, parent: int) -> None:
+    """A slot's child process: groups of leases in, one reply per lease out, until told to stop
+    or orphaned."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's business
+
+    def orphan_watch() -> None:
+        while True:
+            time.sleep(0.5)
+            if os.getppid() != parent:
+                os._exit(3)
+
+    threading.Thread(target=orphan_watch, daemon=True).start()
+    logging.basicConfig(level=logging.WARNING, format="%(asctime)s slot %(message)s")
+    # One slot is one core: no BLAS/OpenMP thread pools fighting the other slots and workers
+    # (numpy is not imported yet in this fresh process; an explicit setting wins).
+    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(var, "1")
+    import swarmpath.optimizers  # noqa: F401  (pay the import before the first lease)
+
+    def progress(n: int) -> None:
+        done.value = n
+
+    warm_up()
+    try:
+        conn.send(("ready", -1))  # the worker pulls work for this slot only from now on
+    except (EOFError, OSError):
+        return
+
+    while True:
+        try:
+            message = conn.recv()
+        except (EOFError, OSError):
+            return
+        if message is None:
+            return
+        try:
+            bundle = decode_work_reply(message)
+            assert isinstance(bundle, LeaseBundle)
+        except Exception as exc:  # pragma: no cover - the parent encoded it
+            conn.send(("error", -1, _failure_text(exc)))
+            continue
+        for i, lease in enumerate(bundle.leases):
+            current.value, done.value = i, 0
+            try:
+                reply: tuple[Any, ...] = (
+                    "done", i, execute_lease(lease, lambda i=i: bool(cancel[i]), progress))
+            except Cancelled:
+                reply = ("cancelled", i)
+            except Exception as exc:  # reported to the parent
+                reply = ("error", i, _failure_text(exc))
+            try:
+                conn.send(reply)
+            except (EOFError, OSError):
+                return
+        current.value = -1
+
+
+class ProcessSlot(Slot):
+    """Leases run in a spawned child process (true parallelism; killed and respawned if it
+    dies). The child is started with the multiprocessing *spawn* method, never forked."""
+
+    def __init__(self, index: int, on_done: Callable[[Slot, Outcomes], None]):
+        super().__init__(index, on_done)
+        import multiprocessing
+
+        self._ctx = multiprocessing.get_context("spawn")
+        self._cancel = self._ctx.Array("b", MAX_BUNDLE_LEASES, lock=False)
+        self._done = self._ctx.Value("q", 0, lock=False)
+        self._current = self._ctx.Value("i", -1, lock=False)
+        self._proc: Any = None
+        self._conn: Any = None
+        self._waiter: threading.Thread | None = None
+        self._closing = False
+        self._ready = threading.Event()
+        self.on_ready: Callable[[], None] | None = None
+
+    @property
+    def busy(self) -> bool:
+        """Running a group, or not ready yet (starting): no work is pulled for it then."""
+        return bool(self.leases) or not self._ready.is_set()
+
+    @property
+    def ready(self) -> bool:
+        return self._ready.is_set()
+
+    def _await_ready(self) -> bool:
+        try:
+            reply = self._conn.recv()
+        except (EOFError, OSError):
+            return False
+        if reply[0] != "ready":  # pragma: no cover - the child says ready first
+            return False
+        self._ready.set()
+        if self.on_ready is not None:
+            self.on_ready()
+        return True
+
+    def start(self) -> None:
+        self._ready.clear()
+        parent_conn, child_conn = self._ctx.Pipe()
+        self._proc = self._ctx.Process(
+            target=_slot_main,
+            args=(child_conn, self._cancel, self._done, self._current, os.getpid()),
+            name=f"swarmpath-slot-{self.index}", daemon=True,
+        )
+        self._proc.start()
+        child_conn.close()
+        self._conn = parent_conn
+        threading.Thread(target=self._await_ready, name=f"slot-{self.index}-start",
+                         daemon=True).start()
+
+    def submit(self, leases: Sequence[Lease]) -> None:
+        if self._proc is None or not self._proc.is_alive():
+            self.start()  # the group waits in the pipe until the new child is ready
+        group = list(leases)[:MAX_BUNDLE_LEASES]
+        for i in range(MAX_BUNDLE_LEASES):
+            self._cancel[i] = 0
+        self._done.value, self._current.value = 0, -1
+        self.leases = group
+        self._conn.send(encode(LeaseBundle(leases=group)))
+        self._waiter = threading.Thread(
+            target=self._wait, args=(group,), name=f"slot-{self.index}", daemon=True)
+        self._waiter.start()
+
+    def _wait(self, group: list[Lease]) -> None:
+        got: dict[int, Any] = {}
+        while len(got) < len(group):
+            try:
+                if not self._ready.wait(0.05):  # a respawned child: its ready comes first
+                    if self._proc is not None and self._proc.is_alive():
+                        continue
+                    raise EOFError
+                reply = self._conn.recv()
+            except (EOFError, OSError):
+                code = self._proc.exitcode if self._proc is not None else None
+                if self._proc is not None:
+                    self._proc.join(1.0)
+                    code = self._proc.exitcode
+                self._proc = None
+                # the lease that was running fails (a run that kills its process would kill
+                # every worker it is given to); the ones not started yet are run again
+                died = RuntimeError(f"the slot process died (exit code {code})")
+                running = min((i for i in range(len(group)) if i not in got), default=0)
+                for i in range(len(group)):
+                    if i not in got:
+                        got[i] = died if i == running else NotRun(group[i].lease_id)
+                break
+            kind, i = reply[0], reply[1]
+            if i < 0:  # the group could not be read at all
+                for j in range(len(group)):
+                    got.setdefault(j, RuntimeError(reply[2]))
+                break
+            got[i] = (reply[2] if kind == "done" else
+                      Cancelled(group[i].lease_id) if kind == "cancelled" else
+                      RuntimeError(reply[2]))
+        self.leases = []
+        if not self._closing:
+            self.on_done(self, [(lease, got[i]) for i, lease in enumerate(group)])
+
+    def cancel(self, lease_id: str | None = None) -> None:
+        for i in self._position(lease_id):
+            self._cancel[i] = 1
+
+    def iteration(self, lease_id: str | None = None) -> int:
+        current, leases = int(self._current.value), self.leases
+        if 0 <= current < len(leases) and (
+                lease_id is None or leases[current].lease_id == lease_id):
+            return int(self._done.value)
+        return 0
+
+    def close(self, timeout: float = 5.0) -> None:
+        self._closing = True
+        for i in range(MAX_BUNDLE_LEASES):
+            self._cancel[i] = 1
+        if self._conn is not None:
+            try:
+                self._conn.send(None)
+            except (OSError, ValueError):
+                pass
+        if self._proc is not None:
+            self._proc.join(timeout)
+            if self._proc.is_alive():
+                self._proc.terminate()
+                self._proc.join(2.0)
+        if self._conn is not None:
+            self._conn.close()
