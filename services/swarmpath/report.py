@@ -80,11 +80,27 @@ def statistics(
     alpha: float = compare.ALPHA,
 ) -> Statistics:
     """The tests of a study (reference: default the last algorithm; ValueError if unknown)."""
-    samples: dict[tuple[str, int], dict[str, list[float]]] = {}
+    return benchmark_tests(
+        {(c.algorithm, c.function, c.dim): c.best_fitness for c in cells}, algorithms, reference,
+        alpha,
+    )
+
+
+def benchmark_tests(
+    values: Mapping[tuple[str, str, int], Sequence[float]],
+    algorithms: Sequence[str],
+    reference: str | None = None,
+    alpha: float = compare.ALPHA,
+) -> Statistics:
+    """:func:`statistics` from the best fitness of the runs per (algorithm, function, dim)
+    (NaN: a run without a value; an empty cell is not tested and leaves the Friedman test)."""
+    samples: dict[tuple[str, int], dict[str, Sequence[float]]] = {}
     averages: dict[int, dict[str, dict[str, float]]] = {}
-    for c in cells:
-        samples.setdefault((c.function, c.dim), {})[c.algorithm] = c.best_fitness
-        averages.setdefault(c.dim, {}).setdefault(c.function, {})[c.algorithm] = c.stats["avg"]
+    for (algorithm, function, dim), runs in values.items():
+        samples.setdefault((function, dim), {})[algorithm] = runs
+        kept = [v for v in runs if not math.isnan(v)]
+        avg = describe(kept)["avg"] if kept else math.nan
+        averages.setdefault(dim, {}).setdefault(function, {})[algorithm] = avg
     comparison = compare.compare_samples(samples, algorithms, reference, alpha)
     ref = comparison.reference
     per_dim = {d: compare.friedman(v, algorithms, ref, alpha) for d, v in averages.items()}

@@ -210,6 +210,26 @@ class BenchmarkJobSpec(Model):
             lambda name, params: get_optimizer(name).resolve_params(params),
         )
 
+    reference: str | None = Field(
+        default=None,
+        description="algorithm the summary's +/=/- markers compare against "
+        "(default: the last of algorithms)",
+    )
+
+    @field_validator("reference")
+    @classmethod
+    def _reference_of_members(cls, v: str | None, info: ValidationInfo) -> str | None:
+        return _reference(v, info.data.get("algorithms"))
+
+
+def _reference(v: str | None, members: list[str] | None) -> str | None:
+    """A reference among the job's members (case-insensitive, stored as registered)."""
+    if v is None or members is None:  # no reference, or the members failed their validation
+        return v
+    from swarmpath.compare import resolve_reference
+
+    return resolve_reference(members, v)
+
 
 def _params_of_members(
     v: dict[str, Any], members: list[str] | None, what: str, resolve: Callable[[str, Any], Any]
@@ -299,6 +319,17 @@ class MapJobSpec(Model):
                 resolver(params)
 
         return _params_of_members(v, info.data.get("planners"), "planners", resolve)
+
+    reference: str | None = Field(
+        default=None,
+        description="planner the summary's +/=/- markers compare against "
+        "(default: the last of planners)",
+    )
+
+    @field_validator("reference")
+    @classmethod
+    def _reference_of_members(cls, v: str | None, info: ValidationInfo) -> str | None:
+        return _reference(v, info.data.get("planners"))
 
 
 JobSpec = Annotated[BenchmarkJobSpec | MapJobSpec, Field(discriminator="kind")]

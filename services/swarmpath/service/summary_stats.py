@@ -1,0 +1,65 @@
+"""The statistical tests of a job's summary (docs/statistics.md): plain functions, no I/O.
+
+:func:`benchmark_statistics` and :func:`map_statistics` add the marker and p-value columns to the
+summary's rows (in place) and return the ``statistics`` document of ``GET /jobs/{id}/summary``.
+The algorithms (planners) are compared in the order of the job spec; the reference is the spec's
+``reference`` or, when it is None, the last of them. A partial summary tests the runs finished so
+far.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from swarmpath import report
+from swarmpath.compare_maps import MEASURES
+from swarmpath.compare_maps import map_statistics as map_tests
+
+#: Columns added to the benchmark rows, after the existing ones.
+BENCHMARK_TEST_COLUMNS = ("marker", "p", "p_holm")
+#: Columns added to the map rows: per measure its marker and Holm-adjusted p.
+MAP_TEST_COLUMNS = tuple(f"{m}_{c}" for m in MEASURES for c in ("marker", "p_holm"))
+
+
+def benchmark_statistics(
+    rows: list[dict[str, Any]],
+    values: Sequence[Sequence[float] | None],
+    algorithms: Sequence[str],
+    reference: str | None = None,
+) -> dict[str, Any]:
+    """``rows``: one per cell (algorithm, function, dim); ``values[i]``: row i's best fitness per
+    finished run (None or empty: none yet). Adds ``marker``, ``p``, ``p_holm`` to every row."""
+    samples = {
+        (r["algorithm"], r["function"], int(r["dim"])): list(v)
+        for r, v in zip(rows, values, strict=True) if v
+    }
+    tests = report.benchmark_tests(samples, algorithms, reference)
+    for r in rows:
+        t = tests.comparison.get((r["function"], int(r["dim"])), r["algorithm"])
+        r["marker"] = None if t is None else t.marker
+        r["p"] = None if t is None else t.p
+        r["p_holm"] = None if t is None else t.p_holm
+    return report.tests_to_json(tests)
+
+
+def map_statistics(
+    rows: list[dict[str, Any]],
+    runs: Sequence[Sequence[Mapping[str, Any]]],
+    planners: Sequence[str],
+    reference: str | None = None,
+) -> dict[str, Any]:
+    """``rows``: one per cell (planner, map); ``runs[i]``: row i's finished runs' metrics (the
+    ``swarmpath plan --json`` fields). Adds ``<measure>_marker`` and ``<measure>_p_holm`` (success,
+    length, seconds) to every row."""
+    records = [
+        {**m, "planner": r["planner"], "map": r["map"]}
+        for r, cell in zip(rows, runs, strict=True) for m in cell
+    ]
+    tests = map_tests(records, planners, reference)
+    for r in rows:
+        for measure in MEASURES:
+            t = tests.comparisons[measure].get(r["map"], r["planner"])
+            r[f"{measure}_marker"] = None if t is None else t.marker
+            r[f"{measure}_p_holm"] = None if t is None else t.p_holm
+    return tests.to_json()
