@@ -1,0 +1,203 @@
+"""How ``swarmpath reproduce`` prints a reproduction: a terminal table, markdown, CSV, plots."""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from rich.console import Console
+from rich.measure import Measurement
+from rich.table import Table
+
+from swarmpath import reference, reproduction
+from swarmpath.report import format_value
+from swarmpath.reproduction import Row
+
+Markers = Mapping[str, str | None]
+
+
+def _num(v: float | None, digits: int = 2) -> str:
+    return "n/a" if v is None else format_value(v, digits)
+
+
+def _published(row: Row) -> tuple[str, str]:
+    p = row.published
+    spread = " / ".join(_num(p.get(s)) for s in ("min", "max", "std") if s in p)
+    return _num(p.get("avg"), 4), spread
+
+
+def _measured(row: Row, markers: Markers) -> list[str]:
+    m = row.measured
+    if m is None:
+        return ["-"] * 5
+    marker = markers.get(row.key) or ""
+    return [f"{_num(m['avg'])} {marker}".strip(), _num(m["median"]), _num(m["min"]),
+            _num(m["max"]), _num(m["std"])]
+
+
+def _who(tab: reference.Table) -> tuple[str, str]:
+    return ("algorithm", "F") if tab.kind == "benchmark" else ("planner", "map")
+
+
+def grid(tab: reference.Table, rows: Sequence[Row], markers: Markers
+         ) -> tuple[list[str], list[list[str]], list[str]]:
+    """Header, one line per cell (reason as a footnote number), and the footnotes."""
+    who, where = _who(tab)
+    header = [where, who, "published avg", "min / max / std", "measured avg", "median", "min",
+              "max", "std"]
+    if tab.kind == "map":
+        header += ["success"]
+    header += ["log10 ratio", "verdict", "reason"]
+    lines, notes = [], []
+    for r in rows:
+        pub_avg, spread = _published(r)
+        line = [r.where, r.who, pub_avg, spread, *_measured(r, markers)]
+        if tab.kind == "map":
+            line.append(str(r.extra.get("success", "")))
+        ratio = "n/a" if r.log10_ratio is None else f"{r.log10_ratio:+.2f}"
+        mark = ""
+        if r.reason is not None:
+            notes.append(f"{r.key}: {r.reason}"
+                         + (f" (evidence: `{r.evidence}`)" if r.evidence else ""))
+            mark = f"[{len(notes)}]"
+        elif r.unexplained:
+            mark = "UNEXPLAINED"
+        lines.append([*line, ratio, r.verdict, mark])
+    return header, lines, notes
+
+
+def count_lines(tab: reference.Table, rows: Sequence[Row], markers: Markers) -> list[list[str]]:
+    order = tab.algorithms if isinstance(tab, reference.BenchmarkTable) else tab.planners
+    counts = reproduction.counts(rows, order)
+    out = []
+    for who, per in counts.items():
+        signs = [markers.get(r.key) for r in rows if r.who == who]
+        tally = "/".join(str(sum(s == m for s in signs)) for m in ("+", "=", "-"))
+        unexplained = sum(r.unexplained for r in rows if r.who == who)
+        out.append([who, *(str(per[v]) for v in reproduction.VERDICTS), str(unexplained),
+                    tally if any(signs) else "reference" if signs else "-"])
+    return out
+
+
+COUNT_HEADER = [*reproduction.VERDICTS, "unexplained", "+/=/- vs reference"]
+
+
+def _setting_text(tab: reference.Table, setting: Mapping[str, Any]) -> str:
+    paper = tab.setting
+    what = (f"{paper.get('agents')} agents, {paper.get('iterations')} iterations, "
+            f"{paper['dims'][0]} dims" if tab.kind == "benchmark" else
+            ", ".join(f"{k} {v}" for k, v in paper.items() if k not in ("maps", "runs")))
+    return (f"{tab.source['table']} of {tab.source['seed']} ({paper['runs']} runs, {what}); "
+            f"measured: {setting['runs']} runs per cell, seed {setting['seed']}")
+
+
+def markdown(tab: reference.Table, setting: Mapping[str, Any], rows: Sequence[Row],
+             markers: Markers, command: str) -> str:
+    header, lines, notes = grid(tab, rows, markers)
+    out = [f"## {tab.name}", "", f"`{command}`", "", _setting_text(tab, setting) + ".", ""]
+    out += _md_table(header, lines)
+    if notes:
+        out += ["", "Reasons:", ""]
+        out += [f"{i}. {n}" for i, n in enumerate(notes, 1)]
+    out += ["", "Verdicts per " + _who(tab)[0] + " (+/=/-: rank-sum test against the "
+            "last one listed, Holm-corrected, alpha 0.05):", ""]
+    out += _md_table([_who(tab)[0], *COUNT_HEADER], count_lines(tab, rows, markers))
+    out += ["", reproduction.summary_line(rows), "", "Notes on the print:", ""]
+    out += [f"- {' '.join(n.split())}" for n in tab.notes]
+    return "\n".join(out) + "\n\n"
+
+
+def _md_table(header: Sequence[str], lines: Sequence[Sequence[str]]) -> list[str]:
+    def esc(s: str) -> str:
+        return s.replace("|", "\\|")
+
+    out = ["| " + " | ".join(header) + " |", "|" + " --- |" * len(header)]
+    out += ["| " + " | ".join(esc(c) for c in line) + " |" for line in lines]
+    return out
+
+
+def csv_text(tab: reference.Table, rows: Sequence[Row], markers: Markers) -> str:
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    who, where = _who(tab)
+    w.writerow(["table", where, "dim", who, "published_avg", "published_min", "published_max",
+                "published_std", "measured_avg", "measured_median", "measured_min",
+                "measured_max", "measured_std", "marker", "log10_ratio", "verdict", "reason",
+                "evidence"])
+    for r in rows:
+        m = r.measured or {}
+        w.writerow([tab.name, r.where, "" if r.dim is None else r.dim, r.who,
+                    *(_raw(r.published.get(s)) for s in ("avg", "min", "max", "std")),
+                    *(_raw(m.get(s)) for s in ("avg", "median", "min", "max", "std")),
+                    markers.get(r.key) or "", _raw(r.log10_ratio), r.verdict,
+                    r.reason or "", r.evidence or ""])
+    return buf.getvalue()
+
+
+def _raw(v: float | None) -> str:
+    return "" if v is None else repr(float(v))
+
+
+def print_rich(tab: reference.Table, setting: Mapping[str, Any], rows: Sequence[Row],
+               markers: Markers) -> None:
+    header, lines, notes = grid(tab, rows, markers)
+    table = Table(title=f"{tab.name}: {_setting_text(tab, setting)}")
+    for h in header:
+        table.add_column(h, overflow="fold")
+    for line in lines:
+        table.add_row(*line)
+    counts = Table(title="verdicts")
+    for h in [_who(tab)[0], *COUNT_HEADER]:
+        counts.add_column(h)
+    for line in count_lines(tab, rows, markers):
+        counts.add_row(*line)
+    console = Console()
+    if not console.is_terminal:  # pipes and files: never squeeze the numbers
+        width = Measurement.get(console, console.options.update(width=100_000), table).maximum
+        console = Console(width=max(80, width))
+    console.print(table)
+    for i, n in enumerate(notes, 1):
+        console.print(f"[{i}] {n}", highlight=False, markup=False)
+    console.print(counts)
+    console.print(reproduction.summary_line(rows), highlight=False)
+
+
+def plot(tab: reference.Table, rows: Sequence[Row], path: Path) -> Path:
+    """log10(measured / published) per cell, one series per algorithm or planner, the
+    tolerance shaded."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    places = list(dict.fromkeys(r.where for r in rows))
+    who = list(dict.fromkeys(r.who for r in rows))
+    tol = (reproduction.DECADE if tab.kind == "benchmark"
+           else math.log10(1 + reproduction.MAP_TOLERANCE))
+    fig, ax = plt.subplots(figsize=(max(6.0, 0.6 * len(places) + 2), 4.5))
+    ax.axhspan(-tol, tol, color="0.9", label="matches")
+    for i, name in enumerate(who):
+        pts = [(places.index(r.where) + (i - len(who) / 2) * 0.08, r.log10_ratio)
+               for r in rows if r.who == name and r.log10_ratio is not None]
+        if pts:
+            ax.scatter(*zip(*pts, strict=True), s=18, label=name)
+    ax.set_xticks(range(len(places)), places, rotation=45 if tab.kind == "map" else 0)
+    ax.set_ylabel("log10(measured / published)")
+    ax.set_title(tab.name)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def write_outputs(directory: Path, tab: reference.Table, setting: Mapping[str, Any],
+                  rows: Sequence[Row], markers: Markers, command: str) -> None:
+    directory.mkdir(parents=True, exist_ok=True)
+    (directory / f"{tab.name}.md").write_text(markdown(tab, setting, rows, markers, command),
+                                              encoding="utf-8")
+    plot(tab, rows, directory / f"{tab.name}.png")
