@@ -133,7 +133,7 @@ def test_plot_writes_a_cd_diagram_per_dimension(tmp_path: Path) -> None:
     out = tmp_path / "figs"
     result = runner.invoke(app, [*ARGS, "--plot", str(out)])
     assert result.exit_code == 0, result.stderr
-    assert sorted(p.name for p in out.iterdir()) == ["cd-D2.png", "cd-D3.png"]
+    assert sorted(p.name for p in out.glob("cd-*")) == ["cd-D2.png", "cd-D3.png"]
     with Image.open(out / "cd-D2.png") as img:
         assert img.format == "PNG" and img.size[0] > 400
         pixels = np.asarray(img.convert("L"))

@@ -305,3 +305,22 @@ def test_real_process_prints_table_json_and_errors(command):
     assert bad.returncode == 2
     assert bad.stdout == ""
     assert bad.stderr.strip() == "swarmpath bench: error: --dims: 5000 is not in [1, 1000]"
+
+
+def test_plot_writes_curves_and_box_plots_per_function_and_dim(tmp_path):
+    out = tmp_path / "plots"
+    result = invoke("-a", ",".join(ALGOS), "-f", "F1,F8", "-d", "2", *SMALL, "--plot", str(out))
+    assert result.exit_code == 0, result.stderr
+    assert sorted(p.name for p in out.iterdir()) == [
+        "box_F1_d2.png", "box_F8_d2.png", "cd-D2.png", "curves_F1_d2.png", "curves_F8_d2.png"]
+    assert all(p.read_bytes().startswith(b"\x89PNG\r\n\x1a\n") for p in out.iterdir())
+
+
+def test_cells_keep_each_runs_curve_for_the_plots():
+    spec = bench_cli.make_spec("GWO", "F1", "3", runs=3, agents=6, iterations=8, seed=4)
+    (cell,) = bench_cli.run_bench(spec)
+    ref = minimize("GWO", "F1", dim=3, agents=6, iterations=8, runs=3, seed=4)
+    assert np.array_equal(np.asarray(cell.curves), ref.curve)
+    runs = report.plot_runs([cell])
+    assert [r["run"] for r in runs] == [0, 1, 2]
+    assert [r["best_fitness"] for r in runs] == [float(v) for v in ref.best_fitness]

@@ -82,13 +82,14 @@ def test_json_document_has_exactly_runs_summary_and_statistics():
     assert doc["statistics"]["reference"] == "OMPL-BITstar"  # the last planner listed
 
 
-def test_plot_writes_one_png_per_planner_and_map(tmp_path):
+def test_plot_writes_one_png_per_planner_and_map_and_box_plots_per_map(tmp_path):
     out = tmp_path / "plots"
     result = invoke("-p", "OMPL-BITstar", "-m", "mfb-static,mfb-dynamic", "--runs", "2",
                     "--params", fast("OMPL-BITstar"), "--plot", str(out))
     assert result.exit_code == 0, result.stderr
     files = sorted(p.name for p in out.iterdir())
-    assert files == ["OMPL-BITstar_mfb-dynamic.png", "OMPL-BITstar_mfb-static.png"]
+    assert files == ["OMPL-BITstar_mfb-dynamic.png", "OMPL-BITstar_mfb-static.png",
+                     "box_mfb-dynamic.png", "box_mfb-static.png"]
     for name in files:
         data = (out / name).read_bytes()
         assert data.startswith(PNG) and len(data) > 1000

@@ -38,6 +38,8 @@ class Cell:
     evaluations: list[int]  # per run
     seconds: float
     params: dict[str, Any] = field(default_factory=dict)
+    #: best so far after each iteration, one list per run (aligned with run_ids); empty if not kept
+    curves: list[list[float]] = field(default_factory=list, repr=False)
     stats: dict[str, float] = field(init=False)
     rank: int = 0  # among the algorithms at this (function, dim); set by assign_ranks
 
@@ -284,6 +286,17 @@ def tests_to_json(tests: Statistics) -> dict[str, Any]:
         "comparison": tests.comparison.to_json(key_fields=("function", "dim")),
         "friedman": [{"dim": d, **f.to_json()} for d, f in tests.friedman.items()],
     })
+
+
+def plot_runs(cells: Iterable[Cell]) -> list[dict[str, Any]]:
+    """One dict per run (algorithm, function, dim, run, best_fitness, curve): what
+    :func:`swarmpath.plots.write_benchmark_plots` draws."""
+    return [
+        {"algorithm": c.algorithm, "function": c.function, "dim": c.dim, "run": run,
+         "best_fitness": value, "curve": c.curves[i] if i < len(c.curves) else None}
+        for c in cells
+        for i, (run, value) in enumerate(zip(c.run_ids, c.best_fitness, strict=True))
+    ]
 
 
 def json_number(v: float) -> float | str:

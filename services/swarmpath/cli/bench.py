@@ -25,7 +25,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from swarmpath import __version__, compare, report
 from swarmpath.cli import parallel
-from swarmpath.cli.core import InputError, app, parse_params_option, resolve_names
+from swarmpath.cli.core import InputError, app, parse_params_option, plot_dir, resolve_names
 from swarmpath.functions import expand_function_names, get_function
 from swarmpath.optimizers import ParameterError, get_optimizer, list_optimizers, minimize_many
 from swarmpath.optimizers.api import MAX_AGENTS, MAX_DIM, MAX_ITERATIONS
@@ -269,6 +269,7 @@ def _cell(algorithm: str, function: str, dim: int, results: list[Any]) -> report
         evaluations=[int(v) for res in results for v in res.evaluations],
         seconds=sum(res.seconds for res in results),
         params=dict(results[-1].params or {}),
+        curves=[row.tolist() for res in results for row in res.curve],
     )
 
 
@@ -368,7 +369,9 @@ def bench(
     plot: Annotated[
         Path | None,
         typer.Option("--plot", metavar="DIR",
-                     help="Write a critical-difference diagram per dimension into DIR."),
+                     help="Write PNGs into DIR: convergence curves and box plots of best "
+                     "fitness per function and dimension, a critical-difference diagram per "
+                     "dimension."),
     ] = None,
 ) -> None:
     """Run optimizers on benchmark functions; print min/max/avg/std per function and dimension,
@@ -377,7 +380,7 @@ def bench(
                      reference)
     check_range("--jobs", jobs, 0, parallel.MAX_JOBS)
     if plot is not None:
-        plot = plot_dir(plot)
+        plot = plot_dir(plot, "--plot")
     stderr = Console(stderr=True)
     started = time.perf_counter()
     try:
@@ -387,29 +390,21 @@ def bench(
     seconds = time.perf_counter() - started
     tests = report.statistics(cells, spec.algorithms, spec.reference)
     if plot is not None:
+        from swarmpath import plots
         from swarmpath.cli.cdplot import draw_cd
 
+        for out in plots.write_benchmark_plots(report.plot_runs(cells), plot):
+            stderr.print(f"wrote {out}", highlight=False)
         for dim, f in tests.friedman.items():
-            out = draw_cd(f, plot / f"cd-D{dim}.png", f"D = {dim}")
-            if out is not None:
-                stderr.print(f"wrote {out}", highlight=False)
+            cd = draw_cd(f, plot / f"cd-D{dim}.png", f"D = {dim}")
+            if cd is not None:
+                stderr.print(f"wrote {cd}", highlight=False)
 
     if as_json:
         doc = report.study_to_json(spec.settings(), cells, seconds, __version__, tests)
         sys.stdout.write(json.dumps(doc, allow_nan=False) + "\n")
         return
     print_tables(spec, cells, seconds, tests)
-
-
-def plot_dir(path: Path) -> Path:
-    """``--plot DIR``, created if needed; InputError naming ``--plot`` otherwise."""
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise InputError("--plot", f"cannot create {str(path)!r}: {exc.strerror}") from None
-    if not path.is_dir():
-        raise InputError("--plot", f"{str(path)!r} is not a directory")
-    return path
 
 
 def print_tables(

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import sys
 from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import Annotated, Any
 
 import typer
@@ -89,6 +90,17 @@ def parse_params_option(
             raise InputError("--params", str(exc)) from None
         out[name] = dict(values)
     return out
+
+
+def plot_dir(path: Path, option: str) -> Path:
+    """Create the output directory of ``--plot`` (or ``-o``); InputError naming the option."""
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(option, f"cannot create {str(path)!r}: {exc.strerror}") from None
+    if not path.is_dir():
+        raise InputError(option, f"{str(path)!r} is not a directory")
+    return path
 
 
 def error_line(path: str, message: str) -> str:

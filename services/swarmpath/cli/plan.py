@@ -4,7 +4,8 @@ For each planner and map it runs ``--runs`` episodes (run r of ``--seed`` s is t
 any machine, see :mod:`swarmpath.planners.episode`) and prints Run / Distance / Error / Elapsed
 time plus success, collisions and the gap to the exact optimum, with a Mean row. ``--json``
 prints ``{"runs": [...], "summary": [...]}`` (the summary from
-:func:`swarmpath.planners.summary.summarize`), ``--plot DIR`` writes one PNG per planner x map.
+:func:`swarmpath.planners.summary.summarize`), ``--plot DIR`` writes one PNG per planner x map
+(:mod:`swarmpath.plots`) and box plots of length, gap and time per map.
 
 ``--maps`` takes preset names (``--list-maps``) and paths: scenario JSON/YAML, ROS map_server /
 nav2 YAML (recognised by its ``image`` key) or MovingAI ``.map`` files (one metre per cell).
@@ -15,7 +16,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-import re
 import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -30,7 +30,8 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from swarmpath.cli import parallel
-from swarmpath.cli.core import InputError, app, parse_params_option, resolve_names
+from swarmpath.cli.core import InputError, app, parse_params_option, plot_dir, resolve_names
+from swarmpath.legend import legend_text
 
 MAX_RUNS = 10_000
 MAP_SUFFIXES = (".json", ".yaml", ".yml", ".map")
@@ -329,6 +330,7 @@ def print_tables(cells: Sequence[CellResult], spec: PlanSpec, seconds: float) ->
         f"{seconds:.1f} s",
         highlight=False,
     )
+    console.print(legend_text(["Collisions", "Gap (%)"]), markup=False, highlight=False)
     if len(spec.planners) > 1:
         from swarmpath.cli import plan_stats
         from swarmpath.compare_maps import map_statistics
@@ -342,91 +344,16 @@ def print_tables(cells: Sequence[CellResult], spec: PlanSpec, seconds: float) ->
 
 
 # ---------------------------------------------------------------------------------------- plots
-def _slug(text: str) -> str:
-    return re.sub(r"[^A-Za-z0-9._-]+", "_", text).strip("_") or "map"
+def write_plots(cells: Sequence[CellResult], directory: Path) -> list[Path]:
+    """One PNG per planner x map (every run's path on the map) and one per map (box plots of
+    length, gap and planning time): :func:`swarmpath.plots.write_map_plots`."""
+    from swarmpath import plots
 
-
-def plot_cell(cell: CellResult, directory: Path) -> Path:
-    """One PNG: the map, obstacles and their robot-radius-inflated outlines, moving obstacles at
-    their initial positions with a faint trace (run 0's world), start, goal (and its trace when it
-    moves), every run's executed path (failed runs dashed red)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import numpy as np
-    from matplotlib.lines import Line2D
-    from matplotlib.patches import Circle, Patch, Polygon, Rectangle
-    from shapely.geometry import Polygon as ShapelyPolygon
-
-    s = cell.scenario
-    r = s.robot.radius
-    w, h = s.size
-    fig, ax = plt.subplots(figsize=(7, 7.4), dpi=100)
-    try:
-        ax.add_patch(Rectangle((0, 0), w, h, fill=False, ec="black", lw=1.0))
-        for ob in s.obstacles:
-            moving = ob.is_moving
-            face = "#f4b183" if moving else "#9e9e9e"
-            if ob.shape == "circle":
-                c, rad = ob.center, ob.radius
-                ax.add_patch(Circle(c, rad, fc=face, ec="none", alpha=0.9))
-                ax.add_patch(Circle(c, rad + r, fill=False, ec="#616161", ls="--", lw=0.8))
-            else:
-                pts = np.asarray(ob.points)
-                ax.add_patch(Polygon(pts, closed=True, fc=face, ec="none", alpha=0.9))
-                outline = ShapelyPolygon(pts).buffer(r, quad_segs=16)
-                xs, ys = outline.exterior.xy
-                ax.plot(xs, ys, color="#616161", ls="--", lw=0.8)
-        t_end = max((run["path"][-1][2] for run in cell.runs if run["path"]), default=0.0)
-        if s.is_dynamic and t_end > 0:
-            world = simulated_world(s, cell.seed, 0)
-            times = np.linspace(0.0, t_end, 200)
-            # columns of obstacle_positions_at (ObstacleSet order) that belong to movers
-            movers = [j for j, k in enumerate(world.set_order) if s.obstacles[k].is_moving]
-            if movers:
-                pos = np.array([world.obstacle_positions_at(float(t)) for t in times])
-                for j in movers:
-                    ax.plot(pos[:, j, 0], pos[:, j, 1], color="#e07b39", alpha=0.35, lw=1.0)
-            if s.goal_motion is not None:
-                g = np.array([world.goal_at(float(t)) for t in times])
-                ax.plot(g[:, 0], g[:, 1], color="#2e7d32", alpha=0.5, lw=1.0, ls=":")
-        for run in cell.runs:
-            p = np.asarray(run["path"], dtype=float).reshape(-1, 3)
-            if run["success"]:
-                ax.plot(p[:, 0], p[:, 1], lw=1.2, alpha=0.85)
-            else:
-                ax.plot(p[:, 0], p[:, 1], lw=1.2, ls="--", color="#d32f2f", alpha=0.85)
-        ax.plot(*s.start, marker="o", color="#1565c0", ms=8, ls="none")
-        ax.plot(*s.goal, marker="*", color="#2e7d32", ms=13, ls="none")
-        handles = [
-            Line2D([], [], marker="o", color="#1565c0", ls="none", label="start"),
-            Line2D([], [], marker="*", color="#2e7d32", ms=10, ls="none", label="goal (t=0)"),
-            Patch(fc="#9e9e9e", label="static obstacle"),
-            Line2D([], [], color="#616161", ls="--", lw=0.8, label=f"inflated by r={r:g} m"),
-        ]
-        if any(ob.is_moving for ob in s.obstacles):
-            handles += [Patch(fc="#f4b183", label="moving obstacle (t=0)"),
-                        Line2D([], [], color="#e07b39", alpha=0.35, label="obstacle trace (run 1)")]
-        if s.goal_motion is not None:
-            handles.append(Line2D([], [], color="#2e7d32", alpha=0.5, ls=":",
-                                  label="goal trace (run 1)"))
-        handles += [Line2D([], [], color="#1f77b4", label="run (reached the goal)"),
-                    Line2D([], [], color="#d32f2f", ls="--", label="run (failed)")]
-        ok = sum(1 for run in cell.runs if run["success"])
-        ax.set_title(f"{cell.planner} on {s.name}: {ok}/{len(cell.runs)} runs reached the goal")
-        ax.set_xlim(-0.02 * w, 1.02 * w)
-        ax.set_ylim(-0.02 * h, 1.02 * h)
-        ax.set_aspect("equal")
-        ax.set_xlabel("x (m)")
-        ax.set_ylabel("y (m)")
-        fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=8, frameon=False)
-        fig.subplots_adjust(bottom=0.13, top=0.94)
-        out = directory / f"{_slug(cell.planner)}_{_slug(s.name)}.png"
-        fig.savefig(out)
-    finally:
-        plt.close(fig)
-    return out
+    scenarios = {c.scenario.name: c.scenario for c in cells}
+    seeds = {c.scenario.name: c.seed for c in cells}
+    runs = [r for c in cells for r in c.runs]
+    return plots.write_map_plots(
+        runs, scenarios, lambda sc, run: simulated_world(sc, seeds[sc.name], run), directory)
 
 
 # -------------------------------------------------------------------------------------- command
@@ -488,8 +415,9 @@ def plan(
         bool, typer.Option("--json", help='Print one JSON document {"runs", "summary"}.')
     ] = False,
     plot: Annotated[
-        Path | None, typer.Option("--plot", help="Write one PNG per planner x map into DIR.",
-                                  metavar="DIR")
+        Path | None,
+        typer.Option("--plot", metavar="DIR",
+                     help="Write PNGs into DIR: paths per planner x map, box plots per map."),
     ] = None,
     params: Annotated[
         str | None,
@@ -526,20 +454,14 @@ def plan(
     if not 0 <= jobs <= parallel.MAX_JOBS:
         raise InputError("--jobs", f"{jobs} is not in [0, {parallel.MAX_JOBS}]")
     if plot is not None:
-        try:
-            plot.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise InputError("--plot", f"cannot create {str(plot)!r}: {exc.strerror}") from None
-        if not plot.is_dir():
-            raise InputError("--plot", f"{str(plot)!r} is not a directory")
+        plot_dir(plot, "--plot")
     stderr = Console(stderr=True)
     started = time.perf_counter()
     total = len(spec.cells()) * spec.runs
     cells = _run_with_progress(spec, stderr, jobs or min(parallel.usable_cpus(), total))
     seconds = time.perf_counter() - started
     if plot is not None:
-        for cell in cells:
-            out = plot_cell(cell, plot)
+        for out in write_plots(cells, plot):
             stderr.print(f"wrote {out}", highlight=False)
     if as_json:
         sys.stdout.write(json.dumps(document(cells, spec.reference), allow_nan=False) + "\n")

@@ -20,6 +20,7 @@ from typing import Annotated, Any
 import typer
 
 from swarmpath.cli.core import InputError, app
+from swarmpath.legend import legend_text
 
 DEFAULT_DATA = "swarmpath-data"
 DEFAULT_ZENOH = "tcp/127.0.0.1:7447"
@@ -27,8 +28,8 @@ DEFAULT_HTTP = "127.0.0.1:8000"
 
 UrlOpt = Annotated[
     str | None,
-    typer.Option("--url", envvar="SWARMPATH_URL",
-                 help="Coordinator URL [default: http://127.0.0.1:8000]."),
+    typer.Option("--url", envvar="SWARMPATH_URL", help="Coordinator URL.",
+                 show_default="http://127.0.0.1:8000"),
 ]
 
 
@@ -117,7 +118,7 @@ def _serve(app_: Any, http: str, log_level: str) -> None:
 # ------------------------------------------------------------------------------- processes
 ZenohOpt = Annotated[
     list[str] | None,
-    typer.Option("--zenoh", help=f"Zenoh listen endpoint(s) [default: {DEFAULT_ZENOH}]."),
+    typer.Option("--zenoh", help="Zenoh listen endpoint(s).", show_default=DEFAULT_ZENOH),
 ]
 DataOpt = Annotated[Path, typer.Option("--data", help="Data directory (SQLite queue, MCAP files).")]
 HttpOpt = Annotated[str, typer.Option("--http", help="HTTP listen address HOST:PORT.")]
@@ -163,11 +164,11 @@ def worker(
     connect: Annotated[
         list[str] | None,
         typer.Option("--connect",
-                     help=f"Coordinator's Zenoh endpoint(s) [default: {DEFAULT_ZENOH}]."),
+                     help="Coordinator's Zenoh endpoint(s).", show_default=DEFAULT_ZENOH),
     ] = None,
     slots: Annotated[int, typer.Option("--slots", help="Leases executed concurrently.")] = 1,
     worker_id: Annotated[
-        str | None, typer.Option("--id", help="Worker id [default: HOST-PID].")
+        str | None, typer.Option("--id", help="Worker id.", show_default="HOST-PID")
     ] = None,
     prefix: PrefixOpt = "swarmpath",
     user: Annotated[
@@ -271,7 +272,8 @@ def _host() -> str:
 @app.command()
 def up(
     workers: Annotated[
-        int, typer.Option("--workers", help="Local worker processes [default: CPU count].")
+        int, typer.Option("--workers", help="Local worker processes (0: one per CPU).",
+                          show_default="CPU count")
     ] = 0,
     http: HttpOpt = DEFAULT_HTTP,
     zenoh: Annotated[str, typer.Option("--zenoh", help="Zenoh listen endpoint.")] = DEFAULT_ZENOH,
@@ -451,6 +453,7 @@ def status(
              "finished": _when(j["finished"])} for j in jobs]
     console.print(_table("jobs", ["id", "kind", "state", "runs", "failed", "created", "finished"],
                          rows))
+    console.print(legend_text(["failed"]), markup=False, highlight=False)
     if job is None:
         workers = [{**w, "alive": "yes" if w["alive"] else "no",
                     "current_runs": len(w["current_runs"]),
@@ -485,17 +488,42 @@ def results(
     title = (f"job {job} ({summary['kind']}): {summary['state']}, "
              f"{summary['runs_done'] + summary['runs_failed']}/{summary['runs_total']} runs"
              + (" (partial)" if summary["partial"] else ""))
-    _console().print(_table(title, summary["columns"], summary["rows"]))
+    console = _console()
+    console.print(_table(title, summary["columns"], summary["rows"]))
+    console.print(legend_text(summary["columns"]), markup=False, highlight=False)
+
+
+@app.command()
+def cancel(
+    job: Annotated[str, typer.Argument(metavar="JOB", help="A job id.")],
+    url: UrlOpt = None,
+) -> None:
+    """Cancel a queued or running job (a finished job stays as it is); prints its state."""
+    with _client(url) as client:
+        try:
+            status = client.cancel(job)
+        except Exception as exc:
+            _fail(exc)
+            raise
+    done = status["runs_done"] + status["runs_failed"]
+    typer.echo(f"job {status['id']}: {status['state']} ({done}/{status['runs_total']} runs "
+               f"finished, {status['runs_failed']} failed)")
 
 
 @app.command()
 def download(
     job: Annotated[str, typer.Argument(metavar="JOB", help="A job id.")],
-    output: Annotated[Path, typer.Option("-o", "--output", help="Where to write the MCAP.")],
+    output: Annotated[
+        Path | None,
+        typer.Option("-o", "--output", help="Where to write the MCAP (a file or a directory).",
+                     show_default="JOB.mcap"),
+    ] = None,
     url: UrlOpt = None,
 ) -> None:
     """Download the job's MCAP file (after the job has ended)."""
-    if output.is_dir():
+    if output is None:
+        output = Path(f"{job}.mcap")
+    elif output.is_dir():
         output = output / f"{job}.mcap"
     if not output.parent.exists():
         raise InputError("--output", f"directory {str(output.parent)!r} does not exist")

@@ -1,0 +1,39 @@
+"""What the result columns mean, in one place: printed under the CLI tables and shown by the
+dashboard (``legend(columns)``), so that both say the same thing."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+#: Column name -> one sentence. Keys are the summary's column names (``failed``, ``collisions``,
+#: ``gap_mean``, ...) and the CLI's spellings of the same columns.
+NOTES: dict[str, str] = {
+    "failed": "runs that crashed (an exception in the optimizer, planner or worker); a run that "
+              "did not reach the goal is not failed, it counts against success_rate",
+    "success_rate": "share of finished runs that reached the goal without touching an obstacle",
+    "collisions": "simulated steps in which the robot body touched an obstacle, summed over the "
+                  "runs (one run grazing an obstacle for 3 steps counts 3)",
+    "gap_mean": "mean excess of the path length over the exact shortest path, over successful "
+                "runs; blank on maps with moving obstacles or a moving goal (no exact optimum "
+                "exists there) and when no run succeeded",
+    "length_mean": "mean executed path length of the successful runs (m)",
+    "error_mean": "mean final distance to the goal over all runs (m)",
+    "seconds_mean": "mean planning wall time per run (s)",
+    "rank": "rank of avg among the algorithms on this function and dimension (1 = best)",
+}
+ALIASES = {"gap": "gap_mean", "gap (%)": "gap_mean", "collision": "collisions"}
+
+
+def legend(columns: Iterable[str]) -> list[tuple[str, str]]:
+    """(column, meaning) for the columns that have a note, in the columns' order."""
+    out: list[tuple[str, str]] = []
+    for c in columns:
+        key = ALIASES.get(c.lower(), c.lower())
+        if key in NOTES and all(k != c for k, _ in out):
+            out.append((c, NOTES[key]))
+    return out
+
+
+def legend_text(columns: Iterable[str]) -> str:
+    """The legend as lines ``column: meaning`` (empty when no column has a note)."""
+    return "\n".join(f"{c}: {text}" for c, text in legend(columns))

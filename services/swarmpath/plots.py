@@ -1,0 +1,330 @@
+"""The figures of a study as PNG files (matplotlib, Agg): an adapter used by ``swarmpath bench
+--plot``, ``swarmpath plan --plot`` and ``swarmpath results JOB --plot`` alike.
+
+Every function takes plain run dicts, the shape ``swarmpath plan --json`` and the service's run
+records share:
+
+* benchmark runs: ``algorithm``, ``function``, ``dim``, ``best_fitness`` and ``curve`` (best so
+  far after each iteration; a thinned curve keeps its first and last iteration);
+* map runs: ``planner``, ``map``, ``run``, ``success``, ``reason``, ``collisions``, ``length``,
+  ``gap``, ``seconds`` and ``path`` (rows ``[x, y, t]``).
+
+Files are named by cell: ``curves_<function>_d<dim>.png`` and ``box_<function>_d<dim>.png`` per
+function and dimension, ``<planner>_<map>.png`` (paths on the map) and ``box_<map>.png`` (length,
+gap, planning time) per map. One colour per algorithm or planner, the same in every figure.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+#: Colours of successful paths, failed paths and the marks on failed runs.
+PATH_RGB = "#1f77b4"
+FAILED_RGB = "#d32f2f"
+STATIC_RGB = "#9e9e9e"
+MOVING_RGB = "#f4b183"
+
+
+def _pyplot() -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def slug(text: str) -> str:
+    """A file-name-safe version of a name (``OMPL-RRT*`` -> ``OMPL-RRT``)."""
+    return re.sub(r"[^A-Za-z0-9._-]+", "_", str(text)).strip("_") or "x"
+
+
+def palette(names: Sequence[str]) -> dict[str, Any]:
+    """One colour per name, in the given order (tab10, then tab20 for more than ten)."""
+    plt = _pyplot()
+    cmap = plt.get_cmap("tab10" if len(names) <= 10 else "tab20")
+    return {n: cmap(i % cmap.N) for i, n in enumerate(names)}
+
+
+# --------------------------------------------------------------------------------- benchmark
+def curve_matrix(curves: Sequence[Sequence[float]]) -> tuple[np.ndarray, np.ndarray]:
+    """Curves of one cell as (iterations (m,), values (runs, m)).
+
+    Curves of unequal length (thinned by the service to fit a message: evenly spaced samples,
+    first and last kept) are put on the iterations of the longest by linear interpolation."""
+    lengths = [len(c) for c in curves]
+    m = max(lengths)
+    x = np.arange(1, m + 1, dtype=float)
+    rows = []
+    for c in curves:
+        arr = np.asarray(c, dtype=float)
+        if len(arr) == m:
+            rows.append(arr)
+        else:
+            rows.append(np.interp(x, np.linspace(1.0, m, len(arr)), arr))
+    return x, np.vstack(rows)
+
+
+def _y_scale(ax: Any, values: np.ndarray) -> str:
+    """Log y when every finite value is positive, else linear (F8's minimum is negative)."""
+    finite = values[np.isfinite(values)]
+    if finite.size and finite.min() > 0:
+        ax.set_yscale("log")
+        return "log"
+    return "linear"
+
+
+def convergence_figure(title: str, curves: Mapping[str, Sequence[Sequence[float]]]) -> Any:
+    """Median best-so-far against iteration with the interquartile band, one colour per
+    algorithm, log y (linear when a value is zero or negative)."""
+    plt = _pyplot()
+    colours = palette(list(curves))
+    fig, ax = plt.subplots(figsize=(7, 4.5), dpi=100)
+    everything = []
+    for name, runs in curves.items():
+        if not runs:
+            continue
+        x, values = curve_matrix(runs)
+        q1, med, q3 = np.nanpercentile(values, [25, 50, 75], axis=0)
+        ax.fill_between(x, q1, q3, color=colours[name], alpha=0.2, lw=0)
+        ax.plot(x, med, color=colours[name], lw=1.5, label=f"{name} (median of {len(runs)})")
+        everything.append(values.ravel())
+    if everything:
+        _y_scale(ax, np.concatenate(everything))
+    ax.set_title(title)
+    ax.set_xlabel("iteration")
+    ax.set_ylabel("best fitness so far (median, IQR band)")
+    ax.grid(True, which="major", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def box_figure(title: str, panels: Sequence[tuple[str, Mapping[str, Sequence[float | None]]]],
+               log: bool = False, empty: str = "no values") -> Any:
+    """One box plot per panel (label, {name: values}): a box per name in its colour (None and
+    non-finite values left out); names without values are labelled "(none)", a panel without any
+    says ``empty``."""
+    plt = _pyplot()
+    names = list(dict.fromkeys(n for _, data in panels for n in data))
+    colours = palette(names)
+    fig, axes = plt.subplots(1, len(panels), figsize=(max(5.0, 0.6 * len(names) + 2) *
+                                                      len(panels), 4.5), dpi=100, squeeze=False)
+    for ax, (label, data) in zip(axes[0], panels, strict=True):
+        values = [np.asarray([v for v in data.get(n, ()) if v is not None and math.isfinite(v)],
+                             dtype=float) for n in names]
+        present = [i for i, v in enumerate(values) if v.size]
+        if present:
+            box = ax.boxplot([values[i] for i in present], positions=[i + 1 for i in present],
+                             widths=0.6, patch_artist=True, showfliers=True,
+                             medianprops={"color": "black"})
+            for patch, i in zip(box["boxes"], present, strict=True):
+                patch.set_facecolor(colours[names[i]])
+                patch.set_alpha(0.6)
+            if log:
+                _y_scale(ax, np.concatenate([values[i] for i in present]))
+        else:
+            ax.text(0.5, 0.5, empty, transform=ax.transAxes, ha="center", va="center",
+                    wrap=True, color="#616161")
+        ax.set_xlim(0.5, len(names) + 0.5)
+        ax.set_xticks(range(1, len(names) + 1))
+        ax.set_xticklabels([n if values[i].size else f"{n}\n(none)" for i, n in enumerate(names)],
+                           rotation=30 if len(names) > 4 else 0, ha="right" if len(names) > 4
+                           else "center", fontsize=8)
+        ax.set_ylabel(label)
+        ax.grid(True, axis="y", alpha=0.3)
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def _save(fig: Any, path: Path) -> Path:
+    try:
+        fig.savefig(path)
+    finally:
+        _pyplot().close(fig)
+    return path
+
+
+def _finite(v: Any) -> float | None:
+    try:
+        f = float(v)
+    except (TypeError, ValueError):  # "inf"/"nan" strings of JSON exports parse; None does not
+        return None
+    return f if math.isfinite(f) else None
+
+
+def write_benchmark_plots(runs: Iterable[Mapping[str, Any]], directory: Path) -> list[Path]:
+    """Per function and dimension: the convergence curves and the box plot of best fitness."""
+    curves: dict[tuple[str, int], dict[str, list[Any]]] = {}
+    best: dict[tuple[str, int], dict[str, list[float | None]]] = {}
+    for r in runs:
+        key = (str(r["function"]), int(r["dim"]))
+        if r.get("curve"):
+            curves.setdefault(key, {}).setdefault(str(r["algorithm"]), []).append(r["curve"])
+        best.setdefault(key, {}).setdefault(str(r["algorithm"]), []).append(
+            _finite(r.get("best_fitness")))
+    directory.mkdir(parents=True, exist_ok=True)
+    out = []
+    for (function, dim), by_algo in best.items():
+        name = f"{slug(function)}_d{dim}"
+        if curves.get((function, dim)):
+            fig = convergence_figure(f"{function}, {dim} dimensions", curves[(function, dim)])
+            out.append(_save(fig, directory / f"curves_{name}.png"))
+        fig = box_figure(f"{function}, {dim} dimensions: best fitness of each run",
+                         [("best fitness", by_algo)], log=True)
+        out.append(_save(fig, directory / f"box_{name}.png"))
+    return out
+
+
+# -------------------------------------------------------------------------------------- maps
+def map_box_figure(map_name: str, runs: Sequence[Mapping[str, Any]]) -> Any:
+    """Length and gap of the successful runs, planning time of all runs, per planner."""
+    length: dict[str, list[float | None]] = {}
+    gap: dict[str, list[float | None]] = {}
+    seconds: dict[str, list[float | None]] = {}
+    for r in runs:
+        p = str(r["planner"])
+        for d in (length, gap, seconds):
+            d.setdefault(p, [])
+        if r.get("success"):
+            length[p].append(_finite(r.get("length")))
+            g = _finite(r.get("gap"))
+            gap[p].append(None if g is None else 100.0 * g)
+        seconds[p].append(_finite(r.get("seconds")))
+    return box_figure(f"{map_name}: runs per planner", [
+        ("path length of successful runs (m)", length),
+        ("gap to the exact optimum (%)", gap),
+        ("planning time (s)", seconds),
+    ], empty="no values: no successful run, or (gap)\nno exact optimum on a map that moves")
+
+
+def collision_points(path: np.ndarray, world: Any, radius: float) -> np.ndarray:
+    """The path rows that end a colliding step (the product's rule: clearance <= radius)."""
+    from swarmpath.metrics import step_clearances
+    from swarmpath.world.geometry import collides
+
+    if len(path) < 2:
+        return path[:0, :2]
+    hit = collides(step_clearances(path, world.obstacles_at), radius)
+    return path[1:][hit, :2]
+
+
+def map_figure(planner: str, scenario: Any, runs: Sequence[Mapping[str, Any]],
+               world_of: Callable[[int], Any]) -> Any:
+    """The map, obstacles and their robot-radius-inflated outlines, moving obstacles at their
+    initial positions with their tracks (run 1's world), start, goal, and every run's path:
+    successful runs solid blue, failed runs dashed red with an x where they stopped and a dot on
+    each colliding step. ``world_of(run)`` rebuilds the run's world (moving obstacles)."""
+    plt = _pyplot()
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Circle, Patch, Polygon, Rectangle
+    from shapely.geometry import Polygon as ShapelyPolygon
+
+    s = scenario
+    r = s.robot.radius
+    w, h = s.size
+    fig, ax = plt.subplots(figsize=(7, 7.6), dpi=100)
+    ax.add_patch(Rectangle((0, 0), w, h, fill=False, ec="black", lw=1.0))
+    for ob in s.obstacles:
+        face = MOVING_RGB if ob.is_moving else STATIC_RGB
+        if ob.shape == "circle":
+            ax.add_patch(Circle(ob.center, ob.radius, fc=face, ec="none", alpha=0.9))
+            ax.add_patch(Circle(ob.center, ob.radius + r, fill=False, ec="#616161", ls="--",
+                                lw=0.8))
+        else:
+            pts = np.asarray(ob.points)
+            ax.add_patch(Polygon(pts, closed=True, fc=face, ec="none", alpha=0.9))
+            xs, ys = ShapelyPolygon(pts).buffer(r, quad_segs=16).exterior.xy
+            ax.plot(xs, ys, color="#616161", ls="--", lw=0.8)
+    paths = {int(run.get("run", i)): np.asarray(run["path"], dtype=float).reshape(-1, 3)
+             for i, run in enumerate(runs) if run.get("path")}
+    t_end = max((p[-1, 2] for p in paths.values()), default=0.0)
+    if s.is_dynamic and t_end > 0:
+        world = world_of(min(paths) if paths else 0)
+        times = np.linspace(0.0, t_end, 200)
+        movers = [j for j, k in enumerate(world.set_order) if s.obstacles[k].is_moving]
+        if movers:
+            pos = np.array([world.obstacle_positions_at(float(t)) for t in times])
+            for j in movers:
+                ax.plot(pos[:, j, 0], pos[:, j, 1], color="#e07b39", alpha=0.35, lw=1.0)
+        if s.goal_motion is not None:
+            g = np.array([world.goal_at(float(t)) for t in times])
+            ax.plot(g[:, 0], g[:, 1], color="#2e7d32", alpha=0.5, lw=1.0, ls=":")
+    any_collision = False
+    for i, run in enumerate(runs):
+        p = paths.get(int(run.get("run", i)))
+        if p is None:
+            continue
+        if run.get("success"):
+            ax.plot(p[:, 0], p[:, 1], lw=1.2, alpha=0.85, color=PATH_RGB)
+            continue
+        ax.plot(p[:, 0], p[:, 1], lw=1.2, ls="--", color=FAILED_RGB, alpha=0.85)
+        ax.plot(p[-1, 0], p[-1, 1], marker="x", color=FAILED_RGB, ms=9, mew=2, ls="none")
+        if int(run.get("collisions") or 0) > 0:
+            hits = collision_points(p, world_of(int(run.get("run", i))), r)
+            if len(hits):
+                any_collision = True
+                ax.plot(hits[:, 0], hits[:, 1], marker="o", color="black", mfc=FAILED_RGB,
+                        ms=5, ls="none")
+    ax.plot(*s.start, marker="o", color="#1565c0", ms=8, ls="none")
+    ax.plot(*s.goal, marker="*", color="#2e7d32", ms=13, ls="none")
+    handles = [
+        Line2D([], [], marker="o", color="#1565c0", ls="none", label="start"),
+        Line2D([], [], marker="*", color="#2e7d32", ms=10, ls="none", label="goal (t=0)"),
+        Patch(fc=STATIC_RGB, label="static obstacle"),
+        Line2D([], [], color="#616161", ls="--", lw=0.8, label=f"inflated by r={r:g} m"),
+    ]
+    if any(ob.is_moving for ob in s.obstacles):
+        handles += [Patch(fc=MOVING_RGB, label="moving obstacle (t=0)"),
+                    Line2D([], [], color="#e07b39", alpha=0.35, label="obstacle track (run 1)")]
+    if s.goal_motion is not None:
+        handles.append(Line2D([], [], color="#2e7d32", alpha=0.5, ls=":",
+                              label="goal track (run 1)"))
+    handles += [Line2D([], [], color=PATH_RGB, label="run (reached the goal)"),
+                Line2D([], [], color=FAILED_RGB, ls="--", marker="x", mew=2,
+                       label="run (failed; x: where it stopped)")]
+    if any_collision:
+        handles.append(Line2D([], [], marker="o", color="black", mfc=FAILED_RGB, ls="none",
+                              label="colliding step"))
+    ok = sum(1 for run in runs if run.get("success"))
+    ax.set_title(f"{planner} on {s.name}: {ok}/{len(runs)} runs reached the goal")
+    ax.set_xlim(-0.02 * w, 1.02 * w)
+    ax.set_ylim(-0.02 * h, 1.02 * h)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    fig.legend(handles=handles, loc="lower center", ncol=3, fontsize=8, frameon=False)
+    fig.subplots_adjust(bottom=0.16, top=0.94)
+    return fig
+
+
+def write_map_plots(
+    runs: Iterable[Mapping[str, Any]],
+    scenarios: Mapping[str, Any],
+    world_of: Callable[[Any, int], Any],
+    directory: Path,
+) -> list[Path]:
+    """Per planner x map the paths on the map, per map the box plots. ``scenarios``: map name
+    -> Scenario; ``world_of(scenario, run)`` rebuilds a run's world."""
+    cells: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
+    for r in runs:
+        cells.setdefault((str(r["planner"]), str(r["map"])), []).append(r)
+    directory.mkdir(parents=True, exist_ok=True)
+    out = []
+    for (planner, name), cell_runs in cells.items():
+        scenario = scenarios[name]
+        fig = map_figure(planner, scenario, cell_runs, lambda run, sc=scenario: world_of(sc, run))
+        out.append(_save(fig, directory / f"{slug(planner)}_{slug(name)}.png"))
+    by_map: dict[str, list[Mapping[str, Any]]] = {}
+    for (_, name), cell_runs in cells.items():
+        by_map.setdefault(name, []).extend(cell_runs)
+    for name, map_runs in by_map.items():
+        out.append(_save(map_box_figure(name, map_runs), directory / f"box_{slug(name)}.png"))
+    return out
