@@ -132,6 +132,7 @@ def test_submit_status_list_and_404(client):
         ({"seed": -1}, "seed"),
         ({"kind": "nope"}, "body"),
         ({"extra": 1}, "extra"),
+        ({"reference": "NOPE"}, "reference"),
     ],
 )
 def test_malformed_jobs_are_422_naming_the_field(client, change, field):
@@ -205,6 +206,10 @@ def test_a_job_worked_off_through_the_handlers(client, core):
     csv = client.get(f"/jobs/{job['id']}/summary", params={"format": "csv"})
     assert csv.headers["content-type"].startswith("text/csv")
     assert csv.text.splitlines()[0].startswith("algorithm,function,dim")
+    assert csv.text.splitlines()[0].endswith(",rank,marker,p,p_holm")
+    assert summary["statistics"]["comparison"]["reference"] == "PSO"  # the last algorithm
+    assert [r["marker"] for r in summary["rows"] if r["algorithm"] == "PSO"] == [None, None]
+    assert all(r["marker"] in ("+", "=", "-") for r in summary["rows"] if r["algorithm"] == "GWO")
 
     r = client.get(f"/jobs/{job['id']}/mcap")
     assert r.status_code == 200
@@ -574,6 +579,26 @@ def test_cli_client_commands(cli, tmp_path):
     assert table.exit_code == 0 and "GWO" in table.stdout and "partial" in table.stdout
     early = cli("download", job, "-o", str(tmp_path / "x.mcap"))
     assert early.exit_code == 1 and "409" in early.stderr and "queued" in early.stderr
+
+
+def test_cli_results_prints_markers_counts_and_friedman(cli, app, tmp_path):
+    spec = tmp_path / "spec.json"
+    spec.write_text(json.dumps({**SPEC, "algorithms": ["GWO", "PSO", "COOT"], "reference": "gwo"}))
+    job = cli("submit", str(spec)).stdout.strip()
+    app.state.core.publish = Wire()
+    assert work_off(app.state.core) == 30
+    summary = json.loads(cli("results", job, "--format", "json").stdout)
+    table = cli("results", job)
+    assert table.exit_code == 0, table.stderr
+    counts = summary["statistics"]["comparison"]["counts"]
+    line = next(ln for ln in table.stdout.splitlines() if ln.startswith("+/=/- vs GWO: "))
+    assert line == "+/=/- vs GWO: " + ", ".join(
+        f"{a} {counts[a]['+']}/{counts[a]['=']}/{counts[a]['-']}" for a in ("PSO", "COOT"))
+    assert "Friedman D=3 over 2 blocks: " in table.stdout
+    header = next(ln for ln in table.stdout.splitlines() if "algorithm" in ln)
+    assert [t for t in header.split() if t.isidentifier()][-3:] == ["marker", "p", "p_holm"]
+    csv = cli("results", job, "--format", "csv").stdout.splitlines()
+    assert csv[0].endswith(",marker,p,p_holm") and len(csv) == 1 + 6
 
 
 def test_cli_bad_input_names_the_field(cli, tmp_path):

@@ -15,6 +15,7 @@ from swarmpath.service.summary_stats import (
     MAP_TEST_COLUMNS,
     benchmark_statistics,
     map_statistics,
+    statistics_lines,
 )
 
 
@@ -67,3 +68,44 @@ def test_job_spec_reference_is_one_of_the_jobs_members(spec: dict) -> None:
         parse_job_spec({**spec, "reference": "NOPE"})
     (err,) = info.value.errors()
     assert err["loc"][-1] == "reference" and "'NOPE' is not one of" in err["msg"]
+
+
+def test_store_summary_tests_the_runs_against_the_specs_reference(tmp_path) -> None:
+    from swarmpath.service.store import Store
+    from test_store import SPEC as STORE_SPEC
+    from test_store import direct_values, drain
+
+    spec = {**STORE_SPEC, "reference": "gwo"}
+    store = Store(tmp_path / "data")
+    try:
+        job = store.create_job(spec)
+        drain(store)
+        summary = store.summary(job)
+    finally:
+        store.close()
+    assert summary is not None
+    algorithms = ["GWO", "PSO"]
+    assert spec["algorithms"] == algorithms
+    expected = report.benchmark_tests(direct_values(spec), algorithms, "GWO")
+    assert summary["statistics"] == report.tests_to_json(expected)
+    for row in summary["rows"]:
+        t = expected.comparison.get((row["function"], row["dim"]), row["algorithm"])
+        assert row["marker"] == (None if t is None else t.marker)
+        assert row["p_holm"] == (None if t is None else t.p_holm)
+    assert [r["marker"] for r in summary["rows"] if r["algorithm"] == "GWO"] == [None, None]
+    assert summary["columns"][-3:] == ["marker", "p", "p_holm"]
+
+
+def test_statistics_lines_of_a_map_summary() -> None:
+    rows = [{"planner": p, "map": m} for m in ("m1", "m2") for p in ("P", "Q", "R")]
+    runs = [[{"success": True, "length": 1.0 + k + i, "seconds": 0.1 * k} for i in range(4)]
+            for k in range(6)]
+    doc = map_statistics(rows, runs, ["P", "Q", "R"])
+    lines = statistics_lines({"kind": "map", "statistics": doc})
+    assert lines[:3] == ["success +/=/- vs R: P 0/2/0, Q 0/2/0",
+                         "length +/=/- vs R: P 0/2/0, Q 0/2/0",
+                         "seconds +/=/- vs R: P 0/2/0, Q 0/2/0"]
+    assert lines[3].startswith("Friedman (length) over 2 blocks: chi2 = 4, p = 0.135")
+    assert lines[3].endswith("mean ranks P 1.00 =, Q 2.00 =, R 3.00")
+    assert statistics_lines({"kind": "map", "statistics": map_statistics(
+        rows[:1], runs[:1], ["P"])}) == []  # one planner: nothing to compare

@@ -20,6 +20,17 @@ NOTES: dict[str, str] = {
     "error_mean": "mean final distance to the goal over all runs (m)",
     "seconds_mean": "mean planning wall time per run (s)",
     "rank": "rank of avg among the algorithms on this function and dimension (1 = best)",
+    "marker": "+ / = / -: significantly better / no significant difference / worse than the "
+              "reference algorithm (two-sided Wilcoxon rank-sum test, Holm-adjusted over the "
+              "table, alpha 0.05; blank for the reference itself; docs/statistics.md)",
+    "p": "two-sided p-value of that test, before the correction",
+    "p_holm": "the p-value after Holm's correction over every test of the table",
+    "success_marker": "+/=/- against the reference planner's success rate (Fisher's exact test, "
+                      "Holm-adjusted over the table, alpha 0.05)",
+    "length_marker": "+/=/- against the reference planner's path lengths (Wilcoxon rank-sum "
+                     "test over successful runs, Holm-adjusted over the table, alpha 0.05)",
+    "seconds_marker": "+/=/- against the reference planner's planning times (Wilcoxon "
+                      "rank-sum test, Holm-adjusted over the table, alpha 0.05)",
 }
 ALIASES = {"gap": "gap_mean", "gap (%)": "gap_mean", "collision": "collisions"}
 

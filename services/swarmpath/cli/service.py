@@ -490,6 +490,10 @@ def results(
              + (" (partial)" if summary["partial"] else ""))
     console = _console()
     console.print(_table(title, summary["columns"], summary["rows"]))
+    from swarmpath.service.summary_stats import statistics_lines
+
+    for line in statistics_lines(summary):
+        console.print(line, highlight=False, markup=False)
     console.print(legend_text(summary["columns"]), markup=False, highlight=False)
 
 

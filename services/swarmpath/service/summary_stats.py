@@ -63,3 +63,44 @@ def map_statistics(
             r[f"{measure}_marker"] = None if t is None else t.marker
             r[f"{measure}_p_holm"] = None if t is None else t.p_holm
     return tests.to_json()
+
+
+def _p(p: Any) -> str:
+    return "-" if not isinstance(p, int | float) else (f"{p:.3g}" if p >= 1e-3 else f"{p:.2e}")
+
+
+def _friedman_line(label: str, f: Mapping[str, Any]) -> str:
+    def rank(a: str, r: Any) -> str:
+        if not isinstance(r, int | float):
+            return f"{a} -"
+        marker = (f["posthoc"].get(a) or {}).get("marker")
+        return f"{a} {r:.2f}" + (f" {marker}" if marker else "")
+
+    ranks = ", ".join(rank(a, r) for a, r in f["mean_ranks"].items())
+    test = (f"chi2 = {f['statistic']:.3g}, p = {_p(f['p'])}" if f["statistic"] is not None
+            else f["note"])
+    cd = f"; Nemenyi CD = {f['nemenyi_cd']:.3g}" if f.get("nemenyi_cd") is not None else ""
+    return f"Friedman {label} over {f['blocks']} blocks: {test}{cd}; mean ranks {ranks}"
+
+
+def statistics_lines(summary: Mapping[str, Any]) -> list[str]:
+    """The summary's +/=/- counts and Friedman tests as text lines (``swarmpath results`` prints
+    them under the table; :mod:`swarmpath.legend` explains the marker columns)."""
+    st = summary.get("statistics")
+    if not st:
+        return []
+    if summary.get("kind") == "benchmark":
+        comparisons = {"": st["comparison"]}
+        fried = {f"D={f['dim']}": f for f in st["friedman"]}
+    else:
+        comparisons = {f"{m} ": c for m, c in st["comparisons"].items()}
+        fried = {f"({m})": f for m, f in st["friedman"].items()}
+    ref = next(iter(comparisons.values()))["reference"]
+    if not any(c["counts"] for c in comparisons.values()):
+        return []
+    lines = []
+    for label, c in comparisons.items():
+        counts = ", ".join(f"{a} {n['+']}/{n['=']}/{n['-']}" for a, n in c["counts"].items())
+        lines.append(f"{label}+/=/- vs {ref}: {counts}")
+    lines += [_friedman_line(label, f) for label, f in fried.items()]
+    return lines

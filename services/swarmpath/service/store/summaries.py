@@ -10,13 +10,20 @@ from collections.abc import Sequence
 from typing import Any
 
 from swarmpath.service.store.base import StoreBase, _safe
+from swarmpath.service.summary_stats import (
+    BENCHMARK_TEST_COLUMNS,
+    MAP_TEST_COLUMNS,
+    benchmark_statistics,
+    map_statistics,
+)
 
 BENCHMARK_COLUMNS = (
     "algorithm", "function", "dim", "runs", "failed", "min", "max", "avg", "std", "median", "rank",
+    *BENCHMARK_TEST_COLUMNS,
 )
 MAP_COLUMNS = (
     "planner", "map", "runs", "failed", "success_rate", "collisions", "length_mean", "length_std",
-    "error_mean", "seconds_mean", "gap_mean",
+    "error_mean", "seconds_mean", "gap_mean", *MAP_TEST_COLUMNS,
 )
 
 
@@ -75,9 +82,12 @@ class SummariesMixin(StoreBase):
         """The tables of the CLI for a job (partial while it runs); None for unknown jobs.
 
         benchmark rows: algorithm, function, dim, runs, failed, min, max, avg, std, median, rank
-        (rank of the avg among the algorithms at that function and dim; 1 = best).
+        (rank of the avg among the algorithms at that function and dim; 1 = best), marker, p,
+        p_holm (Wilcoxon rank-sum test against the spec's reference, docs/statistics.md).
         map rows: planner, map, runs, failed, success_rate, collisions, length_mean, length_std,
-        error_mean, seconds_mean, gap_mean (length and gap over successful runs)."""
+        error_mean, seconds_mean, gap_mean (length and gap over successful runs), and per measure
+        (success, length, seconds) its marker and Holm-adjusted p. ``statistics``: the tests'
+        document (:mod:`swarmpath.service.summary_stats`)."""
         from swarmpath.stats import describe, rank
 
         with self._read() as db:
@@ -85,6 +95,7 @@ class SummariesMixin(StoreBase):
             if job is None:
                 return None
             seq, kind = job["seq"], job["kind"]
+            job_spec = json.loads(job["spec"])
             cells = db.execute(
                 "SELECT idx, spec, failed FROM cells WHERE job_seq = ? ORDER BY idx", (seq,)
             ).fetchall()
@@ -126,6 +137,10 @@ class SummariesMixin(StoreBase):
                     row["rank"] = ranks[(row["function"], row["dim"])][row["algorithm"]]
                 else:
                     row.update(dict.fromkeys(("min", "max", "avg", "std", "median", "rank")))
+            statistics = benchmark_statistics(
+                rows, [values.get(c["idx"]) for c in cells], job_spec["algorithms"],
+                job_spec.get("reference"),
+            )
         else:
             for c in cells:
                 spec = json.loads(c["spec"])
@@ -133,6 +148,10 @@ class SummariesMixin(StoreBase):
                     {"planner": spec["planner"], "map": spec["map"], "failed": c["failed"],
                      **map_cell_summary(metrics.get(c["idx"], []))}
                 )
+            statistics = map_statistics(
+                rows, [metrics.get(c["idx"], []) for c in cells], job_spec["planners"],
+                job_spec.get("reference"),
+            )
         return {
             "job_id": job_id,
             "kind": kind,
@@ -143,6 +162,7 @@ class SummariesMixin(StoreBase):
             "runs_failed": job["runs_failed"],
             "columns": list(BENCHMARK_COLUMNS if kind == "benchmark" else MAP_COLUMNS),
             "rows": [_safe(r) for r in rows],
+            "statistics": statistics,
         }
 
     def summary_csv(self, job_id: str) -> str | None:
