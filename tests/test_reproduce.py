@@ -163,7 +163,7 @@ def test_document_counts_and_is_strict_json():
     assert reproduction.summary_line(rows) == "3 cells, 2 unexplained"
 
 
-def test_map_table_end_to_end_matches_plan_runs():
+def test_map_table_end_to_end_matches_plan_runs(tmp_path):
     """One run per cell of mfb-maps through the command; the lengths are those of the plan
     command's episode with the same seed and run."""
     from swarmpath.cli import plan
@@ -178,3 +178,20 @@ def test_map_table_end_to_end_matches_plan_runs():
         assert cell["runs"] == ([direct["length"]] if direct["success"] else [])
         assert cell["verdict"] in reproduction.VERDICTS
     assert doc["unexplained"] == sum(c["unexplained"] for c in doc["cells"])
+    # --from judges the same runs again without running them; --out writes markdown and a plot
+    saved = tmp_path / "mfb.json"
+    saved.write_text(res.stdout)
+    again = invoke("--from", str(saved), "--json", "--out", str(tmp_path / "out"))
+    assert again.exit_code == 0, again.stderr
+    redo = json.loads(again.stdout)
+    for a, b in zip(doc["cells"], redo["cells"], strict=True):
+        assert (a["runs"], a["verdict"], a["log10_ratio"]) == (b["runs"], b["verdict"],
+                                                               b["log10_ratio"])
+    md = (tmp_path / "out" / "mfb-maps.md").read_text()
+    assert "swarmpath reproduce mfb-maps --runs 1 --seed 3 --format markdown" in md
+    assert md.count("| mfb-static |") == 2 and reproduction.summary_line([]) not in md
+    assert (tmp_path / "out" / "mfb-maps.png").stat().st_size > 0
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"table": "nope"}')
+    res = invoke("--from", str(bad))
+    assert res.exit_code == 2 and "--from" in res.stderr

@@ -42,6 +42,9 @@ MATCHES, BETTER, WORSE, NOT_COMPARABLE = "matches", "better", "worse", "not comp
 VERDICTS = (MATCHES, BETTER, WORSE, NOT_COMPARABLE)
 #: map-table column -> the run-outcome field measuring it (absent: no measured counterpart)
 MEASURED_FIELD = {"distance_m": "length", "error_m": "error"}
+#: what a map row keeps of each run outcome (enough to judge the cell again: ``--from``)
+OUTCOME_FIELDS = ("run", "success", "length", "error", "seconds", "collisions", "optimum",
+                  "reason")
 
 
 @dataclass(frozen=True)
@@ -208,10 +211,13 @@ def map_rows(
         field_ = MEASURED_FIELD.get(column)
         values = [float(r[field_]) for r in ok] if field_ else []
         measured = describe(values) if values else None
+        optima = [float(r["optimum"]) for r in runs if r.get("optimum") is not None]
         extra = {
             "success": f"{len(ok)}/{len(runs)}",
             "seconds_median": float(np.median([float(r.get("seconds") or 0.0) for r in runs])),
             "collisions": int(sum(int(r.get("collisions") or 0) for r in runs)),
+            "optimum": float(np.mean(optima)) if optima else None,
+            "outcomes": [{k: r.get(k) for k in OUTCOME_FIELDS} for r in runs],
         }
         scenario = scenarios[map_name]
         line = straight_line(scenario)

@@ -119,48 +119,79 @@ def cells_from_runs(runs: Sequence[dict[str, Any]]) -> list[report.Cell]:
 
 
 # ------------------------------------------------------------------------------- reproduction
-def reproduce_table(
-    name: str, runs: int | None, seed: int, jobs: int, url: str | None
-) -> tuple[reference.Table, dict[str, Any], list[reproduction.Row], dict[str, Any] | None,
-           dict[str, str | None]]:
+Result = tuple[reference.Table, dict[str, Any], list[reproduction.Row], dict[str, Any] | None,
+               dict[str, str | None]]
+
+
+def reproduce_table(name: str, runs: int | None, seed: int, jobs: int, url: str | None) -> Result:
     """Run one table's study; returns (table, setting, rows, statistics json, markers)."""
     table = reference.load(name)
     setting = study_setting(table, runs, seed)
-    reasons = reference.load_reasons()
     started = time.perf_counter()
+    measured: list[Any]
+    if isinstance(table, reference.BenchmarkTable):
+        measured = (cells_from_runs(run_remote(setting, url)) if url
+                    else run_benchmark_local(setting, jobs))
+    else:
+        measured = run_remote(setting, url) if url else run_map_local(setting, jobs)
+    setting["seconds"] = round(time.perf_counter() - started, 1)
+    return judge(table, setting, measured)
+
+
+def judge(table: reference.Table, setting: dict[str, Any], measured: Sequence[Any]) -> Result:
+    """Verdicts, statistics and markers for measured benchmark cells (``report.Cell``) or map
+    run outcomes (dicts with planner, map, success, length, ...), with the current reasons."""
+    reasons = reference.load_reasons()
     markers: dict[str, str | None] = {}
     statistics: dict[str, Any] | None = None
     if isinstance(table, reference.BenchmarkTable):
-        cells = (cells_from_runs(run_remote(setting, url)) if url
-                 else run_benchmark_local(setting, jobs))
+        cells: list[report.Cell] = list(measured)
         by_cell = {(c.function, c.algorithm): c.best_fitness for c in cells}
         rows = reproduction.benchmark_rows(table, by_cell, reasons)
         stats = report.statistics(cells, list(table.algorithms))
         statistics = report.tests_to_json(stats)
         for c in cells:
-            key = reference.cell_key(name, c.algorithm, c.function, c.dim)
-            markers[key] = stats.marker(c)
+            markers[reference.cell_key(table.name, c.algorithm, c.function, c.dim)] = (
+                stats.marker(c))
     else:
         from swarmpath.world import get_map
 
-        outcomes = run_remote(setting, url) if url else run_map_local(setting, jobs)
         grouped: dict[tuple[str, str], list[dict[str, Any]]] = {}
-        for r in outcomes:
+        for r in measured:
             grouped.setdefault((r["planner"], r["map"]), []).append(r)
         scenarios = {m: get_map(m) for m in table.maps}
         rows = reproduction.map_rows(table, grouped, reasons, scenarios)
         if len(table.planners) > 1:
             from swarmpath import compare
 
-            samples = {r.where: {} for r in rows}
+            samples: dict[str, dict[str, list[float]]] = {r.where: {} for r in rows}
             for r in rows:
                 samples[r.where][r.who] = r.runs
             comparison = compare.compare_samples(samples, list(table.planners))
             statistics = {"comparison": comparison.to_json(("map",))}
             for r in rows:
                 markers[r.key] = comparison.marker(r.where, r.who)
-    setting["seconds"] = round(time.perf_counter() - started, 1)
     return table, setting, rows, statistics, markers
+
+
+def from_document(doc: dict[str, Any]) -> Result:
+    """Judge again the runs of an earlier ``--json`` document (same numbers; current reasons)."""
+    name = doc.get("table")
+    if name not in reference.TABLES:
+        raise InputError("--from", f"not a reproduce document of a known table: {name!r}")
+    table = reference.load(name)
+    measured: list[Any] = []
+    for c in doc["cells"]:
+        if table.kind == "benchmark":
+            values = [float(v) for v in c["runs"]]
+            measured.append(report.Cell(
+                algorithm=c["algorithm"], function=c["function"], dim=int(c["dim"]),
+                run_ids=list(range(len(values))), best_fitness=values,
+                evaluations=[0] * len(values), seconds=0.0))
+        else:
+            measured += [{**o, "planner": c["planner"], "map": c["map"]}
+                         for o in c["outcomes"]]
+    return judge(table, dict(doc["setting"]), measured)
 
 
 def command_line(name: str, runs: int | None, seed: int, fmt: str) -> str:
@@ -197,6 +228,11 @@ def reproduce(
     out: Annotated[
         Path | None, typer.Option(help="Also write DIR/<table>.md and DIR/<table>.png.")
     ] = None,
+    from_: Annotated[
+        Path | None,
+        typer.Option("--from", help="Judge the runs of an earlier --json output again "
+                                    "(no study is run; reasons as they are now)."),
+    ] = None,
 ) -> None:
     """Run a seed paper's table at its setting; print published beside measured, with verdicts."""
     from swarmpath.cli import reproduce_output as output
@@ -209,12 +245,30 @@ def reproduce(
         raise InputError("--format", f"{fmt!r} is not one of {', '.join(FORMATS)}")
     if not 0 <= jobs <= parallel.MAX_JOBS:
         raise InputError("--jobs", f"{jobs} is not in [0, {parallel.MAX_JOBS}]")
-    names = resolve_tables(table)
-    for name in names:  # validate every table's options before running anything
-        study_setting(reference.load(name), runs, seed)
+    results: list[Result] = []
+    if from_ is not None:
+        try:
+            loaded = json.loads(from_.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:
+            raise InputError("--from", f"{from_}: {exc}") from None
+        previous = loaded if isinstance(loaded, list) else [loaded]
+        try:
+            results = [from_document(d) for d in previous]
+        except (KeyError, TypeError, ValueError) as exc:
+            if isinstance(exc, InputError):
+                raise
+            raise InputError("--from", f"{from_}: not a reproduce document ({exc})") from None
+        names = [r[0].name for r in results]
+    else:
+        names = resolve_tables(table)
+        for name in names:  # validate every table's options before running anything
+            study_setting(reference.load(name), runs, seed)
     docs = []
-    for name in names:
-        tab, setting, rows, statistics, markers = reproduce_table(name, runs, seed, jobs, url)
+    for i, name in enumerate(names):
+        tab, setting, rows, statistics, markers = (
+            results[i] if results else reproduce_table(name, runs, seed, jobs, url))
+        if results:
+            runs, seed = int(setting["runs"]), int(setting["seed"])
         doc = reproduction.document(tab, setting, rows, statistics)
         doc["version"] = __version__
         docs.append(doc)

@@ -184,7 +184,7 @@ def plot(tab: reference.Table, rows: Sequence[Row], path: Path) -> Path:
         pts = [(places.index(r.where) + (i - len(who) / 2) * 0.08, r.log10_ratio)
                for r in rows if r.who == name and r.log10_ratio is not None]
         if pts:
-            ax.scatter(*zip(*pts, strict=True), s=18, label=name)
+            ax.scatter([x for x, _ in pts], [y for _, y in pts], s=18, label=name)
     ax.set_xticks(range(len(places)), places, rotation=45 if tab.kind == "map" else 0)
     ax.set_ylabel("log10(measured / published)")
     ax.set_title(tab.name)

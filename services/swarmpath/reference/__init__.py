@@ -150,7 +150,7 @@ def _benchmark(name: str, doc: dict[str, Any]) -> BenchmarkTable:
             }
     return BenchmarkTable(
         name=name, source=doc["source"], setting=doc["setting"], algorithms=algorithms,
-        functions=tuple(doc["cells"]), stats=stats, notes=tuple(doc.get("notes") or ()),
+        functions=tuple(doc["cells"]), stats=stats, notes=_notes(name, doc),
         cell_notes=dict(doc.get("cell_notes") or {}), cells=cells,
     )
 
@@ -181,8 +181,15 @@ def _map(name: str, doc: dict[str, Any]) -> MapTable:
         "table", "kind", "source", "setting", "columns", "compare", "notes", "cells"}}
     return MapTable(
         name=name, source=doc["source"], setting=doc["setting"], columns=columns,
-        compare=doc["compare"], notes=tuple(doc.get("notes") or ()), cells=cells, extra=extra,
+        compare=doc["compare"], notes=_notes(name, doc), cells=cells, extra=extra,
     )
+
+
+def _notes(name: str, doc: dict[str, Any]) -> tuple[str, ...]:
+    notes = doc.get("notes") or []
+    if not all(isinstance(n, str) for n in notes):
+        raise ReferenceError(f"{name}.yaml: every note must be a string (quote it)")
+    return tuple(notes)
 
 
 def load(name: str) -> Table:
