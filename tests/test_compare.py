@@ -181,3 +181,16 @@ def test_nemenyi_cd_matches_demsar_table(k: int, q: float) -> None:
     n = 13
     assert compare.nemenyi_cd(k, n) == pytest.approx(q * math.sqrt(k * (k + 1) / (6 * n)),
                                                      abs=2e-3)
+
+
+def test_rank_sum_many_equals_single_scipy_calls() -> None:
+    rng = np.random.default_rng(5)
+    pairs = [(rng.integers(0, 4, size=n).astype(float), rng.integers(1, 5, size=m).astype(float))
+             for n, m in [(30, 30), (30, 30), (5, 6), (30, 25), (12, 12), (9, 3)]]
+    pairs.append((np.zeros(20), np.zeros(20)))  # identical: p = 1, not scipy's NaN
+    pairs.append((np.full(10, np.nan), np.ones(10)))  # nothing left to test
+    got = compare.rank_sum_many(pairs)
+    for (x, y), res in zip(pairs[:-2], got[:-2], strict=True):
+        ref = stats.mannwhitneyu(x, y, alternative="two-sided")
+        assert res == (pytest.approx(ref.statistic), pytest.approx(ref.pvalue, rel=1e-12))
+    assert got[-2] == (200.0, 1.0) and got[-1] is None

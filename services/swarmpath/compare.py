@@ -49,7 +49,7 @@ from scipy import stats
 __all__ = [
     "ALPHA", "BETTER", "MARKERS", "SAME", "WORSE", "Comparison", "Friedman", "PairTest",
     "cliques", "compare_samples", "compare_success", "friedman", "holm", "nemenyi_cd",
-    "rank_sum", "resolve_reference",
+    "rank_sum", "rank_sum_many", "resolve_reference",
 ]
 
 ALPHA = 0.05
@@ -109,6 +109,37 @@ def rank_sum(x: ArrayLike, reference: ArrayLike) -> tuple[float, float] | None:
         return a.size * b.size / 2.0, 1.0
     res = stats.mannwhitneyu(a, b, alternative="two-sided")
     return float(res.statistic), float(res.pvalue)
+
+
+#: Above this many values in both samples scipy's ``method="auto"`` is the normal approximation
+#: whatever the ties, so tests of equal sizes can share one vectorized call with the same results.
+_EXACT_MAX = 8
+
+
+def rank_sum_many(
+    pairs: Sequence[tuple[ArrayLike, ArrayLike]],
+) -> list[tuple[float, float] | None]:
+    """:func:`rank_sum` of every (x, reference) pair. Pairs whose samples both have more than 8
+    values are tested together, one vectorized ``mannwhitneyu`` call per pair of sizes (the
+    normal approximation either way, so the values are those of single calls); the others one
+    by one."""
+    out: list[tuple[float, float] | None] = [None] * len(pairs)
+    batches: dict[tuple[int, int], list[tuple[int, np.ndarray, np.ndarray]]] = {}
+    for i, (x, ref) in enumerate(pairs):
+        a, b = _clean(x), _clean(ref)
+        if a.size > _EXACT_MAX and b.size > _EXACT_MAX and not np.all(
+            np.concatenate([a, b]) == a[0]
+        ):
+            batches.setdefault((a.size, b.size), []).append((i, a, b))
+        else:
+            out[i] = rank_sum(a, b)
+    for group in batches.values():
+        res = stats.mannwhitneyu(np.stack([g[1] for g in group]), np.stack([g[2] for g in group]),
+                                 alternative="two-sided", axis=1)
+        for (i, _, _), u, p in zip(group, np.atleast_1d(res.statistic),
+                                   np.atleast_1d(res.pvalue), strict=True):
+            out[i] = (float(u), float(p))
+    return out
 
 
 @dataclass(frozen=True)
@@ -207,23 +238,24 @@ def compare_samples(
     (cell key -> algorithm -> values of its runs), Holm-adjusted over the whole table."""
     algos = tuple(algorithms)
     ref = resolve_reference(algos, reference) if algos else ""
-    raw: list[PairTest] = []
-    direction: dict[int, int] = {}
+    entries: list[tuple[K, str, np.ndarray, np.ndarray]] = []
     for key, per_algo in samples.items():
         ref_values = per_algo.get(ref)
+        y = _clean(ref_values) if ref_values is not None else np.empty(0)
         for a in algos:
-            if a == ref or a not in per_algo:
-                continue
-            x = _clean(per_algo[a])
-            y = _clean(ref_values) if ref_values is not None else np.empty(0)
-            res = rank_sum(x, y)
-            if res is None:
-                raw.append(PairTest(key, a, x.size, y.size, None, None))
-                continue
-            u, p = res
-            leans_lower = u < x.size * y.size / 2.0
-            direction[len(raw)] = 1 if leans_lower == lower_is_better else -1
-            raw.append(PairTest(key, a, x.size, y.size, u, p))
+            if a != ref and a in per_algo:
+                entries.append((key, a, _clean(per_algo[a]), y))
+    raw: list[PairTest] = []
+    direction: dict[int, int] = {}
+    results = rank_sum_many([(x, y) for _, _, x, y in entries])
+    for (cell, a, x, y), res in zip(entries, results, strict=True):
+        if res is None:
+            raw.append(PairTest(cell, a, x.size, y.size, None, None))
+            continue
+        u, p = res
+        leans_lower = u < x.size * y.size / 2.0
+        direction[len(raw)] = 1 if leans_lower == lower_is_better else -1
+        raw.append(PairTest(cell, a, x.size, y.size, u, p))
     return Comparison("wilcoxon rank-sum", algos, ref, alpha, lower_is_better,
                       _adjust(raw, alpha, direction))
 

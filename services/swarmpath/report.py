@@ -13,6 +13,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
 from rich import box
 from rich.table import Table
 from rich.text import Text
@@ -100,8 +101,9 @@ def benchmark_tests(
     averages: dict[int, dict[str, dict[str, float]]] = {}
     for (algorithm, function, dim), runs in values.items():
         samples.setdefault((function, dim), {})[algorithm] = runs
-        kept = [v for v in runs if not math.isnan(v)]
-        avg = describe(kept)["avg"] if kept else math.nan
+        arr = np.asarray(runs, dtype=float)
+        kept = arr[~np.isnan(arr)]
+        avg = describe(kept)["avg"] if kept.size else math.nan
         averages.setdefault(dim, {}).setdefault(function, {})[algorithm] = avg
     comparison = compare.compare_samples(samples, algorithms, reference, alpha)
     ref = comparison.reference
