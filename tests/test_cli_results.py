@@ -97,3 +97,206 @@ def test_legend_follows_the_columns_it_is_given():
 
     assert [c for c, _ in legend(["planner", "failed", "Gap (%)", "x"])] == ["failed", "Gap (%)"]
     assert legend(["Collisions"]) == [("Collisions", NOTES["collisions"])]
+
+
+# ------------------------------------------------------------------------------ per-run exports
+def rest_runs(http, job):
+    items = http.get(f"/jobs/{job}/runs", params={"limit": 1000}).json()["items"]
+    return [http.get(f"/jobs/{job}/runs/{i['run_id']}").json() for i in items]
+
+
+def test_runs_export_in_every_format_holds_every_run_with_its_curve(service, tmp_path):
+    import pandas as pd
+
+    from swarmpath import exports
+
+    cli, http, _core = service
+    job = finished(service, BENCH)
+    expected = rest_runs(http, job)
+    frames = {}
+    for fmt in exports.FORMATS:
+        out = tmp_path / f"runs.{fmt}"
+        result = cli("results", job, "--runs", "--format", fmt, "-o", str(out))
+        assert result.exit_code == 0, result.stderr
+        frames[fmt] = exports.load_results(out)
+    names = [n for n, _ in exports.BENCHMARK_COLUMNS]
+    for fmt, df in frames.items():
+        assert list(df.columns) == names, fmt
+        assert len(df) == 12 and df["run_id"].tolist() == list(range(12))
+        assert (df["job_id"] == job).all() and (df["iterations"] == 10).all()
+        for row, item in zip(df.to_dict("records"), expected, strict=True):
+            assert (row["algorithm"], row["function"], row["dim"], row["run"]) == (
+                item["algorithm"], item["function"], item["dim"], item["run"])
+            assert row["best_fitness"] == item["best_fitness"]
+            assert list(row["curve"]) == item["curve"] and len(row["curve"]) == 10
+            assert list(row["best_position"]) == item["best_position"]
+    pd.testing.assert_frame_equal(frames["csv"].drop(columns=["curve", "best_position",
+                                                              "worker", "failure",
+                                                              "curve_stride"]),
+                                  frames["parquet"].drop(columns=["curve", "best_position",
+                                                                  "worker", "failure",
+                                                                  "curve_stride"]),
+                                  check_dtype=False)
+
+
+def test_rest_streams_runs_as_csv_and_parquet(service):
+    import io
+
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from swarmpath import exports
+
+    _cli, http, _core = service
+    job = finished(service, MAPS)
+    csv = http.get(f"/jobs/{job}/runs", params={"format": "csv"})
+    assert csv.status_code == 200 and csv.headers["content-type"].startswith("text/csv")
+    lines = csv.text.splitlines()
+    assert lines[0].split(",") == [n for n, _ in exports.map_columns()]
+    assert len(lines) == 3
+    pq_bytes = http.get(f"/jobs/{job}/runs", params={"format": "parquet"}).content
+    table = pq.read_table(io.BytesIO(pq_bytes))
+    assert table.num_rows == 2
+    assert table.schema.field("path").type == pa.list_(pa.list_(pa.float64()))
+    paths = table.column("path").to_pylist()
+    for run_id, path in enumerate(paths):
+        assert path == http.get(f"/jobs/{job}/runs/{run_id}").json()["path"]
+        assert path[0][:2] == [0.0, 0.0] and len(path[0]) == 3
+    assert table.column("success").to_pylist() == [True, True]
+    assert "planned_length" in table.column_names  # every RunOutcome field is a column
+
+
+def test_load_results_of_a_job_id_asks_the_coordinator(service, monkeypatch):
+    import swarmpath.service.client as client_module
+    from swarmpath import load_results
+
+    _cli, http, _core = service
+    job = finished(service, BENCH)
+    real = client_module.ServiceClient
+    monkeypatch.setattr(client_module, "ServiceClient",
+                        lambda url=None: real("http://testserver", transport=http._transport))
+    df = load_results(job)
+    assert len(df) == 12
+    assert df["best_fitness"].tolist() == [i["best_fitness"] for i in rest_runs(http, job)]
+
+
+def test_runs_export_errors_name_the_option(service, tmp_path):
+    cli, _http, _core = service
+    job = finished(service, BENCH)
+    for args, option in [
+        (["--runs", "--format", "xml"], "--format"),
+        (["--runs", "--format", "parquet"], "--output"),
+        (["--format", "ioh"], "--output"),
+        (["--runs", "--format", "csv", "-o", str(tmp_path / "no" / "x.csv")], "--output"),
+    ]:
+        result = cli("results", job, *args)
+        assert result.exit_code == 2, (args, result.stdout)
+        lines = result.stderr.strip().splitlines()
+        assert len(lines) == 1 and option in lines[0], (args, lines)
+    maps = finished(service, MAPS)
+    result = cli("results", maps, "--format", "ioh", "-o", str(tmp_path / "ioh"))
+    assert result.exit_code == 2 and "benchmark job" in result.stderr
+
+
+def test_results_plot_writes_the_figures_of_a_job(service, tmp_path):
+    cli, _http, _core = service
+    job = finished(service, BENCH)
+    result = cli("results", job, "--plot", str(tmp_path / "b"))
+    assert result.exit_code == 0, result.stderr
+    assert sorted(p.name for p in (tmp_path / "b").iterdir()) == [
+        "box_F1_d2.png", "box_F8_d2.png", "curves_F1_d2.png", "curves_F8_d2.png"]
+    maps = finished(service, MAPS)
+    result = cli("results", maps, "--plot", str(tmp_path / "m"))
+    assert result.exit_code == 0, result.stderr
+    assert sorted(p.name for p in (tmp_path / "m").iterdir()) == [
+        "OMPL-RRTstar_mfb-static.png", "box_mfb-static.png"]
+
+
+# ------------------------------------------------------------------------------- IOHprofiler
+# The rules of IOHanalyzer's "Supported Data Format" page (github.com/IOHprofiler/IOHanalyzer,
+# inst/shiny-server/markdown/dataformat.md) and the .info lines IOHexperimenter writes.
+SEPARATOR = '"function evaluation" "best-so-far f(x)"'
+NUMBER = r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?"
+
+
+def parse_info(path: Path) -> list[dict]:
+    """Three lines per block: name = value pairs (funcId, DIM, algId mandatory), a line
+    starting with a single %, then the raw-data path and instance:evaluations|best per run."""
+    import re
+
+    lines = path.read_text().splitlines()
+    assert len(lines) % 3 == 0 and lines
+    blocks = []
+    for i in range(0, len(lines), 3):
+        head, comment, data = lines[i:i + 3]
+        pairs = dict(p.split(" = ", 1) for p in head.split(", "))
+        assert {"funcId", "DIM", "algId"} <= set(pairs)
+        assert comment.startswith("%") and not comment.startswith("%%")
+        rel, *entries = data.split(", ")
+        runs = []
+        for e in entries:
+            m = re.fullmatch(rf"(\d+):(\d+)\|({NUMBER})", e)
+            assert m, e
+            runs.append((int(m[1]), int(m[2]), float(m[3])))
+        blocks.append({"pairs": pairs, "dat": path.parent / rel, "runs": runs})
+    return blocks
+
+
+def parse_dat(path: Path) -> list[list[tuple[int, float]]]:
+    """Blocks separated by the double-quoted separation line; records of two numbers split by a
+    single space; evaluations increase, best-so-far never gets worse (minimization)."""
+    import re
+
+    blocks: list[list[tuple[int, float]]] = []
+    for line in path.read_text().splitlines():
+        if line == SEPARATOR:
+            blocks.append([])
+            continue
+        assert re.fullmatch(rf"\d+ {NUMBER}", line), line
+        e, v = line.split(" ")
+        blocks[-1].append((int(e), float(v)))
+    for b in blocks:
+        assert b and all(b[k][0] < b[k + 1][0] for k in range(len(b) - 1))
+        assert all(b[k][1] >= b[k + 1][1] for k in range(len(b) - 1))
+    return blocks
+
+
+def test_ioh_export_follows_the_iohprofiler_format(service, tmp_path):
+    from swarmpath.functions import list_functions
+
+    cli, http, _core = service
+    job = finished(service, BENCH)
+    out = tmp_path / "ioh"
+    result = cli("results", job, "--format", "ioh", "-o", str(out))
+    assert result.exit_code == 0, result.stderr
+    items = rest_runs(http, job)
+    assert sorted(p.name for p in out.iterdir()) == ["GWO", "PSO"]
+    for algorithm in ("GWO", "PSO"):
+        infos = sorted((out / algorithm).glob("*.info"))
+        assert [p.name for p in infos] == ["IOHprofiler_f1_F1.info", "IOHprofiler_f9_F8.info"]
+        for info in infos:
+            (block,) = parse_info(info)
+            pairs = block["pairs"]
+            function = pairs["funcName"].strip('"')
+            assert int(pairs["funcId"]) == list_functions().index(function) + 1
+            assert (pairs["DIM"], pairs["algId"], pairs["maximization"]) == (
+                "2", f'"{algorithm}"', '"F"')
+            runs = [i for i in items if (i["algorithm"], i["function"]) == (algorithm, function)]
+            dat = parse_dat(block["dat"])
+            assert len(dat) == len(block["runs"]) == len(runs) == 3
+            for (instance, evals, best), records, item in zip(block["runs"], dat, runs,
+                                                              strict=True):
+                assert instance == 1  # not shifted: one instance
+                assert records[-1] == (evals, best)  # each block ends at the last evaluation
+                assert evals == item["evaluations"]
+                assert best == pytest.approx(item["best_fitness"], rel=1e-9, abs=1e-300)
+                assert records[0][1] == pytest.approx(item["curve"][0], rel=1e-9)
+
+
+def test_ioh_evaluation_points_follow_thinned_curves():
+    from swarmpath.ioh import evaluation_points, run_block
+
+    assert evaluation_points(4, 4, 40) == [10, 20, 30, 40]
+    assert evaluation_points(3, 9, 90, stride=4) == [10, 50, 90]  # iterations 1, 5, 9
+    assert run_block([float("inf"), 5.0, 5.0, 2.0], [1, 2, 3, 4]) == [(2, 5.0), (4, 2.0)]
+    assert run_block([3.0, 3.0], [1, 2]) == [(1, 3.0), (2, 3.0)]

@@ -1,6 +1,6 @@
 """The service commands: ``up``, ``coordinator``, ``worker`` (processes) and ``submit``, ``status``,
-``results``, ``download`` (REST clients; ``--url`` or ``$SWARMPATH_URL``, token from
-``$SWARMPATH_TOKEN``).
+``cancel``, ``download`` (REST clients, ``--url`` or ``$SWARMPATH_URL``, token from
+``$SWARMPATH_TOKEN``; ``results`` is in :mod:`swarmpath.cli.results`).
 
 Heavy imports (fastapi, uvicorn, zenoh) stay inside the command functions.
 """
@@ -460,41 +460,6 @@ def status(
                     "last_seen": _when(w["last_seen"])} for w in data["workers"]]
         console.print(_table("workers", ["id", "host", "pid", "slots", "alive", "current_runs",
                                          "runs_done", "last_seen"], workers))
-
-
-@app.command()
-def results(
-    job: Annotated[str, typer.Argument(metavar="JOB", help="A job id.")],
-    format: Annotated[
-        str, typer.Option("--format", help="table, json or csv.")
-    ] = "table",
-    url: UrlOpt = None,
-) -> None:
-    """The job's summary table (partial while it runs)."""
-    if format not in ("table", "json", "csv"):
-        raise InputError("--format", f"{format!r} is not one of table, json, csv")
-    with _client(url) as client:
-        try:
-            if format == "csv":
-                sys.stdout.write(client.summary_csv(job))
-                return
-            summary = client.summary(job)
-        except Exception as exc:
-            _fail(exc)
-            raise
-    if format == "json":
-        typer.echo(json.dumps(summary, indent=2))
-        return
-    title = (f"job {job} ({summary['kind']}): {summary['state']}, "
-             f"{summary['runs_done'] + summary['runs_failed']}/{summary['runs_total']} runs"
-             + (" (partial)" if summary["partial"] else ""))
-    console = _console()
-    console.print(_table(title, summary["columns"], summary["rows"]))
-    from swarmpath.service.summary_stats import statistics_lines
-
-    for line in statistics_lines(summary):
-        console.print(line, highlight=False, markup=False)
-    console.print(legend_text(summary["columns"]), markup=False, highlight=False)
 
 
 @app.command()

@@ -12,9 +12,10 @@ prefix).
 
 from __future__ import annotations
 
+import json
 import os
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -132,21 +133,39 @@ class ServiceClient:
             if not got["items"] or len(items) >= got["total"]:
                 return items
 
-    def run(self, job_id: str, run_id: int) -> dict[str, Any]:
-        return self._json("GET", f"/jobs/{job_id}/runs/{run_id}")
+    def iter_runs(self, job_id: str) -> Iterator[dict[str, Any]]:
+        """Every run of the job with its cell spec and series, streamed (``format=jsonl``)."""
+        for line in self._stream_lines(f"/jobs/{job_id}/runs", {"format": "jsonl"}):
+            yield json.loads(line)
 
-    def download(self, job_id: str, path: str | Path) -> Path:
-        """Save the job's MCAP (ServiceError 409 while the job runs)."""
-        path = Path(path)
+    def download_runs(self, job_id: str, fmt: str, path: str | Path) -> Path:
+        """Save every run as CSV or Parquet (``GET /jobs/{id}/runs?format=...``)."""
+        return self._save(f"/jobs/{job_id}/runs", Path(path), {"format": fmt})
+
+    def _stream_lines(self, path: str, params: dict[str, Any]) -> Iterator[str]:
         try:
-            with self._http.stream("GET", f"/jobs/{job_id}/mcap") as response:
-                if response.status_code >= 400:
-                    response.read()
-                    try:
-                        detail = response.json().get("detail", response.text)
-                    except ValueError:
-                        detail = response.text
-                    raise ServiceError(response.status_code, detail)
+            with self._http.stream("GET", path, params=params) as response:
+                self._raise_streamed(response)
+                for line in response.iter_lines():
+                    if line.strip():
+                        yield line
+        except httpx.TransportError as exc:
+            raise Unreachable(0, f"cannot reach the coordinator at {self.url}: {exc}") from None
+
+    @staticmethod
+    def _raise_streamed(response: httpx.Response) -> None:
+        if response.status_code >= 400:
+            response.read()
+            try:
+                detail = response.json().get("detail", response.text)
+            except ValueError:
+                detail = response.text
+            raise ServiceError(response.status_code, detail)
+
+    def _save(self, url_path: str, path: Path, params: dict[str, Any] | None = None) -> Path:
+        try:
+            with self._http.stream("GET", url_path, params=params) as response:
+                self._raise_streamed(response)
                 tmp = path.with_name(path.name + ".part")
                 with open(tmp, "wb") as f:
                     for chunk in response.iter_bytes():
@@ -155,6 +174,13 @@ class ServiceClient:
         except httpx.TransportError as exc:
             raise Unreachable(0, f"cannot reach the coordinator at {self.url}: {exc}") from None
         return path
+
+    def run(self, job_id: str, run_id: int) -> dict[str, Any]:
+        return self._json("GET", f"/jobs/{job_id}/runs/{run_id}")
+
+    def download(self, job_id: str, path: str | Path) -> Path:
+        """Save the job's MCAP (ServiceError 409 while the job runs)."""
+        return self._save(f"/jobs/{job_id}/mcap", Path(path))
 
     def workers(self) -> list[dict[str, Any]]:
         return self._json("GET", "/workers")

@@ -52,8 +52,12 @@ class RunViewsMixin(StoreBase):
             item["completed"] = result["created"]
         return _safe(item)
 
-    def runs(self, job_id: str, limit: int = 100, offset: int = 0) -> list[dict[str, Any]] | None:
-        """One item per run in run_id order (all runs, finished or not); None for unknown jobs."""
+    def runs(
+        self, job_id: str, limit: int = 100, offset: int = 0, series: bool = False
+    ) -> list[dict[str, Any]] | None:
+        """One item per run in run_id order (all runs, finished or not); None for unknown jobs.
+        ``series``: each item also holds its cell's ``spec`` and its series (curve and
+        best_position, or path) as :meth:`run` gives them."""
         limit, offset = max(0, int(limit)), max(0, int(offset))
         with self._read() as db:
             job = self._job_row(db, job_id)
@@ -75,7 +79,8 @@ class RunViewsMixin(StoreBase):
                 (r["cell_idx"], r["run"]): r
                 for r in db.execute(
                     "SELECT cell_idx, run, lease_id, worker, status, failure, seconds, metrics,"
-                    " created FROM results WHERE job_seq = ? AND (cell_idx, run) >= (?, ?)"
+                    f" created{', series' if series else ''}"
+                    " FROM results WHERE job_seq = ? AND (cell_idx, run) >= (?, ?)"
                     " AND (cell_idx, run) <= (?, ?)",
                     (seq, lo // rpc, lo % rpc, (hi - 1) // rpc, (hi - 1) % rpc),
                 )
@@ -87,8 +92,26 @@ class RunViewsMixin(StoreBase):
             key, cell_spec = cells[cell_idx]
             res = results.get((cell_idx, run))
             state, worker = self._run_state(job["state"], cell_idx, run, res, leased)
-            items.append(self._item(job, seed, cell_idx, key, cell_spec, run, res, state, worker))
+            item = self._item(job, seed, cell_idx, key, cell_spec, run, res, state, worker)
+            if series:
+                item["spec"] = cell_spec
+                if res is not None and res["series"] is not None:
+                    item.update(decode_series(res["series"]))
+            items.append(item)
         return items
+
+    def iter_runs(
+        self, job_id: str, series: bool = True, batch: int = 500
+    ) -> Iterator[dict[str, Any]]:
+        """Every run of a job in run_id order (see :meth:`runs`), read in batches without holding
+        the lock in between: for streaming exports of any size."""
+        offset = 0
+        while True:
+            items = self.runs(job_id, batch, offset, series=series)
+            if not items:
+                return
+            yield from items
+            offset += len(items)
 
     def _leased_runs(self, db: sqlite3.Connection, seq: int) -> dict[tuple[int, int], str]:
         out: dict[tuple[int, int], str] = {}

@@ -1,9 +1,10 @@
 """A job's results: the summary tables, the runs, one run, the MCAP file."""
 
+import json
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, HTTPException, Query
-from fastapi.responses import FileResponse, PlainTextResponse
+from fastapi.responses import FileResponse, PlainTextResponse, StreamingResponse
 
 from swarmpath.service.http.deps import CoreDep, status_or_404
 from swarmpath.service.util import json_safe
@@ -26,18 +27,47 @@ def job_summary(
     return json_safe(summary)
 
 
-@router.get("/jobs/{job_id}/runs")
+@router.get("/jobs/{job_id}/runs", responses={200: {"content": {
+    "text/csv": {}, "application/vnd.apache.parquet": {}, "application/x-ndjson": {}}}})
 def job_runs(
     job_id: str,
     core: CoreDep,
     limit: Annotated[int, Query(ge=1, le=1000)] = 100,
     offset: Annotated[int, Query(ge=0)] = 0,
-) -> dict[str, Any]:
-    """One item per run (finished or not), in run_id order."""
+    format: Literal["json", "csv", "parquet", "jsonl"] = "json",
+) -> Any:
+    """One item per run (finished or not), in run_id order: a page of JSON items, or every
+    run streamed as CSV or Parquet (one row per run, :mod:`swarmpath.exports` columns) or as
+    JSON lines (each item with its cell ``spec`` and series: curve and best position, or path).
+    """
     status = status_or_404(core, job_id)
-    items = core.store.runs(job_id, limit, offset) or []
-    return {"job_id": job_id, "total": status.runs_total, "limit": limit, "offset": offset,
-            "items": json_safe(items)}
+    if format == "json":
+        items = core.store.runs(job_id, limit, offset) or []
+        return {"job_id": job_id, "total": status.runs_total, "limit": limit, "offset": offset,
+                "items": json_safe(items)}
+    return _stream(core, job_id, status.kind, format)
+
+
+def _stream(core: Any, job_id: str, kind: str, format: str) -> StreamingResponse:
+    from swarmpath import exports
+
+    items = core.store.iter_runs(job_id, series=True)
+    name = f"{job_id}-runs.{format}"
+    headers = {"Content-Disposition": f'attachment; filename="{name}"'}
+    if format == "jsonl":
+        lines = (json.dumps(json_safe(item), allow_nan=False) + "\n" for item in items)
+        return StreamingResponse(lines, media_type="application/x-ndjson", headers=headers)
+    rows = exports.rows(items, job_id)
+    if format == "csv":
+        return StreamingResponse(exports.csv_chunks(kind, rows), media_type="text/csv",
+                                 headers=headers)
+    try:
+        import pyarrow  # noqa: F401
+    except ImportError:
+        raise HTTPException(501, f"Parquet {exports.NEEDS_DATA_EXTRA} on the coordinator"
+                            ) from None
+    return StreamingResponse(exports.parquet_chunks(kind, rows),
+                             media_type="application/vnd.apache.parquet", headers=headers)
 
 
 @router.get("/jobs/{job_id}/runs/{run_id}")

@@ -1,0 +1,158 @@
+"""``swarmpath results JOB``: the job's summary table, its runs as CSV / JSON / Parquet, its curves
+in IOHprofiler's format and its figures (a REST client like the other service commands)."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from swarmpath.cli import service as svc
+from swarmpath.cli.core import InputError, app, plot_dir
+from swarmpath.legend import legend_text
+
+SUMMARY_FORMATS = ("table", "json", "csv")
+RUN_FORMATS = ("csv", "json", "parquet")
+
+
+def _call(fn: Any, *args: Any) -> Any:
+    try:
+        return fn(*args)
+    except Exception as exc:
+        svc._fail(exc)
+        raise
+
+
+def _check(format: str, runs: bool, output: Path | None) -> None:
+    if format == "ioh":
+        if runs:
+            raise InputError("--runs", "--format ioh writes the curves, not --runs")
+        if output is None:
+            raise InputError("--output", "--format ioh needs a directory: -o DIR")
+        plot_dir(output, "--output")
+        return
+    allowed = RUN_FORMATS if runs else SUMMARY_FORMATS
+    if format not in allowed:
+        what = "with --runs" if runs else "(ioh: IOHprofiler files; --runs: per-run rows)"
+        raise InputError("--format", f"{format!r} is not one of {', '.join(allowed)} {what}")
+    if output is not None and (output.is_dir() or not output.parent.is_dir()):
+        raise InputError("--output", f"{str(output)!r} is not a file in an existing directory")
+    if format == "parquet" and output is None:
+        raise InputError("--output", "Parquet is binary: give a file, -o FILE.parquet")
+
+
+@app.command()
+def results(
+    job: Annotated[str, typer.Argument(metavar="JOB", help="A job id.")],
+    format: Annotated[
+        str,
+        typer.Option("--format", help="Summary: table, json or csv. With --runs: csv, json or "
+                     "parquet. ioh: the curves as IOHprofiler files (-o DIR)."),
+    ] = "table",
+    runs: Annotated[
+        bool, typer.Option("--runs", help="One row per run (identity, metrics, curve or path).")
+    ] = False,
+    output: Annotated[
+        Path | None,
+        typer.Option("-o", "--output", help="File to write (directory for --format ioh).",
+                     show_default="stdout"),
+    ] = None,
+    plot: Annotated[
+        Path | None,
+        typer.Option("--plot", metavar="DIR",
+                     help="Write PNGs into DIR: curves and box plots per function and "
+                     "dimension, or paths per planner x map and box plots per map."),
+    ] = None,
+    url: svc.UrlOpt = None,
+) -> None:
+    """The job's summary table (partial while it runs), its runs, IOHprofiler files, figures."""
+    if runs and format == "table":
+        format = "csv"
+    _check(format, runs, output)
+    if plot is not None:
+        plot_dir(plot, "--plot")
+    with svc._client(url) as client:
+        if plot is not None:
+            for out in _plots(client, job, plot):
+                typer.echo(f"wrote {out}", err=True)
+        if format == "ioh":
+            _ioh(client, job, output)  # type: ignore[arg-type]
+        elif runs:
+            _runs(client, job, format, output)
+        else:
+            _summary(client, job, format)
+
+
+def _summary(client: Any, job: str, format: str) -> None:
+    if format == "csv":
+        sys.stdout.write(_call(client.summary_csv, job))
+        return
+    summary = _call(client.summary, job)
+    if format == "json":
+        typer.echo(json.dumps(summary, indent=2))
+        return
+    title = (f"job {job} ({summary['kind']}): {summary['state']}, "
+             f"{summary['runs_done'] + summary['runs_failed']}/{summary['runs_total']} runs"
+             + (" (partial)" if summary["partial"] else ""))
+    console = svc._console()
+    console.print(svc._table(title, summary["columns"], summary["rows"]))
+    from swarmpath.service.summary_stats import statistics_lines
+
+    for line in statistics_lines(summary):
+        console.print(line, highlight=False, markup=False)
+    console.print(legend_text(summary["columns"]), markup=False, highlight=False)
+
+
+def _runs(client: Any, job: str, format: str, output: Path | None) -> None:
+    from swarmpath import exports
+
+    if format in ("csv", "parquet") and output is not None:
+        path = _call(client.download_runs, job, format, output)
+        typer.echo(f"{path} ({path.stat().st_size} bytes)", err=True)
+        return
+    kind = _call(client.job, job)["kind"]
+    rows = exports.rows(_call(client.iter_runs, job), job)
+    if output is None:  # csv or json on stdout
+        if format == "csv":
+            for text in exports.csv_chunks(kind, rows):
+                sys.stdout.write(text)
+        else:
+            sys.stdout.write(json.dumps([exports.json_row(r) for r in rows], allow_nan=False)
+                             + "\n")
+        return
+    n = exports.write(kind, rows, format, output)
+    typer.echo(f"{output}: {n} runs", err=True)
+
+
+def _ioh(client: Any, job: str, directory: Path) -> None:
+    from swarmpath.ioh import write_ioh
+
+    if _call(client.job, job)["kind"] != "benchmark":
+        raise InputError("--format", "ioh holds optimizer curves: JOB must be a benchmark job")
+    written = write_ioh(_call(client.iter_runs, job), directory, job)
+    typer.echo(f"{directory}: {written.runs} runs in {len(written.files)} files"
+               + (f" ({written.skipped} runs without a finite curve left out)"
+                  if written.skipped else ""), err=True)
+
+
+def _plots(client: Any, job: str, directory: Path) -> list[Path]:
+    from swarmpath import plots
+
+    items = [i for i in _call(client.iter_runs, job) if i.get("state") == "done"]
+    if not items:
+        return []
+    if "algorithm" in items[0]:
+        return plots.write_benchmark_plots(items, directory)
+    from swarmpath.service.recorder import scenario_for, world_for
+
+    scenarios: dict[str, Any] = {}
+    for item in items:
+        if item["map"] not in scenarios:
+            scenarios[item["map"]] = scenario_for(item.get("spec") or {"map": item["map"]})
+    known = [i for i in items if scenarios[i["map"]] is not None]
+    seed = int(items[0]["seed"])
+    return plots.write_map_plots(known, scenarios, lambda sc, run: world_for(sc, seed, run),
+                                 directory)

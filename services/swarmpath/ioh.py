@@ -1,0 +1,152 @@
+"""Convergence curves in the IOHprofiler format, which IOHanalyzer loads (``swarmpath results JOB
+--format ioh -o DIR``).
+
+The format (IOHanalyzer's "Supported Data Format" page, inst/shiny-server/markdown/dataformat.md
+in github.com/IOHprofiler/IOHanalyzer, and the files IOHexperimenter writes): per algorithm a
+folder holding, per function, a meta-data file ``IOHprofiler_f<id>_<name>.info`` with three lines
+per dimension
+
+* ``suite = "swarmpath", funcId = <id>, funcName = "<name>", DIM = <d>, maximization = "F",
+  algId = "<algorithm>", algInfo = "..."`` (``funcId``, ``DIM`` and ``algId`` are mandatory),
+* a line starting with ``%`` (a comment),
+* the raw-data file's relative path, then ``<instance>:<evaluations>|<best-so-far f(x)>`` per run;
+
+and the raw data ``data_f<id>_<name>/IOHprofiler_f<id>_DIM<d>.dat`` in the two-column format: per
+run a separation line ``"function evaluation" "best-so-far f(x)"``, then one line per improvement
+``<evaluations> <best-so-far>``, single-space separated, each block ending with the run's last
+evaluation.
+
+swarmpath records the best-so-far after each iteration. The evaluations after iteration k are
+taken as ``round(k * E / T)`` (E: the run's evaluations, T: the iterations), exact for the
+algorithms that evaluate the same number of agents each iteration. A curve the service thinned
+(``curve_stride`` s) has iterations 1, 1 + s, 1 + 2s, ... and the last one. Function ids are the
+positions in the function registry (F1 = 1, ...). Runs of a shifted job are instances
+1 + run (each run moves the optimum); otherwise every run is instance 1. Non-finite values (an
+infeasible start) are left out; a run without a finite value is left out and counted.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+SEPARATOR = '"function evaluation" "best-so-far f(x)"'
+
+
+def _slug(text: str) -> str:
+    return re.sub(r"[^A-Za-z0-9._-]+", "_", text).strip("_") or "x"
+
+
+def function_id(name: str) -> int:
+    from swarmpath.functions import list_functions
+
+    return list_functions().index(name) + 1
+
+
+def evaluation_points(length: int, iterations: int, evaluations: int, stride: int = 1
+                      ) -> list[int]:
+    """Evaluations spent after each stored curve sample (see the module doc)."""
+    iterations = max(iterations, length)
+    its = [min(j * stride, iterations - 1) + 1 for j in range(length)]
+    if length:
+        its[-1] = iterations
+    per = evaluations / iterations if iterations else 0.0
+    out: list[int] = []
+    for k in its:
+        e = max(1, round(k * per))
+        out.append(max(e, out[-1] + 1) if out else e)
+    return out
+
+
+def run_block(curve: list[float], points: list[int]) -> list[tuple[int, float]]:
+    """The (evaluations, best-so-far) lines of one run: the first finite value, each
+    improvement, and the last evaluation."""
+    lines: list[tuple[int, float]] = []
+    best = math.inf
+    for e, v in zip(points, curve, strict=True):
+        v = float(v)
+        if not math.isfinite(v):
+            continue
+        if not lines or v < best:
+            best = v
+            lines.append((e, v))
+    if lines and lines[-1][0] != points[-1]:
+        lines.append((points[-1], best))
+    return lines
+
+
+@dataclass
+class Written:
+    files: list[Path] = field(default_factory=list)
+    runs: int = 0
+    skipped: int = 0  # finished runs without a finite value or a curve
+
+
+def _num(v: float) -> str:
+    return f"{v:.10e}"
+
+
+def write_ioh(items: Iterable[Mapping[str, Any]], directory: Path, job_id: str = "") -> Written:
+    """Write every finished benchmark run's curve under ``directory`` (see the module doc)."""
+    groups: dict[tuple[str, str, int], list[Mapping[str, Any]]] = {}
+    out = Written()
+    for item in items:
+        if item.get("state") != "done" or "algorithm" not in item:
+            continue
+        if not item.get("curve"):
+            out.skipped += 1
+            continue
+        groups.setdefault((str(item["algorithm"]), str(item["function"]), int(item["dim"])),
+                          []).append(item)
+    infos: dict[Path, list[str]] = {}
+    for (algorithm, function, dim), runs in sorted(groups.items(),
+                                                   key=lambda kv: (kv[0][0], function_id(kv[0][1]),
+                                                                   kv[0][2])):
+        fid = function_id(function)
+        name = _slug(function)
+        folder = directory / _slug(algorithm)
+        rel = f"data_f{fid}_{name}/IOHprofiler_f{fid}_DIM{dim}.dat"
+        dat_path = folder / rel
+        dat_path.parent.mkdir(parents=True, exist_ok=True)
+        entries: list[str] = []
+        lines: list[str] = []
+        spec: Mapping[str, Any] = {}
+        for item in sorted(runs, key=lambda r: int(r["run"])):
+            spec = item.get("spec") or {}
+            curve = list(item["curve"])
+            iterations = int(spec.get("iterations") or len(curve))
+            evaluations = int(item.get("evaluations") or iterations)
+            stride = int(item.get("curve_stride") or 1)
+            block = run_block(curve, evaluation_points(len(curve), iterations, evaluations,
+                                                       stride))
+            if not block:
+                out.skipped += 1
+                continue
+            instance = int(item["run"]) + 1 if spec.get("shifted") else 1
+            lines.append(SEPARATOR)
+            lines += [f"{e} {_num(v)}" for e, v in block]
+            entries.append(f"{instance}:{block[-1][0]}|{_num(block[-1][1])}")
+            out.runs += 1
+        if not entries:
+            continue
+        dat_path.write_text("\n".join(lines) + "\n", encoding="ascii")
+        out.files.append(dat_path)
+        info = folder / f"IOHprofiler_f{fid}_{name}.info"
+        # no commas inside values: the first line is split at commas into name = value pairs
+        alg_info = (f"{spec.get('agents', '?')} agents; {spec.get('iterations', '?')} "
+                    f"iterations; seed {runs[0].get('seed', '?')}"
+                    + ("; shifted" if spec.get("shifted") else ""))
+        infos.setdefault(info, []).extend([
+            f'suite = "swarmpath", funcId = {fid}, funcName = "{function}", DIM = {dim}, '
+            f'maximization = "F", algId = "{algorithm}", algInfo = "{alg_info}"',
+            f"% swarmpath job {job_id}".rstrip(),
+            ", ".join([rel, *entries]),
+        ])
+    for info, text in infos.items():
+        info.write_text("\n".join(text) + "\n", encoding="ascii")
+        out.files.append(info)
+    return out
