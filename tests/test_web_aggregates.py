@@ -1,0 +1,151 @@
+"""The dashboard's aggregates: grids, curve sampling, bands, box plots, per-job accumulation."""
+
+import math
+
+import numpy as np
+import pytest
+
+from swarmpath.service.web import aggregates as agg
+from swarmpath.service.web.scene import load_cell_scenario, motion, scene
+
+
+def test_curve_grid_is_log_spaced_and_covers_both_ends():
+    g = agg.curve_grid(500)
+    assert g[0] == 1 and g[-1] == 500
+    assert np.all(np.diff(g) > 0)
+    assert g.size <= agg.GRID_POINTS
+    assert (g < 50).sum() > (g > 450).sum()  # denser early on
+    assert agg.curve_grid(3).tolist() == [1, 2, 3]
+    with pytest.raises(ValueError):
+        agg.curve_grid(0)
+
+
+def test_sample_curve_reads_iterations_and_thinned_curves():
+    curve = np.arange(100, 0, -1, dtype=float)  # value after iteration i+1 is 100 - i
+    g = agg.curve_grid(100)
+    assert agg.sample_curve(curve, g).tolist() == (101 - g).tolist()
+    # thinned as the worker thins a curve that does not fit a message: 0, 8, ..., 96, 99
+    from swarmpath.service.worker import _thin
+
+    thin = _thin(list(curve), 8)
+    got = agg.sample_curve(thin, g, stride=8)
+    expected = [curve[(i - 1) // 8 * 8] if i < 100 else curve[-1] for i in g]
+    assert got.tolist() == expected
+    assert np.all(got >= curve[g - 1])  # best-so-far: the earlier sample is an upper bound
+
+
+def test_band_is_median_and_quartiles_per_column():
+    rows = np.array([[1.0, 10.0], [2.0, 20.0], [3.0, 30.0], [4.0, 40.0], [5.0, 50.0]])
+    b = agg.band(rows)
+    assert b["median"] == [3.0, 30.0]
+    assert b["q1"] == [2.0, 20.0] and b["q3"] == [4.0, 40.0]
+    assert all(math.isnan(v) for v in agg.band(np.zeros((0, 2)))["median"])
+
+
+def test_box_stats_tukey_whiskers_and_outliers():
+    values = [1, 2, 3, 4, 5, 6, 7, 8, 100, math.inf]
+    b = agg.box_stats(values)
+    assert b is not None
+    assert b["n"] == 9  # the infinite value is left out
+    assert b["median"] == 5.0 and b["q1"] == 3.0 and b["q3"] == 7.0
+    assert b["hi"] == 8.0 and b["lo"] == 1.0 and b["outliers"] == [100.0]
+    assert agg.box_stats([math.nan, math.inf]) is None
+    many = agg.box_stats(list(range(100)) + [1000 + i for i in range(100)] + [50] * 2000)
+    assert many is not None and len(many["outliers"]) == agg.MAX_OUTLIERS
+
+
+def test_thin_path_keeps_ends():
+    path = [[i * 0.1, 0.0, i * 0.5] for i in range(1000)]
+    thin = agg.thin_path(path, 50)
+    assert len(thin) == 50 and thin[0] == [0.0, 0.0, 0.0] and thin[-1] == [99.9, 0.0, 499.5]
+    assert agg.thin_path([]) == []
+
+
+def _bench_cells(runs=4):
+    cells, idx = [], 0
+    for fn in ("F1", "F8"):
+        for alg in ("GWO", "PSO"):
+            spec = {"kind": "benchmark", "algorithm": alg, "function": fn, "dim": 2,
+                    "agents": 5, "iterations": 20}
+            cells.append({"index": idx, "key": f"{alg}/{fn}/2", "spec": spec, "runs": runs})
+            idx += 1
+    return cells
+
+
+def test_job_aggregates_benchmark_view_is_incremental_and_deduplicated():
+    from swarmpath.functions import get_function
+
+    job = agg.JobAggregates("j1", "benchmark", _bench_cells())
+    f8_star = get_function("F8").f_min_for(2)
+    for cell in range(4):
+        for run in range(4):
+            base = f8_star if cell >= 2 else 0.0
+            curve = base + np.linspace(1.0, 0.1, 20) * (1 + cell) + 0.01 * run
+            assert job.add(cell, run, ok=True, metrics={"best_fitness": float(curve[-1])},
+                           curve=curve.tolist())
+    assert not job.add(0, 0, ok=True, metrics={"best_fitness": 0.0})  # duplicate
+    assert not job.add(9, 0, ok=True, metrics={})  # no such cell
+    v1 = job.view()
+    assert job.view() is v1  # cached until something is added
+    assert [g["function"] for g in v1["groups"]] == ["F1", "F8"]
+    g = v1["groups"][1]
+    assert set(g["algorithms"]) == {"GWO", "PSO"}
+    band = g["algorithms"]["GWO"]["band"]
+    assert len(band["median"]) == len(g["iterations"])
+    assert min(band["q1"]) >= 0.0  # errors f - f*, not raw F8 values (negative)
+    assert g["best"] == ["GWO"]  # its curves were scaled by 3 versus 4
+    assert g["algorithms"]["GWO"]["box"]["n"] == 4
+    assert job.add(3, 3, ok=True, metrics={}) is False
+    job2 = agg.JobAggregates("j1", "benchmark", _bench_cells(runs=5))
+    job2.add(0, 4, ok=False, metrics={})
+    view = job2.view()
+    assert view["groups"][0]["algorithms"]["GWO"]["failed"] == 1
+    assert view["groups"][0]["algorithms"]["GWO"]["runs"] == 0
+
+
+def test_job_aggregates_map_view_counts_success_and_marks_failures():
+    spec = {"kind": "map", "planner": "ICOOT", "map": "m1", "scenario": None, "params": {}}
+    job = agg.JobAggregates("j2", "map", [{"index": 0, "key": "ICOOT/m1", "spec": spec,
+                                          "runs": 3}])
+    path = [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]]
+    job.add(0, 0, ok=True, metrics={"success": True, "length": 1.4, "gap": 0.1,
+                                    "seconds": 0.2, "collisions": 0}, path=path)
+    job.add(0, 1, ok=True, metrics={"success": False, "collisions": 2, "seconds": 0.3,
+                                    "reason": "collided 2 times", "length": 9.0}, path=path)
+    job.add(0, 2, ok=False, metrics={})
+    g = job.view()["groups"][0]
+    cell = g["planners"]["ICOOT"]
+    assert cell["runs"] == 3 and cell["succeeded"] == 1 and cell["crashed"] == 1
+    assert cell["success_rate"] == pytest.approx(1 / 3)
+    assert cell["failures"] == {"collision": 1}
+    assert cell["box"]["length"]["n"] == 1  # lengths of successful runs only
+    assert cell["box"]["seconds"]["n"] == 2
+    assert [p["failure"] for p in cell["paths"]] == [None, "collision"]
+
+
+@pytest.mark.parametrize(("reason", "collisions", "kind"), [
+    ("planner gave up: no feasible move", 0, "stall"),
+    ("time limit (120 s simulated)", 0, "timeout"),
+    ("step limit (2000 decisions)", 0, "timeout"),
+    ("collided 3 times", 3, "collision"),
+    ("not finished", 0, "other"),
+])
+def test_failure_kind(reason, collisions, kind):
+    assert agg.failure_kind({"reason": reason, "collisions": collisions}) == kind
+
+
+def test_scene_and_motion_of_a_dynamic_preset():
+    from swarmpath.world.presets import get_map, list_maps
+
+    dynamic = [m for m in list_maps() if get_map(m).is_dynamic]
+    assert dynamic, "no dynamic preset map"
+    sc = load_cell_scenario({"map": dynamic[0], "scenario": None})
+    s = scene(sc)
+    assert len(s["obstacles"]) == len(sc.obstacles)
+    assert any(o["moving"] for o in s["obstacles"]) or sc.goal_motion is not None
+    m = motion(sc, seed=1, run=0, t_end=10.0, samples=11)
+    assert len(m["times"]) == 11
+    for k, track in m["offsets"].items():
+        assert sc.obstacles[int(k)].is_moving
+        assert track[0] == [0.0, 0.0] and len(track) == 11
+    assert m == motion(sc, seed=1, run=0, t_end=10.0, samples=11)  # reproducible
