@@ -9,8 +9,8 @@ arrays, not from the store), so a page of a finished 78,000-run job costs a dict
 
 Benchmark cells keep each run's best-so-far error ``f - f*`` sampled at :data:`GRID_POINTS`
 log-spaced iterations (float32; 78,000 runs x 64 points = 20 MB) and its best fitness. Map cells
-keep each run's path thinned to :data:`PATH_POINTS` points, where it stopped when it failed, and
-its length, gap and planning time.
+keep each run's path thinned to :data:`PATH_POINTS` points, why it failed and where it collided
+(recomputed once from the full path in that run's world), and its length, gap and planning time.
 """
 
 from __future__ import annotations
@@ -150,20 +150,23 @@ class _BenchmarkCell:
 
     def view(self) -> dict[str, Any]:
         if self.cache is None:
+            from swarmpath.stats import describe
+
             rows = self.rows[self.ok]
             best = self.best[self.ok]
             self.cache = {
                 "runs": int(self.ok.sum()), "failed": self.failed,
                 "band": band(rows), "box": box_stats(best),
-                "mean": float(best.mean()) if best.size and np.isfinite(best).all()
-                else (math.inf if best.size else None),
+                "describe": describe(best) if best.size else None,
             }
         return self.cache
 
 
 class _MapCell:
-    def __init__(self, spec: Mapping[str, Any], runs: int):
+    def __init__(self, spec: Mapping[str, Any], runs: int, seed: int):
         self.spec = spec
+        self.seed = seed
+        self.scenario: Any = None
         self.seen = np.zeros(runs, dtype=bool)
         self.paths: dict[int, dict[str, Any]] = {}
         self.values: dict[str, list[float]] = {"length": [], "gap": [], "seconds": []}
@@ -198,7 +201,18 @@ class _MapCell:
                 "run": run, "success": success, "failure": kind,
                 "reason": str(metrics.get("reason") or ""),
                 "path": thin_path(path),
+                "collisions": self._collisions(run, path) if kind == "collision" else [],
             }
+
+    def _collisions(self, run: int, path: Any) -> list[list[float]]:
+        from swarmpath.service.web.scene import collision_points, load_cell_scenario
+
+        try:
+            if self.scenario is None:
+                self.scenario = load_cell_scenario(self.spec)
+            return collision_points(self.scenario, self.seed, run, path)
+        except Exception:  # a scenario that no longer loads: the path is still drawn
+            return []
 
     def view(self) -> dict[str, Any]:
         if self.cache is None:
@@ -224,7 +238,8 @@ def _f_star(function: str, dim: int) -> float:
 class JobAggregates:
     """The dashboard's state of one job (see the module docstring). Thread-safe."""
 
-    def __init__(self, job_id: str, kind: str, cells: Sequence[Mapping[str, Any]]):
+    def __init__(self, job_id: str, kind: str, cells: Sequence[Mapping[str, Any]],
+                 seed: int = 0):
         self.job_id = job_id
         self.kind = kind
         self.version = 0  # bumped by every add(): a client's cached copy is current if equal
@@ -237,7 +252,7 @@ class JobAggregates:
                 f_star = _f_star(spec["function"], int(spec["dim"]))
                 self._cells.append(_BenchmarkCell(spec, int(c["runs"]), f_star))
             else:
-                self._cells.append(_MapCell(spec, int(c["runs"])))
+                self._cells.append(_MapCell(spec, int(c["runs"]), seed))
         self._view: dict[str, Any] | None = None
 
     def cell_index(self, key: str) -> int | None:
@@ -298,12 +313,21 @@ class JobAggregates:
                 "iterations": cell.grid.tolist(), "algorithms": {},
             })
             g["algorithms"][s["algorithm"]] = cell.view()
+        samples: dict[tuple[str, int], dict[str, np.ndarray]] = {}
         for g in groups.values():
-            means = {a: v["mean"] for a, v in g["algorithms"].items() if v["mean"] is not None}
+            means = {a: v["describe"]["avg"] for a, v in g["algorithms"].items()
+                     if v["describe"] is not None and not math.isnan(v["describe"]["avg"])}
             low = min(means.values(), default=None)
             g["best"] = sorted(a for a, m in means.items() if m == low)
+            g["means"] = means
+        for cell in self._cells:
+            assert isinstance(cell, _BenchmarkCell)
+            s = cell.spec
+            samples.setdefault((s["function"], int(s["dim"])), {})[s["algorithm"]] = (
+                cell.best[cell.ok])
         return {"job_id": self.job_id, "kind": "benchmark", "version": self.version,
-                "algorithms": algorithms, "groups": list(groups.values())}
+                "algorithms": algorithms, "groups": list(groups.values()),
+                "statistics": benchmark_statistics(samples, groups, algorithms)}
 
     def _map_view(self) -> dict[str, Any]:
         groups: dict[str, dict[str, Any]] = {}
@@ -315,4 +339,57 @@ class JobAggregates:
             g = groups.setdefault(s["map"], {"map": s["map"], "cell": index, "planners": {}})
             g["planners"][s["planner"]] = cell.view()
         return {"job_id": self.job_id, "kind": "map", "version": self.version,
-                "planners": planners, "groups": list(groups.values())}
+                "planners": planners, "groups": list(groups.values()),
+                "statistics": map_statistics(groups, planners)}
+
+
+def benchmark_statistics(
+    samples: Mapping[tuple[str, int], Mapping[str, np.ndarray]],
+    groups: Mapping[tuple[str, int], Mapping[str, Any]],
+    algorithms: Sequence[str],
+) -> dict[str, Any] | None:
+    """+/=/- of every algorithm against the reference (the last one listed) per function x dim
+    (Wilcoxon rank-sum, Holm over the table) and Friedman mean ranks per dimension
+    (:mod:`swarmpath.compare`). None with fewer than two algorithms."""
+    if len(algorithms) < 2:
+        return None
+    from swarmpath.compare import compare_samples, friedman
+
+    comparison = compare_samples(samples, algorithms)
+    markers: dict[str, dict[str, str]] = {}
+    for (function, dim), per in samples.items():
+        for a in per:
+            m = comparison.marker((function, dim), a)
+            if m is not None:
+                markers.setdefault(f"{function}/{dim}", {})[a] = m
+    ranks: dict[str, Any] = {}
+    for dim in sorted({d for _, d in groups}):
+        values = {f: g["means"] for (f, d), g in groups.items() if d == dim}
+        fr = friedman(values, algorithms)
+        ranks[str(dim)] = {"mean_ranks": fr.mean_ranks, "p": fr.p, "blocks": len(fr.blocks),
+                           "note": fr.note}
+    return {"test": comparison.test, "reference": comparison.reference,
+            "alpha": comparison.alpha, "markers": markers, "counts": comparison.counts(),
+            "friedman": ranks}
+
+
+def map_statistics(
+    groups: Mapping[str, Mapping[str, Any]], planners: Sequence[str]
+) -> dict[str, Any] | None:
+    """Success rates of every planner against the reference (the last one listed) per map:
+    Fisher's exact test, Holm over the table (:mod:`swarmpath.compare`)."""
+    if len(planners) < 2:
+        return None
+    from swarmpath.compare import compare_success
+
+    counts = {name: {p: (v["succeeded"], v["runs"] - v["crashed"])
+                     for p, v in g["planners"].items()} for name, g in groups.items()}
+    comparison = compare_success(counts, planners)
+    markers: dict[str, dict[str, str]] = {}
+    for name, per in counts.items():
+        for p in per:
+            m = comparison.marker(name, p)
+            if m is not None:
+                markers.setdefault(name, {})[p] = m
+    return {"test": comparison.test, "reference": comparison.reference,
+            "alpha": comparison.alpha, "markers": markers, "counts": comparison.counts()}

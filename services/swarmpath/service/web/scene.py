@@ -67,3 +67,24 @@ def motion(scenario: Any, seed: int, run: int, t_end: float,
     goal = (_r([world.goal_at(float(t)) for t in times])
             if scenario.goal_motion is not None else [])
     return {"times": _r(times), "offsets": offsets, "goal": goal}
+
+
+def collision_points(scenario: Any, seed: int, run: int, path: Any,
+                     limit: int = 20) -> list[list[float]]:
+    """Where run ``run``'s executed path touched an obstacle: the end point [x, y, t] of the
+    first step of each stretch of colliding steps (the product's rule: body gap <= 0, against
+    the obstacles' true positions in that run's world), at most ``limit`` of them."""
+    from swarmpath.metrics import step_clearances
+    from swarmpath.optimizers.streams import SIMULATION, run_generator
+    from swarmpath.world.geometry import collides
+
+    p = np.asarray(path, dtype=np.float64).reshape(-1, 3)
+    if p.shape[0] < 2:
+        return []
+    if scenario.is_dynamic:
+        world = scenario.instantiate(run_generator(seed, run, SIMULATION))
+        hits = collides(step_clearances(p, world.obstacles_at), scenario.robot.radius)
+    else:
+        hits = collides(step_clearances(p, scenario.initial_obstacles()), scenario.robot.radius)
+    starts = np.flatnonzero(hits & ~np.concatenate([[False], hits[:-1]]))[:limit]
+    return _r(p[starts + 1])

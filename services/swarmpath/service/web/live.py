@@ -1,0 +1,179 @@
+"""The dashboard's in-memory state in the coordinator: one :class:`JobAggregates` per recent job,
+fed by the coordinator as it accepts results (:meth:`Dashboard.observe`), built once from the
+store for a job that is not in memory (after a restart, or evicted), and the live jobs list that
+every open page shares (:meth:`Dashboard.jobs_snapshot`, computed at most twice a second
+whatever the number of clients).
+
+Bounded: at most ``max_jobs`` jobs' aggregates (least recently used evicted), a rate window of
+``RATE_WINDOW`` seconds per job, at most ``max_scenes`` map scenes."""
+
+from __future__ import annotations
+
+import json
+import logging
+import threading
+import time
+from collections import OrderedDict, deque
+from collections.abc import Iterable
+from typing import Any
+
+from swarmpath.service.web.aggregates import JobAggregates
+
+log = logging.getLogger("swarmpath.dashboard")
+
+RATE_WINDOW = 30.0  # seconds of accepted results behind a job's runs/s
+SNAPSHOT_SECONDS = 0.5  # the jobs list is recomputed at most this often
+SNAPSHOT_JOBS = 200  # jobs in the live list (newest first)
+
+
+class Dashboard:
+    def __init__(self, store: Any, max_jobs: int = 8, max_scenes: int = 64):
+        self.store = store
+        self.max_jobs = max_jobs
+        self.max_scenes = max_scenes
+        self._lock = threading.Lock()
+        self._jobs: OrderedDict[str, JobAggregates] = OrderedDict()
+        self._ready: dict[str, threading.Event] = {}
+        self._rates: dict[str, deque[tuple[float, int]]] = {}
+        self._scenes: OrderedDict[tuple[Any, ...], dict[str, Any]] = OrderedDict()
+        self._snapshot: tuple[float, bytes] = (-1.0, b"")
+
+    # ------------------------------------------------------------------------------- feeding
+    def observe(self, job_id: str, results: Iterable[Any], now: float | None = None) -> None:
+        """Results just accepted for ``job_id`` (``RunResult`` objects): update the job's
+        aggregates (created on its first results) and its rate."""
+        now = time.time() if now is None else now
+        results = list(results)
+        with self._lock:
+            rate = self._rates.setdefault(job_id, deque())
+            rate.append((now, len(results)))
+            while rate and rate[0][0] < now - RATE_WINDOW:
+                rate.popleft()
+            if len(self._rates) > 4 * self.max_jobs:  # forget the rates of the oldest jobs
+                for old in list(self._rates)[: len(self._rates) - 4 * self.max_jobs]:
+                    del self._rates[old]
+        job = self.aggregates(job_id)
+        if job is None:
+            return
+        for r in results:
+            index = job.cell_index(r.cell)
+            if index is not None:
+                job.add(index, r.run, ok=r.status == "ok", metrics=r.metrics, curve=r.curve,
+                        path=r.path)
+
+    def aggregates(self, job_id: str) -> JobAggregates | None:
+        """The job's aggregates (None: unknown job), built from the store the first time."""
+        with self._lock:
+            job = self._jobs.get(job_id)
+            if job is not None:
+                self._jobs.move_to_end(job_id)
+                ready = self._ready.get(job_id)
+            else:
+                ready = None
+        if job is not None:
+            if ready is not None:
+                ready.wait()
+            return job
+        status = self.store.job_status(job_id)
+        spec = self.store.job_spec(job_id)
+        cells = self.store.cells(job_id)
+        if status is None or spec is None or cells is None:
+            return None
+        with self._lock:
+            job = self._jobs.get(job_id)
+            if job is None:  # we build it; results arriving meanwhile are added (deduplicated)
+                job = JobAggregates(job_id, status.kind, cells, spec.seed)
+                self._jobs[job_id] = job
+                ready = self._ready[job_id] = threading.Event()
+                while len(self._jobs) > self.max_jobs:
+                    self._jobs.popitem(last=False)
+                build = True
+            else:
+                ready, build = self._ready.get(job_id), False
+        if not build:
+            if ready is not None:
+                ready.wait()
+            return job
+        started = time.perf_counter()
+        try:
+            n = sum(job.add_record(rec) for rec in self.store.iter_run_records(job_id))
+        finally:
+            with self._lock:
+                self._ready.pop(job_id).set()
+        if n:
+            log.info("dashboard: job %s aggregated from %d stored runs in %.2f s", job_id, n,
+                     time.perf_counter() - started)
+        return job
+
+    # --------------------------------------------------------------------------------- rates
+    def rate(self, job_id: str, now: float | None = None) -> float:
+        """Results accepted per second for the job over the last RATE_WINDOW seconds."""
+        now = time.time() if now is None else now
+        with self._lock:
+            events = list(self._rates.get(job_id, ()))
+        recent = [(t, n) for t, n in events if t >= now - RATE_WINDOW]
+        if not recent:
+            return 0.0
+        span = max(now - recent[0][0], 1.0)
+        return sum(n for _, n in recent) / span
+
+    def jobs_snapshot(self, now: float | None = None) -> bytes:
+        """The jobs list as JSON bytes (newest first), each job with ``progress`` (0..1),
+        ``rate`` (runs/s) and ``eta`` (seconds, None when unknown); shared by every client for
+        SNAPSHOT_SECONDS."""
+        now = time.time() if now is None else now
+        with self._lock:
+            at, data = self._snapshot
+        if data and now - at < SNAPSHOT_SECONDS:
+            return data
+        jobs = []
+        for status in self.store.list_jobs(None, SNAPSHOT_JOBS, 0):
+            item = status.model_dump()
+            finished = status.runs_done + status.runs_failed
+            item["progress"] = finished / status.runs_total if status.runs_total else 1.0
+            rate = self.rate(status.id, now) if status.state == "running" else 0.0
+            item["rate"] = round(rate, 3)
+            left = status.runs_total - finished
+            item["eta"] = round(left / rate, 1) if rate > 0 and left > 0 else None
+            jobs.append(item)
+        data = json.dumps({"time": now, "jobs": jobs}, separators=(",", ":")).encode()
+        with self._lock:
+            self._snapshot = (now, data)
+        return data
+
+    # -------------------------------------------------------------------------------- scenes
+    def scene(self, job_id: str, cell_index: int, run: int | None, t_end: float,
+              seed: int, path: Any = None) -> dict[str, Any] | None:
+        """The map of a map cell with run ``run``'s (default 0) moving obstacles and goal up to
+        ``t_end``, and where ``path`` (that run's) touched an obstacle; cached. None when the
+        job or cell is unknown or not a map cell."""
+        from swarmpath.service.web.scene import (
+            collision_points,
+            load_cell_scenario,
+            motion,
+            scene,
+        )
+
+        key = (job_id, cell_index, run, round(t_end, 3))
+        with self._lock:
+            hit = self._scenes.get(key)
+            if hit is not None:
+                self._scenes.move_to_end(key)
+                return hit
+        cells = self.store.cells(job_id)
+        if cells is None or not 0 <= cell_index < len(cells):
+            return None
+        spec = cells[cell_index]["spec"]
+        if spec.get("kind") != "map":
+            return None
+        scenario = load_cell_scenario(spec)
+        out = scene(scenario)
+        out["run"] = run
+        out["motion"] = motion(scenario, seed, run if run is not None else 0, t_end)
+        out["collisions"] = (collision_points(scenario, seed, run or 0, path)
+                             if path is not None else [])
+        with self._lock:
+            self._scenes[key] = out
+            while len(self._scenes) > self.max_scenes:
+                self._scenes.popitem(last=False)
+        return out

@@ -1,0 +1,164 @@
+/* Job page: status, downloads, and the job's aggregates (/ui/jobs/{id}/data): a benchmark's
+   pivot table, convergence curves and box plots; a map job's maps with every path, success
+   rates and box plots. Refreshed every 2 s while the job runs (304 when nothing changed). */
+(function () {
+  "use strict";
+  SP.header("jobs");
+  const id = decodeURIComponent(location.pathname.split("/")[3]);
+  const main = SP.q("#main");
+  SP.q("h1").textContent = "Job " + id;
+  main.insertAdjacentHTML("beforeend", `<p id="summary"></p><p class="downloads" id="downloads"></p>
+    <div id="content"></div><p class="legend" id="legend"></p>`);
+  let etag = null, colors = {}, status = null;
+
+  function color(name, list) {
+    if (!(name in colors)) colors[name] = SP.color(list.indexOf(name));
+    return colors[name];
+  }
+  function downloads(kind) {
+    const j = "/jobs/" + encodeURIComponent(id);
+    SP.q("#downloads").innerHTML = `Downloads:
+      <a href="${j}/mcap" id="dl-mcap">MCAP</a>
+      <a href="${j}/summary?format=csv" id="dl-summary-csv">summary CSV</a>
+      <a href="${j}/summary" id="dl-summary-json">summary JSON</a>
+      <a href="${j}/runs?format=csv" id="dl-runs-csv">runs CSV</a>
+      <a href="${j}/runs?format=parquet" id="dl-runs-parquet">runs Parquet</a>`;
+  }
+
+  function renderStatus(s) {
+    status = s;
+    const done = s.runs_done + s.runs_failed;
+    const active = s.state === "queued" || s.state === "running";
+    SP.q("#status").innerHTML = `<span class="state state-${s.state}" id="job-state">${s.state}</span>
+      ${s.kind} job, ${done} / ${s.runs_total} runs finished (${s.runs_failed} crashed),
+      created ${SP.time(s.created)}${s.finished ? ", ended " + SP.time(s.finished) : ""}
+      ${active ? '<button class="cancel" id="cancel">cancel</button>' : ""}`;
+    const b = SP.q("#cancel");
+    if (b) b.onclick = async () => { const r = await SP.cancelJob(id); if (r.ok) renderStatus(r.data); };
+  }
+
+  function pivot(data) {
+    const st = data.statistics || { markers: {}, counts: {}, friedman: {} };
+    const algs = data.algorithms;
+    let html = `<h2>Best fitness: mean (std) over runs</h2><table id="pivot"><thead><tr><th class="l">function</th><th>dim</th>`
+      + algs.map((a) => `<th>${SP.esc(a)}</th>`).join("") + `</tr></thead><tbody>`;
+    for (const g of data.groups) {
+      html += `<tr data-group="${g.function}/${g.dim}"><td class="l">${g.function}</td><td>${g.dim}</td>`;
+      for (const a of algs) {
+        const c = g.algorithms[a], d = c && c.describe;
+        const m = (st.markers[g.function + "/" + g.dim] || {})[a];
+        html += `<td class="${g.best.includes(a) ? "best" : ""}">${d ? SP.num(d.avg, 3) + " (" + SP.num(d.std, 2) + ")" : "-"}`
+          + `${m ? `<span class="marker">${m}</span>` : ""}</td>`;
+      }
+      html += "</tr>";
+    }
+    html += "</tbody><tfoot>";
+    if (st.reference) {
+      html += `<tr><th class="l" colspan="2">+/=/- vs ${SP.esc(st.reference)}</th>` + algs.map((a) => {
+        const c = st.counts[a];
+        return `<td>${c ? `${c["+"]}/${c["="]}/${c["-"]}` : "ref."}</td>`;
+      }).join("") + "</tr>";
+      for (const dim in st.friedman) {
+        const f = st.friedman[dim];
+        html += `<tr><th class="l" colspan="2">mean rank (dim ${dim})</th>` + algs.map((a) =>
+          `<td>${SP.num(f.mean_ranks[a], 2)}</td>`).join("") + "</tr>";
+      }
+    }
+    html += "</tfoot></table>";
+    if (st.reference) html += `<p class="legend">Bold: lowest mean. Markers: Wilcoxon rank-sum test of each algorithm's best fitness against ${SP.esc(st.reference)} (Holm-adjusted over the table, alpha ${st.alpha}): + significantly better, = no significant difference, - significantly worse. Mean rank: Friedman ranks of the means over the functions (1 = best).</p>`;
+    return html;
+  }
+
+  function renderBenchmark(data) {
+    const algs = data.algorithms;
+    const content = SP.q("#content");
+    content.innerHTML = pivot(data) + `<h2>Convergence and best fitness per function and dimension</h2><div id="charts"></div>`;
+    const charts = SP.q("#charts");
+    for (const g of data.groups) {
+      const row = document.createElement("div");
+      row.className = "grid";
+      row.dataset.group = g.function + "/" + g.dim;
+      row.innerHTML = `<div class="card chart conv"></div><div class="card chart box"></div>`;
+      charts.appendChild(row);
+      const series = algs.filter((a) => g.algorithms[a] && g.algorithms[a].runs).map((a) => {
+        const b = g.algorithms[a].band;
+        return { name: a, color: color(a, algs), x: g.iterations, y: b.median, lo: b.q1, hi: b.q3 };
+      });
+      SP.lineChart(row.children[0], { title: `${g.function}, dim ${g.dim}: median and IQR`,
+        xlabel: "iteration", ylabel: "best-so-far f(x) - f*", logy: true, logx: false, series: series });
+      const boxes = algs.map((a) => ({ name: a, color: color(a, algs), stats: g.algorithms[a] && g.algorithms[a].box }));
+      const positive = boxes.every((b) => !b.stats || b.stats.min > 0);
+      SP.boxChart(row.children[1], { title: `${g.function}, dim ${g.dim}: best fitness`, ylabel: "best fitness", logy: positive, boxes: boxes });
+    }
+  }
+
+  async function renderMap(data) {
+    const planners = data.planners;
+    const st = data.statistics || { markers: {} };
+    const content = SP.q("#content");
+    let html = `<h2>Success rate</h2><table id="success"><thead><tr><th class="l">map</th>` +
+      planners.map((p) => `<th>${SP.esc(p)}</th>`).join("") + `</tr></thead><tbody>`;
+    for (const g of data.groups) {
+      html += `<tr><td class="l">${SP.esc(g.map)}</td>` + planners.map((p) => {
+        const c = g.planners[p]; const m = (st.markers[g.map] || {})[p];
+        if (!c || !c.runs) return "<td>-</td>";
+        const f = Object.entries(c.failures).map(([k, n]) => `${n} ${k}`).join(", ");
+        return `<td title="${f}">${(100 * c.success_rate).toFixed(0)}% (${c.succeeded}/${c.runs})${m ? `<span class="marker">${m}</span>` : ""}</td>`;
+      }).join("") + "</tr>";
+    }
+    html += `</tbody></table>`;
+    if (st.reference) html += `<p class="legend">Markers: Fisher's exact test of each planner's success rate against ${SP.esc(st.reference)} (Holm-adjusted, alpha ${st.alpha}): + significantly higher, = no significant difference, - significantly lower.</p>`;
+    html += `<div id="maps"></div>`;
+    content.innerHTML = html;
+    const maps = SP.q("#maps");
+    for (const g of data.groups) {
+      const sec = document.createElement("section");
+      sec.dataset.map = g.map;
+      sec.innerHTML = `<h2>${SP.esc(g.map)}</h2><div class="grid"><div class="card mapchart"></div>
+        <div><div class="card chart box-length"></div><div class="card chart box-gap"></div><div class="card chart box-seconds"></div></div></div>`;
+      maps.appendChild(sec);
+      const paths = [];
+      let tEnd = 0;
+      for (const p of planners) {
+        const c = g.planners[p]; if (!c) continue;
+        for (const r of c.paths) {
+          paths.push({ name: p, color: color(p, planners), points: r.path, run: r.run, success: r.success, failure: r.failure, reason: r.reason, collisions: r.collisions });
+          if (r.path.length) tEnd = Math.max(tEnd, r.path[r.path.length - 1][2]);
+        }
+      }
+      const r = await SP.api(`/ui/jobs/${encodeURIComponent(id)}/scene?cell=${g.cell}&t_end=${tEnd}`);
+      if (r.ok) {
+        SP.mapChart(sec.querySelector(".mapchart"), r.data, paths);
+        const leg = document.createElement("p"); leg.className = "legend";
+        leg.innerHTML = planners.map((p) => `<span style="color:${color(p, planners)}">&#9632; ${SP.esc(p)}</span>`).join(" ")
+          + " &nbsp; dashed: failed run; &#10005; where a run touched an obstacle; &#9633; end of a stalled (purple) or timed-out (orange) run"
+          + (r.data.dynamic ? "; orange lines: moving obstacles' tracks (run 0's world)" : "");
+        sec.querySelector(".mapchart").appendChild(leg);
+      }
+      for (const [what, label] of [["length", "path length (m), successful runs"], ["gap", "gap to the optimum, successful runs"], ["seconds", "planning time (s)"]]) {
+        SP.boxChart(sec.querySelector(".box-" + what), { title: label, empty: what === "gap" ? "no gap: no optimum with moving obstacles, or no successful run" : "no successful run", ylabel: what === "seconds" ? "s" : what === "gap" ? "gap" : "m", width: 420, height: 200,
+          boxes: planners.map((p) => ({ name: p, color: color(p, planners), stats: g.planners[p] && g.planners[p].box[what] })) });
+      }
+    }
+  }
+
+  async function refresh() {
+    const s = await SP.api("/jobs/" + encodeURIComponent(id));
+    if (!s.ok) { SP.q("#status").textContent = `job ${id}: ${s.status} ${JSON.stringify(s.data && s.data.detail)}`; return; }
+    renderStatus(s.data);
+    if (!SP.q("#downloads").innerHTML) downloads(s.data.kind);
+    const headers = etag ? { "If-None-Match": etag } : {};
+    const r = await SP.api(`/ui/jobs/${encodeURIComponent(id)}/data`, { headers: headers });
+    if (r.status === 200) {
+      etag = r.headers.get("etag");
+      if (r.data.kind === "benchmark") renderBenchmark(r.data); else await renderMap(r.data);
+      SP.q("#legend").textContent = r.data.kind === "benchmark"
+        ? "Curves: median best-so-far error f(x) - f* over the successful runs, band from the 25th to the 75th percentile, log scale; box plots: quartiles, whiskers at 1.5 IQR, outliers as circles. Crashed runs (an exception in the optimizer) have no value."
+        : "Paths: up to 200 runs per planner and map. Success: the run reached the goal without touching an obstacle. Crashed runs (an exception) are counted in 'runs' but have no path. Gap: length / optimum - 1 (the exact shortest path), only on static maps: with moving obstacles there is no optimum. Collisions count colliding steps.";
+      document.body.dataset.version = r.data.version;
+    }
+    if (status && (status.state === "queued" || status.state === "running")) setTimeout(refresh, 2000);
+    else document.body.dataset.loaded = "1";
+  }
+  refresh();
+})();
