@@ -1,0 +1,288 @@
+"""The dashboard in a real browser: headless Chromium (Debian packages ``chromium`` and
+``chromium-driver``) driven by selenium opens every page of a coordinator served on a free
+loopback port, waits for the plots and checks what they show; submits a job through the form,
+sees its validation errors, and cancels a job from the jobs list.
+
+``SWARMPATH_SCREENSHOTS=DIR`` saves a screenshot of each page into DIR (the README's images:
+``SWARMPATH_SCREENSHOTS=docs/img pytest tests/test_web_browser.py``)."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import socket
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+webdriver = pytest.importorskip("selenium.webdriver", reason="selenium (the test extra)")
+from selenium.common.exceptions import TimeoutException  # noqa: E402
+from selenium.webdriver.common.by import By  # noqa: E402
+from selenium.webdriver.support.ui import Select, WebDriverWait  # noqa: E402
+
+from swarmpath.service.coordinator import Coordinator, CoordinatorSettings, create_app  # noqa: E402
+from swarmpath.service.protocol import (  # noqa: E402
+    Lease,
+    LeaseRequest,
+    decode_work_reply,
+    encode,
+)
+from swarmpath.service.worker import execute_lease, pack_batches  # noqa: E402
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+CHROMEDRIVER = shutil.which("chromedriver")
+pytestmark = pytest.mark.skipif(
+    CHROMIUM is None or CHROMEDRIVER is None,
+    reason="headless browser tests need Debian's 'chromium' and 'chromium-driver' packages "
+           "(apt-get install chromium chromium-driver)",
+)
+SHOTS = os.environ.get("SWARMPATH_SCREENSHOTS")
+WAIT = 30.0  # seconds a page may take on a loaded machine before the test fails
+
+BENCH = {"kind": "benchmark", "algorithms": ["GWO", "PSO", "ICOOT"], "functions": ["F1", "F8"],
+         "dims": [2, 5], "runs": 6, "agents": 8, "iterations": 40, "seed": 3}
+MAP = {"kind": "map", "planners": ["MFB", "OMPL-RRTstar"], "maps": ["mfb-static", "mfb-dynamic"],
+       "runs": 2, "seed": 1}
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def work_off(core: Coordinator, worker: str = "w1") -> int:
+    """A worker without the network: lease, execute, hand the results to the coordinator."""
+    core.worker_alive(worker)
+    n = 0
+    while True:
+        lease = decode_work_reply(core.handle_lease_request(
+            encode(LeaseRequest(worker=worker, max_runs=100, host="test", slots=2))))
+        if not isinstance(lease, Lease):
+            return n
+        results = execute_lease(lease)
+        for payload in pack_batches(worker, [data for _run, data in results]):
+            core.handle_results(f"swarmpath/results/{lease.job_id}", payload)
+        n += len(results)
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    """A coordinator (REST only) on a free loopback port, stopped after the module."""
+    import uvicorn
+
+    os.environ.pop("SWARMPATH_TOKEN", None)
+    data = tmp_path_factory.mktemp("dashboard")
+    app = create_app(CoordinatorSettings(data_dir=data / "data"), use_zenoh=False)
+    port = _free_port()
+    srv = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning",
+                                        timeout_graceful_shutdown=2))
+    thread = threading.Thread(target=srv.run, daemon=True)
+    thread.start()
+    deadline = time.monotonic() + WAIT
+    while not srv.started and thread.is_alive() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert srv.started, "the test coordinator did not start"
+    try:
+        yield f"http://127.0.0.1:{port}", app
+    finally:
+        srv.should_exit = True
+        thread.join(timeout=WAIT)
+
+
+@pytest.fixture(scope="module")
+def jobs(server):
+    """A finished benchmark job and a finished map job."""
+    import httpx
+
+    url, app = server
+    core = app.state.core
+    ids = {}
+    for spec in (BENCH, MAP):
+        r = httpx.post(f"{url}/jobs", json=spec)
+        assert r.status_code == 201, r.text
+        ids[spec["kind"]] = r.json()["id"]
+        work_off(core)
+    return ids
+
+
+@pytest.fixture(scope="module")
+def browser():
+    from selenium.webdriver.chrome.options import Options
+    from selenium.webdriver.chrome.service import Service
+
+    opts = Options()
+    opts.binary_location = CHROMIUM
+    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+                "--window-size=1400,1000", "--no-proxy-server"):
+        opts.add_argument(arg)
+    driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=opts)
+    driver.set_page_load_timeout(WAIT)
+    try:
+        yield driver
+    finally:
+        driver.quit()
+
+
+def wait_for(driver, css: str, count: int = 1):
+    """The elements matching ``css`` once there are at least ``count`` of them."""
+    try:
+        WebDriverWait(driver, WAIT).until(
+            lambda d: len(d.find_elements(By.CSS_SELECTOR, css)) >= count)
+    except TimeoutException:
+        logs = "; ".join(e["message"] for e in driver.get_log("browser")) if hasattr(
+            driver, "get_log") else ""
+        raise AssertionError(f"no {count} x {css!r} on {driver.current_url}: {logs}") from None
+    return driver.find_elements(By.CSS_SELECTOR, css)
+
+
+def shot(driver, name: str) -> None:
+    if SHOTS:
+        Path(SHOTS).mkdir(parents=True, exist_ok=True)
+        height = driver.execute_script("return document.body.scrollHeight")
+        driver.set_window_size(1400, min(max(900, int(height) + 40), 3000))
+        driver.save_screenshot(str(Path(SHOTS) / f"dashboard-{name}.png"))
+        driver.set_window_size(1400, 1000)
+
+
+def texts(elements) -> list[str]:
+    return [e.text for e in elements]
+
+
+def test_jobs_page_lists_jobs_live_and_filters(server, jobs, browser):
+    url, app = server
+    browser.get(url + "/")
+    rows = wait_for(browser, "#jobs tbody tr", 2)
+    assert {r.get_attribute("data-job") for r in rows} >= set(jobs.values())
+    assert all(r.get_attribute("data-state") == "done" for r in rows)
+    # a job submitted elsewhere appears without a reload (pushed over /events)
+    import httpx
+
+    new = httpx.post(f"{url}/jobs", json={**BENCH, "runs": 1, "seed": 9}).json()["id"]
+    wait_for(browser, f'#jobs tbody tr[data-job="{new}"][data-state="queued"]')
+    shot(browser, "jobs")
+    Select(browser.find_element(By.ID, "filter")).select_by_visible_text("queued")
+    rows = wait_for(browser, "#jobs tbody tr")
+    assert [r.get_attribute("data-job") for r in rows] == [new]
+    # cancel it from the page
+    rows[0].find_element(By.CSS_SELECTOR, "button.cancel").click()
+    Select(browser.find_element(By.ID, "filter")).select_by_visible_text("cancelled")
+    wait_for(browser, f'#jobs tbody tr[data-job="{new}"][data-state="cancelled"]')
+    assert app.state.core.store.job_status(new).state == "cancelled"
+
+
+def test_benchmark_job_page_table_curves_and_boxes(server, jobs, browser):
+    url, _app = server
+    browser.get(f"{url}/ui/jobs/{jobs['benchmark']}")
+    groups = len(BENCH["functions"]) * len(BENCH["dims"])
+    wait_for(browser, "#charts .conv svg", groups)
+    rows = browser.find_elements(By.CSS_SELECTOR, "#pivot tbody tr")
+    assert len(rows) == groups
+    header = texts(browser.find_elements(By.CSS_SELECTOR, "#pivot thead th"))
+    assert header == ["function", "dim", *BENCH["algorithms"]]
+    for row in rows:  # one best per row, the others with a statistics marker
+        assert len(row.find_elements(By.CSS_SELECTOR, "td.best")) >= 1
+        assert len(row.find_elements(By.CSS_SELECTOR, ".marker")) == len(BENCH["algorithms"]) - 1
+    foot = texts(browser.find_elements(By.CSS_SELECTOR, "#pivot tfoot th"))
+    assert any("mean rank" in t for t in foot) and any("+/=/-" in t for t in foot)
+    for chart in browser.find_elements(By.CSS_SELECTOR, "#charts .conv"):
+        assert len(chart.find_elements(By.CSS_SELECTOR, "g.sp-series")) == len(BENCH["algorithms"])
+        assert len(chart.find_elements(By.CSS_SELECTOR, "polygon.sp-band")) == len(
+            BENCH["algorithms"])
+        labels = texts(chart.find_elements(By.CSS_SELECTOR, ".sp-axis-label"))
+        assert labels == ["iteration", "best-so-far f(x) - f*"]
+    for chart in browser.find_elements(By.CSS_SELECTOR, "#charts .box"):
+        assert len(chart.find_elements(By.CSS_SELECTOR, "g.sp-box")) == len(BENCH["algorithms"])
+    links = {a.get_attribute("id") for a in browser.find_elements(By.CSS_SELECTOR, "#downloads a")}
+    assert {"dl-mcap", "dl-summary-csv", "dl-runs-csv", "dl-runs-parquet"} <= links
+    shot(browser, "job-benchmark")
+
+
+def test_map_job_page_paths_failures_and_boxes(server, jobs, browser):
+    url, app = server
+    browser.get(f"{url}/ui/jobs/{jobs['map']}")
+    maps = wait_for(browser, "#maps section .mapchart svg", len(MAP["maps"]))
+    runs_per_map = len(MAP["planners"]) * MAP["runs"]
+    for m in maps:
+        assert len(m.find_elements(By.CSS_SELECTOR, "polyline.sp-path")) == runs_per_map
+        assert m.find_elements(By.CSS_SELECTOR, ".sp-obstacle")
+    view = app.state.core.dashboard.aggregates(jobs["map"]).view()
+    paths = [p for g in view["groups"] for c in g["planners"].values() for p in c["paths"]]
+    hits = sum(len(p["collisions"]) for p in paths)
+    stops = sum(1 for p in paths if not p["success"] and p["failure"] != "collision")
+    assert hits > 0  # RRT* plans around the static obstacles only and is hit on mfb-dynamic
+    assert len(browser.find_elements(By.CSS_SELECTOR, "#maps .sp-collision")) == hits
+    assert len(browser.find_elements(By.CSS_SELECTOR, "#maps .sp-failure")) == hits + stops
+    dynamic = browser.find_element(By.CSS_SELECTOR, 'section[data-map="mfb-dynamic"]')
+    assert dynamic.find_elements(By.CSS_SELECTOR, "polyline.sp-track")  # moving obstacles
+    static = browser.find_element(By.CSS_SELECTOR, 'section[data-map="mfb-static"]')
+    assert not static.find_elements(By.CSS_SELECTOR, "polyline.sp-track")
+    for what in ("length", "seconds"):
+        boxes = browser.find_elements(By.CSS_SELECTOR, f"#maps .box-{what} g.sp-box")
+        assert len(boxes) >= len(MAP["maps"])
+    cells = browser.find_elements(By.CSS_SELECTOR, "#success tbody tr")
+    assert len(cells) == len(MAP["maps"])
+    shot(browser, "job-map")
+
+
+def test_run_pages(server, jobs, browser):
+    url, _app = server
+    browser.get(f"{url}/ui/jobs/{jobs['benchmark']}/runs/0")
+    wait_for(browser, "#plot g.sp-series")
+    assert len(browser.find_elements(By.CSS_SELECTOR, "#best-position tbody tr")) == \
+        BENCH["dims"][0]
+    shot(browser, "run-benchmark")
+    # a map run that failed on the dynamic map (RRT* collides there): the slider moves things
+    browser.get(f"{url}/ui/jobs/{jobs['map']}/runs/6")
+    wait_for(browser, "#plot svg .sp-robot")
+    assert "Failure" in browser.find_element(By.ID, "failure").text
+    assert browser.find_elements(By.CSS_SELECTOR, "#plot .sp-collision")
+    before = browser.find_element(By.CSS_SELECTOR, "#plot .sp-robot").get_attribute("cx")
+    browser.execute_script("const s = document.getElementById('time'); s.value = s.max / 3;"
+                           "s.dispatchEvent(new Event('input'));")
+    after = browser.find_element(By.CSS_SELECTOR, "#plot .sp-robot").get_attribute("cx")
+    assert before != after
+    assert browser.find_element(By.ID, "time-label").text.startswith("t = ")
+    shot(browser, "run-map")
+
+
+def test_workers_page(server, jobs, browser):
+    url, _app = server
+    browser.get(url + "/ui/workers")
+    rows = wait_for(browser, "#workers tbody tr")
+    assert rows[0].get_attribute("data-worker") == "w1"
+    cells = texts(rows[0].find_elements(By.TAG_NAME, "td"))
+    assert cells[3] == "2"  # slots
+    assert int(cells[6]) > 0  # runs done
+    shot(browser, "workers")
+
+
+def test_submit_form_shows_errors_at_fields_then_submits(server, jobs, browser):
+    url, app = server
+    browser.get(url + "/ui/submit")
+    wait_for(browser, "#submit-form input[name=algorithms]")
+    form = browser.find_element(By.ID, "submit-form")
+    form.find_element(By.CSS_SELECTOR, "input[name=algorithms][value=GWO]").click()
+    form.find_element(By.CSS_SELECTOR, "input[name=functions][value=F1]").click()
+    dims = form.find_element(By.NAME, "dims")
+    dims.clear()
+    dims.send_keys("2, x")
+    runs = form.find_element(By.NAME, "runs")
+    runs.clear()
+    runs.send_keys("0")
+    browser.find_element(By.ID, "submit-button").click()
+    wait_for(browser, '[data-error="runs"]:not(:empty)')
+    assert browser.find_element(By.CSS_SELECTOR, '[data-error="dims"]').text
+    assert not browser.find_element(By.CSS_SELECTOR, '[data-error="agents"]').text
+    shot(browser, "submit")
+    dims.clear()
+    dims.send_keys("2")
+    runs.clear()
+    runs.send_keys("2")
+    browser.find_element(By.ID, "submit-button").click()
+    link = wait_for(browser, "#new-job")[0]
+    status = app.state.core.store.job_status(link.text)
+    assert status is not None and status.runs_total == 2
+    assert not browser.find_element(By.CSS_SELECTOR, '[data-error="runs"]').text
