@@ -1,0 +1,151 @@
+"""The dashboard's routes and live state without a browser: pages and static files, the jobs
+snapshot (rate, ETA), aggregates fed on accept equal to aggregates built from the store, ETags,
+scenes and their errors, the events stream."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from fastapi.testclient import TestClient
+
+from swarmpath.service.coordinator import CoordinatorSettings, create_app
+from swarmpath.service.protocol import Lease, LeaseRequest, decode_work_reply, encode
+from swarmpath.service.web import dashboard_routes
+from swarmpath.service.web.live import Dashboard
+from swarmpath.service.web.pages import ASSETS
+from swarmpath.service.worker import execute_lease, pack_batches
+
+BENCH = {"kind": "benchmark", "algorithms": ["GWO", "PSO"], "functions": ["F1"], "dims": [2],
+         "runs": 4, "agents": 5, "iterations": 15}
+
+
+@pytest.fixture
+def app(tmp_path, monkeypatch):
+    monkeypatch.delenv("SWARMPATH_TOKEN", raising=False)
+    return create_app(CoordinatorSettings(data_dir=tmp_path / "data"), use_zenoh=False)
+
+
+@pytest.fixture
+def client(app):
+    with TestClient(app) as c:
+        yield c
+
+
+def work_off(core, worker="w1"):
+    core.worker_alive(worker)
+    while isinstance(lease := decode_work_reply(core.handle_lease_request(
+            encode(LeaseRequest(worker=worker, max_runs=100)))), Lease):
+        for payload in pack_batches(worker, [d for _r, d in execute_lease(lease)]):
+            core.handle_results(f"swarmpath/results/{lease.job_id}", payload)
+
+
+@pytest.mark.parametrize("path", ["/", "/ui/jobs/abc", "/ui/jobs/abc/runs/3", "/ui/workers",
+                                  "/ui/submit"])
+def test_pages_are_html_that_loads_only_shipped_assets(client, path):
+    r = client.get(path)
+    assert r.status_code == 200 and r.headers["content-type"].startswith("text/html")
+    for src in ("/static/common.js", "/static/plot.js", "/static/style.css"):
+        assert src in r.text
+        assert client.get(src).status_code == 200
+    assert "http://" not in r.text and "https://" not in r.text  # nothing from a CDN
+
+
+def test_static_files_are_a_whitelist(client):
+    assert set(ASSETS) >= {"plot.js", "common.js", "style.css", "jobs.js", "job.js"}
+    for name in ASSETS:
+        assert client.get(f"/static/{name}").status_code == 200
+    for bad in ("../pages.py", "..%2Fpages.py", "pages.py", "nope.js"):
+        assert client.get(f"/static/{bad}").status_code == 404
+
+
+def test_jobs_snapshot_rate_eta_and_config(client, app):
+    core = app.state.core
+    job = client.post("/jobs", json=BENCH).json()["id"]
+    snap = client.get("/ui/jobs").json()
+    (item,) = snap["jobs"]
+    assert item["id"] == job and item["progress"] == 0.0 and item["eta"] is None
+    work_off(core)
+    core.dashboard._snapshot = (-1.0, b"")  # the snapshot is shared for 0.5 s
+    (item,) = client.get("/ui/jobs").json()["jobs"]
+    assert item["state"] == "done" and item["progress"] == 1.0 and item["eta"] is None
+    assert core.dashboard.rate(job) > 0
+    cfg = client.get("/ui/config").json()
+    assert cfg["token_required"] is False
+    assert cfg["defaults"]["benchmark"]["runs"] == 30 and cfg["defaults"]["map"]["runs"] == 10
+
+
+def test_eta_from_the_rate_of_a_running_job(tmp_path):
+    from swarmpath.service.protocol import parse_job_spec
+    from swarmpath.service.store import Store
+
+    store = Store(tmp_path)
+    try:
+        job = store.create_job(parse_job_spec(BENCH))
+        dash = Dashboard(store)
+
+        class R:  # the fields observe() reads of a RunResult
+            def __init__(self, run):
+                self.cell, self.run, self.status, self.metrics = "GWO/F1/2", run, "ok", {}
+                self.curve = self.path = None
+
+        store.lease("w1", 100, now=100.0)  # the job is running
+        dash.observe(job, [R(0), R(1)], now=100.0)
+        dash.observe(job, [R(2)], now=110.0)
+        assert dash.rate(job, now=110.0) == pytest.approx(3 / 10)
+        (item,) = json.loads(dash.jobs_snapshot(now=110.0))["jobs"]
+        assert item["state"] == "running" and item["rate"] == pytest.approx(0.3)
+        assert item["eta"] == pytest.approx(8 / 0.3, abs=0.1)  # the store has no results: 8 left
+        assert dash.rate(job, now=1000.0) == 0.0  # the window has passed
+    finally:
+        store.close()
+
+
+def test_aggregates_fed_on_accept_equal_those_built_from_the_store(client, app):
+    core = app.state.core
+    job = client.post("/jobs", json=BENCH).json()["id"]
+    r = client.get(f"/ui/jobs/{job}/data")
+    assert r.status_code == 200 and r.json()["version"] == 0
+    work_off(core)
+    live = client.get(f"/ui/jobs/{job}/data")
+    etag = live.headers["etag"]
+    assert live.json()["version"] == 8
+    assert client.get(f"/ui/jobs/{job}/data", headers={"If-None-Match": etag}).status_code == 304
+    cold = Dashboard(core.store).aggregates(job)  # as after a restart
+    assert cold is not None
+    assert json.loads(json.dumps(cold.view(), default=str)) == json.loads(
+        json.dumps(core.dashboard.aggregates(job).view(), default=str))
+    group = live.json()["groups"][0]
+    assert set(group["algorithms"]) == {"GWO", "PSO"}
+    assert live.json()["statistics"]["reference"] == "PSO"
+    assert client.get("/ui/jobs/nope/data").status_code == 404
+
+
+def test_scene_routes(client, app):
+    core = app.state.core
+    bench = client.post("/jobs", json=BENCH).json()["id"]
+    assert client.get(f"/ui/jobs/{bench}/scene?cell=0").status_code == 404  # no map
+    spec = {"kind": "map", "planners": ["MFB"], "maps": ["mfb-dynamic"], "runs": 1, "seed": 2}
+    job = client.post("/jobs", json=spec).json()["id"]
+    assert client.get(f"/ui/jobs/{job}/scene").status_code == 422
+    assert client.get(f"/ui/jobs/{job}/scene?cell=0&run=0").status_code == 422
+    assert client.get(f"/ui/jobs/{job}/scene?cell=5").status_code == 404
+    assert client.get(f"/ui/jobs/{job}/scene?run=5").status_code == 404
+    s = client.get(f"/ui/jobs/{job}/scene?cell=0&t_end=5").json()
+    assert s["dynamic"] and s["motion"]["offsets"] and s["collisions"] == []
+    work_off(core)
+    s = client.get(f"/ui/jobs/{job}/scene?run=0&t_end=5").json()
+    assert s["run"] == 0 and len(s["motion"]["times"]) > 1
+
+
+def test_events_stream_pushes_the_jobs_list(client, app, monkeypatch):
+    monkeypatch.setattr(dashboard_routes, "STREAM_SECONDS", 0.5)  # the stream ends by itself
+    job = client.post("/jobs", json=BENCH).json()["id"]
+    with client.stream("GET", "/events") as r:
+        assert r.headers["content-type"].startswith("text/event-stream")
+        text = "".join(r.iter_text())
+    assert text.startswith("retry: 1000")
+    events = [block for block in text.split("\n\n") if block.startswith("event: jobs")]
+    assert len(events) == 1  # nothing changed afterwards: not sent again
+    data = json.loads(events[0].split("data: ", 1)[1])
+    assert [j["id"] for j in data["jobs"]] == [job]
