@@ -149,3 +149,25 @@ def test_events_stream_pushes_the_jobs_list(client, app, monkeypatch):
     assert len(events) == 1  # nothing changed afterwards: not sent again
     data = json.loads(events[0].split("data: ", 1)[1])
     assert [j["id"] for j in data["jobs"]] == [job]
+
+
+def test_finished_jobs_aggregates_are_saved_and_reloaded(client, app, tmp_path):
+    core = app.state.core
+    job = client.post("/jobs", json=BENCH).json()["id"]
+    spec = {"kind": "map", "planners": ["MFB"], "maps": ["mfb-static"], "runs": 1, "seed": 2}
+    map_job = client.post("/jobs", json=spec).json()["id"]
+    work_off(core)
+    core.tick()  # finalizes the jobs: their aggregates are saved
+    for j in (job, map_job):
+        saved = core.dashboard.cache_dir / f"{j}.npz"
+        assert saved.is_file()
+        fresh = Dashboard(core.store, core.dashboard.cache_dir)
+        reloaded = fresh.aggregates(j)
+        assert json.dumps(reloaded.view(), default=str) == json.dumps(
+            core.dashboard.aggregates(j).view(), default=str)
+    # a file that does not match the store is ignored: the store is read again
+    other = tmp_path / "other"
+    other.mkdir()
+    (core.dashboard.cache_dir / f"{job}.npz").replace(other / f"{map_job}.npz")
+    again = Dashboard(core.store, other).aggregates(map_job)
+    assert again.view()["kind"] == "map" and again.finished_runs() == 1

@@ -15,9 +15,11 @@ keep each run's path thinned to :data:`PATH_POINTS` points, why it failed and wh
 
 from __future__ import annotations
 
+import json
 import math
 import threading
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -26,6 +28,7 @@ GRID_POINTS = 64  # iterations sampled per convergence curve
 PATH_POINTS = 150  # points kept per map path
 MAX_PATHS = 200  # paths kept per map cell (the first ones by run index arrive first)
 MAX_OUTLIERS = 40  # outliers listed per box (the most extreme ones)
+SAVE_FORMAT = "swarmpath-dashboard-1"
 
 
 def curve_grid(iterations: int, points: int = GRID_POINTS) -> np.ndarray:
@@ -66,8 +69,12 @@ def band(rows: np.ndarray) -> dict[str, list[float]]:
     if rows.shape[0] == 0:
         nan = [math.nan] * rows.shape[1]
         return {"median": nan, "q1": list(nan), "q3": list(nan)}
+    x = rows.astype(np.float64)
     with np.errstate(invalid="ignore"):
-        q1, med, q3 = np.nanquantile(rows.astype(np.float64), [0.25, 0.5, 0.75], axis=0)
+        if np.isnan(x).any():  # nanquantile works column by column: only when needed
+            q1, med, q3 = np.nanquantile(x, [0.25, 0.5, 0.75], axis=0)
+        else:
+            q1, med, q3 = np.quantile(x, [0.25, 0.5, 0.75], axis=0)
     return {"median": med.tolist(), "q1": q1.tolist(), "q3": q3.tolist()}
 
 
@@ -162,6 +169,20 @@ class _BenchmarkCell:
         return self.cache
 
 
+    def state(self) -> dict[str, Any]:
+        return {"rows": self.rows, "best": self.best, "ok": self.ok, "seen": self.seen,
+                "failed": np.array(self.failed)}
+
+    def restore(self, state: Mapping[str, Any]) -> None:
+        for name in ("rows", "best", "ok", "seen"):
+            value = np.asarray(state[name])
+            if value.shape != getattr(self, name).shape:
+                raise ValueError(f"saved {name} has shape {value.shape}")
+            setattr(self, name, value.astype(getattr(self, name).dtype))
+        self.failed = int(state["failed"])
+        self.cache = None
+
+
 class _MapCell:
     def __init__(self, spec: Mapping[str, Any], runs: int, seed: int):
         self.spec = spec
@@ -203,6 +224,24 @@ class _MapCell:
                 "path": thin_path(path),
                 "collisions": self._collisions(run, path) if kind == "collision" else [],
             }
+
+    _FIELDS = ("paths", "values", "finished", "succeeded", "crashed", "failures")
+
+    def state(self) -> dict[str, Any]:
+        data = {name: getattr(self, name) for name in self._FIELDS}
+        data["paths"] = list(self.paths.values())
+        return {"json": np.array(json.dumps(data)), "seen": self.seen}
+
+    def restore(self, state: Mapping[str, Any]) -> None:
+        seen = np.asarray(state["seen"], dtype=bool)
+        if seen.shape != self.seen.shape:
+            raise ValueError(f"saved seen has shape {seen.shape}")
+        data = json.loads(str(state["json"]))
+        for name in self._FIELDS:
+            setattr(self, name, data[name])
+        self.paths = {int(p["run"]): p for p in data["paths"]}
+        self.seen = seen
+        self.cache = None
 
     def _collisions(self, run: int, path: Any) -> list[list[float]]:
         from swarmpath.service.web.scene import collision_points, load_cell_scenario
@@ -290,6 +329,49 @@ class JobAggregates:
             metrics=record.get("metrics") or {}, curve=record.get("curve"),
             path=record.get("path"),
         )
+
+    def finished_runs(self) -> int:
+        with self._lock:
+            return int(sum(int(c.seen.sum()) for c in self._cells))
+
+    def save(self, path: Path) -> None:
+        """Write the aggregates to ``path`` (.npz, no pickles): a finished job's page loads from
+        it after a restart instead of re-reading every run from the store."""
+        arrays: dict[str, Any] = {"format": np.array(SAVE_FORMAT), "kind": np.array(self.kind)}
+        with self._lock:
+            for i, cell in enumerate(self._cells):
+                for name, value in cell.state().items():
+                    arrays[f"{i}.{name}"] = value
+            arrays["version"] = np.array(self.version)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(".tmp.npz")
+        np.savez(tmp, **arrays)
+        tmp.replace(path)
+
+    def load(self, path: Path) -> bool:
+        """Restore what :meth:`save` wrote (False, and nothing changed, when the file is missing,
+        of another format or does not fit this job's cells)."""
+        try:
+            with np.load(path, allow_pickle=False) as f:
+                if str(f["format"]) != SAVE_FORMAT or str(f["kind"]) != self.kind:
+                    return False
+                states = [{k.split(".", 1)[1]: f[k] for k in f.files if k.startswith(f"{i}.")}
+                          for i in range(len(self._cells))]
+                version = int(f["version"])
+        except (OSError, KeyError, ValueError):
+            return False
+        with self._lock:
+            backup = [c.state() for c in self._cells]
+            try:
+                for cell, state in zip(self._cells, states, strict=True):
+                    cell.restore(state)
+            except (KeyError, ValueError, TypeError):
+                for cell, state in zip(self._cells, backup, strict=True):
+                    cell.restore(state)
+                return False
+            self.version = version
+            self._view = None
+        return True
 
     def view(self) -> dict[str, Any]:
         """The job page's data: ``benchmark`` groups (one per function x dim) or ``map`` groups

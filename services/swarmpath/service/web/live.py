@@ -4,6 +4,10 @@ store for a job that is not in memory (after a restart, or evicted), and the liv
 every open page shares (:meth:`Dashboard.jobs_snapshot`, computed at most twice a second
 whatever the number of clients).
 
+A finished job's aggregates are saved in ``cache_dir`` (:meth:`Dashboard.finished`) and loaded
+from there when the job is not in memory, so its page stays quick after a restart; unfinished
+jobs are rebuilt from the store in the background at startup (:meth:`Dashboard.warm`).
+
 Bounded: at most ``max_jobs`` jobs' aggregates (least recently used evicted), a rate window of
 ``RATE_WINDOW`` seconds per job, at most ``max_scenes`` map scenes."""
 
@@ -11,13 +15,18 @@ from __future__ import annotations
 
 import json
 import logging
+import re
 import threading
 import time
 from collections import OrderedDict, deque
 from collections.abc import Iterable
+from pathlib import Path
 from typing import Any
 
 from swarmpath.service.web.aggregates import JobAggregates
+
+FINAL_STATES = frozenset({"done", "failed", "cancelled"})
+_SAFE_ID = re.compile(r"^[A-Za-z0-9_.-]{1,64}$")
 
 log = logging.getLogger("swarmpath.dashboard")
 
@@ -27,8 +36,10 @@ SNAPSHOT_JOBS = 200  # jobs in the live list (newest first)
 
 
 class Dashboard:
-    def __init__(self, store: Any, max_jobs: int = 8, max_scenes: int = 64):
+    def __init__(self, store: Any, cache_dir: Path | None = None, max_jobs: int = 8,
+                 max_scenes: int = 64):
         self.store = store
+        self.cache_dir = cache_dir  # finished jobs' aggregates (JobAggregates.save)
         self.max_jobs = max_jobs
         self.max_scenes = max_scenes
         self._lock = threading.Lock()
@@ -96,14 +107,64 @@ class Dashboard:
             return job
         started = time.perf_counter()
         try:
-            n = sum(job.add_record(rec) for rec in self.store.iter_run_records(job_id))
+            finished = status.runs_done + status.runs_failed
+            saved = self._saved(job_id)
+            if (status.state in FINAL_STATES and saved is not None and job.load(saved)
+                    and job.finished_runs() == finished):
+                how = "its saved aggregates"
+            else:
+                if job.finished_runs():  # a stale file: start again from the store
+                    job = JobAggregates(job_id, status.kind, cells, spec.seed)
+                    with self._lock:
+                        self._jobs[job_id] = job
+                n = sum(job.add_record(rec) for rec in self.store.iter_run_records(job_id))
+                how = f"{n} stored runs"
+                if status.state in FINAL_STATES and saved is not None:
+                    self._save(job, saved)
         finally:
             with self._lock:
                 self._ready.pop(job_id).set()
-        if n:
-            log.info("dashboard: job %s aggregated from %d stored runs in %.2f s", job_id, n,
-                     time.perf_counter() - started)
+        log.info("dashboard: job %s aggregated from %s in %.2f s", job_id, how,
+                 time.perf_counter() - started)
         return job
+
+    def _saved(self, job_id: str) -> Path | None:
+        if self.cache_dir is None or not _SAFE_ID.match(job_id):
+            return None
+        return self.cache_dir / f"{job_id}.npz"
+
+    def finished(self, job_id: str) -> None:
+        """The job ended: save its aggregates when they are in memory (a job that is not is
+        saved when its page first rebuilds them)."""
+        path = self._saved(job_id)
+        with self._lock:
+            job = self._jobs.get(job_id) if job_id not in self._ready else None
+        if path is not None and job is not None:
+            self._save(job, path)
+
+    @staticmethod
+    def _save(job: JobAggregates, path: Path) -> None:
+        try:
+            job.save(path)
+        except OSError:
+            log.exception("saving the dashboard's aggregates of job %s failed", job.job_id)
+
+    def warm(self, job_ids: Iterable[str]) -> threading.Thread:
+        """In a daemon thread: import the statistics (scipy) and build the aggregates of
+        ``job_ids`` (the unfinished jobs after a restart), so the first pages are quick."""
+        ids = list(job_ids)[-self.max_jobs:]
+
+        def run() -> None:
+            try:
+                import swarmpath.compare  # noqa: F401
+                for job_id in ids:
+                    self.aggregates(job_id)
+            except Exception:
+                log.exception("warming the dashboard up failed")
+
+        thread = threading.Thread(target=run, name="dashboard-warm", daemon=True)
+        thread.start()
+        return thread
 
     # --------------------------------------------------------------------------------- rates
     def rate(self, job_id: str, now: float | None = None) -> float:
