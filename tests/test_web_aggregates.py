@@ -25,7 +25,7 @@ def test_sample_curve_reads_iterations_and_thinned_curves():
     g = agg.curve_grid(100)
     assert agg.sample_curve(curve, g).tolist() == (101 - g).tolist()
     # thinned as the worker thins a curve that does not fit a message: 0, 8, ..., 96, 99
-    from swarmpath.service.worker import _thin
+    from swarmpath.service.worker.packing import _thin
 
     thin = _thin(list(curve), 8)
     got = agg.sample_curve(thin, g, stride=8)

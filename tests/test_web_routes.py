@@ -10,10 +10,10 @@ import pytest
 from fastapi.testclient import TestClient
 
 from swarmpath.service.coordinator import CoordinatorSettings, create_app
+from swarmpath.service.http.routes import dashboard as dashboard_routes
+from swarmpath.service.http.routes.pages import ASSETS
 from swarmpath.service.protocol import Lease, LeaseRequest, decode_work_reply, encode
-from swarmpath.service.web import dashboard_routes
 from swarmpath.service.web.live import Dashboard
-from swarmpath.service.web.pages import ASSETS
 from swarmpath.service.worker import execute_lease, pack_batches
 
 BENCH = {"kind": "benchmark", "algorithms": ["GWO", "PSO"], "functions": ["F1"], "dims": [2],

@@ -107,8 +107,16 @@ def _serve(app_: Any, http: str, log_level: str) -> None:
 
     host, port = parse_http(http)
     config = uvicorn.Config(app_, host=host, port=port, log_level=log_level.lower(),
-                            access_log=log_level.lower() == "debug", lifespan="on")
+                            access_log=log_level.lower() == "debug", lifespan="on",
+                            timeout_graceful_shutdown=5)
     server = uvicorn.Server(config)
+    handle_exit = server.handle_exit
+
+    def stopping(sig: int, frame: Any) -> None:  # open dashboard event streams end at once
+        app_.state.stopping = True
+        handle_exit(sig, frame)
+
+    server.handle_exit = stopping  # type: ignore[method-assign]
     server.run()
     if not server.started:
         typer.echo(f"swarmpath: error: could not serve HTTP on {http}", err=True)

@@ -50,6 +50,7 @@ from swarmpath.service.settings import DEFAULT_HTTP, CoordinatorSettings
 from swarmpath.service.store import FINAL_STATES, Store
 from swarmpath.service.util import json_safe
 from swarmpath.service.util import short as _short
+from swarmpath.service.web.live import Dashboard
 
 if TYPE_CHECKING:
     from swarmpath.service.bridge import ZenohBridge
@@ -86,6 +87,7 @@ class Coordinator:
         self.keys = Keys(settings.prefix)
         self.store = Store(settings.data_dir, synchronous=settings.synchronous)
         self.recorders = Recorders(self.store)
+        self.dashboard = Dashboard(self.store, Path(settings.data_dir) / "dashboard")
         self.sizer = LeaseSizer(settings.target_lease_seconds, settings.min_lease_runs)
         self.publish: Callable[[str, bytes], None] = publish or (lambda key, payload: None)
         self.heartbeat_seconds = settings.heartbeat_seconds or settings.lease_seconds / 3.0
@@ -117,6 +119,7 @@ class Coordinator:
             log.info("restart: %d active leases get %.0f s to report", extended, grace)
         touched = self.recorders.recover()
         self._recording.update(self.store.unfinished_jobs())
+        self.dashboard.warm(self.store.unfinished_jobs())
         if touched:
             log.info("restart: MCAP files rebuilt from the store for %d jobs", len(touched))
         return touched
@@ -365,6 +368,10 @@ class Coordinator:
             self._record(job_id, accepted, now)
         except Exception:
             log.exception("recording results of job %s in its MCAP failed", job_id)
+        try:
+            self.dashboard.observe(job_id, accepted, now)
+        except Exception:
+            log.exception("updating the dashboard's aggregates of job %s failed", job_id)
         status = self.store.job_status(job_id)
         if status is not None and status.state in FINAL_STATES:
             self.finalize(job_id)
@@ -426,6 +433,7 @@ class Coordinator:
                     return None
                 status = self.store.job_status(job_id)
                 log.info("job %s %s; MCAP %s", job_id, status.state if status else "?", path)
+                self.dashboard.finished(job_id)
             self._recording.discard(job_id)
             self._jobs.pop(job_id, None)
             return self.recorders.path(job_id)

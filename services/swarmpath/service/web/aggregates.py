@@ -278,8 +278,9 @@ class JobAggregates:
     """The dashboard's state of one job (see the module docstring). Thread-safe."""
 
     def __init__(self, job_id: str, kind: str, cells: Sequence[Mapping[str, Any]],
-                 seed: int = 0):
+                 seed: int = 0, reference: str | None = None):
         self.job_id = job_id
+        self.reference = reference  # the statistics' reference (None: the last one listed)
         self.kind = kind
         self.version = 0  # bumped by every add(): a client's cached copy is current if equal
         self._lock = threading.Lock()
@@ -409,7 +410,8 @@ class JobAggregates:
                 cell.best[cell.ok])
         return {"job_id": self.job_id, "kind": "benchmark", "version": self.version,
                 "algorithms": algorithms, "groups": list(groups.values()),
-                "statistics": benchmark_statistics(samples, groups, algorithms)}
+                "statistics": benchmark_statistics(samples, groups, algorithms,
+                                                   self.reference)}
 
     def _map_view(self) -> dict[str, Any]:
         groups: dict[str, dict[str, Any]] = {}
@@ -422,22 +424,23 @@ class JobAggregates:
             g["planners"][s["planner"]] = cell.view()
         return {"job_id": self.job_id, "kind": "map", "version": self.version,
                 "planners": planners, "groups": list(groups.values()),
-                "statistics": map_statistics(groups, planners)}
+                "statistics": map_statistics(groups, planners, self.reference)}
 
 
 def benchmark_statistics(
     samples: Mapping[tuple[str, int], Mapping[str, np.ndarray]],
     groups: Mapping[tuple[str, int], Mapping[str, Any]],
     algorithms: Sequence[str],
+    reference: str | None = None,
 ) -> dict[str, Any] | None:
-    """+/=/- of every algorithm against the reference (the last one listed) per function x dim
-    (Wilcoxon rank-sum, Holm over the table) and Friedman mean ranks per dimension
+    """+/=/- of every algorithm against ``reference`` (default: the last one listed) per
+    function x dim (Wilcoxon rank-sum, Holm over the table) and Friedman mean ranks per dimension
     (:mod:`swarmpath.compare`). None with fewer than two algorithms."""
     if len(algorithms) < 2:
         return None
     from swarmpath.compare import compare_samples, friedman
 
-    comparison = compare_samples(samples, algorithms)
+    comparison = compare_samples(samples, algorithms, reference)
     markers: dict[str, dict[str, str]] = {}
     for (function, dim), per in samples.items():
         for a in per:
@@ -447,7 +450,7 @@ def benchmark_statistics(
     ranks: dict[str, Any] = {}
     for dim in sorted({d for _, d in groups}):
         values = {f: g["means"] for (f, d), g in groups.items() if d == dim}
-        fr = friedman(values, algorithms)
+        fr = friedman(values, algorithms, reference)
         ranks[str(dim)] = {"mean_ranks": fr.mean_ranks, "p": fr.p, "blocks": len(fr.blocks),
                            "note": fr.note}
     return {"test": comparison.test, "reference": comparison.reference,
@@ -456,9 +459,10 @@ def benchmark_statistics(
 
 
 def map_statistics(
-    groups: Mapping[str, Mapping[str, Any]], planners: Sequence[str]
+    groups: Mapping[str, Mapping[str, Any]], planners: Sequence[str],
+    reference: str | None = None,
 ) -> dict[str, Any] | None:
-    """Success rates of every planner against the reference (the last one listed) per map:
+    """Success rates of every planner against ``reference`` (default: the last one) per map:
     Fisher's exact test, Holm over the table (:mod:`swarmpath.compare`)."""
     if len(planners) < 2:
         return None
@@ -466,7 +470,7 @@ def map_statistics(
 
     counts = {name: {p: (v["succeeded"], v["runs"] - v["crashed"])
                      for p, v in g["planners"].items()} for name, g in groups.items()}
-    comparison = compare_success(counts, planners)
+    comparison = compare_success(counts, planners, reference)
     markers: dict[str, dict[str, str]] = {}
     for name, per in counts.items():
         for p in per:

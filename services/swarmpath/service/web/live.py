@@ -93,7 +93,8 @@ class Dashboard:
         with self._lock:
             job = self._jobs.get(job_id)
             if job is None:  # we build it; results arriving meanwhile are added (deduplicated)
-                job = JobAggregates(job_id, status.kind, cells, spec.seed)
+                job = JobAggregates(job_id, status.kind, cells, spec.seed,
+                                    getattr(spec, "reference", None))
                 self._jobs[job_id] = job
                 ready = self._ready[job_id] = threading.Event()
                 while len(self._jobs) > self.max_jobs:
@@ -114,7 +115,8 @@ class Dashboard:
                 how = "its saved aggregates"
             else:
                 if job.finished_runs():  # a stale file: start again from the store
-                    job = JobAggregates(job_id, status.kind, cells, spec.seed)
+                    job = JobAggregates(job_id, status.kind, cells, spec.seed,
+                                    getattr(spec, "reference", None))
                     with self._lock:
                         self._jobs[job_id] = job
                 n = sum(job.add_record(rec) for rec in self.store.iter_run_records(job_id))

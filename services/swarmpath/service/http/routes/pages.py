@@ -1,5 +1,6 @@
-"""Routes of the dashboard's pages: the HTML shells and their scripts and styles (package data in
-``static/``; the pages draw themselves from the JSON routes of :mod:`.dashboard_routes`).
+"""The dashboard's pages: the HTML shells and their scripts and styles (package data in
+``swarmpath/service/web/static/``; the pages draw themselves from the JSON routes of
+:mod:`.dashboard`).
 
 ``GET /`` jobs, ``/ui/jobs/{id}`` a job, ``/ui/jobs/{id}/runs/{run_id}`` a run, ``/ui/workers``,
 ``/ui/submit``; ``/static/{name}`` serves only the files shipped in ``static/``."""

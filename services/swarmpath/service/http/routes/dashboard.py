@@ -1,9 +1,10 @@
-"""JSON and event routes behind the dashboard's pages (thin: the work is in
+"""The dashboard's data: JSON and event routes behind its pages (thin: the work is in
 :class:`~swarmpath.service.web.live.Dashboard` and :mod:`~swarmpath.service.web.aggregates`).
 
 * ``GET /events`` - Server-Sent Events: ``event: jobs`` with the jobs list (progress, runs/s,
   ETA) once a second when it changed; every client shares one snapshot. A stream ends after
-  ``STREAM_SECONDS`` (the browser reconnects) so it never holds a shutdown up for long.
+  ``STREAM_SECONDS`` (the browser reconnects), and within a second of ``app.state.stopping``
+  (set by ``swarmpath coordinator``/``up`` on SIGTERM) so it does not hold a shutdown up.
 * ``GET /ui/jobs`` - the same snapshot, for clients without EventSource.
 * ``GET /ui/jobs/{id}/data`` - the job page's aggregates, with an ETag (304 when unchanged).
 * ``GET /ui/jobs/{id}/scene?cell=N`` (run 0's world) or ``?run=RUN_ID`` - a map cell's scene.
@@ -14,7 +15,6 @@ from __future__ import annotations
 
 import asyncio
 import json
-import os
 import threading
 import time
 from collections.abc import AsyncIterator
@@ -22,6 +22,9 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, HTTPException, Query, Request
 from fastapi.responses import Response, StreamingResponse
+
+from swarmpath.service.http.deps import CoreDep
+from swarmpath.service.util import json_safe
 
 router = APIRouter(tags=["dashboard"])
 
@@ -40,16 +43,7 @@ class _Streams:
 _STREAMS = _Streams()
 
 
-def _core(request: Request) -> Any:
-    core = getattr(request.app.state, "core", None)
-    if core is None:
-        raise HTTPException(503, "the coordinator is starting or stopping")
-    return core
-
-
 def _json(data: Any, status: int = 200, headers: dict[str, str] | None = None) -> Response:
-    from swarmpath.service.coordinator import json_safe
-
     body = json.dumps(json_safe(data), separators=(",", ":"))
     return Response(body, status, headers=headers, media_type="application/json")
 
@@ -59,12 +53,7 @@ def config(request: Request) -> dict[str, Any]:
     """Whether submit/cancel need a bearer token, and the defaults of the job specs' fields."""
     from swarmpath.service.protocol import BenchmarkJobSpec, MapJobSpec
 
-    core = getattr(request.app.state, "core", None)
-    token = getattr(request.app.state, "token", None)
-    if token is None and core is not None:
-        token = core.settings.token
-    if token is None:
-        token = os.environ.get("SWARMPATH_TOKEN")
+    token = getattr(request.app.state, "token", None)  # create_app resolved $SWARMPATH_TOKEN
 
     def defaults(cls: Any) -> dict[str, Any]:
         return {name: f.get_default(call_default_factory=True)
@@ -75,16 +64,15 @@ def config(request: Request) -> dict[str, Any]:
 
 
 @router.get("/ui/jobs")
-def jobs(request: Request) -> Response:
+def jobs(core: CoreDep) -> Response:
     """The jobs list (newest 200) with progress, runs/s and ETA."""
-    data = _core(request).dashboard.jobs_snapshot()
+    data = core.dashboard.jobs_snapshot()
     return Response(data, media_type="application/json")
 
 
 @router.get("/events")
-async def events(request: Request) -> StreamingResponse:
+async def events(request: Request, core: CoreDep) -> StreamingResponse:
     """Server-Sent Events: ``jobs`` (the /ui/jobs list) when it changes, at most once a second."""
-    core = _core(request)
     with _STREAMS.lock:
         if _STREAMS.open >= MAX_STREAMS:
             raise HTTPException(503, f"too many event streams (at most {MAX_STREAMS})")
@@ -94,7 +82,8 @@ async def events(request: Request) -> StreamingResponse:
         try:
             yield b"retry: 1000\n\n"
             last, quiet, started = b"", time.monotonic(), time.monotonic()
-            while core.accepting and time.monotonic() - started < STREAM_SECONDS:
+            while (core.accepting and not getattr(request.app.state, "stopping", False)
+                   and time.monotonic() - started < STREAM_SECONDS):
                 if await request.is_disconnected():
                     return
                 data = await asyncio.to_thread(core.dashboard.jobs_snapshot)
@@ -115,9 +104,9 @@ async def events(request: Request) -> StreamingResponse:
 
 
 @router.get("/ui/jobs/{job_id}/data", responses={304: {"description": "unchanged"}})
-def job_data(job_id: str, request: Request) -> Response:
+def job_data(job_id: str, request: Request, core: CoreDep) -> Response:
     """The job page's aggregates (see :meth:`JobAggregates.view`); ETag = the job's version."""
-    agg = _core(request).dashboard.aggregates(job_id)
+    agg = core.dashboard.aggregates(job_id)
     if agg is None:
         raise HTTPException(404, f"unknown job {job_id!r}")
     etag = f'"{job_id}-{agg.version}"'
@@ -129,14 +118,13 @@ def job_data(job_id: str, request: Request) -> Response:
 @router.get("/ui/jobs/{job_id}/scene")
 def job_scene(
     job_id: str,
-    request: Request,
+    core: CoreDep,
     cell: Annotated[int | None, Query(ge=0)] = None,
     run: Annotated[int | None, Query(ge=0, description="run_id")] = None,
     t_end: Annotated[float, Query(ge=0, le=1e6)] = 0.0,
 ) -> Response:
     """A map cell's scene and (for ``run``, else its cell's run 0) the moving obstacles' and
     goal's tracks up to ``t_end`` seconds."""
-    core = _core(request)
     spec = core.store.job_spec(job_id)
     status = core.store.job_status(job_id)
     if spec is None or status is None:
