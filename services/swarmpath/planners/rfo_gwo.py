@@ -149,6 +149,7 @@ from swarmpath.planners.base import (
     PlannerError,
     register,
 )
+from swarmpath.planners.cost_to_go import CostToGo
 from swarmpath.robot.kinematics import ARRIVE
 from swarmpath.world.geometry import (
     ObstacleSet,
@@ -415,6 +416,10 @@ class RfoFamilyPlanner(Planner):
         "goal_snap": 0.2,  # m: a fox this close to the target with a free segment steps onto it
         "arrivals": 1,  # foxes that must reach the target before the search ends
         "arrival_wait": 1.0,  # then at most this many times the first fox's iterations more
+        # "closer to the target": eq 17's straight line, the way along free space, or the
+        # straight line first and the way along free space when that search stalls
+        "progress": "auto",
+        "progress_cells": 300,  # grid cells along the longer side for the way along free space
         # following the path with sensors (moving obstacles)
         "watch": 3.0,  # m: sensed points farther than this from the robot are ignored
         "dynamic_margin": 0.3,  # m beyond the robot radius kept from sensed points
@@ -427,12 +432,13 @@ class RfoFamilyPlanner(Planner):
         "alpha_draw": ("fox", "population"),
         "reference": ("target", "best"),
         "node_opt": ("gwo", "off"),
+        "progress": ("auto", "euclidean", "geodesic"),
     }
 
     @classmethod
     def check_params(cls, p: Mapping[str, ParamValue]) -> None:
         for key in ("foxes", "iterations", "wolves", "gwo_iterations", "ea_population",
-                    "ea_generations", "arrivals"):
+                    "ea_generations", "arrivals", "progress_cells"):
             if key in p and int(p[key]) < 1:
                 raise PlannerError(f"{cls.name}.{key} must be >= 1")
         for key in ("radius", "split_length", "watch", "replan", "side_step", "relax_box"):
@@ -483,7 +489,7 @@ class RfoFamilyPlanner(Planner):
         target = self._waypoints[self._next].copy()
         self._next += 1
         # the last waypoint is the goal: drive onto it so the executed path is complete
-        return Decision(target, 0, None, finish=self._next >= len(self._waypoints))
+        return Decision(target, 0, None, finish=self._next >= len(self._waypoints), align=True)
 
     def _begin(self, obs: Observation) -> Decision:
         """Plan from the robot to the goal as observed and hand out the first waypoint."""
@@ -496,9 +502,9 @@ class RfoFamilyPlanner(Planner):
         if self._watching(obs):  # watch from the first step on
             decision = self._follow(obs)
             return Decision(decision.target, self._cost + decision.iterations,
-                            decision.duration, decision.reason, decision.finish)
+                            decision.duration, decision.reason, decision.finish, align=True)
         return Decision(self._waypoints[0].copy(), self._cost, None,
-                        finish=len(self._waypoints) == 1)
+                        finish=len(self._waypoints) == 1, align=True)
 
     def _goal_moved(self, obs: Observation) -> bool:
         """The path is used up and the goal is more than ``goal_snap`` from where it was planned
@@ -559,7 +565,7 @@ class RfoFamilyPlanner(Planner):
         finish = k == len(self._waypoints) - 1
         duration = float(self.p["replan"])
         if len(hits) == 0:
-            return Decision(target, 0, duration, finish=finish)
+            return Decision(target, 0, duration, finish=finish, align=True)
         margin = r + float(self.p["dynamic_margin"])
         iterations = 0
         if collides(self._static.segment_clearance(pos[None, :], target[None, :]), r)[0]:
@@ -574,7 +580,7 @@ class RfoFamilyPlanner(Planner):
             target = self._waypoints[0].copy()
             finish = len(self._waypoints) == 1
         if _hit_clearance(pos, target, hits) > margin:
-            return Decision(target, iterations, duration, finish=finish)
+            return Decision(target, iterations, duration, finish=finish, align=True)
         # blocked: the candidate (waiting included) nearest the waypoint that stays clear
         step = float(self.p["side_step"])
         angles = np.arange(12) * (2 * math.pi / 12)
@@ -587,9 +593,9 @@ class RfoFamilyPlanner(Planner):
         ok = free & (room > margin)
         if ok.any():
             cost = np.where(ok, np.hypot(*(cands - target).T), np.inf)
-            return Decision(cands[int(np.argmin(cost))], iterations, duration)
+            return Decision(cands[int(np.argmin(cost))], iterations, duration, align=True)
         room = np.where(free, room, -np.inf)
-        return Decision(cands[int(np.argmax(room))], iterations, duration)
+        return Decision(cands[int(np.argmax(room))], iterations, duration, align=True)
 
     # --------------------------------------------------------------------------- planning
     def plan(self, start: Array, goal: Array, radius: float) -> Array | None:
@@ -623,6 +629,11 @@ class RfoFamilyPlanner(Planner):
         return self._failure
 
     @property
+    def planned_length(self) -> float | None:
+        """Length of the last plan (a moving goal makes the planner plan again)."""
+        return None if self.path is None else path_length(self.path)
+
+    @property
     def cost(self) -> int:
         """The paper's cost: RFO iterations consumed (Table 2)."""
         return self._cost
@@ -648,16 +659,44 @@ class RfoFamilyPlanner(Planner):
         if bool(collides(obstacles.point_clearance(start), radius)):
             self._failure = "start is in collision"
             return
+        if bool(collides(obstacles.point_clearance(goal), radius)):
+            self._failure = "goal is in collision"
+            return
+        # A start or goal closer to an obstacle than the safety rule allows could never be left
+        # or reached: the safety margin shrinks to half their clearance beyond the radius.
+        ends = obstacles.point_clearance(np.stack([start, goal]))
+        spare = float(ends.min()) - radius
+        if spare > 0 and radius + 0.5 * spare < self._thr_safe:
+            self._thr_safe = radius + 0.5 * spare
+            self._thr_node = max(self._thr_node, self._thr_safe)
         self._stall: tuple[int, float] | None = None
+        mode = str(self.p["progress"])
+        self._togo = self._euclidean
+        self.progress_used = "euclidean"
+        note = ""
+        if mode == "geodesic":
+            if not self._use_geodesic(obstacles, start, goal):
+                return
         found, self._cost = self._search(start, goal)
+        if not found and self._stall is not None and mode == "auto":
+            # eq 17's straight line has traps (an obstacle facing the goal); the way along free
+            # space has none: search again with it
+            note = (f"; with eq 17's straight-line progress first, no fox got closer for "
+                    f"{self._stall[0]} iterations ({self._stall[1]:.2f} m away)")
+            self._stall = None
+            if not self._use_geodesic(obstacles, start, goal, note):
+                return
+            found, more = self._search(start, goal)
+            self._cost += more
         if not found:
+            away = "along free space" if self.progress_used == "geodesic" else "in a straight line"
             if self._stall is not None:
                 self._failure = (
                     f"no fox got closer to the goal for {self._stall[0]} iterations (best "
-                    f"{self._stall[1]:.2f} m away)"
+                    f"{self._stall[1]:.2f} m away {away}){note}"
                 )
             else:
-                self._failure = f"no path to the goal within {self._cost} iterations"
+                self._failure = f"no path to the goal within {self._cost} iterations{note}"
             return
         # already at the target: one waypoint, the target itself
         found = [np.vstack([q, goal]) if len(q) == 1 else q for q in found]
@@ -675,6 +714,29 @@ class RfoFamilyPlanner(Planner):
             return
         self.path = path
         self._waypoints = path[1:]
+
+    # ------------------------------------------------------------------------ progress
+    def _euclidean(self, P: Array) -> Array:
+        """Eq 17: the straight-line distance to the target."""
+        return np.asarray(np.hypot(P[..., 0] - self._goal[0], P[..., 1] - self._goal[1]))
+
+    def _use_geodesic(self, obstacles: ObstacleSet, start: Array, goal: Array,
+                      note: str = "") -> bool:
+        """Switch "closer to the target" to the way along free space (:class:`CostToGo`, keeping
+        the safety clearance); False, with the failure set, when the start has no such way."""
+        field = CostToGo(obstacles, self.scenario.size, goal, self._thr_safe,
+                         int(self.p["progress_cells"]))
+        self._togo = field
+        self.progress_used = "geodesic"
+        if not math.isfinite(float(field(start[None, :])[0])):
+            self._failure = (
+                f"no way from the start to the goal keeping {self._thr_safe:.3g} m from every "
+                f"obstacle (robot radius + safety margin) on a grid of "
+                f"{field.spec.resolution:.3g} m cells: the goal is walled off, or the way "
+                f"passes gaps narrower than the grid resolves (raise progress_cells){note}"
+            )
+            return False
+        return True
 
     # ------------------------------------------------------------------------ validity
     def _segments_ok(self, A: Array, B: Array) -> NDArray[np.bool_]:
@@ -739,7 +801,7 @@ class RfoFamilyPlanner(Planner):
         for t in range(1, T + 1):
             if arrived and t - 1 - first >= max(1, math.ceil(wait * first)):
                 return arrived, t - 1
-            dist = np.hypot(*(pos - goal).T)  # eq 17 (monotone in the Euclidean distance)
+            dist = self._togo(pos)  # eq 17 (or the way along free space, see ``progress``)
             dist = np.where(active, dist, np.inf)
             self.trace.append(float(dist.min()))
             if dist.min() < record - STALL_TOLERANCE:
@@ -762,7 +824,7 @@ class RfoFamilyPlanner(Planner):
             delta = ref - pos
             step = np.sign(delta) * np.minimum(alpha[:, None], np.abs(delta))  # eq 2, clamped
             new = np.clip(pos + step, lo, hi)
-            closer = np.hypot(*(new - goal).T) < dist
+            closer = self._togo(new) < dist
             seg_ok, node_ok = self._moves_ok(pos, new, self._thr_node)
             ok = closer & seg_ok & node_ok
             if self.fallback == "local":
@@ -853,7 +915,7 @@ class RfoFamilyPlanner(Planner):
         R = float(self.p["radius"])
         lower = np.maximum(P - R, self._lo)
         upper = np.minimum(P + R, self._hi)
-        goal = self._goal
+        togo = self._togo
         thr = self._thr_safe
         m = int(self.p["wolves"])
         query = _BoxQuery(self._geo, P, lower, upper, thr, m, ks)
@@ -863,7 +925,7 @@ class RfoFamilyPlanner(Planner):
         def objective(X: Array, streams: RunStreams) -> Array:
             W = X.reshape(-1, 2)
             dseg, dnode, dobs = query(W)
-            dg = np.hypot(W[:, 0] - goal[0], W[:, 1] - goal[1])
+            dg = togo(W)
             valid = ~collides(dseg, thr) & ~collides(dnode, thr) & (dg < dp)
             viol = (np.maximum(thr - dseg, 0.0) + np.maximum(thr - dnode, 0.0)
                     + np.maximum(dg - dp, 0.0))
