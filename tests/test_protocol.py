@@ -250,7 +250,7 @@ def make_lease() -> p.Lease:
     return p.Lease(
         lease_id="abc123", worker="w-1", job_id="job1", cell=cell.key, cell_index=1,
         runs_per_cell=30, seed=1, runs=[4, 5, 6], spec=cell, deadline=1e9, lease_seconds=60,
-        heartbeat_seconds=20,
+        heartbeat_seconds=20, capability="5e" * 32,
     )
 
 
@@ -272,6 +272,26 @@ def test_run_result_keeps_non_finite_numbers():
     back = p.decode(p.RunResult, p.encode(r))
     assert back.metrics["best_fitness"] == math.inf and back.curve[0] == math.inf
     assert back.metrics["evaluations"] == 10 and back.metrics["flag"] is True
+
+
+def test_a_result_proof_survives_the_wire_and_binds_every_field():
+    """The worker signs the result it built; the coordinator checks the one it parsed: the JSON
+    round trip (non-finite floats, ints vs floats, tuples) must not change the signed text."""
+    from swarmpath.service.capability import new_capability, result_ok, result_proof
+
+    cap = new_capability()
+    r = p.RunResult(lease_id="abc", job_id="j", cell="GWO/F1/30", run=3, worker="w",
+                    seconds=0.1, metrics={"best_fitness": -0.0, "evaluations": 10, "ok": True,
+                                          "gap": None, "x": 1e-300},
+                    curve=[math.inf, 1.0, 0.1 + 0.2, math.nan], best_position=[1.0, -2.5],
+                    path=[(0.0, 1.0, 2.0)])
+    signed = r.model_copy(update={"proof": result_proof(cap, r)})
+    back = p.decode(p.RunResult, p.encode(signed))
+    assert result_ok(cap, back) and not result_ok(new_capability(), back)
+    assert not result_ok("", back) and not result_ok(cap, r)  # no proof, no secret: never
+    for change in ({"run": 4}, {"worker": "v"}, {"seconds": 0.2}, {"status": "failed"},
+                   {"curve": [1.0]}, {"metrics": {"best_fitness": -1.0}}):
+        assert not result_ok(cap, back.model_copy(update=change)), change
 
 
 def test_garbage_and_oversized_payloads_are_rejected():

@@ -27,7 +27,7 @@ from swarmpath.service.recorder import (
 from swarmpath.service.store import Store
 
 sys.path.insert(0, str(Path(__file__).parent))
-from test_store import SPEC, T0, drain, execute
+from test_store import SPEC, T0, drain, execute, signed
 
 
 def read_all(path: Path):
@@ -388,9 +388,10 @@ def test_map_job_through_the_store(store):
     recorders = Recorders(store)
     while (lease := store.lease("w", 2, now=T0)) is not None:
         results = [
-            RunResult(lease_id=lease.lease_id, job_id=job, cell=lease.cell, run=r, worker="w",
-                      seconds=0.5, metrics=map_record(job, r, T0)["metrics"],
-                      path=[tuple(p) for p in map_record(job, r, T0)["path"]])
+            signed(lease, RunResult(
+                lease_id=lease.lease_id, job_id=job, cell=lease.cell, run=r, worker="w",
+                seconds=0.5, metrics=map_record(job, r, T0)["metrics"],
+                path=[tuple(p) for p in map_record(job, r, T0)["path"]]))
             for r in lease.runs
         ]
         store.accept_results(results, T0)

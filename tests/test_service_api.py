@@ -12,6 +12,14 @@ from fastapi.testclient import TestClient
 from mcap.reader import make_reader
 
 from swarmpath.optimizers import minimize
+from swarmpath.service.capability import (
+    drop_ok,
+    drop_proof,
+    new_capability,
+    progress_ok,
+    progress_proof,
+    result_proof,
+)
 from swarmpath.service.client import ServiceClient, ServiceError, error_field
 from swarmpath.service.coordinator import (
     Coordinator,
@@ -23,12 +31,16 @@ from swarmpath.service.coordinator import (
 from swarmpath.service.protocol import (
     Ack,
     BenchmarkCell,
+    Cancel,
     Lease,
     LeaseBundle,
+    LeaseDrop,
     LeaseRequest,
     MapCell,
     NoWork,
+    ResultBatch,
     RunProgress,
+    RunResult,
     decode,
     decode_work_reply,
     encode,
@@ -42,6 +54,8 @@ from swarmpath.service.worker import (
     pack_batches,
 )
 from swarmpath.service.zenoh_config import check_endpoint, client_config, router_config
+
+CAP = "c0de" * 16  # the capability of the hand-made leases below
 
 SPEC = {
     "kind": "benchmark", "algorithms": ["GWO", "PSO"], "functions": ["F1", "F9"], "dims": [3],
@@ -249,17 +263,53 @@ def test_duplicates_stale_and_garbage(client, core, caplog):
     assert n == len(lease.runs)
 
 
-def test_progress_renews_and_drops(client, core):
-    client.post("/jobs", json=SPEC)
+def test_progress_renews_and_drops_only_with_the_proof(client, core):
+    job = client.post("/jobs", json=SPEC).json()
     core.worker_alive("w1")
     lease = lease_for(core)
-    progress = RunProgress(lease_id=lease.lease_id, job_id=lease.job_id, worker="w1",
-                           cell=lease.cell, runs=lease.runs)
     key = f"swarmpath/progress/{lease.job_id}"
-    assert core.handle_progress(key, encode(progress)) is None  # active: renewed, no answer
-    unknown = progress.model_copy(update={"lease_id": "nope"})
-    assert core.handle_progress(key, encode(unknown)).drop_leases == ["nope"]
-    assert core.publish.acks()[-1].drop_leases == ["nope"]
+
+    def progress(seq: int, cap: str = lease.capability, lease_id: str = lease.lease_id) -> bytes:
+        return encode(RunProgress(lease_id=lease_id, job_id=lease.job_id, worker="w1",
+                                  cell=lease.cell, runs=lease.runs, seq=seq,
+                                  proof=progress_proof(cap, lease_id, seq)))
+
+    assert core.handle_progress(key, progress(1)) is None  # active: renewed, no answer
+    # a stolen lease id with a made-up secret, a replayed message, an unknown lease: ignored
+    assert core.handle_progress(key, progress(2, cap="0" * 64)) is None
+    assert core.handle_progress(key, progress(1)) is None
+    assert core.handle_progress(key, progress(3, lease_id="nope")) is None
+    assert core.publish.acks() == [] and core.stats["unproven"] == 3
+    client.delete(f"/jobs/{job['id']}")
+    ack = core.handle_progress(key, progress(2))  # the lease ended: drop it, with the proof
+    assert [d.lease_id for d in ack.drop_leases] == [lease.lease_id]
+    assert drop_ok(lease.capability, lease.lease_id, ack.drop_leases[0].proof)
+    assert core.publish.acks()[-1] == ack
+
+
+def test_forged_results_and_stolen_lease_ids_are_stale(client, core):
+    """What an attacker on the bus can see (lease ids, workers, cells and runs are broadcast in
+    progress messages) is not enough: without the lease's capability every result is stale,
+    and the real worker's results are accepted afterwards."""
+    job = client.post("/jobs", json=SPEC).json()
+    core.worker_alive("w1")
+    lease = lease_for(core)
+    real = [decode(RunResult, d) for _r, d in execute_lease(lease)]
+    key = f"swarmpath/results/{job['id']}"
+    forged = [r.model_copy(update={"metrics": {**r.metrics, "best_fitness": -12345.0},
+                                   "proof": None}) for r in real]
+    guessed = [r.model_copy(update={"proof": result_proof(new_capability(), r)}) for r in forged]
+    altered = [r.model_copy(update={"metrics": forged[0].metrics}) for r in real]  # proof kept
+    for batch in (forged, guessed, altered):
+        payload = encode(ResultBatch(worker="w1", results=batch))
+        assert {a.status for a in core.handle_results(key, payload).results} == {"stale"}
+    assert client.get(f"/jobs/{job['id']}").json()["runs_done"] == 0
+    payload = encode(ResultBatch(worker="w1", results=real))
+    assert {a.status for a in core.handle_results(key, payload).results} == {"accepted"}
+    values = [r["best_fitness"] for r in client.get(f"/jobs/{job['id']}/runs").json()["items"]
+              if r["state"] == "done"]
+    assert sorted(values) == sorted(r.metrics["best_fitness"] for r in real)
+    assert -12345.0 not in values
 
 
 def test_leases_only_to_live_workers_and_requeue_when_gone(client, core):
@@ -286,19 +336,16 @@ def test_cancel_publishes_and_finalizes(client, core):
     lease = lease_for(core)
     r = client.delete(f"/jobs/{job['id']}")
     assert r.status_code == 200 and r.json()["state"] == "cancelled"
-    assert ("swarmpath/cancel", encode_cancel(job["id"])) in core.publish.sent
+    cancels = [decode(Cancel, p) for k, p in core.publish.sent if k == "swarmpath/cancel"]
+    assert [c.job_id for c in cancels] == [job["id"]]
+    (drop,) = cancels[0].leases  # the one active lease, with the coordinator's proof
+    assert drop.lease_id == lease.lease_id and drop_ok(lease.capability, drop.lease_id, drop.proof)
     assert client.get(f"/jobs/{job['id']}/mcap").status_code == 200
     results = pack_batches("w1", [d for _r, d in execute_lease(lease)])
     ack = core.handle_results(f"swarmpath/results/{job['id']}", results[0])
     assert {r.status for r in ack.results} == {"stale"}
     assert isinstance(lease_for(core), NoWork)
     assert client.delete(f"/jobs/{job['id']}").json()["state"] == "cancelled"
-
-
-def encode_cancel(job_id: str) -> bytes:
-    from swarmpath.service.protocol import Cancel
-
-    return encode(Cancel(job_id=job_id))
 
 
 def test_catalog_health_metrics(client):
@@ -334,7 +381,7 @@ def test_client_against_the_app(app):
 def make_lease(spec, runs, seed=4) -> Lease:
     return Lease(lease_id="L1", worker="w1", job_id="j1", cell=spec.key, cell_index=0,
                  runs_per_cell=10, seed=seed, runs=runs, spec=spec, deadline=0.0,
-                 lease_seconds=30.0, heartbeat_seconds=10.0)
+                 lease_seconds=30.0, heartbeat_seconds=10.0, capability=CAP)
 
 
 def test_execute_lease_equals_minimize_and_splits_batches(monkeypatch):
@@ -467,7 +514,8 @@ def offline_worker(**settings):
 def run_ack(lease: Lease, runs, status="accepted", drop=()) -> Sample:
     from swarmpath.service.protocol import RunAck
 
-    return Sample(encode(Ack(worker="w1", drop_leases=list(drop), results=[
+    drops = [LeaseDrop(lease_id=d, proof=drop_proof(CAP, d)) for d in drop]
+    return Sample(encode(Ack(worker="w1", drop_leases=drops, results=[
         RunAck(lease_id=lease.lease_id, job_id=lease.job_id, cell=lease.cell, run=r,
                status=status) for r in runs])))
 
@@ -505,18 +553,26 @@ def test_worker_resends_a_result_overtaken_by_a_later_one():
     assert json.loads(w._session.puts[-1][1])["results"][0]["lease_id"] == "L1"
 
 
-def test_worker_drops_leases_and_cancelled_jobs():
-    from swarmpath.service.protocol import Cancel
-
+def test_worker_drops_leases_only_on_the_coordinators_word():
     w = offline_worker()
     spec = BenchmarkCell(algorithm="PSO", function="F1", dim=2, agents=5, iterations=3)
     lease = make_lease(spec, [0, 1])
     w._publish_results(lease, execute_lease(lease))
     w._on_ack(run_ack(lease, [], drop=["L1"]))
     assert w._pending == {} and "L1" in w._dropped
+    w._dropped.clear()
     w._publish_results(lease, execute_lease(lease))
+    # forged: a cancel naming the job only, one with a made-up proof, an ack with a drop proof
+    # of another lease (replayed from the bus): nothing is dropped
+    made_up = LeaseDrop(lease_id="L1", proof=drop_proof(new_capability(), "L1"))
+    replayed = LeaseDrop(lease_id="L1", proof=drop_proof(CAP, "L2"))
     w._on_cancel(Sample(encode(Cancel(job_id="j1"))))
-    assert w._pending == {} and "j1" in w._cancelled_jobs
+    w._on_cancel(Sample(encode(Cancel(job_id="j1", leases=[made_up]))))
+    w._on_ack(Sample(encode(Ack(worker="w1", drop_leases=[replayed]))))
+    assert len(w._pending) == 2 and not w._dropped and w.unproven_drops == 2
+    proven = LeaseDrop(lease_id="L1", proof=drop_proof(CAP, "L1"))
+    w._on_cancel(Sample(encode(Cancel(job_id="j1", leases=[proven]))))
+    assert w._pending == {} and "L1" in w._dropped
     w._on_ack(Sample(b"garbage"))  # logged, ignored
 
 
@@ -536,6 +592,8 @@ def test_worker_heartbeats_running_leases():
     key, payload = w._session.puts[-1]
     progress = decode(RunProgress, payload)
     assert key == "swarmpath/progress/j1" and progress.iterations == 30 and progress.runs == [0, 1]
+    assert progress.seq == 1 and progress_ok(CAP, lease.lease_id, 1, progress.proof)
+    assert CAP not in payload.decode()  # the secret itself never goes on the bus
     assert w.heartbeat_due(t + 6) == 0
 
 

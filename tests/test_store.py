@@ -16,6 +16,7 @@ from pathlib import Path
 import pytest
 
 from swarmpath.optimizers import minimize
+from swarmpath.service.capability import progress_proof, result_proof
 from swarmpath.service.protocol import Lease, MapJobSpec, RunResult, parse_job_spec
 from swarmpath.service.store import Store, StoreError
 from swarmpath.stats import describe, rank
@@ -34,19 +35,30 @@ def store(tmp_path):
     s.close()
 
 
+def signed(lease: Lease, result: RunResult) -> RunResult:
+    """The result with its proof (the HMAC a worker makes with the lease's capability)."""
+    return result.model_copy(update={"proof": result_proof(lease.capability, result)})
+
+
+def beat(store: Store, lease: Lease, worker: str, seq: int = 1, **kw):
+    """A proven heartbeat (progress message number ``seq``) of ``lease`` by ``worker``."""
+    return store.heartbeat(lease.lease_id, worker, seq=seq,
+                           proof=progress_proof(lease.capability, lease.lease_id, seq), **kw)
+
+
 def execute(lease: Lease, worker: str | None = None) -> list[RunResult]:
     """What a worker does with a benchmark lease."""
     c = lease.spec
     res = minimize(c.algorithm, c.function, c.dim, c.agents, c.iterations, seed=lease.seed,
                    params=c.params, shifted=c.shifted, run_ids=lease.runs)
     return [
-        RunResult(
+        signed(lease, RunResult(
             lease_id=lease.lease_id, job_id=lease.job_id, cell=lease.cell, run=r,
             worker=worker or lease.worker, seconds=res.seconds / len(lease.runs),
             metrics={"best_fitness": float(res.best_fitness[i]),
                      "evaluations": int(res.evaluations[i])},
             curve=res.curve[i].tolist(), best_position=res.best_position[i].tolist(),
-        )
+        ))
         for i, r in enumerate(lease.runs)
     ]
 
@@ -155,14 +167,47 @@ def test_stale_results_are_rejected(store):
     job = store.create_job(SPEC, now=T0)
     lease = store.lease("w1", 2, now=T0)
     good = execute(lease)[0]
-    assert store.accept_result(good.model_copy(update={"lease_id": "unknown"}), T0) == "stale"
-    assert store.accept_result(good.model_copy(update={"worker": "w2"}), T0) == "stale"
-    assert store.accept_result(good.model_copy(update={"run": 4}), T0) == "stale"  # not leased
-    assert store.accept_result(good.model_copy(update={"cell": "PSO/F1/4"}), T0) == "stale"
-    assert store.accept_result(good.model_copy(update={"job_id": "other"}), T0) == "stale"
+
+    def changed(**update):  # a well-signed result that fencing must still refuse
+        return signed(lease, good.model_copy(update=update))
+
+    assert store.accept_result(changed(lease_id="unknown"), T0) == "stale"
+    assert store.accept_result(changed(worker="w2"), T0) == "stale"
+    assert store.accept_result(changed(run=4), T0) == "stale"  # not leased
+    assert store.accept_result(changed(cell="PSO/F1/4"), T0) == "stale"
+    assert store.accept_result(changed(job_id="other"), T0) == "stale"
     assert store.job_status(job).runs_done == 0
     assert store.accept_result(good, T0) == "accepted"
     assert store.counters()["stale"] == 5
+
+
+def test_results_without_the_lease_capability_are_stale(store):
+    """A forged result (no proof, a proof made with another secret, or a proven result altered
+    after signing) is never stored, even naming the right lease, worker and run."""
+    job = store.create_job(SPEC, now=T0)
+    lease = store.lease("w1", 2, now=T0)
+    assert len(lease.capability) == 64 and lease.capability != store.lease("w1", 1).capability
+    good = execute(lease)[0]
+    forged_value = good.model_copy(update={"metrics": {**good.metrics,
+                                                       "best_fitness": -12345.0}})
+    other_secret = good.model_copy(update={"proof": result_proof("0" * 64, good)})
+    for forged in (good.model_copy(update={"proof": None}), other_secret, forged_value):
+        assert store.accept_result(forged, T0) == "stale"
+    assert store.job_status(job).runs_done == 0 and store.counters()["stale"] == 3
+    assert store.accept_result(good, T0) == "accepted"
+    assert store.run(job, good.run)["best_fitness"] == good.metrics["best_fitness"]
+
+
+def test_heartbeat_needs_the_proof_and_a_fresh_seq(store):
+    store.create_job(SPEC, now=T0)
+    lease = store.lease("w1", 2, now=T0, lease_seconds=10)
+    assert beat(store, lease, "w1", 1, now=T0 + 5, lease_seconds=10) == "active"
+    # a replayed message (same seq) and one with a lower seq renew nothing
+    assert beat(store, lease, "w1", 1, now=T0 + 9, lease_seconds=10) == "unknown"
+    proof = progress_proof("f" * 64, lease.lease_id, 7)  # made without the capability
+    assert store.heartbeat(lease.lease_id, "w1", now=T0 + 9, lease_seconds=10, seq=7,
+                           proof=proof) == "unknown"
+    assert store.requeue_expired(now=T0 + 16) == 2  # expired at T0 + 15
 
 
 def test_requeue_on_expiry_and_late_result_of_the_old_lease(store):
@@ -171,7 +216,7 @@ def test_requeue_on_expiry_and_late_result_of_the_old_lease(store):
     late = execute(old)
     assert store.requeue_expired(now=T0 + 5) == 0  # not yet
     assert store.requeue_expired(now=T0 + 11) == 3
-    assert store.heartbeat(old.lease_id, "w1", now=T0 + 11) == "expired"
+    assert beat(store, old, "w1", now=T0 + 11) == "expired"
     new = store.lease("w2", 5, now=T0 + 12)
     assert (new.cell, new.runs) == (old.cell, old.runs)  # requeued runs first
     # the old worker's late result for run 0 arrives first: accepted once (runs are deterministic)
@@ -198,11 +243,12 @@ def test_expired_lease_only_requeues_runs_without_results(store):
 def test_heartbeat_extends_the_deadline(store):
     store.create_job(SPEC, now=T0)
     lease = store.lease("w1", 2, now=T0, lease_seconds=10)
-    assert store.heartbeat(lease.lease_id, "w1", now=T0 + 8, lease_seconds=10) == "active"
+    assert beat(store, lease, "w1", now=T0 + 8, lease_seconds=10) == "active"
     assert store.requeue_expired(now=T0 + 15) == 0
     assert store.requeue_expired(now=T0 + 19) == 2
-    assert store.heartbeat("nope", "w1", now=T0) == "unknown"
-    assert store.heartbeat(lease.lease_id, "w2", now=T0) == "unknown"
+    nope = lease.model_copy(update={"lease_id": "nope"})
+    assert beat(store, nope, "w1", 2, now=T0) == "unknown"
+    assert beat(store, lease, "w2", 3, now=T0) == "unknown"
 
 
 def test_requeue_on_worker_loss(store):
@@ -216,7 +262,7 @@ def test_requeue_on_worker_loss(store):
     assert [x["lease_id"] for x in store.active_leases()] == [b.lease_id]
     c = store.lease("w3", 5, now=T0 + 2)
     assert c.runs == a.runs
-    assert store.heartbeat(a.lease_id, "w1", now=T0 + 2) == "released"
+    assert beat(store, a, "w1", now=T0 + 2) == "released"
 
 
 def test_release_returns_a_lease(store):
@@ -256,8 +302,9 @@ def test_failed_runs(store):
     job = store.create_job({**SPEC, "algorithms": ["GWO"], "functions": ["F1"], "runs": 2}, T0)
     lease = store.lease("w1", 2, now=T0)
     ok, bad = execute(lease)
-    bad = bad.model_copy(update={"status": "failed", "failure": "boom", "metrics": {},
-                                 "curve": None, "best_position": None})
+    bad = signed(lease, bad.model_copy(update={"status": "failed", "failure": "boom",
+                                               "metrics": {}, "curve": None,
+                                               "best_position": None}))
     assert store.accept_results([ok, bad], now=T0) == ["accepted", "accepted"]
     st = store.job_status(job)
     assert (st.state, st.runs_done, st.runs_failed) == ("done", 1, 1)
@@ -270,7 +317,7 @@ def test_failed_runs(store):
 def test_a_job_whose_runs_all_fail_is_failed(store):
     job = store.create_job({**SPEC, "algorithms": ["GWO"], "functions": ["F1"], "runs": 1}, T0)
     lease = store.lease("w1", 1, now=T0)
-    r = execute(lease)[0].model_copy(update={"status": "failed", "failure": "x"})
+    r = signed(lease, execute(lease)[0].model_copy(update={"status": "failed", "failure": "x"}))
     store.accept_result(r, now=T0)
     assert store.job_status(job).state == "failed"
     row = store.summary(job)["rows"][0]
@@ -348,9 +395,9 @@ def test_map_summary(store):
     while (lease := store.lease("w", 3, now=T0)) is not None:
         planner = lease.spec.planner
         store.accept_results([
-            RunResult(lease_id=lease.lease_id, job_id=job, cell=lease.cell, run=r, worker="w",
-                      seconds=1.0, metrics=metrics[planner][r],
-                      path=[(0.0, 0.0, 0.0), (1.0, 1.0, 1.0)])
+            signed(lease, RunResult(
+                lease_id=lease.lease_id, job_id=job, cell=lease.cell, run=r, worker="w",
+                seconds=1.0, metrics=metrics[planner][r], path=[(0.0, 0.0, 0.0), (1.0, 1.0, 1.0)]))
             for r in lease.runs
         ], now=T0)
     s = store.summary(job)
@@ -373,7 +420,8 @@ def test_map_summary(store):
 def test_non_finite_values_are_json_safe(store):
     job = store.create_job({**SPEC, "algorithms": ["GWO"], "functions": ["F1"], "runs": 2}, T0)
     lease = store.lease("w", 2, now=T0)
-    rs = [r.model_copy(update={"metrics": {**r.metrics, "best_fitness": float("inf")}})
+    inf = {"best_fitness": float("inf")}
+    rs = [signed(lease, r.model_copy(update={"metrics": {**r.metrics, **inf}}))
           for r in execute(lease)]
     store.accept_results(rs, now=T0)
     row = store.summary(job)["rows"][0]
@@ -509,7 +557,7 @@ def test_relaxed_lease_commits_survive_reopening(tmp_path):
     s = Store(tmp_path / "d")
     job = s.create_job(SPEC, now=T0)
     lease = s.lease("w1", 2, now=T0)
-    s.heartbeat(lease.lease_id, "w1", now=T0 + 1, lease_seconds=100)
+    beat(s, lease, "w1", now=T0 + 1, lease_seconds=100)
     s.close()
     again = Store(tmp_path / "d")
     assert [x["lease_id"] for x in again.active_leases()] == [lease.lease_id]

@@ -21,10 +21,12 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from swarmpath.service.capability import drop_proof, result_ok
 from swarmpath.service.catalog import build_catalog
 from swarmpath.service.lease_sizer import LeaseSizer
 from swarmpath.service.metrics import metrics_text
 from swarmpath.service.protocol import (
+    CANCEL_LEASES,
     PROTOCOL_VERSION,
     Ack,
     BenchmarkCell,
@@ -33,6 +35,7 @@ from swarmpath.service.protocol import (
     JobStatus,
     Keys,
     LeaseBundle,
+    LeaseDrop,
     LeaseRequest,
     MapCell,
     MapJobSpec,
@@ -59,6 +62,8 @@ if TYPE_CHECKING:
     from swarmpath.service.ticker import Ticker
 
 log = logging.getLogger("swarmpath.coordinator")
+
+SETTLED_LEASES = 20_000  # leases remembered for recognizing re-sent results
 
 __all__ = [
     "DEFAULT_HTTP",
@@ -101,8 +106,9 @@ class Coordinator:
         self._accepted: deque[tuple[float, int]] = deque()
         self._jobs: dict[str, dict[str, Any]] = {}  # job id -> what records need (cache)
         self._recording: set[str] = set()  # jobs whose MCAP is open
-        # lease -> (its worker, runs stored): recognizes re-sent copies without the store
-        self._settled: OrderedDict[str, tuple[str, set[int]]] = OrderedDict()
+        # lease -> (its worker, its capability, runs stored): recognizes re-sent copies of
+        # stored results without a store round trip (at most SETTLED_LEASES leases, oldest out)
+        self._settled: OrderedDict[str, tuple[str, str, set[int]]] = OrderedDict()
 
     # ---------------------------------------------------------------------------- lifecycle
     def startup(self, now: float | None = None) -> list[str]:
@@ -313,8 +319,8 @@ class Coordinator:
         with self._lock:  # re-sent copies of results stored moments ago: no store round trip
             for item in batches:
                 for r in item[2] if item is not None else ():
-                    owner, runs = self._settled.get(r.lease_id, ("", ()))
-                    if owner == r.worker and r.run in runs:
+                    owner, cap, runs = self._settled.get(r.lease_id, ("", "", ()))
+                    if owner == r.worker and r.run in runs and result_ok(cap, r):
                         by_id[id(r)] = "duplicate"
                         self.stats["duplicates_fast"] += 1
                     else:
@@ -322,11 +328,19 @@ class Coordinator:
         statuses = self.store.accept_results(todo, now) if todo else []
         by_id.update((id(r), s) for r, s in zip(todo, statuses, strict=True))
         with self._lock:
+            fresh = {r.lease_id for r, s in zip(todo, statuses, strict=True)
+                     if s != "stale" and r.lease_id not in self._settled}
+        caps = {lease_id: self.store.capability(lease_id) or "" for lease_id in fresh}
+        with self._lock:
             for r, s in zip(todo, statuses, strict=True):
-                if s != "stale":  # the lease exists and is r.worker's
-                    self._settled.setdefault(r.lease_id, (r.worker, set()))[1].add(r.run)
+                if s != "stale":  # the lease exists, is r.worker's and r proved its capability
+                    entry = self._settled.get(r.lease_id)
+                    if entry is None:
+                        entry = self._settled[r.lease_id] = (r.worker, caps.get(r.lease_id, ""),
+                                                             set())
+                    entry[2].add(r.run)
                     self._settled.move_to_end(r.lease_id)
-            while len(self._settled) > 20_000:
+            while len(self._settled) > SETTLED_LEASES:
                 self._settled.popitem(last=False)
         accepted: dict[str, list[RunResult]] = {}
         for r in todo:
@@ -377,7 +391,9 @@ class Coordinator:
             self.finalize(job_id)
 
     def handle_progress(self, key: str, payload: bytes, now: float | None = None) -> Ack | None:
-        """A RunProgress: renew the lease; tell the worker to drop it when it is not active."""
+        """A RunProgress: renew the lease; tell the worker to drop it when it is not active.
+        Progress without the lease's proof, or replayed (an old seq), changes nothing and gets
+        no answer."""
         now = time.time() if now is None else now
         try:
             msg = decode(RunProgress, payload)
@@ -389,11 +405,19 @@ class Coordinator:
             self.stats["malformed"] += 1
             log.warning("dropped progress for job %s published on %s", msg.job_id, key)
             return None
+        state = self.store.heartbeat(msg.lease_id, msg.worker, now, self.settings.lease_seconds,
+                                     seq=msg.seq, proof=msg.proof)
+        if state == "unknown":
+            self.stats["unproven"] += 1
+            return None
         self._seen(msg.worker, now)
-        state = self.store.heartbeat(msg.lease_id, msg.worker, now, self.settings.lease_seconds)
         if state == "active":
             return None
-        ack = Ack(worker=msg.worker, drop_leases=[msg.lease_id])
+        cap = self.store.capability(msg.lease_id)
+        if cap is None:  # pragma: no cover - heartbeat just proved it exists
+            return None
+        drop = LeaseDrop(lease_id=msg.lease_id, proof=drop_proof(cap, msg.lease_id))
+        ack = Ack(worker=msg.worker, drop_leases=[drop])
         self._send(self.keys.ack(msg.worker), encode(ack))
         return ack
 
@@ -417,7 +441,11 @@ class Coordinator:
             return None
         state = self.store.cancel(job_id)
         if before.state not in FINAL_STATES and state == "cancelled":
-            self._send(self.keys.cancel, encode(Cancel(job_id=job_id)))
+            drops = [LeaseDrop(lease_id=lease_id, proof=drop_proof(cap, lease_id))
+                     for lease_id, _worker, cap in self.store.cancelled_leases(job_id)]
+            for i in range(0, max(1, len(drops)), CANCEL_LEASES):
+                msg = Cancel(job_id=job_id, leases=drops[i:i + CANCEL_LEASES])
+                self._send(self.keys.cancel, encode(msg))
             log.info("job %s cancelled", job_id)
             self.finalize(job_id)
         return self.store.job_status(job_id)

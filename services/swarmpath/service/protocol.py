@@ -44,8 +44,9 @@ MAX_BODY_BYTES = 1_000_000  # REST bodies and Zenoh payloads a coordinator accep
 MAX_SEED = 2**63 - 1
 MAX_LEASE_RUNS = MAX_RUNS_PER_CELL
 MAX_BUNDLE_LEASES = 64  # leases in one reply to a LeaseRequest
+CANCEL_LEASES = 2000  # lease drops in one Cancel message
 
-PROTOCOL_VERSION = 1
+PROTOCOL_VERSION = 2  # 2: lease capabilities (see swarmpath.service.capability)
 DEFAULT_PREFIX = "swarmpath"
 
 # Identifiers that appear inside key expressions: one chunk, none of the reserved characters.
@@ -60,6 +61,8 @@ AckStatus = Literal["accepted", "duplicate", "stale"]
 LeaseState = Literal["active", "done", "expired", "released", "cancelled", "unknown"]
 
 Identifier = Annotated[str, Field(pattern=ID_PATTERN)]
+#: A capability (64 hex digits) or an HMAC-SHA256 tag made with one (64 hex digits).
+Secret = Annotated[str, Field(pattern=r"^[0-9a-f]{64}$")]
 
 
 class Model(BaseModel):
@@ -479,6 +482,10 @@ class Lease(Model):
     deadline: float
     lease_seconds: float = Field(gt=0)
     heartbeat_seconds: float = Field(gt=0)
+    capability: Secret = Field(
+        description="the lease's secret: sent only in this reply, never put on the bus; results "
+        "and progress of the lease prove it (HMAC), and so does the coordinator when it ends it",
+    )
 
     def run_ids(self) -> list[int]:
         return [self.cell_index * self.runs_per_cell + r for r in self.runs]
@@ -531,6 +538,8 @@ class RunProgress(Model):
     iteration: int = Field(default=0, ge=0, description="iterations (or planner steps) done")
     iterations: int = Field(default=0, ge=0, description="total iterations, 0 if unknown")
     best_fitness: list[float] | None = Field(default=None, description="per run, benchmark only")
+    seq: int = Field(ge=1, description="1, 2, ... per lease: only a higher seq renews the lease")
+    proof: Secret = Field(description="HMAC of (lease_id, seq) with the lease's capability")
 
 
 class RunResult(Model):
@@ -556,6 +565,10 @@ class RunResult(Model):
     path: list[tuple[float, float, float]] | None = Field(
         default=None, description="executed trajectory rows [x, y, t] (map runs)"
     )
+    proof: Secret | None = Field(
+        default=None, description="HMAC of this result's JSON (without proof) with the lease's "
+        "capability; a result without a valid one is stale",
+    )
 
 
 class ResultBatch(Model):
@@ -573,6 +586,14 @@ class RunAck(Model):
     status: AckStatus
 
 
+class LeaseDrop(Model):
+    """The coordinator ends a lease: ``proof`` (HMAC of the lease id with the lease's capability)
+    shows the order comes from the coordinator; workers ignore drops without a valid one."""
+
+    lease_id: Identifier
+    proof: Secret
+
+
 class Ack(Model):
     """Published on ``<prefix>/ack/<worker>`` after the results are durably stored.
 
@@ -581,13 +602,16 @@ class Ack(Model):
 
     worker: Identifier
     results: list[RunAck] = Field(default_factory=list)
-    drop_leases: list[str] = Field(default_factory=list)
+    drop_leases: list[LeaseDrop] = Field(default_factory=list, max_length=MAX_BUNDLE_LEASES * 16)
 
 
 class Cancel(Model):
-    """Published on ``<prefix>/cancel``: workers drop every run of ``job_id``."""
+    """Published on ``<prefix>/cancel`` when a job is cancelled: the job's leases that were active,
+    each with its drop proof (several messages for many leases). A worker drops the listed leases
+    it holds whose proof is valid, and nothing else."""
 
     job_id: Identifier
+    leases: list[LeaseDrop] = Field(default_factory=list, max_length=CANCEL_LEASES)
 
 
 class WorkerStatus(Model):
@@ -707,7 +731,7 @@ def error_fields(exc: Exception) -> list[str]:
 # receives (from users and workers) as it reads them (fields with defaults may be left out).
 SENT_BY_COORDINATOR = frozenset(
     {"cell_spec", "run_request", "work_reply", "lease", "lease_bundle", "no_work", "ack", "cancel",
-     "worker_status", "job_status"}
+     "lease_drop", "worker_status", "job_status"}
 )
 SCHEMA_MODELS: dict[str, Any] = {
     "job_spec": JOB_SPEC_ADAPTER,
@@ -724,6 +748,7 @@ SCHEMA_MODELS: dict[str, Any] = {
     "run_result": RunResult,
     "result_batch": ResultBatch,
     "ack": Ack,
+    "lease_drop": LeaseDrop,
     "cancel": Cancel,
     "worker_status": WorkerStatus,
     "job_status": JobStatus,

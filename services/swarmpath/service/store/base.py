@@ -18,7 +18,7 @@ from swarmpath.service.protocol import (
     MapCell,
 )
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2  # 2: leases.capability, leases.beat
 DB_NAME = "swarmpath.sqlite3"
 JOB_STATES: tuple[JobState, ...] = ("queued", "running", "done", "failed", "cancelled")
 FINAL_STATES = frozenset({"done", "failed", "cancelled"})
@@ -77,7 +77,9 @@ CREATE TABLE IF NOT EXISTS leases (
     deadline REAL NOT NULL,
     state    TEXT NOT NULL
              CHECK (state IN ('active', 'done', 'expired', 'released', 'cancelled')),
-    ended    REAL
+    ended    REAL,
+    capability TEXT NOT NULL DEFAULT '',                -- the lease's secret ('' never matches)
+    beat     INTEGER NOT NULL DEFAULT 0                -- highest progress seq taken
 );
 CREATE INDEX IF NOT EXISTS leases_active ON leases (deadline) WHERE state = 'active';
 CREATE INDEX IF NOT EXISTS leases_active_worker ON leases (worker) WHERE state = 'active';
@@ -168,6 +170,11 @@ class StoreBase:
                     "INSERT OR IGNORE INTO meta (key, value) VALUES (?, '0')",
                     [(f"counter.{c}",) for c in (*_COUNTERS, "lease_turn")],
                 )
+            elif int(row[0]) == 1:  # leases granted before capabilities can prove nothing
+                db.execute("ALTER TABLE leases ADD COLUMN capability TEXT NOT NULL DEFAULT ''")
+                db.execute("ALTER TABLE leases ADD COLUMN beat INTEGER NOT NULL DEFAULT 0")
+                db.execute("UPDATE meta SET value = ? WHERE key = 'schema_version'",
+                           (str(SCHEMA_VERSION),))
             elif int(row[0]) != SCHEMA_VERSION:
                 raise StoreError(
                     f"{self.path} has store schema version {row[0]}; this code reads "

@@ -10,6 +10,7 @@ import uuid
 from collections.abc import Sequence
 from typing import Any
 
+from swarmpath.service.capability import new_capability, progress_ok
 from swarmpath.service.protocol import (
     CELL_ADAPTER,
     Lease,
@@ -110,11 +111,12 @@ class LeasesMixin(StoreBase):
                 (turn, now, seq),
             )
             lease_id = uuid.uuid4().hex
+            capability = new_capability()
             db.execute(
-                "INSERT INTO leases (lease_id, worker, job_seq, cell_idx, runs, pending,"
-                " created, deadline, state) VALUES (?, ?, ?, ?, ?, ?, ?, ?, 'active')",
+                "INSERT INTO leases (lease_id, worker, job_seq, cell_idx, runs, pending, created,"
+                " deadline, state, capability) VALUES (?, ?, ?, ?, ?, ?, ?, ?, 'active', ?)",
                 (lease_id, worker, seq, cell_idx, _dumps(runs), len(runs), now,
-                 now + lease_seconds),
+                 now + lease_seconds, capability),
             )
             self._lease_runs[lease_id] = frozenset(runs)
             return Lease(
@@ -130,6 +132,7 @@ class LeasesMixin(StoreBase):
                 deadline=now + lease_seconds,
                 lease_seconds=lease_seconds,
                 heartbeat_seconds=heartbeat_seconds,
+                capability=capability,
             )
         return None
 
@@ -213,17 +216,23 @@ class LeasesMixin(StoreBase):
         return cell_idx, key, spec, list(range(start, stop))
 
     def heartbeat(
-        self, lease_id: str, worker: str, now: float | None = None, lease_seconds: float = 60.0
+        self, lease_id: str, worker: str, now: float | None = None, lease_seconds: float = 60.0,
+        *, seq: int, proof: str | None,
     ) -> LeaseState:
-        """Renew an active lease of ``worker`` (deadline >= now + lease_seconds). Returns the
-        lease's state: anything but 'active' tells the worker to drop it."""
+        """Renew an active lease of ``worker`` (deadline >= now + lease_seconds) when ``proof``
+        is the lease's progress proof of ``seq`` and ``seq`` is above every seq taken before.
+        Returns the lease's state ('unknown' for a wrong worker, proof or an old seq: nothing
+        changes): anything but 'active' and 'unknown' tells the worker to drop it."""
         now = time.time() if now is None else now
         with self._tx(durable=False) as db:  # a lost renewal only means an earlier expiry
             row = db.execute(
-                "SELECT worker, state, deadline FROM leases WHERE lease_id = ?", (lease_id,)
+                "SELECT worker, state, capability, beat FROM leases WHERE lease_id = ?",
+                (lease_id,),
             ).fetchone()
-            if row is None or row["worker"] != worker:
+            if row is None or row["worker"] != worker or seq <= row["beat"] \
+                    or not progress_ok(row["capability"], lease_id, seq, proof):
                 return "unknown"
+            db.execute("UPDATE leases SET beat = ? WHERE lease_id = ?", (seq, lease_id))
             if row["state"] != "active":
                 return row["state"]
             db.execute(
@@ -231,6 +240,25 @@ class LeasesMixin(StoreBase):
                 (now + lease_seconds, lease_id),
             )
             return "active"
+
+    def capability(self, lease_id: str) -> str | None:
+        """The lease's secret (None for an unknown lease)."""
+        with self._read() as db:
+            row = db.execute(
+                "SELECT capability FROM leases WHERE lease_id = ?", (lease_id,)
+            ).fetchone()
+        return None if row is None or not row["capability"] else str(row["capability"])
+
+    def cancelled_leases(self, job_id: str) -> list[tuple[str, str, str]]:
+        """(lease id, worker, capability) of the job's leases ended by its cancellation."""
+        with self._read() as db:
+            rows = db.execute(
+                "SELECT l.lease_id, l.worker, l.capability FROM leases l JOIN jobs j "
+                "ON j.seq = l.job_seq WHERE j.id = ? AND l.state = 'cancelled' "
+                "AND l.capability != ''",
+                (job_id,),
+            ).fetchall()
+        return [(r[0], r[1], r[2]) for r in rows]
 
     def extend_active_leases(self, now: float | None = None, seconds: float = 60.0) -> int:
         """Give every active lease at least ``seconds`` from ``now``: call once when the

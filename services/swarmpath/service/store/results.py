@@ -6,6 +6,7 @@ import sqlite3
 import time
 from collections.abc import Iterable
 
+from swarmpath.service.capability import result_ok
 from swarmpath.service.protocol import (
     AckStatus,
     RunResult,
@@ -38,7 +39,7 @@ class ResultsMixin(StoreBase):
 
     def _accept(self, db: sqlite3.Connection, r: RunResult, now: float) -> AckStatus:
         lease = db.execute("SELECT * FROM leases WHERE lease_id = ?", (r.lease_id,)).fetchone()
-        if lease is None or lease["worker"] != r.worker:
+        if lease is None or lease["worker"] != r.worker or not result_ok(lease["capability"], r):
             return "stale"
         job = db.execute(
             "SELECT seq, id, kind, state, runs_total FROM jobs WHERE seq = ?", (lease["job_seq"],)

@@ -49,7 +49,7 @@ def execute_lease(
         results = _benchmark(lease, lease.spec, cancelled, progress)
     else:
         results = _map(lease, lease.spec, cancelled, progress)
-    return [(r.run, fit_result(r)) for r in results]
+    return [(r.run, fit_result(r, capability=lease.capability)) for r in results]
 
 
 def _result(lease: Lease, run: int, seconds: float, **fields: Any) -> RunResult:

@@ -17,6 +17,7 @@ from collections import deque
 from collections.abc import Sequence
 from typing import Any
 
+from swarmpath.service.capability import progress_proof
 from swarmpath.service.protocol import (
     MAX_BUNDLE_LEASES,
     PROTOCOL_VERSION,
@@ -55,7 +56,7 @@ class Worker(Reporting):
         self._queue: deque[list[Lease]] = deque()  # groups waiting for a free slot
         self._pending: dict[tuple[str, int], _Pending] = {}
         self._dropped: set[str] = set()
-        self._cancelled_jobs: set[str] = set()
+        self.unproven_drops = 0  # drops (acks, cancels) ignored for want of a valid proof
         self._slots: list[Slot] = []
         self._session: Any = None
         self._zenoh: Any = None
@@ -281,6 +282,7 @@ class Worker(Reporting):
                    if now - a.last_progress >= 0.5 * a.lease.heartbeat_seconds]
             for a in due:
                 a.last_progress = now
+                a.beats += 1
         for a in due:
             lease = a.lease
             spec = lease.spec
@@ -291,7 +293,8 @@ class Worker(Reporting):
                 lease_id=lease.lease_id, job_id=lease.job_id, worker=self.id,
                 cell=lease.cell, runs=list(lease.runs),
                 iteration=a.slot.iteration(lease.lease_id) if a.slot is not None else 0,
-                iterations=total,
+                iterations=total, seq=a.beats,
+                proof=progress_proof(lease.capability, lease.lease_id, a.beats),
             )
             self._put(self.keys.progress(lease.job_id), encode(msg))
         return len(due)

@@ -7,6 +7,7 @@ import logging
 from collections.abc import Sequence
 from typing import Any
 
+from swarmpath.service.capability import result_proof
 from swarmpath.service.protocol import (
     MAX_BODY_BYTES,
     RunResult,
@@ -26,10 +27,13 @@ def _scalar(v: Any) -> bool:
     return v is None or isinstance(v, bool | int | float | str)
 
 
-def fit_result(result: RunResult, limit: int = RESULT_BYTES) -> bytes:
+def fit_result(
+    result: RunResult, limit: int = RESULT_BYTES, capability: str | None = None
+) -> bytes:
     """The encoded result, its curve (and path) thinned to evenly spaced samples, first and last
-    kept, when it would not fit in one message (``metrics.curve_stride`` records the stride)."""
-    data = encode(result)
+    kept, when it would not fit in one message (``metrics.curve_stride`` records the stride);
+    with ``capability`` (the lease's secret) it carries its proof."""
+    data = _encode(result, capability)
     stride = 1
     while len(data) > limit and stride < 1 << 20:
         stride *= 2
@@ -41,8 +45,14 @@ def fit_result(result: RunResult, limit: int = RESULT_BYTES) -> bytes:
             changes["path"] = _thin(result.path, stride)
         if not changes:
             break
-        data = encode(result.model_copy(update=changes))
+        data = _encode(result.model_copy(update=changes), capability)
     return data
+
+
+def _encode(result: RunResult, capability: str | None) -> bytes:
+    if capability:
+        result = result.model_copy(update={"proof": result_proof(capability, result)})
+    return encode(result)
 
 
 def _thin(values: Sequence[Any], stride: int) -> list[Any]:

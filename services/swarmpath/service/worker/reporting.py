@@ -11,11 +11,13 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from swarmpath.service.capability import drop_ok
 from swarmpath.service.protocol import (
     Ack,
     Cancel,
     Keys,
     Lease,
+    LeaseDrop,
     decode,
 )
 from swarmpath.service.worker.execution import Cancelled, _result
@@ -25,6 +27,9 @@ from swarmpath.service.worker.slots import NotRun, Outcomes, Slot
 
 log = logging.getLogger("swarmpath.worker")
 
+#: Leases dropped or given up, remembered so their late outcomes are discarded (then forgotten).
+DROPPED_LEASES = 10_000
+
 
 @dataclass
 class _Active:
@@ -32,6 +37,7 @@ class _Active:
     slot: Slot | None  # None while the lease waits in the queue
     received: float
     last_progress: float
+    beats: int = 0  # progress messages sent (their seq)
 
 
 @dataclass
@@ -39,6 +45,7 @@ class _Pending:
     job_id: str
     lease_id: str
     data: bytes
+    capability: str = ""
     sent: float = 0.0
     seq: int = 0  # of the put that last carried it
     attempts: int = 0
@@ -59,7 +66,7 @@ class Reporting:
     _queue: deque[list[Lease]]
     _pending: dict[tuple[str, int], _Pending]
     _dropped: set[str]
-    _cancelled_jobs: set[str]
+    unproven_drops: int
     _session: Any
     _zenoh: Any
     runs_done: int
@@ -77,7 +84,7 @@ class Reporting:
         again: list[Lease] = []
         with self._lock:
             for lease, outcome in outcomes:
-                dropped = lease.lease_id in self._dropped or lease.job_id in self._cancelled_jobs
+                dropped = lease.lease_id in self._dropped
                 held = self._active.get(lease.lease_id)
                 if isinstance(outcome, NotRun) and held is not None and not dropped \
                         and not self._stop.is_set():
@@ -92,7 +99,8 @@ class Reporting:
                     log.error("lease %s failed as a whole: %s", lease.lease_id, text)
                     done.append((lease, [
                         (r, fit_result(_result(lease, r, 0.0, status="failed",
-                                               failure=text[:20_000])))
+                                               failure=text[:20_000]),
+                                       capability=lease.capability))
                         for r in lease.runs
                     ]))
                 else:
@@ -120,7 +128,7 @@ class Reporting:
         with self._lock:
             for lease, results in items:
                 for run, data in results:
-                    entry = _Pending(lease.job_id, lease.lease_id, data)
+                    entry = _Pending(lease.job_id, lease.lease_id, data, lease.capability)
                     self._pending[(lease.lease_id, run)] = entry
                     by_job.setdefault(lease.job_id, []).append(entry)
         for job_id, entries in by_job.items():
@@ -163,8 +171,8 @@ class Reporting:
                     self._acked_seq = max(self._acked_seq, entry.seq)
                 if r.status == "stale":
                     log.info("result %s run %d was stale (%s)", r.cell, r.run, r.lease_id)
-            for lease_id in ack.drop_leases:
-                self._drop(lease_id)
+            for drop in ack.drop_leases:
+                self._drop_proven(drop, "coordinator dropped")
             self._wake.notify_all()
 
     def _on_cancel(self, sample: Any) -> None:
@@ -174,22 +182,40 @@ class Reporting:
             log.warning("ignored a malformed cancel: %s", " ".join(str(exc).split())[:200])
             return
         with self._wake:
-            self._cancelled_jobs.add(msg.job_id)
-            for a in list(self._active.values()):
-                if a.lease.job_id == msg.job_id:
-                    log.info("job %s cancelled: dropping lease %s", msg.job_id, a.lease.lease_id)
-                    self._abandon(a)
-            for key in [k for k, p in self._pending.items() if p.job_id == msg.job_id]:
-                del self._pending[key]
+            for drop in msg.leases:
+                self._drop_proven(drop, f"job {msg.job_id} cancelled: dropping")
             self._wake.notify_all()
+
+    def _capability(self, lease_id: str) -> str | None:
+        active = self._active.get(lease_id)
+        if active is not None:
+            return active.lease.capability
+        for p in self._pending.values():
+            if p.lease_id == lease_id:
+                return p.capability
+        return None
+
+    def _drop_proven(self, drop: LeaseDrop, why: str) -> bool:
+        """Drop a lease we hold when the order proves it comes from the coordinator (the HMAC of
+        the lease id with its capability, which only the coordinator and we know)."""
+        cap = self._capability(drop.lease_id)
+        if cap is None:
+            return False  # not ours (any more): nothing to do
+        if not drop_ok(cap, drop.lease_id, drop.proof):
+            self.unproven_drops += 1
+            log.warning("ignored a drop of lease %s without a valid proof (not from the "
+                        "coordinator)", drop.lease_id)
+            return False
+        log.info("%s lease %s", why, drop.lease_id)
+        self._drop(drop.lease_id)
+        return True
 
     def _drop(self, lease_id: str) -> None:
         self._dropped.add(lease_id)
-        if len(self._dropped) > 10_000:
+        if len(self._dropped) > DROPPED_LEASES:
             self._dropped = {lease_id}
         active = self._active.get(lease_id)
         if active is not None:
-            log.info("coordinator dropped lease %s (%s)", lease_id, active.lease.cell)
             self._abandon(active)
         for key in [k for k, p in self._pending.items() if p.lease_id == lease_id]:
             del self._pending[key]

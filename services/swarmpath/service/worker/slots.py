@@ -12,6 +12,7 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from swarmpath.service.capability import new_capability
 from swarmpath.service.protocol import (
     MAX_BUNDLE_LEASES,
     BenchmarkCell,
@@ -126,7 +127,7 @@ def warm_up() -> None:
     spec = BenchmarkCell(algorithm="PSO", function="F1", dim=2, agents=5, iterations=1)
     lease = Lease(lease_id="warm-up", worker="warm-up", job_id="warm-up", cell=spec.key,
                   cell_index=0, runs_per_cell=1, seed=0, runs=[0], spec=spec, deadline=0.0,
-                  lease_seconds=1.0, heartbeat_seconds=1.0)
+                  lease_seconds=1.0, heartbeat_seconds=1.0, capability=new_capability())
     try:
         execute_lease(lease)
     except Exception:  # pragma: no cover - a broken core shows up in the first real lease
