@@ -68,8 +68,9 @@ class Registry(Generic[T]):
         try:
             return self._classes[name]
         except KeyError:
-            valid = ", ".join(self.names())
-            raise self.error(f"unknown {self.kind} {name!r}; valid: {valid}") from None
+            from swarmpath.names import unknown
+
+            raise self.error(unknown(self.kind, name, self.names())) from None
 
 
 def resolve_params(

@@ -34,6 +34,15 @@ class InputError(ValueError):
         self.detail = message
 
 
+class InputErrors(InputError):
+    """Several problems at once (a job spec the coordinator refused, a scenario file): printed as
+    one line per problem, each naming its field; exit code 2."""
+
+    def __init__(self, problems: Sequence[tuple[str, str]]):
+        self.problems = list(problems)
+        super().__init__(*self.problems[0])
+
+
 def resolve_names(spec: str, registered: Sequence[str], option: str, kind: str) -> list[str]:
     """'ICOOT,coot' -> registered names (case-insensitive, duplicates dropped); 'all' = all."""
     if spec.strip().lower() == "all":
@@ -45,8 +54,11 @@ def resolve_names(spec: str, registered: Sequence[str], option: str, kind: str) 
             continue
         name = part if part in registered else by_lower.get(part.lower())
         if name is None:
+            from swarmpath.names import did_you_mean
+
             valid = ", ".join(registered) or "none"
-            raise InputError(option, f"unknown {kind} {part!r}; registered: {valid}")
+            hint = did_you_mean(part, registered)
+            raise InputError(option, f"unknown {kind} {part!r}{hint}; registered: {valid}")
         if name not in out:
             out.append(name)
     if not out:
@@ -117,7 +129,8 @@ class _Group(TyperGroup):
             return super().invoke(ctx)
         except InputError as exc:
             path = " ".join(p for p in (ctx.command_path, ctx.invoked_subcommand) if p)
-            typer.echo(error_line(path, str(exc)), err=True)
+            for field, message in getattr(exc, "problems", [(exc.field, exc.detail)]):
+                typer.echo(error_line(path, f"{field}: {message}"), err=True)
             raise typer.Exit(EXIT_USAGE) from None
 
     def main(  # type: ignore[override]

@@ -30,7 +30,14 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from swarmpath.cli import parallel
-from swarmpath.cli.core import InputError, app, parse_params_option, plot_dir, resolve_names
+from swarmpath.cli.core import (
+    InputError,
+    InputErrors,
+    app,
+    parse_params_option,
+    plot_dir,
+    resolve_names,
+)
 from swarmpath.legend import legend_text
 
 MAX_RUNS = 10_000
@@ -92,6 +99,10 @@ def load_map(item: str) -> Any:
     except InputError:
         raise
     except (ValueError, KeyError, OSError) as exc:  # ScenarioError, MapImportError, ...
+        problems = getattr(exc, "problems", None)
+        if problems:  # a scenario file: one line per problem
+            raise InputErrors([("--maps", f"{item}: {p}: {m}" if p else f"{item}: {m}")
+                               for p, m in problems]) from None
         raise InputError("--maps", f"{item}: {exc}") from None
 
 

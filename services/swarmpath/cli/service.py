@@ -19,7 +19,7 @@ from typing import Annotated, Any
 
 import typer
 
-from swarmpath.cli.core import InputError, app
+from swarmpath.cli.core import InputError, InputErrors, app
 from swarmpath.legend import legend_text
 
 DEFAULT_DATA = "swarmpath-data"
@@ -316,15 +316,19 @@ def _client(url: str | None) -> Any:
 
 def _fail(exc: Exception, job_option: str = "JOB") -> None:
     """ServiceError -> InputError (bad input, exit 2) or a one-line error (exit 1)."""
-    from swarmpath.service.client import ServiceError, Unreachable, describe_detail
+    from swarmpath.service.client import ServiceError, Unreachable, describe_detail, error_field
 
     if isinstance(exc, Unreachable):
         typer.echo(f"swarmpath: error: {exc}", err=True)
         raise typer.Exit(1)
     if isinstance(exc, ServiceError):
         if exc.status == 422:
-            field = exc.fields[0] if exc.fields else "spec"
-            raise InputError(field, describe_detail(exc.detail)) from None
+            if isinstance(exc.detail, list) and exc.detail:
+                raise InputErrors([
+                    (error_field(d.get("loc", [])), str(d.get("msg", "")))
+                    if isinstance(d, dict) else ("spec", str(d)) for d in exc.detail
+                ]) from None
+            raise InputError("spec", describe_detail(exc.detail)) from None
         if exc.status == 404:
             raise InputError(job_option, describe_detail(exc.detail)) from None
         if exc.status == 401:

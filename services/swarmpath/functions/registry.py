@@ -140,9 +140,9 @@ def get_function(name: str) -> BenchmarkFunction:
     try:
         return _FUNCTIONS[name]
     except KeyError:
-        raise KeyError(
-            f"unknown function {name!r}; valid: {', '.join(_FUNCTIONS)}"
-        ) from None
+        from swarmpath.names import unknown
+
+        raise KeyError(unknown("function", name, _FUNCTIONS)) from None
 
 
 def expand_function_names(spec: str) -> list[str]:

@@ -77,6 +77,38 @@ class Model(BaseModel):
 
 
 # ------------------------------------------------------------------------------------ validation
+Loc = tuple[str | int, ...]
+
+
+class FieldProblems(ValueError):
+    """Problems inside one field, each at its own place: ``(location below the field,
+    message)``. The REST error handler (:mod:`swarmpath.service.errors`) gives each its own
+    detail item, so that ``loc`` reaches the field (``maps.0.obstacles.2.radius``)."""
+
+    def __init__(self, problems: Sequence[tuple[Loc, str]]):
+        self.problems = list(problems)
+        super().__init__("; ".join(
+            f"{'.'.join(str(p) for p in loc)}: {msg}" if loc else msg for loc, msg in problems))
+
+
+def _scenario_loc(path: str) -> Loc:
+    """``obstacles[2].radius`` (the world layer's paths) -> ``('obstacles', 2, 'radius')``."""
+    parts: list[str | int] = []
+    for token in re.findall(r"\[(\d+)\]|([^.\[\]]+)", path):
+        parts.append(int(token[0]) if token[0] else token[1])
+    return tuple(parts)
+
+
+def _unknown_names(v: Sequence[str], valid: Sequence[str], kind: str) -> None:
+    from swarmpath.names import unknown
+
+    problems: list[tuple[Loc, str]] = [
+        ((i,), unknown(kind, name, valid)) for i, name in enumerate(v) if name not in valid
+    ]
+    if problems:
+        raise FieldProblems(problems)
+
+
 def _unique(values: Sequence[Any], what: str) -> None:
     seen: set[Any] = set()
     for v in values:
@@ -114,14 +146,18 @@ def _map_names() -> list[str]:
     return list(list_maps())
 
 
-def _check_inline_scenario(scenario: Mapping[str, Any]) -> None:
-    """Full validation of an inline scenario by the world layer's JSON reader."""
-    from swarmpath.world.scenario_io import scenario_from_dict
+def _inline_scenario_problems(scenario: Mapping[str, Any]) -> list[tuple[Loc, str]]:
+    """Full validation of an inline scenario by the world layer's JSON reader: each problem at
+    its place inside the scenario."""
+    from swarmpath.world.scenario_io import ScenarioError, scenario_from_dict
 
     try:
         scenario_from_dict(dict(scenario))
+    except ScenarioError as exc:
+        return [(_scenario_loc(path), msg) for path, msg in exc.problems]
     except (ValueError, TypeError, KeyError) as exc:
-        raise ValueError(f"scenario {scenario.get('name')!r}: {exc}") from None
+        return [((), str(exc))]
+    return []
 
 
 # -------------------------------------------------------------------------------------- job specs
@@ -149,10 +185,7 @@ class BenchmarkJobSpec(Model):
     def _known_algorithms(cls, v: list[str]) -> list[str]:
         from swarmpath.optimizers import list_optimizers
 
-        valid = list_optimizers()
-        for name in v:
-            if name not in valid:
-                raise ValueError(f"unknown algorithm {name!r}; valid: {', '.join(valid)}")
+        _unknown_names(v, list_optimizers(), "algorithm")
         _unique(v, "algorithm")
         return v
 
@@ -162,11 +195,14 @@ class BenchmarkJobSpec(Model):
         from swarmpath.functions import expand_function_names
 
         names: list[str] = []
-        for item in v:
+        problems: list[tuple[Loc, str]] = []
+        for i, item in enumerate(v):
             try:
                 names.extend(expand_function_names(item))
             except KeyError as exc:
-                raise ValueError(str(exc.args[0]) if exc.args else str(exc)) from None
+                problems.append(((i,), str(exc.args[0]) if exc.args else str(exc)))
+        if problems:
+            raise FieldProblems(problems)
         if not names:
             raise ValueError("no function names given")
         _unique(names, "function")
@@ -277,31 +313,31 @@ class MapJobSpec(Model):
     @field_validator("planners")
     @classmethod
     def _known_planners(cls, v: list[str]) -> list[str]:
-        planners = _planner_registry()
-        valid = list(planners.list_planners())
-        for name in v:
-            if name not in valid:
-                raise ValueError(f"unknown planner {name!r}; valid: {', '.join(valid)}")
+        _unknown_names(v, list(_planner_registry().list_planners()), "planner")
         _unique(v, "planner")
         return v
 
     @field_validator("maps")
     @classmethod
     def _known_maps(cls, v: list[MapEntry]) -> list[MapEntry]:
+        from swarmpath.names import unknown
+
         presets: list[str] | None = None
-        for entry in v:
+        problems: list[tuple[Loc, str]] = []
+        for i, entry in enumerate(v):
             if isinstance(entry, str):
                 if presets is None:
                     presets = _map_names()
                 if entry not in presets:
-                    raise ValueError(f"unknown map {entry!r}; valid: {', '.join(presets)}")
-            else:
-                name = entry.get("name")
-                if not isinstance(name, str) or not _ID_RE.match(name):
-                    raise ValueError(
-                        "an inline scenario needs a 'name' of letters, digits, '_', '.', '-'"
-                    )
-                _check_inline_scenario(entry)
+                    problems.append(((i,), unknown("map", entry, presets)))
+                continue
+            name = entry.get("name")
+            if not isinstance(name, str) or not _ID_RE.match(name):
+                problems.append(((i, "name"), "an inline scenario needs a 'name' of letters, "
+                                 "digits, '_', '.', '-'"))
+            problems += [((i, *loc), msg) for loc, msg in _inline_scenario_problems(entry)]
+        if problems:
+            raise FieldProblems(problems)
         _unique([map_name(e) for e in v], "map name")
         return v
 

@@ -177,6 +177,12 @@ def _path(loc: tuple[int | str, ...]) -> str:
     return out
 
 
+def _field_names() -> list[str]:
+    """Every field name of the scenario document (for "did you mean" on unknown fields)."""
+    models = (ScenarioModel, RobotModel, CircleModel, PolygonModel, GoalMotionModel)
+    return list(dict.fromkeys(name for m in models for name in m.model_fields))
+
+
 def _message(err: Any) -> tuple[str, str]:
     kind = err["type"]
     ctx = err.get("ctx") or {}
@@ -186,7 +192,9 @@ def _message(err: Any) -> tuple[str, str]:
     if kind == "greater_than_equal":
         return path, f"must be >= {ctx['ge']:g}"
     if kind == "extra_forbidden":
-        return path, "unknown field"
+        from swarmpath.names import did_you_mean
+
+        return path, "unknown field" + did_you_mean(str(err["loc"][-1]), _field_names())
     if kind == "missing":
         return path, "required"
     if kind == "finite_number":
@@ -203,7 +211,9 @@ def _message(err: Any) -> tuple[str, str]:
         return path, f"must be {ctx['expected']}"
     if kind == "string_too_short":
         return path, "must not be empty"
-    return path, str(err["msg"])
+    from swarmpath.errors import plain_message
+
+    return path, plain_message(err)
 
 
 # ----------------------------------------------------------------------------------- conversion

@@ -15,7 +15,8 @@ from swarmpath import __version__
 from swarmpath.service.bridge import ZenohBridge
 from swarmpath.service.catalog import warm_registries
 from swarmpath.service.coordinator import Coordinator
-from swarmpath.service.http.middleware import BodyLimit, _validation_detail
+from swarmpath.service.http.errors import validation_detail
+from swarmpath.service.http.middleware import BodyLimit
 from swarmpath.service.http.routes import ROUTERS
 from swarmpath.service.protocol import MAX_BODY_BYTES
 from swarmpath.service.settings import CoordinatorSettings
@@ -80,7 +81,7 @@ def create_app(
 
     @app.exception_handler(RequestValidationError)
     async def _invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
-        return JSONResponse({"detail": _validation_detail(list(exc.errors()))}, status_code=422)
+        return JSONResponse({"detail": validation_detail(list(exc.errors()))}, status_code=422)
 
     for router in ROUTERS:
         app.include_router(router)
