@@ -3,6 +3,8 @@
 Decisions and measured tables: docs/algorithms.md.
 """
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -27,20 +29,19 @@ PUBLISHED_HPO = {
     "F11": 0.0, "F12": 6.5451e-06, "F13": 0.1053,
 }
 # Same order of magnitude as published (a factor 10 either way), or both exactly 0 / <= 1e-15.
-REPRODUCED = ["F5", "F7", "F8", "F9", "F10", "F11"]
-# Exceptions, with what we get instead (docs: "HPO against Table 2"):
-# * F1-F4: published values are 0 or 1e-153 .. 1e-293; ours are astronomically small too but with
-#   other exponents (F1 ~1e-250, not exactly 0). The authors' sequential sweep gives 0 on F1
-#   (scratch port, docs); our synchronous update is slower on this kind of collapse.
-# * F6, F12, F13 (optima at -0.5, -1, 1, off the origin): the synchronous update loses the
-#   authors' immediate target update, the prey rule C Z cos(.) collapses on the target and the
-#   run stalls: ~3, ~0.3, ~2.5 instead of 1e-11, 1e-5, 0.1.
-ASTRONOMICAL = ["F1", "F2", "F3", "F4"]
-STALLS = {"F6": (0.3, 30.0), "F12": (0.01, 3.0), "F13": (0.3, 5.0)}
+REPRODUCED = ["F1", "F5", "F7", "F8", "F9", "F10", "F11", "F13"]
+# Exceptions (docs: "HPO against Table 2"; services/swarmpath/reference/reasons.yaml):
+# * F2-F4: published 1e-153 .. 1e-293; every run of ours is astronomically small too, with
+#   other exponents (the collapse onto the origin keeps going; the exponent is not quality).
+# * F6, F12: heavy tails. Most runs reach the published order or better (median <= published
+#   mean); a few stop early (F12: at pi/30 = 0.105, one coordinate a lattice step away), which
+#   sets the mean.
+ASTRONOMICAL = ["F2", "F3", "F4"]
+HEAVY_TAILED = ["F6", "F12"]
 
 
 def test_exceptions_cover_table_2():
-    assert sorted(REPRODUCED + ASTRONOMICAL + list(STALLS)) == sorted(PUBLISHED_HPO)
+    assert sorted(REPRODUCED + ASTRONOMICAL + HEAVY_TAILED) == sorted(PUBLISHED_HPO)
 
 
 @pytest.mark.parametrize("function", REPRODUCED)
@@ -59,12 +60,19 @@ def test_hpo_astronomically_small_where_published_so(function):
     assert np.all(best < 1e-100), best
 
 
-@pytest.mark.parametrize("function", sorted(STALLS))
-def test_hpo_synchronous_stalls_off_origin(function):
-    low, high = STALLS[function]
-    mean = paper_run("HPO", function).best_fitness.mean()
-    assert low <= mean <= high, mean
-    assert mean > 10.0 * abs(PUBLISHED_HPO[function])
+@pytest.mark.parametrize("function", HEAVY_TAILED)
+def test_hpo_heavy_tailed_cells_reach_the_published_order_in_most_runs(function):
+    best = paper_run("HPO", function).best_fitness
+    published = PUBLISHED_HPO[function]
+    assert np.median(best) <= published, best
+    assert np.count_nonzero(best > 10.0 * published) <= 3, best
+
+
+def test_hpo_synchronous_update_stalls_off_origin():
+    """The former default: the prey cloud contracts around a target fixed for the iteration."""
+    for function, low in (("F6", 0.3), ("F12", 0.01), ("F13", 0.3)):
+        mean = paper_run("HPO", function, runs=4, params={"update": "synchronous"}).best_fitness
+        assert mean.mean() >= low, (function, mean)
 
 
 # --------------------------------------------------------------------------------- origin bias
@@ -84,43 +92,49 @@ def test_rfo_default_is_not_origin_biased_literal_eq9_is():
 
 
 def test_hpo_hunter_rule_is_origin_biased():
-    # The published hunter rule Z (C P + (1 - C) mu) is HPO's engine and pulls to the origin.
-    plain, shifted = plain_and_shifted("HPO", None)
+    # The published hunter rule Z (C P + (1 - C) mu) is HPO's engine and pulls to the origin:
+    # exact zeros on plain F1, not even 1e-8 shifted (the authors' sweep, the default).
+    plain, shifted = plain_and_shifted("HPO", None, runs=4)
+    assert plain == 0.0 and shifted > 1e-8, (plain, shifted)
+    # Synchronously the bias is extreme; the code's prey rule (step 2 Z) keeps the population
+    # from collapsing there: shifted F1 works.
+    sync = {"update": "synchronous"}
+    plain, shifted = plain_and_shifted("HPO", sync)
     assert plain < 1e-100 and shifted > 100.0, (plain, shifted)
-    # The code's prey rule (step 2 Z) keeps the population from collapsing: shifted F1 works.
     plain_code, shifted_code = plain_and_shifted(
-        "HPO", {"prey_step": "2Z", "prey_angle": "from_z"}
+        "HPO", {**sync, "prey_step": "2Z", "prey_angle": "from_z"}
     )
     assert plain_code < 1e-100 and shifted_code < 1e-3 * shifted
 
 
 def test_ihpo_alpha_reading_adds_no_origin_bias_literal_and_position_do():
-    # With HPO's own bias removed (translation-invariant hunter), only alpha can pull to 0.
-    base = {"hunter": "relative"}
-    plain, shifted = plain_and_shifted("IHPO", base)
+    # With HPO's own bias removed (translation-invariant hunter), only alpha can pull to 0
+    # (synchronous update: the finding of docs/algorithms.md, at a sixth of the cost).
+    base = {"hunter": "relative", "update": "synchronous"}
+    plain, shifted = plain_and_shifted("IHPO", {**base, "alpha_on": "step"})
     assert shifted / plain < 10.0 and plain > 1.0, (plain, shifted)
     for on in ("literal", "position"):
         plain, shifted = plain_and_shifted("IHPO", {**base, "alpha_on": on})
         assert plain < 1e-50 and shifted > 100.0, (on, plain, shifted)
 
 
-def test_ihpo_default_inherits_hpo_bias_only():
-    plain, shifted = plain_and_shifted("IHPO", None)
-    assert plain < 1e-20 and shifted > 100.0, (plain, shifted)
-    # literal eq 14 reaches exact zeros on F1 like the published IHPO column
-    plain_lit, _ = plain_and_shifted("IHPO", {"alpha_on": "literal"})
-    assert plain_lit == 0.0
+def test_ihpo_default_is_printed_eq_14_and_origin_bound():
+    # eq 14 as printed (alpha_on = "literal") reaches exact zeros on F1 like the published
+    # IHPO column, and loses them when the optimum moves
+    assert get_optimizer("IHPO").defaults["alpha_on"] == "literal"
+    plain, shifted = plain_and_shifted("IHPO", None, runs=4)
+    assert plain == 0.0 and shifted > 1e-8, (plain, shifted)
 
 
 # -------------------------------------------------------------------------- parameter readings
 ALTERNATIVES = [
     ("HPO", "prey_step", "2Z"), ("HPO", "prey_angle", "from_z"), ("HPO", "hunter", "relative"),
-    ("IHPO", "alpha_on", "displacement"), ("IHPO", "alpha_on", "literal"),
+    ("IHPO", "alpha_on", "displacement"), ("IHPO", "alpha_on", "step"),
     ("IHPO", "alpha_on", "position"), ("IHPO", "alpha_branches", "hunter"),
     ("IHPO", "alpha_branches", "prey"), ("IHPO", "beta_draw", "iteration"),
     ("IHPO", "beta_draw", "dimension"), ("IHPO", "cp_c", "one"), ("IHPO", "hunter", "relative"),
     ("IHPO", "prey_step", "2Z"), ("IHPO", "prey_angle", "from_z"),
-    ("HPO", "update", "sequential"), ("IHPO", "update", "sequential"),
+    ("HPO", "update", "synchronous"), ("IHPO", "update", "synchronous"),
     ("RFO", "alpha_draw", "fox"), ("RFO", "kappa_draw", "fox"),
     ("RFO", "reproduction", "scaled_centre"), ("RFO", "local_greedy", True),
 ]
@@ -226,3 +240,33 @@ def test_rfo_counts_and_small_populations():
         while not opt.done:
             opt.step()
         assert np.all(np.isfinite(opt.best_fitness))
+
+
+# ------------------------------------------------------- IHPO's published F5, F6, F12, F13
+# IHPO column of Table 2 (seed 001): average and minimum best over "1000 times".
+PUBLISHED_IHPO = {"F5": (0.4859, 4.9762e-16), "F6": (5.6221e-15, 0.0),
+                  "F12": (7.5616e-10, 1.5705e-32), "F13": (0.1109, 0.0974)}
+
+
+def optimum_at_origin(name):
+    """The function moved so that its minimiser is the origin (hypothesis of issue 10)."""
+    f = get_function(name)
+    c = f.optimum_coordinate
+    return replace(f, name=f"{name}@0", kernel=lambda x: f.kernel(x + c), optimum_coordinate=0.0)
+
+
+@pytest.mark.parametrize("function", sorted(PUBLISHED_IHPO))
+def test_ihpo_published_cells_need_the_optimum_at_the_origin(function):
+    """No reading reaches the published F5/F6/F12/F13 on the standard functions (optima at 1,
+    -0.5, -1, 1); with the optimum moved to the origin every run is exactly 0, as the published
+    minima of F5, F6, F12 are (to 1e-15). F13's published minimum (0.097) is not 0: the
+    hypothesis explains F5, F6, F12 only."""
+    avg, low = PUBLISHED_IHPO[function]
+    standard = paper_run("IHPO", function, runs=3).best_fitness
+    assert standard.min() > 10.0 * avg, standard
+    moved = paper_run("IHPO", optimum_at_origin(function), runs=3).best_fitness
+    assert np.all(moved == 0.0), moved
+    if function == "F13":
+        assert moved.max() < low
+    else:
+        assert low <= 1e-15

@@ -1,4 +1,4 @@
-"""Hunter-Prey Optimizer, following the authors' equations.
+"""Hunter-Prey Optimizer, following the authors' equations and their sequential sweep.
 
 Naruei, Keynia & Sabbagh Molahosseini, "Hunter-prey optimization: algorithm and applications",
 Soft Computing 26 (2022) 1279-1314, doi 10.1007/s00500-021-06401-0; equations as restated in
@@ -28,17 +28,17 @@ Per iteration t = 1..T (paper eq 5 with it = t, so C ends at 0.02):
 
 Decisions:
 
-* **Synchronous update.** The authors' code sweeps agents one by one: mu and the distance ranking
-  are recomputed for every hunter from the partially updated population, and the target T is
-  replaced as soon as an agent improves on it, so later agents of the same iteration already use
-  it. Here every agent of an iteration uses the population, mu, P and T of the start of the
-  iteration, and T is updated after the whole population was evaluated (Jacobi instead of
-  Gauss-Seidel; no loop over agents). This is a real change, not a detail: without the
-  immediate target update the prey cloud contracts around a fixed T and stalls. Measured with a
-  scratch port of the authors' loop: shifted F1 ~1e-5 sequential vs ~1e4 here, F6/F12 of Table 2
-  reached sequentially and missed here (docs/algorithms.md). The code's prey step
-  (``prey_step = "2Z"``) suffers much less. ``update = "sequential"`` runs the authors' sweep
-  (a loop over agents, vectorized over runs; opt-in, about 6x slower).
+* **Sequential update (the authors' sweep), by default.** The authors' code moves agents one
+  by one: mu and the distance ranking are recomputed for every hunter from the partially
+  updated population, and the target T is replaced as soon as an agent improves on it, so later
+  agents of the same iteration already use it. ``update = "sequential"`` (default) does exactly
+  that: a loop over agents, vectorized over runs, with the same random numbers as the
+  synchronous update. ``update = "synchronous"`` moves every agent from the population, mu, P
+  and T of the start of the iteration and updates T after the whole population was evaluated
+  (Jacobi instead of Gauss-Seidel; no loop over agents, about 4x faster). This is a real change,
+  not a detail: without the immediate target update the prey cloud contracts around a fixed T
+  and stalls (shifted F1 ~1e-5 sequential vs ~1e4 synchronous; Table 2's F6, F12, F13 reached
+  sequentially and missed synchronously: docs/algorithms.md).
 * Positions are always replaced (no greedy selection), as in paper and code.
 * Bounds: the new position is clipped to the box before it is evaluated.
 * Evaluations: N at initialization and N per iteration, N (T + 1) in all (the MATLAB loop starts
@@ -94,7 +94,7 @@ class HPO(Optimizer):
         "prey_step": "CZ",
         "prey_angle": "independent",
         "hunter": "paper",
-        "update": "synchronous",
+        "update": "sequential",
     }
     choices: ClassVar[dict[str, tuple[str, ...]]] = {
         "prey_step": ("CZ", "2Z"),
@@ -192,7 +192,7 @@ class HPO(Optimizer):
             return
         # The authors' sweep: agent i moves from the population as agents 0..i-1 left it (mu and
         # P recomputed) and toward the best point including their evaluations. A loop over
-        # agents (vectorized over runs): opt-in, for reproducing the published column.
+        # agents (vectorized over runs).
         for i in range(self.N):
             rows = slice(i, i + 1)
             X = self._moved(draw, C, kbest, rows)

@@ -2,7 +2,7 @@
 
 Abdulsaheb & Kadhim, "Multi-Objective Robot Path Planning Using an Improved Hunter Prey
 Optimization Algorithm", IJIES 16(2) 2023 (seed 001), eqs 11-14, on top of HPO (eqs 1-10, see
-:mod:`swarmpath.optimizers.hpo`, whose decisions all carry over: synchronous update, no greedy
+:mod:`swarmpath.optimizers.hpo`, whose decisions all carry over: sequential sweep, no greedy
 selection, clip before evaluation, N (T + 1) evaluations).
 
 The paper adds beta = 2 rand - 1 (eq 11), CP = sin(C - t/T) (eq 12) and alpha = beta CP (eq 13),
@@ -16,13 +16,14 @@ It leaves open what C is inside CP, how often beta is drawn and, read together w
 readings, as parameters:
 
 * ``alpha_on`` - what alpha multiplies in the branches it applies to:
-    - ``"step"`` (default): the random step of each rule about its own anchor. Prey: eq 14b as
-      printed, x' = T + alpha C Z cos(2 pi r4)(T - x); hunter: x' = x + alpha (h - x), h the HPO
-      hunter position. alpha adds no pull toward the origin (HPO's own remains, see
-      ``hunter``).
+    - ``"literal"`` (default): eq 14 exactly as printed. 14a expands to
+      x' = Z (alpha C P + (1 - C) mu): alpha scales the prey position P itself, which pulls
+      hunters toward the origin (on top of HPO's own pull, see ``hunter``); 14b is
+      x' = T + alpha C Z cos(2 pi r4)(T - x).
+    - ``"step"``: the random step of each rule about its own anchor. Prey: eq 14b as printed;
+      hunter: x' = x + alpha (h - x), h the HPO hunter position. alpha adds no pull toward the
+      origin (the default until issue 10: it made IHPO worse than HPO on every function).
     - ``"displacement"``: x' = x + alpha (x'_HPO - x) for both rules.
-    - ``"literal"``: eq 14 exactly as printed; in 14a alpha scales the prey position P itself,
-      x' = Z (alpha C P + (1 - C) mu), which pulls hunters toward the origin.
     - ``"position"``: x' = alpha x'_HPO, the whole new position (strongest origin bias: every
       move lands on a point of the segment from the origin through x'_HPO, or its mirror).
 * ``alpha_branches``: ``"both"`` (eq 14, default), ``"hunter"`` or ``"prey"`` only.
@@ -33,12 +34,11 @@ readings, as parameters:
   sin(-0.98) = -0.83; or ``"one"``, a constant C = 1: CP = sin(1 - t/T) falls from 0.84 to 0.
   Since beta is symmetric about 0, only |CP| matters for the law of alpha.
 * ``hunter``: HPO's hunter rule, inherited unchanged (``"paper"``) so that IHPO and HPO differ
-  only by alpha. That rule is itself origin-biased (see :mod:`swarmpath.optimizers.hpo`): default
-  IHPO therefore does much better on plain F1 than on shifted F1, exactly as HPO does; the alpha
-  reading adds no bias of its own. ``"relative"`` removes HPO's bias, and then only ``literal``
-  and ``position`` still show one (tests/test_opt_hpo_rfo.py, docs).
-
-``alpha_on="literal"`` is eq 14 word for word.
+  only by alpha. That rule is itself origin-biased (see :mod:`swarmpath.optimizers.hpo`), and
+  the printed 14a adds to it. ``"relative"`` removes HPO's bias, and then only ``literal`` and
+  ``position`` still show one (tests/test_opt_hpo_rfo.py, docs). With ``"centre"`` (the
+  planners), 14a's alpha scales P about the box centre too, so no reading pulls toward the
+  world origin.
 """
 
 from __future__ import annotations
@@ -63,7 +63,7 @@ class IHPO(HPO):
     )
     defaults: ClassVar[dict[str, Any]] = {
         **HPO.defaults,
-        "alpha_on": "step",
+        "alpha_on": "literal",
         "alpha_branches": "both",
         "beta_draw": "agent",
         "cp_c": "hpo",
@@ -112,7 +112,12 @@ class IHPO(HPO):
             if branches == "prey":
                 hunt = self._hunter_move(z, x, C * P[r] + (1.0 - C) * mu[r], r)
             elif on == "literal":  # eq 14a: alpha scales the prey position
-                hunt = self._hunter_move(z, x, a * (C * P[r]) + (1.0 - C) * mu[r], r)
+                if self.p["hunter"] == "centre":  # positions measured from the box centre
+                    o = self.problem_centre[r]
+                    anchor = a * (C * (P[r] - o)) + (1.0 - C) * (mu[r] - o) + o
+                else:
+                    anchor = a * (C * P[r]) + (1.0 - C) * mu[r]
+                hunt = self._hunter_move(z, x, anchor, r)
             else:
                 h = self._hunter_move(z, x, C * P[r] + (1.0 - C) * mu[r], r)
                 hunt = a * h if on == "position" else x + a * (h - x)
