@@ -263,6 +263,15 @@ def reproduce(
         names = resolve_tables(table)
         for name in names:  # validate every table's options before running anything
             study_setting(reference.load(name), runs, seed)
+    if fmt == "markdown" and not as_json:
+        whole = table if table is not None else ("all" if len(names) > 1 else names[0])
+        first_runs = runs
+        if from_ is not None:
+            first_runs = int(results[0][1]["runs"])
+            seed = int(results[0][1]["seed"])
+        sys.stdout.write(output.markdown_header(
+            command_line(whole, first_runs, seed, fmt), __version__,
+            None if from_ is None else from_.name))
     docs = []
     for i, name in enumerate(names):
         tab, setting, rows, statistics, markers = (
