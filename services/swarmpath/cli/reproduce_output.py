@@ -50,15 +50,22 @@ def grid(tab: reference.Table, rows: Sequence[Row], markers: Markers
     header = [where, who, "published avg", "min / max / std", "measured avg", "median", "min",
               "max", "std"]
     if tab.kind == "map":
-        header += ["success"]
-    header += ["log10 ratio", "verdict", "reason"]
+        header += ["success", "measured / published - 1"]
+    else:
+        header += ["log10 ratio"]
+    header += ["verdict", "reason"]
     lines, notes = [], []
     for r in rows:
         pub_avg, spread = _published(r)
         line = [r.where, r.who, pub_avg, spread, *_measured(r, markers)]
         if tab.kind == "map":
             line.append(str(r.extra.get("success", "")))
-        ratio = "n/a" if r.log10_ratio is None else f"{r.log10_ratio:+.2f}"
+        if r.log10_ratio is None:
+            ratio = "n/a"
+        elif tab.kind == "map":  # a few per cent: say it so
+            ratio = f"{(10 ** r.log10_ratio - 1) * 100:+.1f} %"
+        else:
+            ratio = f"{r.log10_ratio:+.2f}"
         mark = ""
         if r.reason is not None:
             notes.append(f"{r.key}: {r.reason}"
