@@ -300,3 +300,47 @@ def test_ioh_evaluation_points_follow_thinned_curves():
     assert evaluation_points(3, 9, 90, stride=4) == [10, 50, 90]  # iterations 1, 5, 9
     assert run_block([float("inf"), 5.0, 5.0, 2.0], [1, 2, 3, 4]) == [(2, 5.0), (4, 2.0)]
     assert run_block([3.0, 3.0], [1, 2]) == [(1, 3.0), (2, 3.0)]
+
+
+# ------------------------------------------------------------------ timestamps, response models
+def test_status_timestamps_are_iso_8601_beside_the_unix_float(service):
+    from datetime import datetime
+
+    _cli, http, _core = service
+    job = finished(service, BENCH)
+    status = http.get(f"/jobs/{job}").json()
+    for name in ("created", "started", "finished"):
+        stamp = datetime.fromisoformat(status[f"{name}_at"].replace("Z", "+00:00"))
+        assert stamp.utcoffset().total_seconds() == 0
+        assert abs(stamp.timestamp() - status[name]) < 1e-3
+    (worker,) = http.get("/workers").json()
+    assert abs(datetime.fromisoformat(worker["last_seen_at"].replace("Z", "+00:00"))
+               .timestamp() - worker["last_seen"]) < 1e-3
+    queued = http.post("/jobs", json=BENCH).json()["id"]
+    assert http.get(f"/jobs/{queued}").json()["finished_at"] is None
+
+
+def test_openapi_describes_summary_runs_and_run(service):
+    _cli, http, _core = service
+    api = http.get("/openapi.json").json()
+    paths = api["paths"]
+
+    def model(path):
+        content = paths[path]["get"]["responses"]["200"]["content"]["application/json"]
+        return content["schema"]["$ref"].rsplit("/", 1)[-1]
+
+    assert model("/jobs/{job_id}/summary") == "Summary"
+    assert model("/jobs/{job_id}/runs") == "RunsPage"
+    assert model("/jobs/{job_id}/runs/{run_id}") == "Run"
+    schemas = api["components"]["schemas"]
+    assert {"rows", "columns", "legend"} <= set(schemas["Summary"]["properties"])
+    assert {"curve", "path", "run_id", "state"} <= set(schemas["Run"]["properties"])
+    job = finished(service, MAPS)
+    summary = http.get(f"/jobs/{job}/summary").json()
+    from swarmpath.legend import NOTES
+
+    assert set(summary["legend"]) == set(NOTES) & set(summary["columns"])
+    assert {"failed", "collisions", "gap_mean"} <= set(summary["legend"])
+    assert "moving obstacles" in summary["legend"]["gap_mean"]
+    run = http.get(f"/jobs/{job}/runs/1").json()
+    assert "algorithm" not in run and run["planner"] == "OMPL-RRTstar" and run["path"]

@@ -23,6 +23,7 @@ import json
 import math
 import re
 from collections.abc import Callable, Mapping, Sequence
+from datetime import UTC, datetime
 from typing import Annotated, Any, Literal, TypeVar
 
 from pydantic import (
@@ -31,6 +32,7 @@ from pydantic import (
     Field,
     TypeAdapter,
     ValidationInfo,
+    computed_field,
     field_validator,
 )
 
@@ -650,6 +652,14 @@ class Cancel(Model):
     leases: list[LeaseDrop] = Field(default_factory=list, max_length=CANCEL_LEASES)
 
 
+def iso_time(t: float | None) -> str | None:
+    """Unix time -> ISO 8601 in UTC with milliseconds (``2026-11-25T07:41:01.123Z``)."""
+    if not t:
+        return None
+    stamp = datetime.fromtimestamp(t, tz=UTC)
+    return stamp.strftime("%Y-%m-%dT%H:%M:%S.") + f"{stamp.microsecond // 1000:03d}Z"
+
+
 class WorkerStatus(Model):
     """One entry of ``GET /workers``."""
 
@@ -659,8 +669,14 @@ class WorkerStatus(Model):
     slots: int = 1
     current_runs: list[str] = Field(default_factory=list, description="'<job_id>:<run_id>'")
     runs_done: int = 0
-    last_seen: float = 0.0
+    last_seen: float = Field(0.0, description="Unix time")
     alive: bool = True
+
+    @computed_field  # type: ignore[prop-decorator]
+    @property
+    def last_seen_at(self) -> str | None:
+        """``last_seen`` in ISO 8601 (UTC)."""
+        return iso_time(self.last_seen)
 
 
 class JobStatus(Model):
@@ -672,9 +688,25 @@ class JobStatus(Model):
     runs_total: int
     runs_done: int
     runs_failed: int
-    created: float
+    created: float = Field(description="Unix time; created_at is the same in ISO 8601")
     started: float | None = None
     finished: float | None = None
+
+    @computed_field  # type: ignore[prop-decorator]
+    @property
+    def created_at(self) -> str | None:
+        """``created`` in ISO 8601 (UTC)."""
+        return iso_time(self.created)
+
+    @computed_field  # type: ignore[prop-decorator]
+    @property
+    def started_at(self) -> str | None:
+        return iso_time(self.started)
+
+    @computed_field  # type: ignore[prop-decorator]
+    @property
+    def finished_at(self) -> str | None:
+        return iso_time(self.finished)
 
 
 # ------------------------------------------------------------------------------- key expressions

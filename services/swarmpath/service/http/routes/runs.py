@@ -6,13 +6,16 @@ from typing import Annotated, Any, Literal
 from fastapi import APIRouter, HTTPException, Query
 from fastapi.responses import FileResponse, PlainTextResponse, StreamingResponse
 
+from swarmpath.legend import legend
 from swarmpath.service.http.deps import CoreDep, status_or_404
+from swarmpath.service.http.models import Run, RunsPage, Summary
 from swarmpath.service.util import json_safe
 
 router = APIRouter(tags=["results"])
 
 
-@router.get("/jobs/{job_id}/summary")
+@router.get("/jobs/{job_id}/summary", response_model=Summary, response_model_exclude_unset=True,
+            responses={200: {"content": {"text/csv": {}}}})
 def job_summary(
     job_id: str, core: CoreDep, format: Literal["json", "csv"] = "json"
 ) -> Any:
@@ -24,10 +27,12 @@ def job_summary(
         from swarmpath.service.store import summary_to_csv
 
         return PlainTextResponse(summary_to_csv(summary), media_type="text/csv")
+    summary["legend"] = dict(legend(summary["columns"]))
     return json_safe(summary)
 
 
-@router.get("/jobs/{job_id}/runs", responses={200: {"content": {
+@router.get("/jobs/{job_id}/runs", response_model=RunsPage, response_model_exclude_unset=True,
+            responses={200: {"content": {
     "text/csv": {}, "application/vnd.apache.parquet": {}, "application/x-ndjson": {}}}})
 def job_runs(
     job_id: str,
@@ -70,8 +75,9 @@ def _stream(core: Any, job_id: str, kind: str, format: str) -> StreamingResponse
                              media_type="application/vnd.apache.parquet", headers=headers)
 
 
-@router.get("/jobs/{job_id}/runs/{run_id}")
-def job_run(job_id: str, run_id: int, core: CoreDep) -> dict[str, Any]:
+@router.get("/jobs/{job_id}/runs/{run_id}", response_model=Run,
+            response_model_exclude_unset=True)
+def job_run(job_id: str, run_id: int, core: CoreDep) -> Any:
     """One run with its convergence curve (benchmark) or path rows [x, y, t] (map)."""
     status_or_404(core, job_id)
     item = core.store.run(job_id, run_id)

@@ -1,0 +1,80 @@
+"""Response models of the result routes, for /openapi.json (and the dashboard's and other
+clients' code generators). Open models: a metric added to a run or a column to a summary is
+passed through (``extra="allow"``); non-finite numbers travel as "inf", "-inf", "nan"."""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+Number = float | str | None
+RunState = Literal["queued", "leased", "done", "failed", "cancelled"]
+
+
+class _Open(BaseModel):
+    model_config = ConfigDict(extra="allow")
+
+
+class Summary(_Open):
+    """``GET /jobs/{id}/summary``: the CLI's table (partial while the job runs)."""
+
+    job_id: str
+    kind: Literal["benchmark", "map"]
+    state: str
+    partial: bool
+    runs_total: int
+    runs_done: int
+    runs_failed: int
+    columns: list[str]
+    rows: list[dict[str, Any]] = Field(description="one per cell, keyed by the columns")
+    statistics: dict[str, Any] | None = Field(
+        None, description="the statistical tests of docs/statistics.md")
+    legend: dict[str, str] = Field(
+        default_factory=dict,
+        description="what the columns mean (failed, collisions, gap_mean, ...): "
+                    "swarmpath.legend, the text under the CLI tables")
+
+
+class RunItem(_Open):
+    """One run: identity, state and (once finished) its metrics."""
+
+    run_id: int
+    run: int
+    cell: str
+    seed: int
+    state: RunState
+    worker: str | None = None
+    algorithm: str | None = None
+    function: str | None = None
+    dim: int | None = None
+    planner: str | None = None
+    map: str | None = None
+    best_fitness: Number = None
+    evaluations: int | None = None
+    success: bool | None = None
+    collisions: int | None = None
+    length: Number = None
+    gap: Number = None
+    seconds: Number = None
+    failure: str | None = None
+    lease_id: str | None = None
+    completed: float | None = Field(None, description="Unix time the result was accepted")
+
+
+class RunsPage(BaseModel):
+    """``GET /jobs/{id}/runs``: a page of runs in run_id order."""
+
+    job_id: str
+    total: int
+    limit: int
+    offset: int
+    items: list[RunItem]
+
+
+class Run(RunItem):
+    """``GET /jobs/{id}/runs/{run_id}``: one run with its series."""
+
+    curve: list[Number] | None = Field(None, description="best so far after each iteration")
+    best_position: list[Number] | None = None
+    path: list[list[Number]] | None = Field(None, description="rows [x, y, t]")
