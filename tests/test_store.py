@@ -388,7 +388,7 @@ def test_map_summary(store):
               {"success": True, "length": 12.0, "error": 0.2, "seconds": 2.0, "gap": 0.3,
                "collisions": 0},
               {"success": False, "length": 3.0, "error": 5.0, "seconds": 3.0, "gap": None,
-               "collisions": 1}],
+               "collisions": 3, "robot_driven_contacts": 1, "obstacle_driven_contacts": 2}],
         "B": [{"success": True, "length": 11.0, "error": 0.0, "seconds": 0.5, "gap": None,
                "collisions": 0}] * 3,
     }
@@ -409,7 +409,9 @@ def test_map_summary(store):
     assert a["error_mean"] == pytest.approx((0.1 + 0.2 + 5.0) / 3)
     assert a["seconds_mean"] == pytest.approx(2.0)
     assert a["gap_mean"] == pytest.approx(0.2)
-    assert a["collisions"] == 1
+    assert a["collisions"] == 3
+    assert (a["robot_driven_contacts"], a["obstacle_driven_contacts"]) == (1, 2)
+    assert (b["robot_driven_contacts"], b["obstacle_driven_contacts"]) == (0, 0)
     assert b["success_rate"] == 1.0 and b["gap_mean"] is None and b["length_std"] == 0.0
     item = store.run(job, 0)
     assert item["planner"] == "A" and item["map"] == "m" and item["length"] == 10.0

@@ -23,7 +23,8 @@ BENCHMARK_COLUMNS = (
 )
 MAP_COLUMNS = (
     "planner", "map", "runs", "failed", "success_rate", "collisions", "length_mean", "length_std",
-    "error_mean", "seconds_mean", "gap_mean", *MAP_TEST_COLUMNS,
+    "error_mean", "seconds_mean", "gap_mean", "robot_driven_contacts", "obstacle_driven_contacts",
+    *MAP_TEST_COLUMNS,
 )
 
 
@@ -44,8 +45,9 @@ def map_cell_summary(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
     """Statistics of one planner x map from its runs' metrics (``swarmpath plan --json`` fields).
 
     success_rate over all finished runs; length mean/std (ddof=1) and gap mean over the successful
-    runs; error, seconds and collisions over all runs. Missing values are left out; None when no
-    run has the value."""
+    runs; error, seconds and collisions over all runs, the collisions also by cause
+    (``robot_driven_contacts``, ``obstacle_driven_contacts``: :func:`swarmpath.metrics.
+    contact_causes`). Missing values are left out; None when no run has the value."""
     from swarmpath.stats import describe
 
     ok = [m for m in runs if m.get("success") is True]
@@ -61,7 +63,13 @@ def map_cell_summary(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
         "error_mean": _mean(_numbers(runs, "error")),
         "seconds_mean": _mean(_numbers(runs, "seconds")),
         "gap_mean": _mean(_numbers(ok, "gap")),
+        **{key: _total(runs, key) for key in ("robot_driven_contacts", "obstacle_driven_contacts")},
     }
+
+
+def _total(runs: Sequence[dict[str, Any]], key: str) -> int | None:
+    values = _numbers(runs, key)
+    return int(sum(values)) if values else (0 if runs else None)
 
 
 def summary_to_csv(summary: dict[str, Any]) -> str:
