@@ -232,8 +232,10 @@ def map_rows(
                     f"{line:.4f} m straight line from start to goal")
         else:
             ratio = math.log10(measured["avg"] / cell.mean[column])
-        tolerance = math.log10(1.0 + MAP_TOLERANCE)
-        verdict = verdict_of(ratio, tolerance)
+        if ratio is not None and abs(10**ratio - 1.0) <= MAP_TOLERANCE:
+            verdict = MATCHES  # within 10 % either way
+        else:
+            verdict = verdict_of(ratio, 0.0)
         key = cell_key(table.name, planner, map_name)
         reason = reasons.get(key)
         text = reason.reason if reason is not None else auto

@@ -210,10 +210,11 @@ def plot(tab: reference.Table, rows: Sequence[Row], path: Path) -> Path:
 
     places = list(dict.fromkeys(r.where for r in rows))
     who = list(dict.fromkeys(r.who for r in rows))
-    tol = (reproduction.DECADE if tab.kind == "benchmark"
-           else math.log10(1 + reproduction.MAP_TOLERANCE))
+    lo, hi = ((-reproduction.DECADE, reproduction.DECADE) if tab.kind == "benchmark" else
+              (math.log10(1 - reproduction.MAP_TOLERANCE),
+               math.log10(1 + reproduction.MAP_TOLERANCE)))
     fig, ax = plt.subplots(figsize=(max(6.0, 0.6 * len(places) + 2), 4.5))
-    ax.axhspan(-tol, tol, color="0.9", label="matches")
+    ax.axhspan(lo, hi, color="0.9", label="matches")
     for i, name in enumerate(who):
         pts = [(places.index(r.where) + (i - len(who) / 2) * 0.08, r.log10_ratio)
                for r in rows if r.who == name and r.log10_ratio is not None]
