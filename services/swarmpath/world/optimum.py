@@ -38,20 +38,31 @@ obstacle boundary points that lie inside the box, and all of its tangent points 
 the pruning. Start or goal outside the box, or inside an inflated obstacle (clearance < margin -
 1e-9), raise ``ValueError`` naming the point and the obstacle.
 
+Scale
+-----
+Only convex vertices of the *union* carry paths: a convex polygon vertex strictly inside another
+polygon, or (margin > 0) lying on another polygon when both are orthogonal (the touching parts of
+an imported grid map), is dropped (:func:`_covered_vertices`). Disk pairs are processed in chunks
+(bounded memory). Above ``INDEX_ABOVE`` disks the spatial index of
+:mod:`swarmpath.world.optimum_index` decides pairs, segments and arcs exactly without testing
+every edge: raster clearance bounds, edge buckets, and a pair prefilter (the centre segment of
+two vertex disks through an obstacle's interior blocks all four tangents).
+
 Limits
 ------
-The graph has O(N^2) tangents for N disks and each is checked against every nearby obstacle, so
-instances with more than ``max_disks`` disks (default 400; grid maps imported as many rectangles
-reach that quickly) are not solved: the result has ``length = nan``, ``exact = False`` and a
-``reason``. If no collision-free path exists the length is ``inf`` (``exact = True``). At margin 0
-separate polygons that share an edge are separate closed sets: a path may run along the shared
-edge.
+``budget`` (default ``DEFAULT_BUDGET`` = 10 s of wall time) and ``max_disks`` (default 20,000):
+past either, the result has ``length = nan``, ``exact = False`` and a ``reason`` that says which
+limit and how far the search got. If no collision-free path exists the length is ``inf``
+(``exact = True``). At margin 0 separate polygons that share an edge are separate closed sets:
+a path may run along the shared edge.
 """
 
 from __future__ import annotations
 
 import itertools
 import math
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -65,15 +76,19 @@ from swarmpath.world.geometry import (
     point_segment_distance,
     segment_segment_distance,
 )
+from swarmpath.world.optimum_index import EdgeIndex
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.intp]
 BoolArray = NDArray[np.bool_]
 
-__all__ = ["MAX_DISKS", "TOL", "OptimalPath", "shortest_path"]
+__all__ = ["DEFAULT_BUDGET", "MAX_DISKS", "TOL", "OptimalPath", "shortest_path"]
 
 TOL = 1e-9
-MAX_DISKS = 400
+MAX_DISKS = 20_000
+DEFAULT_BUDGET = 10.0  # s
+INDEX_ABOVE = 600  # disks above which the spatial index decides pairs, segments and arcs
+_PAIRS = 1 << 17  # disk pairs per chunk
 TWO_PI = 2.0 * math.pi
 _CHUNK = 1 << 18  # work items (pair x obstacle or pair x edge) per numpy batch
 _NEAR_FIRST = 16  # above this many circles, test each segment against nearby ones first
@@ -208,7 +223,11 @@ def _chunks_by_weight(weights: IntArray, budget: int) -> list[slice]:
 class _Scene:
     """Obstacles, margin and world box with batched exact free-ness tests for segments and arcs."""
 
-    def __init__(self, obstacles: ObstacleSet, margin: float, world: World | None) -> None:
+    def __init__(
+        self, obstacles: ObstacleSet, margin: float, world: World | None,
+        index: EdgeIndex | None = None,
+    ) -> None:
+        self.index = index
         self.obstacles = obstacles
         self.circles = obstacles.circles
         self.polygons = obstacles.polygons
@@ -323,6 +342,9 @@ class _Scene:
             blocked[active[hit]] = True
             active = active[~hit]
         p = len(self.polygons)
+        if self.index is not None and len(active):
+            blocked[active[self.index.segments_blocked(A[active], B[active])]] = True
+            return blocked
         lo = 0
         while lo < p and len(active):
             width = int(np.clip(_CHUNK // len(active), 4, p))
@@ -489,6 +511,17 @@ class _Scene:
         if not self.polygons:
             return blocked
         idx = np.flatnonzero(~blocked)
+        if self.index is not None:
+            small = rho[idx] <= self.m + TOL  # vertex disks: the edge buckets around the centre
+            ii = idx[small]
+            ai, ej = self.index.near_edges(c[ii])
+            for lo in range(0, len(ai), _CHUNK):
+                a_, e_ = ii[ai[lo : lo + _CHUNK]], ej[lo : lo + _CHUNK]
+                dist = _arc_segment_distance(
+                    c[a_], rho[a_], th0[a_], dth[a_], self.index.e0[e_], self.index.e1[e_]
+                )
+                blocked[a_[dist < self.m - TOL]] = True
+            idx = idx[~small]
         step = max(1, _CHUNK // len(self.polygons))
         for lo in range(0, len(idx), step):
             ii = idx[lo : lo + step]
@@ -538,13 +571,51 @@ class _Scene:
 # ----------------------------------------------------------------------------- tangent graph
 
 
+def _orthogonal(poly: Array) -> bool:
+    e = np.roll(poly, -1, axis=0) - poly
+    return bool(np.all((e[:, 0] == 0.0) | (e[:, 1] == 0.0)))
+
+
+def _covered_vertices(
+    points: Array, owner: IntArray, polygons: tuple[Array, ...], margin: float
+) -> BoolArray:
+    """Convex vertices no shortest path bends around although their own polygon is convex there.
+
+    A vertex strictly inside another polygon (its whole disk is then closer than margin to that
+    polygon). A vertex of an orthogonal polygon lying on another orthogonal polygon: near the
+    vertex both are unions of axis-aligned quadrants, the other one covers at least one more
+    quadrant, so the union is flat or reflex there (grid maps cut into touching parts, and cells
+    meeting at a corner, produce exactly these vertices). Only with margin > 0: at margin 0 a path
+    may pass through the point where two squares meet at a corner, and bend there.
+    """
+    out = np.zeros(len(points), dtype=bool)
+    if len(polygons) < 2 or not len(points):
+        return out
+    lo = np.array([p.min(axis=0) for p in polygons]) - TOL
+    hi = np.array([p.max(axis=0) for p in polygons]) + TOL
+    ortho = np.array([_orthogonal(p) for p in polygons])
+    step = max(1, _CHUNK // len(polygons))
+    for a in range(0, len(points), step):
+        pts = points[a : a + step]
+        near = np.all((pts[:, None, :] >= lo) & (pts[:, None, :] <= hi), axis=-1)
+        near[np.arange(len(pts)), owner[a : a + step]] = False
+        vi, pj = np.nonzero(near)
+        for j in np.unique(pj):
+            sel = vi[pj == j]
+            d = point_polygon_distance(pts[sel], polygons[int(j)])
+            both = ortho[int(j)] & ortho[owner[a + sel]] & (margin > 0.0)
+            out[a + sel[(d < -TOL) | ((np.abs(d) <= TOL) & both)]] = True
+    return out
+
+
 def _disks(
     start: Array, goal: Array, obstacles: ObstacleSet, margin: float
 ) -> tuple[Array, Array, Array, Array]:
     """Disks: centres, radii, and for polygon vertices the unit vectors towards both neighbours.
 
-    Order: start, goal, inflated circles, convex polygon vertices. The neighbour vectors are 0
-    for disks that are not polygon vertices.
+    Order: start, goal, inflated circles, convex polygon vertices (minus those of
+    :func:`_covered_vertices`). The neighbour vectors are 0 for disks that are not polygon
+    vertices.
     """
     centres = [start[None], goal[None]]
     radii = [np.zeros(2)]
@@ -554,16 +625,26 @@ def _disks(
     radii.append(circ[keep, 2] + margin)
     n_plain = 2 + int(keep.sum())
     to_prev, to_next = [np.zeros((n_plain, 2))], [np.zeros((n_plain, 2))]
-    for poly in obstacles.polygons:
+    vert: list[Array] = [np.zeros((0, 2))]
+    owner: list[IntArray] = [np.zeros(0, dtype=np.intp)]
+    na: list[Array] = []
+    nb: list[Array] = []
+    for j, poly in enumerate(obstacles.polygons):
         prev, nxt = np.roll(poly, 1, axis=0), np.roll(poly, -1, axis=0)
         area2 = float(np.sum(_cross(poly, nxt)))
         turn = _cross(poly - prev, nxt - poly) * math.copysign(1.0, area2)
         convex = turn > 0.0
-        centres.append(poly[convex])
-        radii.append(np.full(int(convex.sum()), float(margin)))
-        for out, other in ((to_prev, prev), (to_next, nxt)):
+        vert.append(poly[convex])
+        owner.append(np.full(int(convex.sum()), j, dtype=np.intp))
+        for out, other in ((na, prev), (nb, nxt)):
             u = other[convex] - poly[convex]
             out.append(u / _norm(u)[:, None])
+    v = np.concatenate(vert)
+    keep_v = ~_covered_vertices(v, np.concatenate(owner), obstacles.polygons, margin)
+    centres.append(v[keep_v])
+    radii.append(np.full(int(keep_v.sum()), float(margin)))
+    to_prev.append(np.concatenate(na)[keep_v] if na else np.zeros((0, 2)))
+    to_next.append(np.concatenate(nb)[keep_v] if nb else np.zeros((0, 2)))
     return (
         np.concatenate(centres),
         np.concatenate(radii),
@@ -593,14 +674,24 @@ def _locally_free(
     return np.asarray(np.where(radii[disk] > 0.0, cone, tangent))
 
 
-def _tangents(centres: Array, radii: Array) -> tuple[IntArray, IntArray, Array, Array]:
+def _pair_rows(i0: int, i1: int, n: int) -> tuple[IntArray, IntArray]:
+    """Pairs (i, j), i0 <= i < i1, i < j < n (rows of the upper triangle), vectorised."""
+    rows = np.arange(i0, i1, dtype=np.intp)
+    counts = n - 1 - rows
+    ii = np.repeat(rows, counts)
+    jj = ii + 1 + (np.arange(int(counts.sum())) - np.repeat(np.cumsum(counts) - counts, counts))
+    return ii, jj.astype(np.intp)
+
+
+def _tangents(
+    centres: Array, radii: Array, ii: IntArray, jj: IntArray
+) -> tuple[IntArray, IntArray, Array, Array]:
     """All common tangents of all disk pairs: disk indices i, j and tangent points on each.
 
     Line n.x = k with unit normal n touches disk i when n.c_i - k = s_i r_i, at c_i - s_i r_i n.
     With s_i = +1, s_j = +1 gives the outer and s_j = -1 the inner tangents, h = +-1 the two
     mirror images. A zero-radius disk (a point) only needs s_j = +1, two points only one line.
     """
-    ii, jj = np.triu_indices(len(centres), k=1)
     ci, cj, ri, rj = centres[ii], centres[jj], radii[ii], radii[jj]
     dv = cj - ci
     dist = _norm(dv)
@@ -648,12 +739,20 @@ def shortest_path(
     *,
     max_disks: int = MAX_DISKS,
     arc_tol: float = 1e-7,
+    budget: float | None = DEFAULT_BUDGET,
+    progress: Callable[[float], None] | None = None,
+    index: bool | None = None,
 ) -> OptimalPath:
     """Exact shortest path from start to goal for a disk robot of radius ``margin``.
 
-    See the module docstring for the method, the tolerance and the world-box handling.
-    Raises ValueError if start or goal is outside ``world`` or inside an inflated obstacle.
+    See the module docstring for the method, the tolerance, the world-box handling and the
+    limits. ``budget``: seconds of wall time after which the search gives up (``None``: no
+    limit); ``progress(fraction)`` is called as the tangent pairs are processed; ``index``: use
+    the spatial index of :mod:`swarmpath.world.optimum_index` (``None``: when there are more than
+    ``INDEX_ABOVE`` disks; only with margin > 0 and polygons). Raises ValueError if start or
+    goal is outside ``world`` or inside an inflated obstacle.
     """
+    started = time.perf_counter()
     s = np.asarray(start, dtype=np.float64).reshape(2)
     g = np.asarray(goal, dtype=np.float64).reshape(2)
     if not (math.isfinite(margin) and margin >= 0.0):
@@ -675,16 +774,59 @@ def shortest_path(
             math.nan,
             np.zeros((0, 2)),
             False,
-            f"{len(centres) - 2} disks exceed max_disks={max_disks}; optimum not computed",
+            f"{len(centres) - 2} disks (convex vertices and circles) exceed "
+            f"max_disks={max_disks:,}; optimum not computed (raise max_disks)",
         )
 
-    # Tangent candidates, pruned by a local test at their ends (cheap), then as segments.
-    ti, tj, tp, tq = _tangents(centres, radii)
-    ok = _locally_free(tp, tq, ti, centres, radii, na, nb)
-    ok &= _locally_free(tq, tp, tj, centres, radii, na, nb)
-    ti, tj, tp, tq = ti[ok], tj[ok], tp[ok], tq[ok]
-    ok = ~scene.segments_blocked(tp, tq)
-    ti, tj, tp, tq = ti[ok], tj[ok], tp[ok], tq[ok]
+    use_index = (len(centres) > INDEX_ABOVE) if index is None else bool(index)
+    edge_index = None
+    if use_index and margin > 0.0 and obstacles.polygons:
+        pts = [centres, *obstacles.polygons]
+        if len(obstacles.circles):
+            pts.append(obstacles.circles[:, :2] - obstacles.circles[:, 2:3])
+            pts.append(obstacles.circles[:, :2] + obstacles.circles[:, 2:3])
+        allp = np.concatenate(pts)
+        lo, hi = allp.min(axis=0), allp.max(axis=0)
+        edge_index = EdgeIndex(list(obstacles.polygons), (lo[0], lo[1], hi[0], hi[1]), margin, TOL)
+        scene.index = edge_index
+
+    # Tangent candidates, pruned by a local test at their ends (cheap), then as segments; in
+    # chunks of disk pairs so that memory stays bounded and the budget is checked regularly.
+    n_disks = len(centres)
+    n_pairs = n_disks * (n_disks - 1) // 2
+    found: list[tuple[IntArray, IntArray, Array, Array]] = []
+    done = 0
+    i0 = 0
+    while i0 < n_disks - 1:
+        if budget is not None and time.perf_counter() - started > budget:
+            return OptimalPath(
+                math.nan, np.zeros((0, 2)), False,
+                f"time budget of {budget:g} s exhausted after {done:,} of {n_pairs:,} disk "
+                f"pairs ({n_disks - 2:,} disks); optimum not computed (raise the budget)",
+            )
+        i1 = i0 + 1  # rows i0 .. i1 - 1 of the upper triangle: about _PAIRS pairs
+        while i1 < n_disks - 1 and (n_disks - i0) * (i1 + 1 - i0) <= _PAIRS:
+            i1 += 1
+        ii, jj = _pair_rows(i0, i1, n_disks)
+        done += len(ii)
+        if edge_index is not None:  # disks of radius <= margin whose centres see no obstacle
+            small = (radii[ii] <= margin + TOL) & (radii[jj] <= margin + TOL)
+            drop = np.zeros(len(ii), dtype=bool)
+            drop[small] = edge_index.pairs_blocked(centres[ii[small]], centres[jj[small]])
+            ii, jj = ii[~drop], jj[~drop]
+        ti, tj, tp, tq = _tangents(centres, radii, ii, jj)
+        ok = _locally_free(tp, tq, ti, centres, radii, na, nb)
+        ok &= _locally_free(tq, tp, tj, centres, radii, na, nb)
+        ti, tj, tp, tq = ti[ok], tj[ok], tp[ok], tq[ok]
+        ok = ~scene.segments_blocked(tp, tq)
+        found.append((ti[ok], tj[ok], tp[ok], tq[ok]))
+        if progress is not None:
+            progress(done / max(n_pairs, 1))
+        i0 = i1
+    ti = np.concatenate([f[0] for f in found]) if found else np.zeros(0, dtype=np.intp)
+    tj = np.concatenate([f[1] for f in found]) if found else np.zeros(0, dtype=np.intp)
+    tp = np.concatenate([f[2] for f in found]) if found else np.zeros((0, 2))
+    tq = np.concatenate([f[3] for f in found]) if found else np.zeros((0, 2))
 
     # Nodes: one per zero-radius disk (start = 0, goal = 1), one per tangent end on other disks.
     zero = np.flatnonzero(radii == 0.0)

@@ -1,0 +1,106 @@
+"""The exact optimum on imported grid maps: the spatial index agrees with the brute-force tangent
+graph, MovingAI scenario pairs bound it, and a time budget gives a reason instead of a silence."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from swarmpath.world import get_map, list_maps
+from swarmpath.world.geometry import ObstacleSet
+from swarmpath.world.grid_polygons import grid_polygons
+from swarmpath.world.importers import load_movingai_map, load_ros_map, movingai_cell_center
+from swarmpath.world.optimum import shortest_path
+
+DATA = Path(__file__).parent / "data"
+
+
+def _both(start, goal, obs, margin, world):
+    fast = shortest_path(start, goal, obs, margin, world, index=True, budget=None)
+    slow = shortest_path(start, goal, obs, margin, world, index=False, budget=None)
+    return fast, slow
+
+
+@pytest.mark.parametrize("name", list_maps())
+def test_index_matches_the_tangent_graph_on_the_presets(name: str) -> None:
+    s = get_map(name)
+    w, h = s.size
+    fast, slow = _both(s.start, s.goal, s.static_obstacles(), s.robot.radius, (0, 0, w, h))
+    assert fast.exact and slow.exact
+    assert fast.length == pytest.approx(slow.length, abs=1e-9)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_index_matches_the_tangent_graph_on_random_grids(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    blocked = rng.random((24, 30)) < 0.3
+    blocked[0, 0] = blocked[-1, -1] = False
+    res = 0.5
+    polys = tuple(p.astype(float) * res for p in grid_polygons(blocked, tile=8))
+    obs = ObstacleSet(np.zeros((0, 3)), polys)
+    start, goal = (0.25, 0.25), (14.75, 11.75)
+    margin = float(rng.uniform(0.01, 0.2))
+    fast, slow = _both(start, goal, obs, margin, (0.0, 0.0, 15.0, 12.0))
+    assert fast.exact and slow.exact
+    if math.isinf(slow.length):
+        assert math.isinf(fast.length)
+    else:
+        assert fast.length == pytest.approx(slow.length, abs=1e-9)
+
+
+def _scen(path: Path, every: int) -> list[tuple[int, int, int, int, float]]:
+    rows = [line.split("\t") for line in path.read_text().splitlines()[1:] if line.strip()]
+    return [(int(r[4]), int(r[5]), int(r[6]), int(r[7]), float(r[8])) for r in rows][::every]
+
+
+@pytest.mark.parametrize(("name", "every"), [("arena", 16), ("maze512-32-9", 4)])
+def test_any_angle_optimum_within_the_octile_optimum(name: str, every: int) -> None:
+    """MovingAI's octile length (cell centres, 8 moves, no corner cutting) is an upper bound
+    for the any-angle optimum of a point robot and of a robot of half a cell's radius (the
+    octile path keeps half a cell of clearance). It is not within a factor 1.0824 of it: that
+    factor bounds one straight octile line, while the octile path must also stay on cell
+    centres (arena 0-based pair 3, (1, 3) -> (3, 1): octile 3.4142, any-angle 2.8284)."""
+    m = load_movingai_map(DATA / f"{name}.map")
+    height = m.grid.shape[0]
+    w, h = m.scenario.size
+    obs = m.scenario.static_obstacles()
+    pairs = _scen(DATA / f"{name}.map.scen", every)
+    assert len(pairs) >= 7
+    for sx, sy, gx, gy, octile in pairs:
+        start = movingai_cell_center(sx, sy, height)
+        goal = movingai_cell_center(gx, gy, height)
+        point = shortest_path(start, goal, obs, 1e-6, (0.0, 0.0, w, h), budget=None)
+        half = shortest_path(start, goal, obs, 0.5, (0.0, 0.0, w, h), budget=None)
+        assert point.exact and half.exact
+        # the .scen lengths are printed with 4 (arena) or 8 decimals
+        assert math.dist(start, goal) - 1e-9 <= point.length <= half.length + 1e-9
+        assert half.length <= octile + 1e-4
+
+
+def test_budget_gives_up_with_the_reason() -> None:
+    s = load_ros_map(DATA / "tb3_sandbox.yaml").scenario
+    w, h = s.size
+    res = shortest_path(s.start, s.goal, s.static_obstacles(), s.robot.radius, (0, 0, w, h),
+                        budget=0.0)
+    assert not res.exact and math.isnan(res.length)
+    assert res.reason is not None and "time budget of 0 s exhausted" in res.reason
+    assert "raise the budget" in res.reason
+
+
+def test_tb3_sandbox_optimum_and_progress() -> None:
+    s = load_ros_map(DATA / "tb3_sandbox.yaml").scenario
+    w, h = s.size
+    seen: list[float] = []
+    res = shortest_path(s.start, s.goal, s.static_obstacles(), s.robot.radius, (0, 0, w, h),
+                        budget=None, progress=seen.append)
+    assert res.exact and math.isfinite(res.length)
+    assert seen and seen[-1] == 1.0 and seen == sorted(seen)
+    # the path keeps the robot's clearance everywhere (sampled at 1 mm)
+    pts = res.points
+    seg = np.repeat(pts[:-1], 20, axis=0) + (
+        np.tile(np.arange(20) / 20, len(pts) - 1)[:, None] * np.repeat(np.diff(pts, axis=0), 20, 0)
+    )
+    assert s.static_obstacles().point_clearance(seg).min() >= s.robot.radius - 1e-6
