@@ -3,6 +3,7 @@ per-run exports, IOHprofiler files and plots of a finished job."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -344,3 +345,33 @@ def test_openapi_describes_summary_runs_and_run(service):
     assert "moving obstacles" in summary["legend"]["gap_mean"]
     run = http.get(f"/jobs/{job}/runs/1").json()
     assert "algorithm" not in run and run["planner"] == "OMPL-RRTstar" and run["path"]
+
+
+def test_download_layout_shows_the_files_topics_and_plots_curves(service, tmp_path):
+    from swarmpath.service import foxglove
+    from swarmpath.service.recorder import CURVE_SCHEMA, WORLD_FRAME
+
+    cli, _http, _core = service
+    job = finished(service, MAPS)
+    result = cli("download", job, "-o", str(tmp_path), "--layout")
+    assert result.exit_code == 0, result.stderr
+    doc = json.loads((tmp_path / f"{job}.layout.json").read_text())
+    topics = foxglove.mcap_topics(tmp_path / f"{job}.mcap")
+    panels = doc["configById"]
+    scene = panels["3D!swarmpath"]
+    assert scene["followTf"] == WORLD_FRAME
+    shown = set(scene["topics"])
+    assert shown == {t for t in topics if t.startswith(foxglove.SCENE_TOPIC_PREFIXES)}
+    assert {"/tf", "/map/mfb-static/occupancy", "/scene/OMPL-RRTstar/mfb-static"} <= shown
+
+    def leaves(node):
+        if isinstance(node, str):
+            return [node]
+        return leaves(node["first"]) + leaves(node["second"])
+
+    assert sorted(leaves(doc["layout"])) == sorted(panels)  # every panel placed, none missing
+    (plot,) = panels["Plot!swarmpath"]["paths"]
+    topic, field = plot["value"].removesuffix("[:]").split(".")
+    assert (topic, panels["Plot!swarmpath"]["xAxisVal"]) == ("/curves", "index")
+    assert CURVE_SCHEMA["properties"][field]["type"] == "array"
+    assert json.loads(foxglove.LAYOUT_FILE.read_text()) == foxglove.layout()

@@ -64,7 +64,9 @@ def check_common(report: dict[str, Any]) -> None:
         assert fg.check_foxglove_rules(channel["schema"]) == [], channel["topic"]
     job = report["metadata"]["swarmpath.job"]
     assert job["swarmpath_version"] == __version__ and json.loads(job["spec"])
-    assert report["metadataIndexes"] == ["swarmpath.job", "swarmpath.summary"]
+    indexes = report["metadataIndexes"]
+    assert indexes[0] == "swarmpath.job" and indexes[-1] == "swarmpath.summary"
+    assert set(indexes[1:-1]) <= {"swarmpath.run"}  # one per map run
 
 
 @pytest.fixture
@@ -114,6 +116,8 @@ def test_a_map_job_file_passes_the_foxglove_reader(tmp_path):
     assert by_topic["/scene/P/demo"]["schemaName"] == "foxglove.SceneUpdate"
     assert by_topic["/paths/P/demo"]["schemaName"] == "foxglove.PosesInFrame"
     assert by_topic["/paths/P/demo"]["messages"] == 3
+    assert by_topic["/tf"]["schemaName"] == "foxglove.FrameTransform"
+    assert report["metadataIndexes"].count("swarmpath.run") == 3
 
 
 def test_the_reader_rejects_damaged_files(store, tmp_path):

@@ -355,16 +355,34 @@ def test_map_job_file_opens_in_foxglove(tmp_path):
     cells = base64.b64decode(grid["data"])
     assert len(cells) % grid["column_count"] == 0 and set(cells) <= {0, 100}
     assert 100 in cells and grid["fields"][0]["type"] == fg.UINT8
+    # static obstacles only: the cell under the moving circle's start (4, 2) is free, the one
+    # under the static circle (2, 2.3) is occupied
+    size = grid["cell_size"]["x"]
+
+    def cell(x, y):
+        return cells[int(y / size) * grid["column_count"] + int(x / size)]
+
+    assert cell(2.0, 2.3) == 100 and cell(4.0, 2.0) == 0
+    assert grid["frame_id"] == "map/demo"
     (obstacles, _t), = by_topic["/map/demo/obstacles"]
     ents = {e["id"]: e for e in obstacles["entities"]}
-    assert len(ents["obstacles"]["cylinders"]) == 2 and len(ents["obstacles"]["lines"]) == 1
+    assert len(ents["obstacles"]["cylinders"]) == 1 and len(ents["obstacles"]["lines"]) == 1
     assert {"start", "goal", "world"} <= set(ents)
+    assert {e["frame_id"] for e in obstacles["entities"]} == {"map/demo"}
+    (tf, _t), = by_topic["/tf"]
+    assert (tf["parent_frame_id"], tf["child_frame_id"]) == ("world", "map/demo")
     paths = by_topic["/paths/P/demo"]
     assert len(paths) == 2 and len(paths[0][0]["poses"]) == 3
     assert paths[0][1] == round(T0 * 1e9) + 12 * 10**9  # base + t_end
     scene = by_topic["/scene/P/demo"]
     ids = {e["id"] for m, _t in scene for e in m["entities"]}
     assert {"run-0/robot", "run-0/path", "run-0/obstacles", "run-0/goal", "run-1/robot"} <= ids
+    for m, _t in scene:  # every entity of a run says which run it is
+        for e in m["entities"]:
+            if not e["id"].endswith("/obstacles"):
+                about = {kv["key"]: kv["value"] for kv in e["metadata"]}
+                assert e["id"].startswith(f"run-{about['run']}/") and about["planner"] == "P"
+            assert e["frame_id"] == "map/demo"
     # the moving obstacle is drawn where the world puts it at t = 5 s
     from swarmpath.service.recorder import world_for
     from swarmpath.world.scenario_io import scenario_from_dict
@@ -411,3 +429,37 @@ def test_map_runs_without_geometry_still_record_results(tmp_path):
     rec.finish()
     _summary, _meta, messages = read_all(tmp_path / "m.mcap")
     assert [c.topic for _s, c, _m, _t in messages if c.topic == "/results"] == ["/results"]
+
+
+def test_maps_have_their_own_frames_side_by_side_and_runs_their_metadata(tmp_path):
+    from mcap.reader import make_reader
+
+    from swarmpath.service.recorder import MAP_GAP
+
+    small = {**SCENARIO, "name": "small", "size": [6, 4], "goal": [5, 3],
+             "obstacles": SCENARIO["obstacles"][:1]}
+    spec = {"kind": "map", "planners": ["P"], "maps": [SCENARIO, small], "runs": 2, "seed": 1}
+    rec = JobRecorder(tmp_path / "m.mcap", "job1", "map", spec, T0)
+    second = map_record("job1", 2, T0 + 1, small)  # the second map's run arrives first
+    second["spec"]["map"], second["cell"] = "small", "P/small"
+    second["path"] = [[0.0, 0.0, 0.0], [5.0, 3.0, 4.0]]
+    assert rec.add(second)
+    for run in range(2):
+        assert rec.add(map_record("job1", run, T0 + 2 + run))
+    rec.finish()
+    _summary, _metadata, messages = read_all(tmp_path / "m.mcap")
+    tfs = {m["child_frame_id"]: m for _s, c, m, _t in messages if c.topic == "/tf"}
+    assert set(tfs) == {"map/demo", "map/small"}
+    # the spec's order, not the arrival order: demo at x = 0, small to its right
+    assert tfs["map/demo"]["translation"]["x"] == 0.0
+    assert tfs["map/small"]["translation"]["x"] == 10.0 + MAP_GAP
+    assert all(m["parent_frame_id"] == "world" for m in tfs.values())
+    frames = {c.topic: m.get("frame_id") for _s, c, m, _t in messages if "frame_id" in m}
+    assert frames["/map/small/occupancy"] == "map/small" and frames["/paths/P/demo"] == "map/demo"
+    with open(tmp_path / "m.mcap", "rb") as f:
+        runs = [m.metadata for m in make_reader(f).iter_metadata() if m.name == "swarmpath.run"]
+    assert sorted(int(r["run_id"]) for r in runs) == [0, 1, 2]
+    small_run = next(r for r in runs if r["run_id"] == "2")
+    assert (small_run["map"], small_run["run"], small_run["success"]) == ("small", "2", "true")
+    assert small_run["scene_topic"] == "/scene/P/small" and small_run["entity_prefix"] == "run-2/"
+    assert small_run["frame_id"] == "map/small"

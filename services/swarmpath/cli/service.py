@@ -499,6 +499,11 @@ def download(
         typer.Option("-o", "--output", help="Where to write the MCAP (a file or a directory).",
                      show_default="JOB.mcap"),
     ] = None,
+    layout: Annotated[
+        bool,
+        typer.Option("--layout", help="Also write a Foxglove layout (3D scene with this file's "
+                     "topics, Plot of /curves) next to it as JOB.layout.json."),
+    ] = False,
     url: UrlOpt = None,
 ) -> None:
     """Download the job's MCAP file (after the job has ended)."""
@@ -515,3 +520,10 @@ def download(
             _fail(exc)
             raise
     typer.echo(f"{path} ({path.stat().st_size} bytes)", err=True)
+    if layout:
+        from swarmpath.service import foxglove
+
+        out = path.with_name(f"{job}.layout.json")
+        doc = foxglove.layout(foxglove.mcap_topics(path))
+        out.write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+        typer.echo(f"{out} (Foxglove: Layouts > Import from file)", err=True)

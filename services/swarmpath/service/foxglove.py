@@ -15,8 +15,10 @@ binary fields (``Grid.data``) base64. :func:`check_foxglove_rules` verifies a sc
 from __future__ import annotations
 
 import base64
+import json
 import math
 from collections.abc import Iterable, Sequence
+from pathlib import Path
 from typing import Any
 
 SCHEMAS_SOURCE = "github.com/foxglove/schemas schemas/jsonschema (SceneUpdate d41940ba, 16606139)"
@@ -295,10 +297,26 @@ def grid_schema() -> dict[str, Any]:
     }
 
 
+def frame_transform_schema() -> dict[str, Any]:
+    return {
+        "title": "foxglove.FrameTransform",
+        "description": "A transform between two reference frames in 3D space",
+        "type": "object",
+        "properties": {
+            "timestamp": _time("Timestamp of transform"),
+            "parent_frame_id": {"type": "string", "description": "Name of the parent frame"},
+            "child_frame_id": {"type": "string", "description": "Name of the child frame"},
+            "translation": _vector3("Translation component of the transform"),
+            "rotation": _quaternion("Rotation component of the transform"),
+        },
+    }
+
+
 SCHEMA_BUILDERS = {
     "foxglove.SceneUpdate": scene_update_schema,
     "foxglove.PosesInFrame": poses_in_frame_schema,
     "foxglove.Grid": grid_schema,
+    "foxglove.FrameTransform": frame_transform_schema,
 }
 
 
@@ -465,3 +483,40 @@ def grid_uint8(
         "fields": [{"name": field, "offset": 0, "type": UINT8}],
         "data": base64.b64encode(cells).decode("ascii"),
     }
+
+
+def frame_transform(ns: int, parent: str, child: str, x: float = 0.0, y: float = 0.0
+                    ) -> dict[str, Any]:
+    """A foxglove.FrameTransform: ``child`` is ``parent`` moved by (x, y), not rotated."""
+    return {"timestamp": ftime(ns), "parent_frame_id": parent, "child_frame_id": child,
+            "translation": vec3(x, y, 0.0), "rotation": quat_yaw(0.0)}
+
+
+# ------------------------------------------------------------------------------------- layout
+#: The Foxglove layout shipped with swarmpath: a 3D panel following frame ``world`` (the maps
+#: side by side), a Plot of ``/curves.best_fitness[:]`` against the value index (the
+#: iteration) and the ``/results`` message of the current time. Import it in Foxglove with
+#: Layouts > Import from file.
+LAYOUT_FILE = Path(__file__).with_name("foxglove_layout.json")
+#: Topics the layout shows in its 3D panel when a file has them (``/map/...``, ``/scene/...``,
+#: ``/paths/...`` and ``/tf``).
+SCENE_TOPIC_PREFIXES = ("/tf", "/map/", "/scene/", "/paths/")
+
+
+def layout(topics: Sequence[str] = ()) -> dict[str, Any]:
+    """The shipped layout with the scene topics of one file (``topics``) visible in 3D."""
+    doc: dict[str, Any] = json.loads(LAYOUT_FILE.read_text(encoding="utf-8"))
+    panel = doc["configById"]["3D!swarmpath"]
+    for topic in topics:
+        if topic.startswith(SCENE_TOPIC_PREFIXES):
+            panel["topics"][topic] = {"visible": True}
+    return doc
+
+
+def mcap_topics(path: Path) -> list[str]:
+    """The channel topics of a finished MCAP file (from its summary section)."""
+    from mcap.reader import make_reader
+
+    with open(path, "rb") as f:
+        summary = make_reader(f).get_summary()
+    return sorted({c.topic for c in summary.channels.values()}) if summary else []

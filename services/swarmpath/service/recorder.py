@@ -26,16 +26,29 @@ topic                          schema (jsonschema, JSON)       messages
                                swarmpath.MapRunResult          acceptance time
 ``/curves``                    swarmpath.ConvergenceCurve      benchmark: one per run, the whole
                                                                curve as ``best_fitness[]``
+``/tf``                        foxglove.FrameTransform         map: once per map, at base:
+                                                               frame ``map/<map>`` in ``world``
 ``/map/<map>/occupancy``       foxglove.Grid                   map: once per map, at base
+                                                               (static obstacles only)
 ``/map/<map>/obstacles``       foxglove.SceneUpdate            map: once per map, at base
+                                                               (static obstacles, start, goal)
 ``/scene/<planner>/<map>``     foxglove.SceneUpdate            map: per run, robot (and moving
                                                                goal and obstacles) at base + t,
                                                                the whole path at the end
 ``/paths/<planner>/<map>``     foxglove.PosesInFrame           map: one per run, at base + t_end
 =============================  ==============================  =================================
 
+Frames: each map has its own frame ``map/<map>`` (origin at the map's (0, 0)); ``/tf`` places the
+job's maps side by side along x in frame ``world`` (spec order, ``MAP_GAP`` apart), so two maps
+never overlap. Scene entities of a run are ``run-<run>/robot``, ``/goal``, ``/obstacles`` (moving
+obstacles where they are at that time) and ``/path``, with the run's identity in their metadata.
+
 Metadata records: ``swarmpath.job`` (job id, kind, spec JSON, swarmpath version, layout version)
-first, and ``swarmpath.summary`` (final state and the summary table JSON) at the end.
+first, one ``swarmpath.run`` per map run (run, run_id, cell, planner, map, success, reason,
+collisions, length, its scene and path topics, entity prefix and frame), and
+``swarmpath.summary`` (final state and the summary table JSON) at the end. The Foxglove layout
+shipped beside this module (:data:`swarmpath.service.foxglove.LAYOUT_FILE`; ``swarmpath download
+JOB --layout`` writes one with the file's topics) shows the scene in 3D and plots ``/curves``.
 """
 
 from __future__ import annotations
@@ -61,11 +74,13 @@ from swarmpath.service.protocol import PROTOCOL_VERSION
 
 log = logging.getLogger(__name__)
 
-LAYOUT_VERSION = 1
+LAYOUT_VERSION = 2  # 2: a frame per map (/tf), static occupancy, swarmpath.run metadata
 FLUSH_INTERVAL = 1.0
 CHUNK_SIZE = 1024 * 1024
 MAX_SCENE_FRAMES = 200  # per run: path samples drawn as robot positions
 GRID_MAX_CELLS = 400  # per side of the occupancy raster
+MAP_GAP = 2.0  # m between two maps laid side by side in the world frame
+WORLD_FRAME = "world"
 ROBOT_HEIGHT = 0.2
 OBSTACLE_HEIGHT = 0.5
 _BIG = 1.7976931348623157e308
@@ -73,6 +88,19 @@ OBSTACLE_RGBA = fg.color(0.45, 0.45, 0.5, 0.9)
 ROBOT_RGBA = fg.color(0.95, 0.35, 0.1, 0.9)
 START_RGBA = fg.color(0.1, 0.4, 1.0)
 GOAL_RGBA = fg.color(0.1, 0.8, 0.2)
+
+
+def map_frame(name: str) -> str:
+    """The frame of one map (its origin at the map's (0, 0)); ``/tf`` places it in ``world``."""
+    return f"map/{_topic_name(name)}"
+
+
+def _run_about(record: dict[str, Any], planner: str, map_: str) -> dict[str, str]:
+    """What identifies a map run, as strings (scene entity metadata, the run's metadata)."""
+    metrics = record.get("metrics") or {}
+    return {"run": str(int(record["run"])), "run_id": str(record["run_id"]), "planner": planner,
+            "map": map_, "success": str(bool(metrics.get("success"))).lower(),
+            "reason": str(metrics.get("reason") or record.get("failure") or "")}
 
 
 def _marker(x: float, y: float, rgba: dict[str, float], size: float = 0.3) -> dict[str, Any]:
@@ -243,22 +271,27 @@ def world_for(scenario: Any, seed: int, run: int) -> Any:
 
 
 def occupancy(scenario: Any) -> tuple[bytes, int, float]:
-    """The scenario's obstacles at t = 0 rasterized by the world layer: uint8 0 free / 100
-    occupied, row-major from y = 0 up. Returns (data, columns, resolution)."""
+    """The scenario's static obstacles rasterized by the world layer (moving ones are drawn per
+    run where they are, never baked into the grid): uint8 0 free / 100 occupied, row-major from
+    y = 0 up. Returns (data, columns, resolution)."""
+    import dataclasses
+
     import numpy as np
 
     from swarmpath.world.raster import rasterize_scenario
 
     width, height = (float(v) for v in scenario.size)
-    grid = rasterize_scenario(scenario, max(width, height) / GRID_MAX_CELLS)
+    static = dataclasses.replace(
+        scenario, obstacles=tuple(o for o in scenario.obstacles if not o.is_moving))
+    grid = rasterize_scenario(static, max(width, height) / GRID_MAX_CELLS)
     data = np.where(grid.data < 0, 50, grid.data).astype(np.uint8)  # unknown -> 50
     return data.tobytes(), grid.shape[1], grid.resolution
 
 
-def _obstacle_entity(ns: int, entity_id: str, obstacles: Any) -> dict[str, Any]:
+def _obstacle_entity(ns: int, entity_id: str, obstacles: Any, frame: str) -> dict[str, Any]:
     """An ObstacleSet as one entity: cylinders for circles, line loops for polygons."""
     return fg.entity(
-        ns, entity_id,
+        ns, entity_id, frame,
         cylinders=[fg.cylinder(cx, cy, r, OBSTACLE_HEIGHT, OBSTACLE_RGBA)
                    for cx, cy, r in obstacles.circles],
         lines=[fg.line([(float(x), float(y)) for x, y in poly], OBSTACLE_RGBA, 0.04, loop=True)
@@ -294,6 +327,7 @@ class JobRecorder:
         self.clock = clock
         self.written: set[int] = set()
         self._scenarios: dict[str, Any] = {}  # map name -> Scenario (None: no geometry)
+        self._offsets: dict[str, float] | None = None  # map name -> x of its frame in "world"
         self._schemas: dict[str, int] = {}
         self._channels: dict[str, int] = {}
         self._dirty = False
@@ -416,26 +450,55 @@ class JobRecorder:
             if scenario is not None:
                 self._draw_map(map_, scenario)
         scenario = self._scenarios[map_]
+        topic = f"{_topic_name(planner)}/{_topic_name(map_)}"
+        metrics = record.get("metrics") or {}
+        self._writer.add_metadata("swarmpath.run", {
+            **_run_about(record, planner, map_), "cell": str(record["cell"]),
+            "seed": str(record["seed"]), "scene_topic": f"/scene/{topic}",
+            "path_topic": f"/paths/{topic}", "entity_prefix": f"run-{int(record['run'])}/",
+            "frame_id": map_frame(map_), "collisions": str(metrics.get("collisions", "")),
+            "length": str(metrics.get("length", "")),
+        })
         path = record.get("path") or []
         if path:
             self._draw_run(record, planner, map_, path, scenario)
 
+    def _map_offset(self, name: str, width: float) -> float:
+        """x of map ``name``'s frame in ``world``: the job's maps side by side in the spec's
+        order with a gap, so that they never overlap (a map not in the spec goes last)."""
+        if self._offsets is None:
+            self._offsets, x = {}, 0.0
+            for entry in self.spec.get("maps") or []:
+                inline = entry if isinstance(entry, dict) else None
+                key = str(inline.get("name")) if inline else str(entry)
+                sc = self._scenarios.get(key) or scenario_for({"map": key, "scenario": inline})
+                self._offsets[key] = x
+                x += (float(sc.size[0]) if sc is not None else 0.0) + MAP_GAP
+            self._offsets[""] = x  # where the next unknown map goes
+        if name not in self._offsets:
+            self._offsets[name] = self._offsets[""]
+            self._offsets[""] += width + MAP_GAP
+        return self._offsets[name]
+
     def _draw_map(self, name: str, scenario: Any) -> None:
         ns = self.base_ns
         topic = _topic_name(name)
-        data, cols, res = occupancy(scenario)
-        grid = fg.grid_uint8(ns, data, cols, res)
-        self._put(f"/map/{topic}/occupancy", "foxglove.Grid", ns, grid)
+        frame = map_frame(name)
         w, h = (float(v) for v in scenario.size)
+        self._put("/tf", "foxglove.FrameTransform", ns,
+                  fg.frame_transform(ns, WORLD_FRAME, frame, self._map_offset(name, w)))
+        data, cols, res = occupancy(scenario)
+        grid = fg.grid_uint8(ns, data, cols, res, frame_id=frame)
+        self._put(f"/map/{topic}/occupancy", "foxglove.Grid", ns, grid)
         entities = [
-            _obstacle_entity(ns, "obstacles", scenario.initial_obstacles()),
-            fg.entity(ns, "world", lines=[fg.line(
+            _obstacle_entity(ns, "obstacles", scenario.static_obstacles(), frame),
+            fg.entity(ns, "world", frame, lines=[fg.line(
                 [(0, 0), (w, 0), (w, h), (0, h)], fg.color(0.2, 0.2, 0.2, 1), 0.03, loop=True)]),
         ]
         for label, point, rgba in (("start", scenario.start, START_RGBA),
                                    ("goal", scenario.goal, GOAL_RGBA)):
             x, y = float(point[0]), float(point[1])
-            entities.append(fg.entity(ns, label, spheres=[_marker(x, y, rgba)],
+            entities.append(fg.entity(ns, label, frame, spheres=[_marker(x, y, rgba)],
                                       texts=[fg.text(x, y, 0.5, label, rgba, 0.3)]))
         self._put(f"/map/{topic}/obstacles", "foxglove.SceneUpdate", ns, fg.scene_update(entities))
 
@@ -450,6 +513,8 @@ class JobRecorder:
         run = int(record["run"])
         topic = f"{_topic_name(planner)}/{_topic_name(map_)}"
         prefix = f"run-{run}"
+        frame = map_frame(map_)
+        about = _run_about(record, planner, map_)
         radius = float(scenario.robot.radius) if scenario is not None else 0.1
         world = None
         if scenario is not None and scenario.is_dynamic:
@@ -462,23 +527,23 @@ class JobRecorder:
             ns = self.base_ns + _ns(t)
             robot = fg.cylinder(x, y, radius, ROBOT_HEIGHT, ROBOT_RGBA)
             robot["pose"] = fg.pose(x, y, ROBOT_HEIGHT / 2, self._heading(path, i))
-            ents = [fg.entity(ns, f"{prefix}/robot", cylinders=[robot])]
+            ents = [fg.entity(ns, f"{prefix}/robot", frame, cylinders=[robot], metadata=about)]
             if world is not None:
                 gx, gy = (float(v) for v in world.goal_at(max(t, 0.0)))
-                ents.append(fg.entity(ns, f"{prefix}/goal", spheres=[_marker(gx, gy, GOAL_RGBA)]))
-                ents.append(_obstacle_entity(ns, f"{prefix}/obstacles",
-                                             world.obstacles_at(max(t, 0.0))))
+                ents.append(fg.entity(ns, f"{prefix}/goal", frame,
+                                      spheres=[_marker(gx, gy, GOAL_RGBA)], metadata=about))
+                movers = world.obstacles_at(max(t, 0.0))
+                ents.append(_obstacle_entity(ns, f"{prefix}/obstacles", movers, frame))
             self._put(f"/scene/{topic}", "foxglove.SceneUpdate", ns, fg.scene_update(ents))
         end_ns = self.base_ns + _ns(float(path[-1][2]))
         xy = [(float(p[0]), float(p[1])) for p in path]
         self._put(f"/scene/{topic}", "foxglove.SceneUpdate", end_ns, fg.scene_update([
-            fg.entity(end_ns, f"{prefix}/path", lines=[fg.line(xy, ROBOT_RGBA, 0.03, z=0.02)],
-                      metadata={"run_id": str(record["run_id"]), "planner": planner,
-                                "map": map_})]))
+            fg.entity(end_ns, f"{prefix}/path", frame,
+                      lines=[fg.line(xy, ROBOT_RGBA, 0.03, z=0.02)], metadata=about)]))
         poses = [fg.pose(float(p[0]), float(p[1]), 0.0, self._heading(path, i))
                  for i, p in enumerate(path)]
         self._put(f"/paths/{topic}", "foxglove.PosesInFrame", end_ns,
-                  fg.poses_in_frame(end_ns, poses))
+                  fg.poses_in_frame(end_ns, poses, frame_id=frame))
 
     @staticmethod
     def _heading(path: list[list[float]], i: int) -> float:
