@@ -346,3 +346,21 @@ def test_schema_export_writes_every_model(tmp_path):
     job = json.loads(schemas.render("job_spec"))
     assert job["discriminator"]["propertyName"] == "kind"
     assert job["$defs"]["BenchmarkJobSpec"]["properties"]["dims"]["items"]["maximum"] == 1000
+
+
+# ------------------------------------------------------------------------------------ transforms
+@pytest.mark.parametrize("transform", ["none", "shift", "rotate", "shift+rotate"])
+def test_transform_reaches_every_cell(transform):
+    s = p.parse_job_spec(spec(transform=transform))
+    assert s.transform == transform and s.shifted == ("shift" in transform)
+    assert {c.transform for c in p.expand_cells(s)} == {transform}
+
+
+def test_shifted_is_the_alias_of_transform_shift_and_contradictions_name_the_field():
+    s = p.parse_job_spec(spec(shifted=True))
+    assert s.transform == "shift" and all(c.transform == "shift" for c in p.expand_cells(s))
+    assert p.parse_job_spec(spec(shifted=True, transform="shift+rotate")).transform == (
+        "shift+rotate"
+    )
+    fails_on(spec(shifted=True, transform="rotate"), "transform")
+    fails_on(spec(transform="spin"), "transform")

@@ -27,7 +27,7 @@ from typing import Any
 BENCHMARK_COLUMNS: tuple[tuple[str, Any], ...] = (
     ("job_id", str), ("run_id", int), ("run", int), ("cell", str), ("algorithm", str),
     ("function", str), ("dim", int), ("agents", int), ("iterations", int), ("shifted", bool),
-    ("seed", int), ("state", str), ("worker", str), ("best_fitness", float),
+    ("transform", str), ("seed", int), ("state", str), ("worker", str), ("best_fitness", float),
     ("evaluations", int), ("seconds", float), ("failure", str), ("completed", float),
     ("curve_stride", int), ("curve", "list"), ("best_position", "list"),
 )
@@ -93,6 +93,8 @@ def run_row(item: Mapping[str, Any], job_id: str | None = None) -> dict[str, Any
             v = job_id if job_id is not None else item.get("job_id")
         elif name in ("agents", "iterations", "shifted") and kind == "benchmark":
             v = item.get(name, spec.get(name))
+        elif name == "transform" and kind == "benchmark":
+            v = item.get(name, spec.get(name, "shift" if spec.get("shifted") else "none"))
         else:
             v = item.get(name)
         if typ == "list":

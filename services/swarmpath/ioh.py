@@ -20,9 +20,10 @@ swarmpath records the best-so-far after each iteration. The evaluations after it
 taken as ``round(k * E / T)`` (E: the run's evaluations, T: the iterations), exact for the
 algorithms that evaluate the same number of agents each iteration. A curve the service thinned
 (``curve_stride`` s) has iterations 1, 1 + s, 1 + 2s, ... and the last one. Function ids are the
-positions in the function registry (F1 = 1, ...). Runs of a shifted job are instances
-1 + run (each run moves the optimum); otherwise every run is instance 1. Non-finite values (an
-infeasible start) are left out; a run without a finite value is left out and counted.
+positions in the function registry (F1 = 1, ...). Runs of a transformed job (shift, rotate)
+are instances 1 + run (each run moves or turns the function); otherwise every run is instance 1.
+Non-finite values (an infeasible start) are left out; a run without a finite value is left out
+and counted.
 """
 
 from __future__ import annotations
@@ -126,7 +127,7 @@ def write_ioh(items: Iterable[Mapping[str, Any]], directory: Path, job_id: str =
             if not block:
                 out.skipped += 1
                 continue
-            instance = int(item["run"]) + 1 if spec.get("shifted") else 1
+            instance = int(item["run"]) + 1 if _transform(spec) != "none" else 1
             lines.append(SEPARATOR)
             lines += [f"{e} {_num(v)}" for e, v in block]
             entries.append(f"{instance}:{block[-1][0]}|{_num(block[-1][1])}")
@@ -139,7 +140,7 @@ def write_ioh(items: Iterable[Mapping[str, Any]], directory: Path, job_id: str =
         # no commas inside values: the first line is split at commas into name = value pairs
         alg_info = (f"{spec.get('agents', '?')} agents; {spec.get('iterations', '?')} "
                     f"iterations; seed {runs[0].get('seed', '?')}"
-                    + ("; shifted" if spec.get("shifted") else ""))
+                    + (f"; transform {_transform(spec)}" if _transform(spec) != "none" else ""))
         infos.setdefault(info, []).extend([
             f'suite = "swarmpath", funcId = {fid}, funcName = "{function}", DIM = {dim}, '
             f'maximization = "F", algId = "{algorithm}", algInfo = "{alg_info}"',
@@ -150,3 +151,8 @@ def write_ioh(items: Iterable[Mapping[str, Any]], directory: Path, job_id: str =
         info.write_text("\n".join(text) + "\n", encoding="ascii")
         out.files.append(info)
     return out
+
+
+def _transform(spec: Mapping[str, Any]) -> str:
+    """A cell's transform; specs written before transforms existed only say ``shifted``."""
+    return str(spec.get("transform") or ("shift" if spec.get("shifted") else "none"))

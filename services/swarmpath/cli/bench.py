@@ -28,7 +28,7 @@ from swarmpath.cli import parallel
 from swarmpath.cli.core import InputError, app, parse_params_option, plot_dir, resolve_names
 from swarmpath.functions import expand_function_names, get_function
 from swarmpath.optimizers import ParameterError, get_optimizer, list_optimizers, minimize_many
-from swarmpath.optimizers.api import MAX_AGENTS, MAX_DIM, MAX_ITERATIONS
+from swarmpath.optimizers.api import MAX_AGENTS, MAX_DIM, MAX_ITERATIONS, resolve_transform
 
 MAX_RUNS = 10_000
 #: Rough CPU seconds per population element and iteration (23 ms per run of 30 x 30 x 500).
@@ -48,10 +48,12 @@ class BenchSpec:
     agents: int = 30
     iterations: int = 500
     seed: int = 1
-    shifted: bool = False
+    shifted: bool = False  # "shift" in transform (kept for readers of the settings)
     params: dict[str, dict[str, Any]] = field(default_factory=dict)
     #: the algorithm the statistical tests compare against (None: the last of ``algorithms``)
     reference: str | None = None
+    #: none, shift, rotate or shift+rotate (swarmpath.functions.transforms)
+    transform: str = "none"
 
     def cells(self) -> list[tuple[str, int, str]]:
         """(function, dim, algorithm) in table order."""
@@ -122,8 +124,10 @@ def make_spec(
     shifted: bool = False,
     params: str | None = None,
     reference: str | None = None,
+    transform: str | None = None,
 ) -> BenchSpec:
     """Validate the command's options; raises :class:`InputError` naming the bad one."""
+    kind = resolve_transform_option(shifted, transform)
     algos = resolve_algorithms(algorithms)
     try:
         ref = compare.resolve_reference(algos, reference)
@@ -154,10 +158,19 @@ def make_spec(
         agents=agents,
         iterations=iterations,
         seed=seed,
-        shifted=shifted,
+        shifted="shift" in kind,
         params=parse_params(params, algos),
         reference=ref,
+        transform=kind,
     )
+
+
+def resolve_transform_option(shifted: bool, transform: str | None) -> str:
+    """``--transform`` (``--shifted`` is its alias for ``shift``); InputError naming the option."""
+    try:
+        return resolve_transform(shifted, transform)
+    except ParameterError as exc:
+        raise InputError("--transform", str(exc)) from None
 
 
 # -------------------------------------------------------------------------------------- running
@@ -243,7 +256,7 @@ def _compute(job: tuple[BenchSpec, Task], report_rows: Callable[[int], None]) ->
     return minimize_many(
         task.algorithm, list(task.functions), dim=task.dim, agents=spec.agents,
         iterations=spec.iterations, seed=spec.seed, params=spec.params.get(task.algorithm),
-        shifted=spec.shifted, run_ids=list(task.run_ids), on_iteration=hook,
+        transform=spec.transform, run_ids=list(task.run_ids), on_iteration=hook,
     )
 
 
@@ -286,10 +299,10 @@ def run_cell(
 
 
 def caption(spec: BenchSpec, seconds: float) -> str:
-    shifted = ", shifted" if spec.shifted else ""
+    moved = "" if spec.transform == "none" else f", transform {spec.transform}"
     return (
         f"{spec.runs} runs, {spec.agents} agents, {spec.iterations} iterations, seed {spec.seed}"
-        f"{shifted}; {report.BEST_MARK} best avg; {seconds:.1f} s"
+        f"{moved}; {report.BEST_MARK} best avg; {seconds:.1f} s"
     )
 
 
@@ -343,8 +356,16 @@ def bench(
     iterations: Annotated[int, typer.Option(help="Iterations per run.")] = 500,
     seed: Annotated[int, typer.Option(help="Study seed; run r uses its own stream of it.")] = 1,
     shifted: Annotated[
-        bool, typer.Option("--shifted", help="Move each run's optimum randomly in the box.")
+        bool, typer.Option("--shifted", help="Alias of --transform shift.")
     ] = False,
+    transform: Annotated[
+        str | None,
+        typer.Option(
+            "--transform", metavar="none|shift|rotate|shift+rotate",
+            help="Move each run's optimum randomly in the box (shift) and/or turn the function "
+            "about it by a random orthogonal matrix (rotate), from the run's own streams.",
+        ),
+    ] = None,
     as_json: Annotated[
         bool, typer.Option("--json", help="Print one JSON document (every cell and run).")
     ] = False,
@@ -377,7 +398,7 @@ def bench(
     """Run optimizers on benchmark functions; print min/max/avg/std per function and dimension,
     with Wilcoxon rank-sum markers against a reference and Friedman mean ranks."""
     spec = make_spec(algorithms, functions, dims, runs, agents, iterations, seed, shifted, params,
-                     reference)
+                     reference, transform)
     check_range("--jobs", jobs, 0, parallel.MAX_JOBS)
     if plot is not None:
         plot = plot_dir(plot, "--plot")

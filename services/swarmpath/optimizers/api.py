@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmpath.functions import BenchmarkFunction, get_function
+from swarmpath.functions.transforms import TRANSFORMS, shifts
 from swarmpath.optimizers.base import Optimizer, ParameterError
 from swarmpath.optimizers.problem import BenchmarkProblem, Problem, StackedProblem
 from swarmpath.optimizers.registry import get_optimizer
@@ -43,6 +44,7 @@ class Result:
     seconds: float
     shifts: Array | None = None  # (runs, dim) when shifted
     params: dict[str, Any] | None = None
+    transform: str = "none"
 
 
 def create(
@@ -82,10 +84,15 @@ def minimize(
     run_ids: Sequence[int] | None = None,
     on_iteration: Callable[[Optimizer], None] | None = None,
     chunk_elements: int | None = None,
+    transform: str | None = None,
 ) -> Result:
     """Minimise ``function`` with ``algorithm`` for runs 0..runs-1 (or the given ``run_ids``).
 
-    Run r depends only on (algorithm, function, dim, agents, iterations, params, shifted, seed, r).
+    ``transform`` (``none``, ``shift``, ``rotate``, ``shift+rotate``; see
+    :mod:`swarmpath.functions.transforms`) moves and/or turns each run's function with numbers
+    drawn from that run's own streams; ``shifted=True`` is the former spelling of
+    ``transform="shift"``. Run r depends only on (algorithm, function, dim, agents, iterations,
+    params, transform, seed, r).
     Batches larger than about ``chunk_elements`` coordinates per population (default
     ``CHUNK_ELEMENTS``; 0: never split) run as several optimizers stepped in turn;
     ``on_iteration`` is still called once per iteration, after every chunk made it, with the last
@@ -93,7 +100,7 @@ def minimize(
     """
     return minimize_many(
         algorithm, [function], dim, agents, iterations, runs, seed, params, shifted, run_ids,
-        on_iteration, chunk_elements,
+        on_iteration, chunk_elements, transform,
     )[0]
 
 
@@ -110,6 +117,7 @@ def minimize_many(
     run_ids: Sequence[int] | None = None,
     on_iteration: Callable[[Optimizer], None] | None = None,
     chunk_elements: int | None = None,
+    transform: str | None = None,
 ) -> list[Result]:
     """``minimize`` for several functions at once: one :class:`Result` per function, in order.
 
@@ -124,6 +132,7 @@ def minimize_many(
     sharing the process run faster with larger chunks (fewer numpy calls, so fewer hand-offs of
     the GIL for the same work: docs/benchmarks.md, Table 2).
     """
+    kind = resolve_transform(shifted, transform)
     fns = [get_function(f) if isinstance(f, str) else f for f in functions]
     if not fns:
         raise ParameterError("functions must name at least one function")
@@ -143,7 +152,7 @@ def minimize_many(
     # independent and each has its own streams, so chunking changes no number.
     size = max(1, elements // (agents * dim)) if elements else len(ids) * len(fns)
     chunks = _chunk_rows(fns, ids, size)
-    problems = [_chunk_problem(chunk, dim, int(seed), shifted) for chunk in chunks]
+    problems = [_chunk_problem(chunk, dim, int(seed), kind) for chunk in chunks]
     opts = [
         cls(pr, agents, iterations, RunStreams.for_runs(int(seed), [r for _, r in c]), params)
         for pr, c in zip(problems, chunks, strict=True)
@@ -164,7 +173,7 @@ def minimize_many(
     position = np.concatenate([opt.best_position for opt in opts])
     evaluations = np.concatenate([opt.evaluations for opt in opts])
     shifts = None
-    if shifted:
+    if all(part.shifts is not None for pr in problems for part in _parts(pr)):
         shifts = np.concatenate([part.shifts for pr in problems for part in _parts(pr)])
     n = len(ids)
     results = []
@@ -186,6 +195,7 @@ def minimize_many(
                 seconds=seconds / len(fns),
                 shifts=None if shifts is None else shifts[rows].copy(),
                 params=dict(opts[0].p),
+                transform=kind,
             )
         )
     return results
@@ -216,7 +226,21 @@ def _chunk_rows(fns: list[BenchmarkFunction], ids: list[int], size: int) -> list
     return chunks
 
 
-def _chunk_problem(chunk: list[Row], dim: int, seed: int, shifted: bool) -> Problem:
+def resolve_transform(shifted: bool, transform: str | None) -> str:
+    """The transform of a study from the ``shifted`` alias and ``transform`` (ParameterError on
+    an unknown name or a contradiction)."""
+    if transform is None:
+        return "shift" if shifted else "none"
+    if transform not in TRANSFORMS:
+        raise ParameterError(
+            f"transform must be one of {', '.join(TRANSFORMS)}, got {transform!r}"
+        )
+    if shifted and not shifts(transform):
+        raise ParameterError(f"shifted=True contradicts transform={transform!r}")
+    return transform
+
+
+def _chunk_problem(chunk: list[Row], dim: int, seed: int, transform: str) -> Problem:
     parts = []
     start = 0
     while start < len(chunk):
@@ -225,7 +249,7 @@ def _chunk_problem(chunk: list[Row], dim: int, seed: int, shifted: bool) -> Prob
         while stop < len(chunk) and chunk[stop][0] is fn:
             stop += 1
         runs = [r for _, r in chunk[start:stop]]
-        parts.append(BenchmarkProblem.build(fn, dim, runs, seed, shifted))
+        parts.append(BenchmarkProblem.build(fn, dim, runs, seed, transform))
         start = stop
     return parts[0] if len(parts) == 1 else StackedProblem.of(parts)
 

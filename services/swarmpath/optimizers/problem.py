@@ -7,13 +7,14 @@ The objective maps positions shaped (runs, m, dim) to values shaped (runs, m). B
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
 from swarmpath.functions import BenchmarkFunction
-from swarmpath.optimizers.streams import SHIFT, RunStreams, run_generator
+from swarmpath.functions.transforms import random_rotation, rotates, shifts
+from swarmpath.optimizers.streams import ROTATE, SHIFT, RunStreams, run_generator
 
 Array = NDArray[np.float64]
 Objective = Callable[[Array, RunStreams], Array]
@@ -48,10 +49,15 @@ class Problem:
 
 @dataclass
 class BenchmarkProblem(Problem):
-    """F1-F13 on its box for each run, optionally shifted per run (shift from the run's seed)."""
+    """F1-F13 on its box for each run, optionally transformed per run (``transform``: none,
+    shift, rotate, shift+rotate; see :mod:`swarmpath.functions.transforms`). The shift comes from
+    the run's ``SHIFT`` stream, the rotation from its ``ROTATE`` stream, so a run's function does
+    not depend on the batch, the algorithm or the other transform."""
 
     function: BenchmarkFunction | None = None
     shifts: Array | None = None  # (runs, dim) or None
+    rotations: Array | None = None  # (runs, dim, dim) or None
+    transform: str = "none"
 
     @classmethod
     def build(
@@ -60,17 +66,30 @@ class BenchmarkProblem(Problem):
         dim: int,
         run_ids: list[int],
         seed: int,
-        shifted: bool,
+        transform: str | bool = "none",
     ) -> BenchmarkProblem:
+        """``transform`` True/False are the former ``shifted`` flag ("shift"/"none")."""
+        if isinstance(transform, bool):
+            transform = "shift" if transform else "none"
         runs = len(run_ids)
         lower = np.full((runs, dim), function.lower)
         upper = np.full((runs, dim), function.upper)
-        shifts = None
-        if shifted:
-            shifts = np.stack(
+        moved = None
+        if function.shift is not None:  # a function shifted by its caller keeps its shift
+            moved = np.broadcast_to(function._shift_for(dim), (runs, dim)).copy()
+            function = replace_shift(function)
+        if shifts(transform):
+            drawn = np.stack(
                 [function.random_shift(dim, run_generator(seed, r, SHIFT)) for r in run_ids]
             )
-        problem = cls(objective=_unset, lower=lower, upper=upper, function=function, shifts=shifts)
+            moved = drawn if moved is None else moved + drawn
+        rotations = None
+        if rotates(transform):
+            rotations = np.stack(
+                [random_rotation(dim, run_generator(seed, r, ROTATE)) for r in run_ids]
+            )
+        problem = cls(objective=_unset, lower=lower, upper=upper, function=function,
+                      shifts=moved, rotations=rotations, transform=transform)
         problem.objective = problem._evaluate
         return problem
 
@@ -78,10 +97,15 @@ class BenchmarkProblem(Problem):
         f = self.function
         assert f is not None
         x = X
-        if self.shifts is not None:
+        if self.rotations is not None:
+            # x* + Q (x - m), m = x* + shift the minimiser: rotation about the optimum
+            m = self.optimum()
+            x = np.matmul(X - m[:, None, :], self.rotations.transpose(0, 2, 1))
+            x += f.optimum_coordinate
+        elif self.shifts is not None:
             x = X - self.shifts[:, None, :]
-            if f.wrap_shifted:
-                x = np.mod(x - f.lower, f.upper - f.lower) + f.lower
+        if f.wrap_shifted and (self.shifts is not None or self.rotations is not None):
+            x = np.mod(x - f.lower, f.upper - f.lower) + f.lower
         value = f.kernel(x)
         if f.noisy:
             value = value + streams.random(*value.shape[1:])
@@ -131,6 +155,11 @@ class StackedProblem(Problem):
             out[start:stop] = part.objective(X[start:stop], streams)
             start = stop
         return out
+
+
+def replace_shift(function: BenchmarkFunction) -> BenchmarkFunction:
+    """``function`` without its own shift (the problem carries it per run)."""
+    return replace(function, shift=None)
 
 
 def _unset(X: Array, streams: RunStreams) -> Array:  # replaced in BenchmarkProblem.build

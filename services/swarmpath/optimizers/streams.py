@@ -34,6 +34,7 @@ Array = NDArray[np.float64]
 OPTIMIZER = 0
 SHIFT = 1
 SIMULATION = 2
+ROTATE = 3
 
 #: Uniforms buffered per run by ``for_runs`` (64 KiB per run).
 BLOCK = 8192

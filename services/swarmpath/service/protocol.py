@@ -34,6 +34,7 @@ from pydantic import (
     ValidationInfo,
     computed_field,
     field_validator,
+    model_validator,
 )
 
 # ----------------------------------------------------------------------------------------- limits
@@ -177,10 +178,26 @@ class BenchmarkJobSpec(Model):
     agents: int = Field(default=30, ge=1, le=MAX_AGENTS)
     iterations: int = Field(default=500, ge=1, le=MAX_ITERATIONS)
     seed: int = Field(default=1, ge=0, le=MAX_SEED)
-    shifted: bool = False
+    shifted: bool = Field(default=False, description="alias of transform 'shift'")
+    transform: str = Field(
+        default="none",
+        validate_default=True,
+        description="none, shift, rotate or shift+rotate: each run's function moved and/or "
+        "turned with numbers from the run's own streams",
+    )
     params: dict[str, dict[str, ParamValue]] = Field(
         default_factory=dict, description="{algorithm: {parameter: value}}"
     )
+
+    @field_validator("transform")
+    @classmethod
+    def _known_transform(cls, v: str, info: ValidationInfo) -> str:
+        return _transform(v, bool(info.data.get("shifted")))
+
+    @model_validator(mode="after")
+    def _shifted_follows_transform(self) -> BenchmarkJobSpec:
+        self.shifted = "shift" in self.transform
+        return self
 
     @field_validator("algorithms")
     @classmethod
@@ -261,6 +278,19 @@ class BenchmarkJobSpec(Model):
     @classmethod
     def _reference_of_members(cls, v: str | None, info: ValidationInfo) -> str | None:
         return _reference(v, info.data.get("algorithms"))
+
+
+def _transform(v: str, shifted: bool) -> str:
+    """A registered transform; ``shifted`` (the former flag) means ``shift`` and must agree."""
+    from swarmpath.functions.transforms import TRANSFORMS
+
+    if v not in TRANSFORMS:
+        raise ValueError(f"must be one of {', '.join(TRANSFORMS)}, got {v!r}")
+    if shifted and v == "none":
+        return "shift"
+    if shifted and "shift" not in v:
+        raise ValueError(f"{v!r} contradicts shifted: true (which means 'shift')")
+    return v
 
 
 def _reference(v: str | None, members: list[str] | None) -> str | None:
@@ -408,6 +438,12 @@ class BenchmarkCell(Model):
     iterations: int
     shifted: bool = False
     params: dict[str, ParamValue] = Field(default_factory=dict)
+    transform: str = Field(default="none", validate_default=True)
+
+    @field_validator("transform")
+    @classmethod
+    def _known_transform(cls, v: str, info: ValidationInfo) -> str:
+        return _transform(v, bool(info.data.get("shifted")))
 
     @property
     def key(self) -> str:
@@ -444,6 +480,7 @@ def expand_cells(spec: BenchmarkJobSpec | MapJobSpec) -> list[BenchmarkCell | Ma
                 iterations=spec.iterations,
                 shifted=spec.shifted,
                 params=dict(spec.params.get(a, {})),
+                transform=spec.transform,
             )
             for a in spec.algorithms
             for f in spec.functions

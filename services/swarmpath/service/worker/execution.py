@@ -98,7 +98,7 @@ def _benchmark(
             res = minimize(
                 spec.algorithm, spec.function, dim=spec.dim, agents=spec.agents,
                 iterations=spec.iterations, seed=lease.seed, params=spec.params,
-                shifted=spec.shifted, run_ids=batch, on_iteration=hook,
+                transform=spec.transform, run_ids=batch, on_iteration=hook,
             )
         except Cancelled:
             raise
