@@ -195,3 +195,18 @@ def test_map_table_end_to_end_matches_plan_runs(tmp_path):
     bad.write_text('{"table": "nope"}')
     res = invoke("--from", str(bad))
     assert res.exit_code == 2 and "--from" in res.stderr
+
+
+def test_service_runs_become_the_same_cells_as_bench_in_run_order():
+    """--url reads the job's runs back (GET /jobs/{id}/runs items, any order)."""
+    items = [
+        {"algorithm": "GWO", "function": "F1", "dim": 30, "run": 1, "best_fitness": 2.0,
+         "evaluations": 10, "seconds": 0.5},
+        {"algorithm": "GWO", "function": "F1", "dim": 30, "run": 0, "best_fitness": "inf",
+         "evaluations": 10, "seconds": 0.25},
+        {"algorithm": "PSO", "function": "F1", "dim": 30, "run": 0, "best_fitness": 3.0},
+    ]
+    cells = {(c.algorithm, c.function): c for c in cli.cells_from_runs(items)}
+    gwo = cells[("GWO", "F1")]
+    assert gwo.run_ids == [0, 1] and gwo.best_fitness == [math.inf, 2.0]
+    assert gwo.seconds == 0.75 and cells[("PSO", "F1")].best_fitness == [3.0]
