@@ -6,6 +6,7 @@ from __future__ import annotations
 import io
 import json
 import logging
+import time
 
 import pytest
 from fastapi.testclient import TestClient
@@ -320,7 +321,7 @@ def test_leases_only_to_live_workers_and_requeue_when_gone(client, core):
     assert isinstance(lease, Lease) and len(lease.runs) == 3
     workers = {w["id"]: w for w in client.get("/workers").json()}
     assert len(workers["w1"]["current_runs"]) == 3 and workers["w1"]["alive"] is True
-    assert workers["ghost"]["alive"] is False and workers["ghost"]["current_runs"] == []
+    assert "ghost" not in workers  # a lease request alone makes no worker entry
     assert core.worker_gone("w1") == 3
     assert {w["id"]: w for w in client.get("/workers").json()}["w1"]["alive"] is False
     core.worker_alive("w2")
@@ -346,6 +347,43 @@ def test_cancel_publishes_and_finalizes(client, core):
     assert {r.status for r in ack.results} == {"stale"}
     assert isinstance(lease_for(core), NoWork)
     assert client.delete(f"/jobs/{job['id']}").json()["state"] == "cancelled"
+
+
+def test_made_up_worker_ids_leave_no_state(client, core):
+    """30,000 ids in lease requests, results and progress add nothing; 100,000 liveliness
+    tokens fill the table up to its cap (refusals counted), and gone workers are pruned.
+    (scripts/bench/bus_state.py measures memory and GET /workers for 100,000 ids.)"""
+    core.worker_table.max_entries = 500
+    job = client.post("/jobs", json=SPEC).json()
+    for i in range(30_000):
+        worker = f"made-up-{i}"
+        if i % 3 == 0:
+            core.handle_lease_request(encode(LeaseRequest(worker=worker, slots=10**6)))
+        elif i % 3 == 1:
+            batch = {"worker": worker, "results": [{"lease_id": f"L{i}", "job_id": job["id"],
+                                                    "cell": "GWO/F1/3", "run": 0,
+                                                    "worker": worker, "seconds": 0.0}]}
+            core.handle_results(f"swarmpath/results/{job['id']}", json.dumps(batch).encode())
+        else:
+            progress = {"lease_id": f"L{i}", "job_id": job["id"], "worker": worker,
+                        "cell": "GWO/F1/3", "runs": [0], "seq": 1, "proof": "0" * 64}
+            core.handle_progress(f"swarmpath/progress/{job['id']}",
+                                 json.dumps(progress).encode())
+    assert len(core.worker_table) == 0 and client.get("/workers").json() == []
+    assert core.sizer.slots == 1
+    for i in range(100_000):
+        core.worker_alive(f"token-{i}", now=1000.0)
+    assert len(core.worker_table) == 500 and core.worker_table.refused == 99_500
+    assert len(client.get("/workers").json()) == 500
+    text = client.get("/metrics").text
+    assert "swarmpath_workers_refused_total 99500" in text
+    assert "swarmpath_worker_table_entries 500" in text
+    for i in range(500):
+        core.worker_mark_gone(f"token-{i}")
+    core.worker_alive("newcomer")  # room is made by forgetting a gone worker
+    assert core.is_alive("newcomer") and len(core.worker_table) == 500
+    core.tick(now=time.time() + core.settings.forget_workers_seconds + 1)
+    assert [w["id"] for w in client.get("/workers").json()] == ["newcomer"]
 
 
 def test_catalog_health_metrics(client):

@@ -25,6 +25,13 @@ class ZenohBridge:
 
     GROUP_MESSAGES = 64  # result batches stored in one transaction at most ...
     GROUP_BYTES = 8_000_000  # ... and at most this many bytes of them
+    #: Bounds of the two queues between Zenoh's callbacks and our threads. Beyond them input is
+    #: dropped and counted (``swarmpath_messages_overload_total``): an unanswered lease query is
+    #: asked again, an unacknowledged result batch is put again by its worker, the next progress
+    #: message renews the lease.
+    MAX_QUERIES = 1024
+    MAX_EVENTS = 100_000
+    MAX_EVENT_BYTES = 256_000_000
 
     def __init__(self, core: Coordinator, config: Mapping[str, Any]):
         self.core = core
@@ -32,8 +39,10 @@ class ZenohBridge:
         self.keys = core.keys
         self.session: Any = None
         self._entities: list[Any] = []
-        self._work: queue.SimpleQueue[Any] = queue.SimpleQueue()
+        self._work: queue.Queue[Any] = queue.Queue(self.MAX_QUERIES)
         self._events: queue.SimpleQueue[Any] = queue.SimpleQueue()
+        self._queued = [0, 0]  # events and their payload bytes waiting in _events
+        self._queued_lock = threading.Lock()
         self._threads: list[threading.Thread] = []
         self._closed = False
 
@@ -70,7 +79,10 @@ class ZenohBridge:
     # Zenoh callbacks: copy and queue, nothing else (they run on Zenoh's threads).
     def _on_query(self, query: Any) -> None:
         try:
-            self._work.put(query)
+            self._work.put_nowait(query)
+        except queue.Full:
+            self.core.stats["overload"] += 1
+            query.drop()  # no reply: the worker asks again after its backoff
         except Exception:  # pragma: no cover
             log.exception("queueing a lease request failed")
 
@@ -82,9 +94,25 @@ class ZenohBridge:
 
     def _queue_sample(self, kind: str, sample: Any) -> None:
         try:
-            self._events.put((kind, str(sample.key_expr), sample.payload.to_bytes()))
+            payload = sample.payload.to_bytes()
+            with self._queued_lock:
+                if self._queued[0] >= self.MAX_EVENTS or \
+                        self._queued[1] + len(payload) > self.MAX_EVENT_BYTES:
+                    self.core.stats["overload"] += 1
+                    return
+                self._queued[0] += 1
+                self._queued[1] += len(payload)
+            self._events.put((kind, str(sample.key_expr), payload))
         except Exception:  # pragma: no cover
             log.exception("queueing a %s message failed", kind)
+
+    def _taken(self, item: Any) -> Any:
+        """Bookkeeping of an item taken from _events."""
+        if item is not None and item[0] in ("results", "progress"):
+            with self._queued_lock:
+                self._queued[0] -= 1
+                self._queued[1] -= len(item[2])
+        return item
 
     def _on_liveliness(self, sample: Any) -> None:
         try:
@@ -122,7 +150,7 @@ class ZenohBridge:
     def _serve_events(self) -> None:
         held: Any = _NOTHING  # an item taken from the queue while grouping results
         while True:
-            item = self._events.get() if held is _NOTHING else held
+            item = self._taken(self._events.get()) if held is _NOTHING else held
             held = _NOTHING
             if item is None:
                 return
@@ -134,7 +162,7 @@ class ZenohBridge:
                     size = len(payload)
                     while len(group) < self.GROUP_MESSAGES and size < self.GROUP_BYTES:
                         try:
-                            nxt = self._events.get_nowait()
+                            nxt = self._taken(self._events.get_nowait())
                         except queue.Empty:
                             break
                         if nxt is None or nxt[0] != "results":

@@ -54,6 +54,7 @@ from swarmpath.service.store import FINAL_STATES, Store
 from swarmpath.service.util import json_safe
 from swarmpath.service.util import short as _short
 from swarmpath.service.web.live import Dashboard
+from swarmpath.service.worker_table import WorkerTable
 
 if TYPE_CHECKING:
     from swarmpath.service.bridge import ZenohBridge
@@ -64,6 +65,7 @@ if TYPE_CHECKING:
 log = logging.getLogger("swarmpath.coordinator")
 
 SETTLED_LEASES = 20_000  # leases remembered for recognizing re-sent results
+CACHED_CAPABILITIES = 50_000  # capabilities of recent leases kept in memory
 
 __all__ = [
     "DEFAULT_HTTP",
@@ -101,14 +103,15 @@ class Coordinator:
         self.stats: Counter[str] = Counter()
         self._lock = threading.Lock()
         self._final_lock = threading.RLock()
-        self._workers: dict[str, dict[str, Any]] = {}
-        self._alive: set[str] = set()
+        self.worker_table = WorkerTable(settings.max_workers, settings.forget_workers_seconds)
         self._accepted: deque[tuple[float, int]] = deque()
         self._jobs: dict[str, dict[str, Any]] = {}  # job id -> what records need (cache)
         self._recording: set[str] = set()  # jobs whose MCAP is open
         # lease -> (its worker, its capability, runs stored): recognizes re-sent copies of
         # stored results without a store round trip (at most SETTLED_LEASES leases, oldest out)
         self._settled: OrderedDict[str, tuple[str, str, set[int]]] = OrderedDict()
+        # lease -> capability of recent leases (at most CACHED_CAPABILITIES, oldest out)
+        self._caps: OrderedDict[str, str] = OrderedDict()
 
     # ---------------------------------------------------------------------------- lifecycle
     def startup(self, now: float | None = None) -> list[str]:
@@ -139,31 +142,20 @@ class Coordinator:
 
     # ------------------------------------------------------------------------------ workers
     def _seen(self, worker: str, now: float, **info: Any) -> None:
-        with self._lock:
-            entry = self._workers.setdefault(
-                worker, {"host": "", "pid": 0, "slots": 1, "alive": worker in self._alive}
-            )
-            entry["last_seen"] = now
-            for key, value in info.items():
-                if value:
-                    entry[key] = value
+        self.worker_table.seen(worker, now, **info)
 
     def worker_alive(self, worker: str, now: float | None = None) -> None:
         """A liveliness token appeared (or was there when we started)."""
         now = time.time() if now is None else now
-        with self._lock:
-            self._alive.add(worker)
-        self._seen(worker, now)
-        with self._lock:
-            self._workers[worker]["alive"] = True
-        log.info("worker %s is alive", worker)
+        if self.worker_table.alive(worker, now):
+            log.info("worker %s is alive", worker)
+        elif self.worker_table.refused == 1 or self.worker_table.refused % 1000 == 0:
+            log.warning("worker table full (%d live workers): %s refused (%d so far)",
+                        self.worker_table.max_entries, worker, self.worker_table.refused)
 
     def worker_mark_gone(self, worker: str) -> None:
         """Liveliness lost: first half, instant (no store access; safe in a callback)."""
-        with self._lock:
-            self._alive.discard(worker)
-            if worker in self._workers:
-                self._workers[worker]["alive"] = False
+        self.worker_table.gone(worker, time.time())
 
     def worker_gone(self, worker: str, now: float | None = None) -> int:
         """Liveliness lost: requeue the worker's unfinished runs at once."""
@@ -173,26 +165,25 @@ class Coordinator:
         return n
 
     def is_alive(self, worker: str) -> bool:
-        with self._lock:
-            return worker in self._alive
+        return self.worker_table.is_alive(worker)
 
     def workers(self) -> list[WorkerStatus]:
+        """The workers of the table, and any other worker holding a lease (e.g. one of a previous
+        coordinator's life that has not reconnected yet)."""
         activity = self.store.worker_activity()
-        with self._lock:
-            known = {w: dict(e) for w, e in self._workers.items()}
-            alive = set(self._alive)
+        known = self.worker_table.snapshot()
         out = []
-        for worker in sorted(set(known) | alive | set(activity)):
-            entry = known.get(worker, {})
+        for worker in sorted(set(known) | set(activity)):
+            entry = known.get(worker)
             act = activity.get(worker, {})
             current = act.get("current_runs", [])
-            if worker not in alive and worker not in known and not current:
-                continue  # a worker of a previous coordinator's life with nothing leased
+            if entry is None and not current:
+                continue  # a worker of the past with nothing leased
             out.append(WorkerStatus(
-                id=worker, host=str(entry.get("host") or ""), pid=int(entry.get("pid") or 0),
-                slots=int(entry.get("slots") or 1), current_runs=current,
+                id=worker, host=entry.host if entry else "", pid=entry.pid if entry else 0,
+                slots=entry.slots if entry else 1, current_runs=current,
                 runs_done=int(act.get("runs_done", 0)),
-                last_seen=float(entry.get("last_seen") or 0.0), alive=worker in alive,
+                last_seen=entry.last_seen if entry else 0.0, alive=bool(entry and entry.alive),
             ))
         return out
 
@@ -221,9 +212,7 @@ class Coordinator:
             return self._no_work("coordinator shutting down", 2.0)
         if self.settings.require_liveliness and not self.is_alive(req.worker):
             return self._no_work(f"no liveliness token seen for worker {req.worker} yet")
-        with self._lock:
-            self.sizer.slots = max(1, sum(
-                int(self._workers.get(w, {}).get("slots") or 1) for w in self._alive))
+        self.sizer.slots = max(1, self.worker_table.alive_slots())
         try:
             leases = self.store.lease_many(
                 req.worker, req.max_runs, now, self.settings.lease_seconds,
@@ -240,6 +229,7 @@ class Coordinator:
                 self.store.release(lease.lease_id, req.worker)
             return self._no_work(f"worker {req.worker} lost its liveliness token")
         self.stats["leases"] += len(leases)
+        self._remember_caps({lease.lease_id: lease.capability for lease in leases})
         if req.max_leases == 1:
             return encode(leases[0])
         return encode(LeaseBundle(leases=leases))
@@ -313,7 +303,15 @@ class Coordinator:
             if len(valid) < len(batch.results):
                 log.warning("%d results of %s name another job or worker than their batch: "
                             "stale", len(batch.results) - len(valid), batch.worker)
-            batches.append((job_id, batch, valid))
+            # no valid proof, no store round trip (a flood of forged results costs no fsync)
+            proven = [r for r in valid if result_ok(self._capability(r.lease_id), r)]
+            if len(proven) < len(valid):
+                self.stats["unproven"] += len(valid) - len(proven)
+                self.stats["unproven_results"] += len(valid) - len(proven)
+                if self.stats["unproven_results"] == len(valid) - len(proven):
+                    log.warning("results without a valid proof of their lease's capability "
+                                "(counted in swarmpath_messages_unproven_total): stale")
+            batches.append((job_id, batch, proven))
         by_id: dict[int, str] = {}
         todo: list[RunResult] = []
         with self._lock:  # re-sent copies of results stored moments ago: no store round trip
@@ -330,7 +328,7 @@ class Coordinator:
         with self._lock:
             fresh = {r.lease_id for r, s in zip(todo, statuses, strict=True)
                      if s != "stale" and r.lease_id not in self._settled}
-        caps = {lease_id: self.store.capability(lease_id) or "" for lease_id in fresh}
+        caps = {lease_id: self._capability(lease_id) or "" for lease_id in fresh}
         with self._lock:
             for r, s in zip(todo, statuses, strict=True):
                 if s != "stale":  # the lease exists, is r.worker's and r proved its capability
@@ -365,6 +363,22 @@ class Coordinator:
             self._send(self.keys.ack(batch.worker), encode(ack))
             acks.append(ack)
         return acks
+
+    def _capability(self, lease_id: str) -> str | None:
+        """A lease's secret: from the cache of recent leases, else from the store."""
+        with self._lock:
+            cap = self._caps.get(lease_id)
+        if cap is None:
+            cap = self.store.capability(lease_id)
+            if cap is not None:
+                self._remember_caps({lease_id: cap})
+        return cap
+
+    def _remember_caps(self, caps: Mapping[str, str]) -> None:
+        with self._lock:
+            self._caps.update(caps)
+            while len(self._caps) > CACHED_CAPABILITIES:
+                self._caps.popitem(last=False)
 
     def _after_accept(self, job_id: str, accepted: list[RunResult], now: float) -> None:
         """Learn run costs, write the MCAP, finalize the job when it ended."""
@@ -500,9 +514,7 @@ class Coordinator:
         with self._lock:
             while self._accepted and self._accepted[0][0] < now - 60.0:
                 self._accepted.popleft()
-            for worker in [w for w, e in self._workers.items()
-                           if not e.get("alive") and e.get("last_seen", 0) < now - 3600]:
-                del self._workers[worker]
+        self.worker_table.prune(now)
 
     # ------------------------------------------------------------------------------ metrics
     def runs_per_second(self, now: float | None = None, window: float = 60.0) -> float:

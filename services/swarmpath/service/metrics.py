@@ -13,8 +13,7 @@ def metrics_text(core: Coordinator, now: float | None = None) -> str:
     """The coordinator's metrics in the Prometheus text exposition format (version 0.0.4)."""
     now = time.time() if now is None else now
     counters = core.store.counters()
-    with core._lock:
-        alive = len(core._alive)
+    alive = core.worker_table.alive_count()
     active = core.store.active_leases()
     lines: list[str] = []
 
@@ -32,6 +31,12 @@ def metrics_text(core: Coordinator, now: float | None = None) -> str:
            "Results accepted per second over the last minute.",
            round(core.runs_per_second(now), 3))
     metric("swarmpath_workers", "gauge", "Workers with a live liveliness token.", alive)
+    metric("swarmpath_worker_table_entries", "gauge",
+           f"Entries of the worker table (live and recently gone; at most "
+           f"{core.worker_table.max_entries}).", len(core.worker_table))
+    metric("swarmpath_workers_refused_total", "counter",
+           "Liveliness tokens refused because the worker table was full of live workers.",
+           core.worker_table.refused)
     metric("swarmpath_jobs_active", "gauge", "Queued or running jobs.",
            len(core.store.unfinished_jobs()))
     metric("swarmpath_lease_requeues_total", "counter",
@@ -42,8 +47,15 @@ def metrics_text(core: Coordinator, now: float | None = None) -> str:
            counters.get("results_accepted", 0))
     metric("swarmpath_results_duplicate_total", "counter", "Duplicate results ignored.",
            counters.get("duplicates", 0) + core.stats["duplicates_fast"])
-    metric("swarmpath_results_stale_total", "counter", "Stale results rejected.",
-           counters.get("stale", 0))
+    metric("swarmpath_results_stale_total", "counter",
+           "Stale results rejected (fencing, or no valid proof of their lease's capability).",
+           counters.get("stale", 0) + core.stats["unproven_results"])
+    metric("swarmpath_messages_unproven_total", "counter",
+           "Results and progress without a valid proof of their lease's capability (forged, "
+           "replayed or of unknown leases) since this process started.", core.stats["unproven"])
+    metric("swarmpath_messages_overload_total", "counter",
+           "Lease queries and result/progress messages dropped because the coordinator's input "
+           "queues were full (since this process started).", core.stats["overload"])
     metric("swarmpath_messages_malformed_total", "counter",
            "Malformed messages dropped since this process started.", core.stats["malformed"])
     return "\n".join(lines) + "\n"

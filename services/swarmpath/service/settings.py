@@ -31,6 +31,8 @@ class CoordinatorSettings:
     synchronous: str = "FULL"  # SQLite durability (FULL: acks survive a power cut)
     tick_seconds: float = 1.0
     require_liveliness: bool = True  # lease only to workers whose liveliness token is seen
+    max_workers: int = 1024  # worker table entries at most (see worker_table.py)
+    forget_workers_seconds: float = 600.0  # a gone worker is listed this long, then forgotten
 
     def zenoh_config(self) -> dict[str, Any]:
         return router_config(
