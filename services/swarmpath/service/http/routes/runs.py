@@ -8,14 +8,15 @@ from fastapi.responses import FileResponse, PlainTextResponse, StreamingResponse
 
 from swarmpath.legend import legend
 from swarmpath.service.http.deps import CoreDep, status_or_404
+# documented in /openapi.json, not validated per request: the routes stay as fast as they were
 from swarmpath.service.http.models import Run, RunsPage, Summary
 from swarmpath.service.util import json_safe
 
 router = APIRouter(tags=["results"])
 
 
-@router.get("/jobs/{job_id}/summary", response_model=Summary, response_model_exclude_unset=True,
-            responses={200: {"content": {"text/csv": {}}}})
+@router.get("/jobs/{job_id}/summary",
+            responses={200: {"model": Summary, "content": {"text/csv": {}}}})
 def job_summary(
     job_id: str, core: CoreDep, format: Literal["json", "csv"] = "json"
 ) -> Any:
@@ -31,8 +32,7 @@ def job_summary(
     return json_safe(summary)
 
 
-@router.get("/jobs/{job_id}/runs", response_model=RunsPage, response_model_exclude_unset=True,
-            responses={200: {"content": {
+@router.get("/jobs/{job_id}/runs", responses={200: {"model": RunsPage, "content": {
     "text/csv": {}, "application/vnd.apache.parquet": {}, "application/x-ndjson": {}}}})
 def job_runs(
     job_id: str,
@@ -75,8 +75,7 @@ def _stream(core: Any, job_id: str, kind: str, format: str) -> StreamingResponse
                              media_type="application/vnd.apache.parquet", headers=headers)
 
 
-@router.get("/jobs/{job_id}/runs/{run_id}", response_model=Run,
-            response_model_exclude_unset=True)
+@router.get("/jobs/{job_id}/runs/{run_id}", responses={200: {"model": Run}})
 def job_run(job_id: str, run_id: int, core: CoreDep) -> Any:
     """One run with its convergence curve (benchmark) or path rows [x, y, t] (map)."""
     status_or_404(core, job_id)
