@@ -18,7 +18,7 @@ from rich import box
 from rich.table import Table
 from rich.text import Text
 
-from swarmpath import compare
+from swarmpath import audit, compare
 from swarmpath.stats import describe, rank
 
 #: Rows of the table, in the papers' order.
@@ -160,9 +160,13 @@ def render_table(
     caption: str | None = None,
     digits: int = 2,
     tests: Statistics | None = None,
+    origin: bool = False,
 ) -> Table:
     """The paper-style table as a rich Table (print it with any rich Console). With ``tests``,
-    each average is followed by its marker against the reference (``+``, ``=``, ``-``)."""
+    each average is followed by its marker against the reference (``+``, ``=``, ``-``). With
+    ``origin`` (an untransformed study), the averages of origin-suspect cells
+    (:func:`origin_suspects`) carry ``audit.ORIGIN_MARK``; print ``audit.ORIGIN_FOOTNOTE`` under
+    the table when there are any."""
     table = Table(title=title, caption=caption, box=box.SIMPLE_HEAD, pad_edge=False)
     table.add_column("F", no_wrap=True)
     table.add_column("D", justify="right", no_wrap=True)
@@ -171,6 +175,7 @@ def render_table(
         table.add_column(a, justify="right", no_wrap=True)
     rows = table_rows(cells, algorithms)
     show = tests is not None and len(algorithms) > 1
+    suspects = origin_suspects(cells) if origin else set()
     for i, row in enumerate(rows):
         first = i == 0 or (rows[i - 1].function, rows[i - 1].dim) != (row.function, row.dim)
         last = i + 1 == len(rows) or (rows[i + 1].function, rows[i + 1].dim) != (
@@ -182,6 +187,9 @@ def render_table(
             s = "-" if math.isnan(v) else format_value(v, digits)
             # Every number gets the same trailing characters so that marked ones align.
             s += BEST_MARK if marked else " "
+            if suspects:
+                odd = row.stat == "avg" and (row.function, row.dim, a) in suspects
+                s += audit.ORIGIN_MARK if odd else " "
             if show:
                 m = tests.comparison.marker((row.function, row.dim), a) if tests else None
                 s += " " + (m if row.stat == "avg" and m else " ")
@@ -194,6 +202,16 @@ def render_table(
             end_section=last,
         )
     return table
+
+
+def origin_suspects(cells: Iterable[Cell]) -> set[tuple[str, int, str]]:
+    """(function, dim, algorithm) of the cells whose runs reached exact zeros or values below
+    1e-100 on a function whose optimum is at the origin (meaningful for untransformed studies)."""
+    return {
+        (c.function, c.dim, c.algorithm)
+        for c in cells
+        if audit.origin_suspect(c.function, c.best_fitness)
+    }
 
 
 def ranking(cells: Sequence[Cell], algorithms: Sequence[str]) -> list[dict[str, Any]]:
@@ -310,7 +328,9 @@ def json_number(v: float) -> float | str:
     return "nan" if math.isnan(v) else ("inf" if v > 0 else "-inf")
 
 
-def cell_to_json(c: Cell, tests: Statistics | None = None) -> dict[str, Any]:
+def cell_to_json(
+    c: Cell, tests: Statistics | None = None, origin: bool = False
+) -> dict[str, Any]:
     out = {
         "algorithm": c.algorithm,
         "function": c.function,
@@ -324,6 +344,8 @@ def cell_to_json(c: Cell, tests: Statistics | None = None) -> dict[str, Any]:
         "best_fitness": [json_number(v) for v in c.best_fitness],
         "run_evaluations": c.evaluations,
     }
+    if origin:
+        out["origin_suspect"] = audit.origin_suspect(c.function, c.best_fitness)
     if tests is not None:
         t = tests.comparison.get((c.function, c.dim), c.algorithm)
         out["test"] = {
@@ -341,13 +363,15 @@ def study_to_json(
     tests: Statistics | None = None,
 ) -> dict[str, Any]:
     """The whole study as one JSON-ready document (with ``tests``: each cell's ``test`` and the
-    document's ``statistics``, see :func:`tests_to_json`)."""
+    document's ``statistics``, see :func:`tests_to_json`). Untransformed studies (settings
+    ``transform`` none or absent) give each cell ``origin_suspect``."""
+    origin = settings.get("transform", "none") == "none"
     algorithms = list(settings.get("algorithms", dict.fromkeys(c.algorithm for c in cells)))
     doc = {
         "swarmpath": version,
         "settings": dict(settings),
         "seconds": seconds,
-        "cells": [cell_to_json(c, tests) for c in cells],
+        "cells": [cell_to_json(c, tests, origin) for c in cells],
         "ranking": [
             {**r, "mean_rank": json_number(r["mean_rank"])} for r in ranking(cells, algorithms)
         ],

@@ -23,7 +23,7 @@ from rich.console import Console
 from rich.measure import Measurement
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-from swarmpath import __version__, compare, report
+from swarmpath import __version__, audit, compare, report
 from swarmpath.cli import parallel
 from swarmpath.cli.core import InputError, app, parse_params_option, plot_dir, resolve_names
 from swarmpath.functions import expand_function_names, get_function
@@ -435,13 +435,17 @@ def print_tables(
     tests: report.Statistics | None = None,
 ) -> None:
     multi = len(spec.algorithms) > 1
-    table = report.render_table(cells, spec.algorithms, tests=tests if multi else None)
+    plain = spec.transform == "none"
+    table = report.render_table(cells, spec.algorithms, tests=tests if multi else None,
+                                origin=plain)
     console = Console()
     if not console.is_terminal:  # pipes and files: never squeeze the numbers to 80 columns
         width = Measurement.get(console, console.options.update(width=100_000), table).maximum
         console = Console(width=max(80, width))
     console.print(table)
     console.print(caption(spec, seconds), highlight=False)
+    if plain and report.origin_suspects(cells):
+        console.print(audit.ORIGIN_FOOTNOTE, highlight=False)
     if multi:
         console.print(report.render_ranking(cells, spec.algorithms, tests))
         if tests is not None:

@@ -1,0 +1,114 @@
+"""Origin-bias audit: how much an optimizer loses when the optimum leaves the origin.
+
+Pure functions over best values (no I/O). For every optimizer, function and dimension a study
+runs the function plain, shifted and shifted+rotated (:data:`AUDIT_TRANSFORMS`, the same runs and
+seeds); per transform the *decades lost* on a function are log10(mean gap transformed / mean gap
+plain), the gap being best - f_min (f_min per dimension for F8) and a mean gap below
+:data:`GAP_FLOOR` counted as the floor (an exact 0 would make the ratio infinite). Per optimizer
+the audit reports the median over functions of the decades lost, the number of functions losing
+more than one and more than three decades, and how many plain runs ended at exactly 0.
+
+A plain cell is *origin-suspect* when the function's optimum is at the origin and some run ended
+at exactly 0 or below :data:`SUSPECT_BELOW`: such values usually come from a move that scales
+positions toward 0, not from search (`swarmpath bench --transform shift` tells them apart).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from swarmpath.functions import get_function
+
+AUDIT_TRANSFORMS: tuple[str, ...] = ("none", "shift", "shift+rotate")
+GAP_FLOOR = 1e-300
+SUSPECT_BELOW = 1e-100
+ORIGIN_MARK = "°"
+ORIGIN_FOOTNOTE = (
+    f"{ORIGIN_MARK} origin-suspect: exact zeros or values below {SUSPECT_BELOW:g} on a function "
+    "whose optimum is at the origin; rerun with --transform shift to see the search without it."
+)
+
+
+def optimum_at_origin(function: str) -> bool:
+    """True for the registered functions whose minimiser is the origin."""
+    return get_function(function).optimum_coordinate == 0.0
+
+
+def origin_suspect(function: str, values: Iterable[float]) -> bool:
+    """A plain cell whose runs reached exact zeros or values below SUSPECT_BELOW while the
+    function's optimum is at the origin."""
+    if not optimum_at_origin(function):
+        return False
+    f_min = get_function(function).f_min
+    return any(v - f_min < SUSPECT_BELOW for v in values if math.isfinite(v))
+
+
+def mean_gap(function: str, dim: int, values: Sequence[float]) -> float:
+    """Mean of best - f_min over the runs, at least GAP_FLOOR."""
+    f_min = get_function(function).f_min_for(dim)
+    gaps = np.maximum(np.asarray(values, dtype=float) - f_min, 0.0)
+    return max(float(np.mean(gaps)), GAP_FLOOR)
+
+
+@dataclass
+class AuditRow:
+    algorithm: str
+    dim: int
+    #: transform -> function -> decades lost against plain
+    decades: dict[str, dict[str, float]] = field(default_factory=dict)
+    exact_zeros: int = 0  # plain runs that ended at exactly 0
+    plain_runs: int = 0
+
+    def median(self, transform: str) -> float:
+        return float(np.median(list(self.decades[transform].values())))
+
+    def losing(self, transform: str, more_than: float) -> int:
+        return sum(d > more_than for d in self.decades[transform].values())
+
+    def to_json(self) -> dict[str, object]:
+        return {
+            "algorithm": self.algorithm,
+            "dim": self.dim,
+            "exact_zeros": self.exact_zeros,
+            "plain_runs": self.plain_runs,
+            "transforms": {
+                t: {
+                    "median_decades_lost": self.median(t),
+                    "functions_losing_more_than_1": self.losing(t, 1.0),
+                    "functions_losing_more_than_3": self.losing(t, 3.0),
+                    "decades_lost": per,
+                }
+                for t, per in self.decades.items()
+            },
+        }
+
+
+Key = tuple[str, str, int, str]  # (algorithm, function, dim, transform)
+
+
+def audit(
+    values: Mapping[Key, Sequence[float]],
+    algorithms: Sequence[str],
+    functions: Sequence[str],
+    dims: Sequence[int],
+) -> list[AuditRow]:
+    """One row per (algorithm, dim) from the best values of every (algorithm, function, dim,
+    transform) of :data:`AUDIT_TRANSFORMS`."""
+    rows = []
+    for a in algorithms:
+        for d in dims:
+            row = AuditRow(a, d)
+            for f in functions:
+                plain = values[(a, f, d, "none")]
+                row.exact_zeros += sum(v == 0.0 for v in plain)
+                row.plain_runs += len(plain)
+                base = mean_gap(f, d, plain)
+                for t in AUDIT_TRANSFORMS[1:]:
+                    moved = mean_gap(f, d, values[(a, f, d, t)])
+                    row.decades.setdefault(t, {})[f] = math.log10(moved / base)
+            rows.append(row)
+    return rows

@@ -1,0 +1,120 @@
+"""``swarmpath audit``: how much each optimizer owes to optima at the origin.
+
+Every optimizer runs every function plain, shifted and shifted+rotated (the same runs and seeds,
+through :func:`swarmpath.cli.bench.run_bench`); :func:`swarmpath.audit.audit` turns the best
+values into decades lost per optimizer. The table is what docs/algorithms.md shows.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time
+from typing import Annotated
+
+import typer
+from rich.console import Console
+
+from swarmpath import __version__
+from swarmpath.audit import AUDIT_TRANSFORMS, AuditRow, Key, audit
+from swarmpath.cli import parallel
+from swarmpath.cli.bench import check_range, make_spec, run_bench
+from swarmpath.cli.core import InputError, app
+from swarmpath.optimizers import ParameterError
+
+FORMATS = ("table", "markdown")
+HEADER = (
+    "optimizer", "D", "shift: median decades lost", "> 1", "> 3",
+    "shift+rotate: median decades lost", "> 1", "> 3", "plain runs at exactly 0",
+)
+
+
+def audit_lines(rows: list[AuditRow], markdown: bool) -> list[str]:
+    """The audit table as text lines (aligned columns, or a markdown table)."""
+    body = []
+    for r in rows:
+        cells = [r.algorithm, str(r.dim)]
+        for t in AUDIT_TRANSFORMS[1:]:
+            cells += [f"{r.median(t):+.1f}", str(r.losing(t, 1.0)), str(r.losing(t, 3.0))]
+        cells.append(f"{r.exact_zeros} of {r.plain_runs}")
+        body.append(cells)
+    if markdown:
+        out = ["| " + " | ".join(HEADER) + " |", "|" + "---|" * len(HEADER)]
+        return out + ["| " + " | ".join(c) + " |" for c in body]
+    widths = [max(len(h), *(len(c[i]) for c in body)) for i, h in enumerate(HEADER)]
+    fmt = [lambda s, w=w: s.ljust(w) for w in widths[:1]] + [
+        lambda s, w=w: s.rjust(w) for w in widths[1:]
+    ]
+    return ["  ".join(f(c) for f, c in zip(fmt, cells, strict=True))
+            for cells in [list(HEADER), *body]]
+
+
+@app.command("audit")
+def audit_command(
+    algorithms: Annotated[
+        str, typer.Option("--algorithms", "-a", help="Comma-separated names, or 'all'.")
+    ] = "all",
+    functions: Annotated[
+        str, typer.Option("--functions", "-f", help="Names and ranges: F1-F13, F1,F5,F6-floor.")
+    ] = "F1-F13",
+    dims: Annotated[str, typer.Option("--dims", "-d", help="Comma-separated dimensions.")] = "30",
+    runs: Annotated[int, typer.Option(help="Independent runs per cell and transform.")] = 10,
+    agents: Annotated[int, typer.Option(help="Population size.")] = 30,
+    iterations: Annotated[int, typer.Option(help="Iterations per run.")] = 500,
+    seed: Annotated[int, typer.Option(help="Study seed; run r uses its own stream of it.")] = 1,
+    jobs: Annotated[
+        int, typer.Option("--jobs", "-j", help="Processes (0: one per CPU). Numbers do not change.")
+    ] = 0,
+    fmt: Annotated[
+        str, typer.Option("--format", help="table or markdown.")
+    ] = "table",
+    as_json: Annotated[
+        bool, typer.Option("--json", help="Print one JSON document (every function's decades).")
+    ] = False,
+) -> None:
+    """Run every optimizer plain, shifted and shifted+rotated; print per optimizer the decades
+    lost (median over functions of log10 of the mean-gap ratio), the functions losing more than
+    1 and 3 decades, and the plain runs that ended at exactly 0."""
+    if fmt not in FORMATS:
+        raise InputError("--format", f"must be one of {', '.join(FORMATS)}, got {fmt!r}")
+    check_range("--jobs", jobs, 0, parallel.MAX_JOBS)
+    specs = [make_spec(algorithms, functions, dims, runs, agents, iterations, seed,
+                       transform=t) for t in AUDIT_TRANSFORMS]
+    base = specs[0]
+    stderr = Console(stderr=True)
+    started = time.perf_counter()
+    values: dict[Key, list[float]] = {}
+    for spec in specs:
+        try:
+            cells = run_bench(spec, jobs=jobs or parallel.usable_cpus())
+        except ParameterError as exc:
+            raise InputError("--algorithms", str(exc)) from None
+        for c in cells:
+            values[(c.algorithm, c.function, c.dim, spec.transform)] = list(c.best_fitness)
+        stderr.print(f"{spec.transform}: done ({time.perf_counter() - started:.0f} s)",
+                     highlight=False)
+    rows = audit(values, base.algorithms, base.functions, base.dims)
+    seconds = time.perf_counter() - started
+    if as_json:
+        doc = {
+            "swarmpath": __version__,
+            "settings": {**base.settings(), "transforms": list(AUDIT_TRANSFORMS)},
+            "seconds": seconds,
+            "rows": [_finite(r.to_json()) for r in rows],
+        }
+        sys.stdout.write(json.dumps(doc, allow_nan=False) + "\n")
+        return
+    for line in audit_lines(rows, fmt == "markdown"):
+        print(line)
+    print(f"\n{base.runs} runs per cell, {base.agents} agents, {base.iterations} iterations, "
+          f"seed {base.seed}; decades lost = log10(mean gap transformed / mean gap plain), "
+          f"gap = best - f_min, mean gaps below 1e-300 counted as 1e-300; {seconds:.0f} s")
+
+
+def _finite(v: object) -> object:
+    if isinstance(v, dict):
+        return {k: _finite(x) for k, x in v.items()}
+    if isinstance(v, float) and not math.isfinite(v):
+        return str(v)
+    return v

@@ -1,0 +1,95 @@
+"""Origin-bias audit: decades lost per optimizer, origin-suspect cells, the ``audit`` command."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from swarmpath import audit as au
+from swarmpath.cli import app
+from swarmpath.functions import get_function, list_functions
+from swarmpath.optimizers import list_optimizers, minimize
+
+runner = CliRunner()
+
+
+def test_decades_lost_by_hand():
+    values = {
+        ("A", "F1", 5, "none"): [0.0, 0.0],  # mean gap 0 -> the floor 1e-300
+        ("A", "F1", 5, "shift"): [1e-4, 3e-4],  # mean 2e-4
+        ("A", "F1", 5, "shift+rotate"): [0.0, 0.0],
+        ("A", "F9", 5, "none"): [2.0, 4.0],  # 3
+        ("A", "F9", 5, "shift"): [30.0, 30.0],  # 30: one decade
+        ("A", "F9", 5, "shift+rotate"): [0.3, 0.3],  # a decade better
+        ("A", "F8", 5, "none"): [-2094.9144363621687 + 1.0] * 2,  # f_min(5) + 1
+        ("A", "F8", 5, "shift"): [-2094.9144363621687 + 1000.0] * 2,  # three decades
+        ("A", "F8", 5, "shift+rotate"): [-2094.9144363621687 + 1.0] * 2,
+    }
+    (row,) = au.audit(values, ["A"], ["F1", "F9", "F8"], [5])
+    shift = row.decades["shift"]
+    assert shift["F1"] == pytest.approx(math.log10(2e-4) + 300)
+    assert shift["F9"] == pytest.approx(1.0)
+    assert shift["F8"] == pytest.approx(3.0, abs=1e-9)
+    assert row.median("shift") == pytest.approx(3.0, abs=1e-9)
+    assert (row.losing("shift", 1.0), row.losing("shift", 3.0)) == (1 + 1, 1)
+    assert row.decades["shift+rotate"]["F9"] == pytest.approx(-1.0)
+    assert (row.exact_zeros, row.plain_runs) == (2, 6)
+
+
+@pytest.mark.parametrize("name", list_functions())
+def test_origin_suspect_only_where_the_optimum_is_the_origin(name):
+    f = get_function(name)
+    at_origin = f.optimum_coordinate == 0.0
+    assert au.optimum_at_origin(name) == at_origin
+    assert au.origin_suspect(name, [f.f_min, 1.0]) == at_origin
+    assert au.origin_suspect(name, [f.f_min + 1e-120]) == at_origin
+    assert not au.origin_suspect(name, [f.f_min + 1e-50, math.inf])
+
+
+def test_origin_suspect_catches_hpo_and_not_pso():
+    """HPO's hunter scales positions toward 0: exact zeros on plain F1; PSO has no such move."""
+    kw = dict(dim=10, agents=20, iterations=300, runs=3, seed=1)
+    assert au.origin_suspect("F1", minimize("HPO", "F1", **kw).best_fitness)
+    assert not au.origin_suspect("F1", minimize("PSO", "F1", **kw).best_fitness)
+
+
+def test_audit_command_covers_every_optimizer():
+    args = ["audit", "-f", "F1,F9", "-d", "3", "--runs", "2", "--iterations", "5", "-j", "1"]
+    out = runner.invoke(app, [*args, "--json"])
+    assert out.exit_code == 0, out.output
+    doc = json.loads(out.stdout)
+    rows = {r["algorithm"]: r for r in doc["rows"]}
+    assert list(rows) == list_optimizers()
+    for r in rows.values():
+        assert r["plain_runs"] == 4
+        assert set(r["transforms"]) == {"shift", "shift+rotate"}
+        for t in r["transforms"].values():
+            lost = list(t["decades_lost"].values())
+            assert t["median_decades_lost"] == pytest.approx(float(np.median(lost)))
+    table = runner.invoke(app, [*args, "--format", "markdown"])
+    assert table.exit_code == 0
+    lines = [ln for ln in table.stdout.splitlines() if ln.startswith("| ")]
+    assert len(lines) == 1 + len(list_optimizers())
+
+
+def test_audit_command_refuses_bad_input_naming_the_option():
+    out = runner.invoke(app, ["audit", "--format", "html"])
+    assert out.exit_code == 2 and "--format" in out.output
+    out = runner.invoke(app, ["audit", "-a", "NOPE"])
+    assert out.exit_code == 2 and "--algorithms" in out.output
+
+
+def test_bench_flags_origin_suspect_cells_of_untransformed_studies_only():
+    args = ["bench", "-a", "HPO", "-f", "F1,F5", "-d", "10", "--runs", "3", "--iterations",
+            "300", "-j", "1"]
+    plain = runner.invoke(app, args)
+    assert plain.exit_code == 0, plain.output
+    assert au.ORIGIN_MARK in plain.stdout and "--transform shift" in plain.stdout
+    doc = json.loads(runner.invoke(app, [*args, "--json"]).stdout)
+    assert {c["function"]: c["origin_suspect"] for c in doc["cells"]} == {"F1": True, "F5": False}
+    moved = runner.invoke(app, [*args, "--transform", "shift"])
+    assert moved.exit_code == 0 and au.ORIGIN_MARK not in moved.stdout
+    doc = json.loads(runner.invoke(app, [*args, "--transform", "shift", "--json"]).stdout)
+    assert all("origin_suspect" not in c for c in doc["cells"])
