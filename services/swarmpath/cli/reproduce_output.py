@@ -50,7 +50,7 @@ def grid(tab: reference.Table, rows: Sequence[Row], markers: Markers
     header = [where, who, "published avg", "min / max / std", "measured avg", "median", "min",
               "max", "std"]
     if tab.kind == "map":
-        header += ["success", "measured / published - 1"]
+        header += ["success", "collisions", "exact optimum", "measured / published - 1"]
     else:
         header += ["log10 ratio"]
     header += ["verdict", "reason"]
@@ -59,7 +59,9 @@ def grid(tab: reference.Table, rows: Sequence[Row], markers: Markers
         pub_avg, spread = _published(r)
         line = [r.where, r.who, pub_avg, spread, *_measured(r, markers)]
         if tab.kind == "map":
-            line.append(str(r.extra.get("success", "")))
+            optimum = r.extra.get("optimum")
+            line += [str(r.extra.get("success", "")), str(r.extra.get("collisions", "")),
+                     "-" if optimum is None else f"{optimum:.3f}"]
         if r.log10_ratio is None:
             ratio = "n/a"
         elif tab.kind == "map":  # a few per cent: say it so
