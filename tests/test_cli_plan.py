@@ -55,12 +55,14 @@ def test_table_has_the_papers_columns_and_a_mean_row():
     assert mean[4] == "2/2"
 
 
-def test_json_document_has_exactly_runs_summary_and_statistics():
+def test_json_document_has_exactly_runs_summary_statistics_and_maps():
     result = invoke("-p", "OMPL-RRTstar,OMPL-BITstar", "-m", "mfb-static", "--runs", "2",
                     "--seed", "3", "--params", fast("OMPL-RRTstar", "OMPL-BITstar"), "--json")
     assert result.exit_code == 0, result.stderr
     doc = json.loads(result.stdout)
-    assert set(doc) == {"runs", "summary", "statistics"}
+    assert set(doc) == {"runs", "summary", "statistics", "maps"}
+    assert doc["maps"] == [{"map": "mfb-static", "optimum": doc["runs"][0]["optimum"],
+                            "optimum_reason": None, "octile": None}]
     assert len(doc["runs"]) == 4
     for i, run in enumerate(doc["runs"]):
         assert RUN_FIELDS <= set(run)

@@ -8,12 +8,13 @@ prints ``{"runs": [...], "summary": [...]}`` (the summary from
 (:mod:`swarmpath.plots`) and box plots of length, gap and time per map.
 
 ``--maps`` takes preset names (``--list-maps``) and paths: scenario JSON/YAML, ROS map_server /
-nav2 YAML (recognised by its ``image`` key) or MovingAI ``.map`` files (one metre per cell).
+nav2 YAML (recognised by its ``image`` key) or MovingAI ``.map`` files (``--resolution`` metres
+per cell, default 1); ``--start`` / ``--goal`` override every map's endpoints, ``--scen`` turns a
+MovingAI map into one map per scenario pair (:mod:`swarmpath.cli.plan_maps`).
 """
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import math
 import sys
@@ -32,16 +33,21 @@ from rich.table import Table
 from swarmpath.cli import parallel
 from swarmpath.cli.core import (
     InputError,
-    InputErrors,
     app,
     parse_params_option,
     plot_dir,
     resolve_names,
 )
+from swarmpath.cli.plan_maps import (
+    MapOptions,
+    compute_optima,
+    make_options,
+    resolve_maps,
+)
 from swarmpath.legend import legend_text
+from swarmpath.world.optimum import DEFAULT_BUDGET
 
 MAX_RUNS = 10_000
-MAP_SUFFIXES = (".json", ".yaml", ".yml", ".map")
 
 
 @dataclass
@@ -53,6 +59,12 @@ class PlanSpec:
     params: dict[str, dict[str, Any]] = field(default_factory=dict)
     #: the planner the statistical tests compare against (None: the last of ``planners``)
     reference: str | None = None
+    #: seconds the exact optimum of a map may take (None: no limit)
+    optimum_budget: float | None = DEFAULT_BUDGET
+    #: MovingAI octile optimum (m) of the maps made from --scen pairs, by map name
+    octile: dict[str, float] = field(default_factory=dict)
+    #: (exact optimum or None, reason or None) by map name, filled by the command
+    optima: dict[str, tuple[float | None, str | None]] = field(default_factory=dict)
 
     def cells(self) -> list[tuple[str, Any]]:
         return [(p, m) for p in self.planners for m in self.maps]
@@ -78,73 +90,6 @@ def resolve_planners(spec: str) -> list[str]:
     return resolve_names(spec, list_planners(), "--planners", "planner")
 
 
-def load_map(item: str) -> Any:
-    """A preset by name, or a scenario / nav2 / MovingAI file; raises InputError('--maps')."""
-    from swarmpath.world import get_map, list_maps
-
-    presets = list_maps()
-    by_lower = {m.lower(): m for m in presets}
-    if item in presets or item.lower() in by_lower:
-        return get_map(item if item in presets else by_lower[item.lower()])
-    path = Path(item)
-    if not path.is_file():
-        hint = "no such file" if path.suffix.lower() in MAP_SUFFIXES else "unknown map"
-        raise InputError(
-            "--maps",
-            f"{hint} {item!r}; presets: {', '.join(presets)}; or a path to a scenario "
-            "JSON/YAML, nav2 map YAML or MovingAI .map file",
-        )
-    try:
-        return _load_file(path)
-    except InputError:
-        raise
-    except (ValueError, KeyError, OSError) as exc:  # ScenarioError, MapImportError, ...
-        problems = getattr(exc, "problems", None)
-        if problems:  # a scenario file: one line per problem
-            raise InputErrors([("--maps", f"{item}: {p}: {m}" if p else f"{item}: {m}")
-                               for p, m in problems]) from None
-        raise InputError("--maps", f"{item}: {exc}") from None
-
-
-def _load_file(path: Path) -> Any:
-    import yaml
-
-    from swarmpath.world.importers import load_movingai_map, load_ros_map
-    from swarmpath.world.scenario_io import load_scenario, scenario_from_dict
-
-    suffix = path.suffix.lower()
-    if suffix == ".map":
-        return load_movingai_map(path).scenario
-    if suffix in (".yaml", ".yml"):
-        try:
-            doc = yaml.safe_load(path.read_text(encoding="utf-8"))
-        except yaml.YAMLError as exc:
-            raise InputError("--maps", f"{path}: not valid YAML ({exc})") from None
-        if isinstance(doc, dict) and "image" in doc:
-            return load_ros_map(path).scenario
-        if not isinstance(doc, dict):
-            raise InputError("--maps", f"{path}: expected a YAML mapping")
-        return scenario_from_dict(doc, str(path))
-    return load_scenario(path)
-
-
-def resolve_maps(spec: str) -> list[Any]:
-    maps: list[Any] = []
-    names: set[str] = set()
-    for item in _names(spec):
-        scenario = load_map(item)
-        name, k = scenario.name, 2
-        while name in names:  # two files with the same scenario name: keep them apart
-            name, k = f"{scenario.name}#{k}", k + 1
-        if name != scenario.name:
-            scenario = dataclasses.replace(scenario, name=name)
-        names.add(name)
-        maps.append(scenario)
-    if not maps:
-        raise InputError("--maps", "no map given")
-    return maps
-
-
 def parse_params(text: str | None, planners: Sequence[str]) -> dict[str, dict[str, Any]]:
     """'{"OMPL-RRTstar": {"time": 0.5}}' -> params per planner, each checked by the planner."""
     from swarmpath.planners import get_planner
@@ -156,7 +101,10 @@ def parse_params(text: str | None, planners: Sequence[str]) -> dict[str, dict[st
 
 
 def make_spec(planners: str, maps: str, runs: int = 10, seed: int = 1,
-              params: str | None = None, reference: str | None = None) -> PlanSpec:
+              params: str | None = None, reference: str | None = None,
+              map_options: MapOptions | None = None,
+              optimum_budget: float | None = DEFAULT_BUDGET,
+              note: Callable[[str], None] | None = None) -> PlanSpec:
     """Validate the command's options; raises :class:`InputError` naming the bad one."""
     from swarmpath.compare import resolve_reference
 
@@ -165,12 +113,15 @@ def make_spec(planners: str, maps: str, runs: int = 10, seed: int = 1,
         ref = resolve_reference(names, reference)
     except ValueError as exc:
         raise InputError("--reference", str(exc)) from None
-    scenarios = resolve_maps(maps)
+    if optimum_budget is not None and not (math.isfinite(optimum_budget) and optimum_budget > 0):
+        raise InputError("--optimum-budget", f"{optimum_budget} is not a positive number of s")
+    scenarios, octile = resolve_maps(maps, map_options, note)
     if not 1 <= runs <= MAX_RUNS:
         raise InputError("--runs", f"{runs} is not in [1, {MAX_RUNS}]")
     if seed < 0:
         raise InputError("--seed", f"{seed} is negative")
-    return PlanSpec(names, scenarios, runs, seed, parse_params(params, names), ref)
+    return PlanSpec(names, scenarios, runs, seed, parse_params(params, names), ref,
+                    optimum_budget, octile)
 
 
 # -------------------------------------------------------------------------------------- running
@@ -185,7 +136,8 @@ def run_episode(spec: PlanSpec, planner: str, scenario: Any, run: int,
 
     ep = None
     try:
-        ep = Episode(scenario, planner, spec.seed, run, spec.params.get(planner))
+        ep = Episode(scenario, planner, spec.seed, run, spec.params.get(planner),
+                     optimum_budget=spec.optimum_budget)
         while not ep.done:
             ep.step()
             if on_step is not None:
@@ -259,16 +211,29 @@ def simulated_world(scenario: Any, seed: int, run: int) -> Any:
     return scenario.instantiate(run_generator(seed, run, SIMULATION))
 
 
-def document(cells: Sequence[CellResult], reference: str | None = None) -> dict[str, Any]:
-    """The ``--json`` document: exactly {"runs": [...], "summary": [...], "statistics": {...}}
-    (statistics: :meth:`swarmpath.compare_maps.MapStatistics.to_json`)."""
+def document(cells: Sequence[CellResult], reference: str | None = None,
+             spec: PlanSpec | None = None) -> dict[str, Any]:
+    """The ``--json`` document: exactly {"runs": [...], "summary": [...], "statistics": {...},
+    "maps": [...]} (statistics: :meth:`swarmpath.compare_maps.MapStatistics.to_json`; maps: per
+    map its exact optimum, the reason when there is none, and the .scen octile optimum)."""
     from swarmpath.compare_maps import map_statistics
     from swarmpath.planners.summary import summarize
 
     runs = [r for c in cells for r in c.runs]
     planners = list(dict.fromkeys(c.planner for c in cells))
+    names = list(dict.fromkeys(c.scenario.name for c in cells))
+    optima = spec.optima if spec is not None else {}
+    octile = spec.octile if spec is not None else {}
+    by_name = {c.scenario.name: c.runs for c in cells}
+    maps = []
+    for name in names:
+        value, reason = optima.get(name, (None, None))
+        if name not in optima:  # the runs carry the optimum (without the reason)
+            value = next((r["optimum"] for r in by_name[name] if r["optimum"] is not None), None)
+        maps.append({"map": name, "optimum": value, "optimum_reason": reason,
+                     "octile": octile.get(name)})
     return {"runs": runs, "summary": summarize(runs),
-            "statistics": map_statistics(runs, planners, reference).to_json()}
+            "statistics": map_statistics(runs, planners, reference).to_json(), "maps": maps}
 
 
 # --------------------------------------------------------------------------------------- tables
@@ -281,11 +246,15 @@ def _causes(r: dict[str, Any]) -> str:
     return f"{r.get('robot_driven_contacts') or 0}/{r.get('obstacle_driven_contacts') or 0}"
 
 
-def render_cell(cell: CellResult, row: dict[str, Any]) -> Table:
-    """The paper-style run table of one planner x map (``row``: its summary)."""
+def render_cell(cell: CellResult, row: dict[str, Any], reason: str | None = None,
+                octile: float | None = None) -> Table:
+    """The paper-style run table of one planner x map (``row``: its summary; ``reason``: why
+    there is no exact optimum; ``octile``: the MovingAI .scen optimum as a reference)."""
     optimum = row["optimum"]
     title = f"{cell.planner} on {cell.scenario.name}"
-    title += f" (exact optimum {optimum:.4f} m)" if optimum is not None else " (no exact optimum)"
+    title += (f" (exact optimum {optimum:.4f} m" if optimum is not None
+              else f" (no exact optimum: {reason or 'see the runs'}")
+    title += f"; octile optimum {octile:.4f} m)" if octile is not None else ")"
     table = Table(title=title, box=box.SIMPLE_HEAD, pad_edge=False)
     for name in ("Run", "Distance (m)", "Error (m)", "Elapsed time (s)", "Success",
                  "Collisions", "Robot/obstacle-driven", "Gap (%)", "Steps", "Iterations"):
@@ -325,7 +294,9 @@ def print_tables(cells: Sequence[CellResult], spec: PlanSpec, seconds: float) ->
     console = Console()
     tables = []
     for cell in cells:
-        tables.append(render_cell(cell, summarize(cell.runs)[0]))
+        reason = spec.optima.get(cell.scenario.name, (None, None))[1]
+        tables.append(render_cell(cell, summarize(cell.runs)[0], reason,
+                                  spec.octile.get(cell.scenario.name)))
     if not console.is_terminal:  # pipes and files: never squeeze the numbers
         widest = max(Measurement.get(console, console.options.update(width=100_000), t).maximum
                      for t in tables)
@@ -450,6 +421,38 @@ def plan(
         typer.Option("--reference", metavar="NAME", help="Planner the +/=/- markers compare "
                      "against (default: the last one listed)."),
     ] = None,
+    start: Annotated[
+        str | None, typer.Option("--start", metavar="X,Y", help="Start of every map (metres "
+                                 "from the map's lower-left corner).")
+    ] = None,
+    goal: Annotated[
+        str | None, typer.Option("--goal", metavar="X,Y", help="Goal of every map (metres).")
+    ] = None,
+    resolution: Annotated[
+        float | None, typer.Option("--resolution", metavar="M",
+                                   help="Cell size of MovingAI .map files (default 1 m).")
+    ] = None,
+    scen: Annotated[
+        Path | None, typer.Option("--scen", metavar="FILE", help="MovingAI .scen: one map per "
+                                  "start/goal pair of the .map in --maps, its octile optimum "
+                                  "shown beside the exact one.")
+    ] = None,
+    scen_ids: Annotated[
+        str | None, typer.Option("--scen-ids", metavar="I,J,...",
+                                 help="Rows of --scen to use (0 = first pair).")
+    ] = None,
+    optimum_budget: Annotated[
+        float, typer.Option("--optimum-budget", metavar="S",
+                            help="Seconds the exact optimum of one map may take.")
+    ] = DEFAULT_BUDGET,
+    max_cells: Annotated[
+        int | None, typer.Option("--max-cells", help="Largest grid map accepted (cells; "
+                                 "default 4,194,304).")
+    ] = None,
+    max_obstacles: Annotated[
+        int | None, typer.Option("--max-obstacles", help="Most polygons an imported grid map "
+                                 "may make (default 5,000).")
+    ] = None,
 ) -> None:
     """Run path planners on maps; print the papers' run tables (Run / Distance / Error / Elapsed
     time) with success, collisions and the gap to the exact optimum."""
@@ -461,12 +464,19 @@ def plan(
         if list_planners:
             _list_planners()
         return
-    spec = make_spec(planners, maps, runs, seed, params, reference)
+    stderr = Console(stderr=True)
+
+    def note(text: str) -> None:
+        stderr.print(f"swarmpath plan: {text}", highlight=False, markup=False, soft_wrap=True)
+
+    options = make_options(start, goal, resolution, scen, scen_ids, max_cells, max_obstacles)
+    spec = make_spec(planners, maps, runs, seed, params, reference, options, optimum_budget,
+                     note)
     if not 0 <= jobs <= parallel.MAX_JOBS:
         raise InputError("--jobs", f"{jobs} is not in [0, {parallel.MAX_JOBS}]")
     if plot is not None:
         plot_dir(plot, "--plot")
-    stderr = Console(stderr=True)
+    spec.optima = compute_optima(spec.maps, spec.optimum_budget, note)
     started = time.perf_counter()
     total = len(spec.cells()) * spec.runs
     cells = _run_with_progress(spec, stderr, jobs or min(parallel.usable_cpus(), total))
@@ -475,6 +485,7 @@ def plan(
         for out in write_plots(cells, plot):
             stderr.print(f"wrote {out}", highlight=False)
     if as_json:
-        sys.stdout.write(json.dumps(document(cells, spec.reference), allow_nan=False) + "\n")
+        sys.stdout.write(json.dumps(document(cells, spec.reference, spec), allow_nan=False)
+                         + "\n")
         return
     print_tables(cells, spec, seconds)

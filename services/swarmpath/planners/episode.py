@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Mapping
+from collections import OrderedDict
+from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -25,7 +26,7 @@ from swarmpath.optimizers.streams import OPTIMIZER, SIMULATION, run_generator
 from swarmpath.planners.base import Planner, get_planner
 from swarmpath.planners.simulator import Simulator
 from swarmpath.world.geometry import collides
-from swarmpath.world.optimum import shortest_path
+from swarmpath.world.optimum import DEFAULT_BUDGET, shortest_path
 from swarmpath.world.scenario import Scenario
 
 DEFAULT_STEP_LIMIT = 2000
@@ -66,17 +67,28 @@ class RunOutcome:
         return asdict(self)
 
 
-_OPTIMA: dict[int, tuple[Scenario, float | None]] = {}
+_OPTIMA: OrderedDict[tuple[Scenario, float | None], tuple[float | None, str | None]] = (
+    OrderedDict()
+)
+_OPTIMA_KEPT = 16  # scenarios whose optimum this process remembers (equal scenarios share it)
 
 
-def scenario_optimum(scenario: Scenario) -> float | None:
-    """Exact shortest collision-free length for a fully static scenario (None otherwise)."""
+def optimum_of(
+    scenario: Scenario,
+    budget: float | None = DEFAULT_BUDGET,
+    progress: Callable[[float], None] | None = None,
+) -> tuple[float | None, str | None]:
+    """``(length, None)``: the exact shortest collision-free length of a fully static scenario;
+    ``(None, reason)`` when there is none (moving obstacles or goal, no path, start or goal in
+    collision, or the time ``budget`` in seconds ran out). Remembered per equal scenario."""
+    key = (scenario, budget)
+    if key in _OPTIMA:
+        _OPTIMA.move_to_end(key)
+        return _OPTIMA[key]
     if scenario.is_dynamic:
-        return None
-    cached = _OPTIMA.get(id(scenario))
-    if cached is not None and cached[0] is scenario:
-        return cached[1]
+        return None, "moving obstacles or goal: no exact optimum"
     w, h = scenario.size
+    value: float | None = None
     try:
         result = shortest_path(
             np.asarray(scenario.start, dtype=float),
@@ -84,16 +96,25 @@ def scenario_optimum(scenario: Scenario) -> float | None:
             scenario.static_obstacles(),
             scenario.robot.radius,
             world=(0.0, 0.0, float(w), float(h)),
+            budget=budget,
+            progress=progress,
         )
-    except ValueError:  # start or goal in collision: no optimum; the run itself reports why
-        result = None
-    value = (
-        float(result.length)
-        if result is not None and result.exact and math.isfinite(result.length)
-        else None
-    )
-    _OPTIMA[id(scenario)] = (scenario, value)
-    return value
+    except ValueError as exc:  # start or goal in collision: the run itself reports it too
+        reason: str | None = str(exc)
+    else:
+        if result.exact and math.isfinite(result.length):
+            value, reason = float(result.length), None
+        else:
+            reason = result.reason or "no collision-free path exists"
+    _OPTIMA[key] = (value, reason)
+    while len(_OPTIMA) > _OPTIMA_KEPT:
+        _OPTIMA.popitem(last=False)
+    return value, reason
+
+
+def scenario_optimum(scenario: Scenario, budget: float | None = DEFAULT_BUDGET) -> float | None:
+    """Exact shortest collision-free length for a fully static scenario (None otherwise)."""
+    return optimum_of(scenario, budget)[0]
 
 
 class Episode:
@@ -106,8 +127,10 @@ class Episode:
         params: Mapping[str, Any] | None = None,
         step_limit: int = DEFAULT_STEP_LIMIT,
         time_limit: float | None = None,
+        optimum_budget: float | None = DEFAULT_BUDGET,
     ):
         cls: type[Planner] = get_planner(planner)
+        self.optimum_budget = optimum_budget
         self.scenario = scenario
         self.seed = int(seed)
         self.run_index = int(run)
@@ -192,7 +215,7 @@ class Episode:
         reason = self.reason or "not finished"
         if reached and collisions:
             reason = f"collided {collisions} times"
-        optimum = scenario_optimum(self.scenario)
+        optimum = scenario_optimum(self.scenario, self.optimum_budget)
         gap = metrics.gap(length, optimum) if (success and optimum) else None
         return RunOutcome(
             planner=planner_name or self.planner.name,

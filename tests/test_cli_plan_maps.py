@@ -1,0 +1,90 @@
+"""`swarmpath plan` on real maps: --start/--goal/--resolution, MovingAI --scen pairs with their
+octile optimum, import limits and the optimum budget, each bad value naming its option."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from swarmpath.cli import app
+
+runner = CliRunner()
+DATA = Path(__file__).parent / "data"
+ARENA = str(DATA / "arena.map")
+SCEN = str(DATA / "arena.map.scen")
+FAST = json.dumps({"OMPL-RRTstar": {"time": 0.1}})
+
+
+def invoke(*args: str):
+    return runner.invoke(app, ["plan", "-j", "1", "-p", "OMPL-RRTstar", "--runs", "1",
+                               "--params", FAST, *args])
+
+
+def _scen_rows() -> list[list[str]]:
+    return [line.split("\t") for line in Path(SCEN).read_text().splitlines()[1:]]
+
+
+def test_scen_pairs_become_maps_with_the_octile_optimum_beside_the_exact_one() -> None:
+    result = invoke("-m", ARENA, "--scen", SCEN, "--scen-ids", "3,40", "--resolution", "0.5",
+                    "--json")
+    assert result.exit_code == 0, result.stderr
+    doc = json.loads(result.stdout)
+    rows = _scen_rows()
+    assert [m["map"] for m in doc["maps"]] == ["arena#3", "arena#40"]
+    for entry, i in zip(doc["maps"], (3, 40), strict=True):
+        assert entry["octile"] == pytest.approx(float(rows[i][8]) * 0.5)
+        assert entry["optimum"] is not None and entry["optimum_reason"] is None
+        assert entry["optimum"] <= entry["octile"] + 1e-4  # 0.5 m cells, robot 0.105 m
+    run = doc["runs"][0]
+    sx, sy = int(rows[3][4]), int(rows[3][5])
+    assert run["path"][0][:2] == [(sx + 0.5) * 0.5, (49 - sy - 0.5) * 0.5]
+    table = invoke("-m", ARENA, "--scen", SCEN, "--scen-ids", "3")
+    assert table.exit_code == 0, table.stderr
+    assert "octile optimum" in table.stdout and "exact optimum" in table.stdout
+
+
+def test_start_and_goal_override_an_imported_map() -> None:
+    result = invoke("-m", ARENA, "--start", "1.5,2.5", "--goal", "46.5,47.5", "--json")
+    assert result.exit_code == 0, result.stderr
+    run = json.loads(result.stdout)["runs"][0]
+    assert run["path"][0][:2] == [1.5, 2.5]
+
+
+@pytest.mark.parametrize(
+    ("args", "option"),
+    [
+        (("-m", "mfb-static", "--start", "1,x"), "--start"),
+        (("-m", "mfb-static", "--goal", "5"), "--goal"),
+        (("-m", "mfb-static", "--start", "2,2.3"), "--start"),  # inside a circle
+        (("-m", ARENA, "--goal", "0.5,0.5"), "--goal"),  # a blocked cell
+        (("-m", ARENA, "--resolution", "0"), "--resolution"),
+        (("-m", "mfb-static", "--resolution", "2"), "--resolution"),
+        (("-m", ARENA, "--scen", SCEN, "--scen-ids", "999"), "--scen-ids"),
+        (("-m", ARENA, "--scen-ids", "1"), "--scen-ids"),
+        (("-m", "mfb-static", "--scen", SCEN), "--scen"),
+        (("-m", ARENA, "--scen", ARENA), "--scen"),
+        (("-m", ARENA, "--max-obstacles", "3"), "--max-obstacles"),
+        (("-m", ARENA, "--max-cells", "100"), "--max-cells"),
+        (("-m", "mfb-static", "--optimum-budget", "0"), "--optimum-budget"),
+    ],
+)
+def test_bad_values_exit_2_naming_the_option(args: tuple[str, ...], option: str) -> None:
+    result = invoke(*args)
+    assert result.exit_code == 2, result.stdout
+    assert option in result.stderr and "error" in result.stderr
+
+
+def test_limit_errors_say_how_to_raise_them() -> None:
+    result = invoke("-m", ARENA, "--max-obstacles", "3")
+    assert "max_obstacles=3" in result.stderr and "--max-obstacles" in result.stderr
+
+
+def test_the_reason_is_printed_when_the_optimum_gives_up() -> None:
+    result = invoke("-m", str(DATA / "tb3_sandbox.yaml"), "--optimum-budget", "1e-9", "--json")
+    assert result.exit_code == 0, result.stderr
+    assert "no exact optimum on tb3_sandbox: time budget of 1e-09 s exhausted" in result.stderr
+    entry = json.loads(result.stdout)["maps"][0]
+    assert entry["optimum"] is None and "time budget" in entry["optimum_reason"]
