@@ -61,6 +61,12 @@ def test_unknown_names_suggest_the_near_miss(http):
     assert got["functions.1"].startswith("unknown function 'F99' (did you mean 'F9'?)")
     assert got["dims.0"] == "must be an integer" and got["dims.1"] == "must be <= 1000"
     assert got["seeed"] == "unknown field (did you mean 'seed'?)"
+    got = details(http, {"kind": "benchmark", "algorithms": ["GWO"], "functions": ["F1"],
+                         "params": {"GWO": {"a_mx": 2, "a_max": "x"}, "GW": {}}})
+    assert got["params.GWO.a_mx"].startswith("GWO has no parameter 'a_mx' (did you mean "
+                                             "'a_max'?)")
+    assert "a_max" in got["params.GWO.a_max"]
+    assert got["params.GW"].startswith("not one of the job's algorithms (did you mean 'GWO'?)")
     got = details(http, {"kind": "map", "planners": ["MFBB"], "maps": ["mfb-statc", 3]})
     assert got["planners.0"].startswith("unknown planner 'MFBB' (did you mean 'MFB'?)")
     assert got["maps.1"] == "must be a string or an object"

@@ -143,7 +143,7 @@ def test_submit_status_list_and_404(client):
         ({"iterations": 100_001}, "iterations"),
         ({"runs": 10_001}, "runs"),
         ({"functions": ["F1-F13"], "dims": [2, 3, 4, 5], "runs": 10_000}, "runs"),
-        ({"params": {"GWO": {"nope": 1}}}, "params"),
+        ({"params": {"GWO": {"nope": 1}}}, "params.GWO.nope"),
         ({"seed": -1}, "seed"),
         ({"kind": "nope"}, "kind"),
         ({"extra": 1}, "extra"),

@@ -84,8 +84,11 @@ def resolve_params(
     merged: dict[str, ParamValue] = dict(defaults)
     for key, value in (params or {}).items():
         if key not in defaults:
+            from swarmpath.names import did_you_mean
+
             valid = ", ".join(sorted(defaults)) or "none"
-            raise error(f"{owner} has no parameter {key!r}; valid: {valid}")
+            hint = did_you_mean(str(key), list(defaults))
+            raise error(f"{owner} has no parameter {key!r}{hint}; valid: {valid}")
         default = defaults[key]
         if isinstance(default, bool):
             if not isinstance(value, bool):

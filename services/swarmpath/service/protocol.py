@@ -306,17 +306,30 @@ def _params_of_members(
     v: dict[str, Any], members: list[str] | None, what: str, resolve: Callable[[str, Any], Any]
 ) -> dict[str, Any]:
     """Per-member parameters: only for the job's own members, each accepted by its resolver."""
+    from swarmpath.names import did_you_mean
+
     if members is None:  # the member list itself failed validation: that error is reported
         return v
+    problems: list[tuple[Loc, str]] = []
     for name, params in v.items():
         if name not in members:
-            raise ValueError(
-                f"params for {name!r}, which is not one of the job's {what} ({', '.join(members)})"
-            )
-        try:
-            resolve(name, params)
-        except (ValueError, TypeError, KeyError) as exc:
-            raise ValueError(str(exc)) from None
+            problems.append(((name,), f"not one of the job's {what}{did_you_mean(name, members)}"
+                             f" ({', '.join(members)})"))
+            continue
+        keyed = False
+        for key, value in params.items():  # each parameter on its own: loc params.NAME.KEY
+            try:
+                resolve(name, {key: value})
+            except (ValueError, TypeError, KeyError) as exc:
+                problems.append(((name, key), str(exc.args[0]) if exc.args else str(exc)))
+                keyed = True
+        if not keyed:  # then together (a rule across parameters)
+            try:
+                resolve(name, params)
+            except (ValueError, TypeError, KeyError) as exc:
+                problems.append(((name,), str(exc.args[0]) if exc.args else str(exc)))
+    if problems:
+        raise FieldProblems(problems)
     return v
 
 
