@@ -93,3 +93,19 @@ def test_bench_flags_origin_suspect_cells_of_untransformed_studies_only():
     assert moved.exit_code == 0 and au.ORIGIN_MARK not in moved.stdout
     doc = json.loads(runner.invoke(app, [*args, "--transform", "shift", "--json"]).stdout)
     assert all("origin_suspect" not in c for c in doc["cells"])
+
+
+@pytest.mark.parametrize(("where", "dim", "runs", "flagged"), [
+    ("F11", 30, [0.0, 1e-3], True), ("F12", 30, [0.0, 1e-3], False),
+    ("F1", 30, [1e-30, 1e-20], False), ("icoot-map1", None, [0.0], False),
+])
+def test_reproduce_tables_flag_origin_suspect_cells(where, dim, runs, flagged):
+    from swarmpath.cli import reproduce_output as ro
+    from swarmpath.reproduction import Row
+
+    stats = {"avg": float(np.mean(runs)), "median": 0.0, "min": 0.0, "max": 1.0, "std": 0.0}
+    row = Row(key=f"t/A/{where}", who="A", where=where, dim=dim, published={}, measured=stats,
+              runs=runs, log10_ratio=None, verdict="matches", reason=None, evidence=None,
+              extra={})
+    assert (au.ORIGIN_MARK in ro._measured(row, {})[0]) == flagged
+    assert ro._origin_note([row]) == ([au.ORIGIN_FOOTNOTE] if flagged else [])

@@ -13,7 +13,7 @@ from rich.console import Console
 from rich.measure import Measurement
 from rich.table import Table
 
-from swarmpath import reference, reproduction
+from swarmpath import audit, reference, reproduction
 from swarmpath.report import format_value
 from swarmpath.reproduction import Row
 
@@ -35,8 +35,19 @@ def _measured(row: Row, markers: Markers) -> list[str]:
     if m is None:
         return ["-"] * 5
     marker = markers.get(row.key) or ""
-    return [f"{_num(m['avg'])} {marker}".strip(), _num(m["median"]), _num(m["min"]),
+    odd = audit.ORIGIN_MARK if _origin_suspect(row) else ""
+    return [f"{_num(m['avg'])}{odd} {marker}".strip(), _num(m["median"]), _num(m["min"]),
             _num(m["max"]), _num(m["std"])]
+
+
+def _origin_suspect(row: Row) -> bool:
+    """A benchmark cell (the papers' tables are untransformed) whose runs reached exact zeros or
+    values below 1e-100 on a function whose optimum is at the origin."""
+    return row.dim is not None and audit.origin_suspect(row.where, row.runs)
+
+
+def _origin_note(rows: Sequence[Row]) -> list[str]:
+    return [audit.ORIGIN_FOOTNOTE] if any(_origin_suspect(r) for r in rows) else []
 
 
 def _who(tab: reference.Table) -> tuple[str, str]:
@@ -112,6 +123,8 @@ def markdown(tab: reference.Table, setting: Mapping[str, Any], rows: Sequence[Ro
     if notes:
         out += ["", "Reasons:", ""]
         out += [f"{i}. {n}" for i, n in enumerate(notes, 1)]
+    for note in _origin_note(rows):
+        out += ["", note]
     out += ["", "Verdicts per " + _who(tab)[0] + " (+/=/-: rank-sum test against the "
             "last one listed, Holm-corrected, alpha 0.05):", ""]
     out += _md_table([_who(tab)[0], *COUNT_HEADER], count_lines(tab, rows, markers))
@@ -198,6 +211,8 @@ def print_rich(tab: reference.Table, setting: Mapping[str, Any], rows: Sequence[
     console.print(table)
     for i, n in enumerate(notes, 1):
         console.print(f"[{i}] {n}", highlight=False, markup=False)
+    for n in _origin_note(rows):
+        console.print(n, highlight=False, markup=False)
     console.print(counts)
     console.print(reproduction.summary_line(rows), highlight=False)
 
