@@ -249,6 +249,12 @@ def resolve_maps(spec: str, opts: MapOptions | None = None,
         items = [i for i in items if i != grids[0]]
     for item in items:
         maps.append(load_map(item, opts, note))
+    if note is not None:
+        from swarmpath.world.trajectories import trajectory_warnings
+
+        for scenario in maps:
+            for field_, message in trajectory_warnings(scenario):
+                note(f"warning: {scenario.name}: {field_}: {message}")
     names: set[str] = set()
     out = []
     for scenario in maps:
