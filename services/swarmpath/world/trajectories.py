@@ -65,12 +65,13 @@ def trajectory_warnings(s: Scenario, horizon: float | None = None) -> list[tuple
             if o.shape == "circle":
                 assert o.center is not None and o.radius is not None
                 c = np.asarray(o.center) + moved
-                bad = static.point_clearance(c) < o.radius
+                bad = np.asarray(static.point_clearance(c) < o.radius, dtype=bool)
             else:
                 pts = np.asarray(o.points)
                 a = (pts[None, :, :] + moved[:, None, :]).reshape(-1, 2)
                 b = (np.roll(pts, -1, axis=0)[None, :, :] + moved[:, None, :]).reshape(-1, 2)
-                bad = (static.segment_clearance(a, b) <= 0.0).reshape(n, len(pts)).any(axis=1)
+                bad = np.asarray(static.segment_clearance(a, b) <= 0.0).reshape(n, -1)
+                bad = np.asarray(bad.any(axis=1), dtype=bool)
             i = _first(bad)
             if i is not None:
                 out.append((f"obstacles[{k}]", f"its stated path runs into a static obstacle at "
