@@ -205,7 +205,7 @@ def test_results_plot_writes_the_figures_of_a_job(service, tmp_path):
     result = cli("results", job, "--plot", str(tmp_path / "b"))
     assert result.exit_code == 0, result.stderr
     assert sorted(p.name for p in (tmp_path / "b").iterdir()) == [
-        "box_F1_d2.png", "box_F8_d2.png", "curves_F1_d2.png", "curves_F8_d2.png"]
+        "box_F1_d2.png", "box_F8_d2.png", "cd-D2.png", "curves_F1_d2.png", "curves_F8_d2.png"]
     maps = finished(service, MAPS)
     result = cli("results", maps, "--plot", str(tmp_path / "m"))
     assert result.exit_code == 0, result.stderr

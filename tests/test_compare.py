@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -194,3 +195,15 @@ def test_rank_sum_many_equals_single_scipy_calls() -> None:
         ref = stats.mannwhitneyu(x, y, alternative="two-sided")
         assert res == (pytest.approx(ref.statistic), pytest.approx(ref.pvalue, rel=1e-12))
     assert got[-2] == (200.0, 1.0) and got[-1] is None
+
+
+def test_friedman_from_json_gives_back_the_test() -> None:
+    values = {f"F{i}": {"A": 0.1 * i, "B": 1.0 + i, "C": 10.0 - i} for i in range(5)}
+    f = compare.friedman(values, ["A", "B", "C"], reference="B")
+    back = compare.Friedman.from_json(json.loads(json.dumps(f.to_json())))
+    assert back.mean_ranks == f.mean_ranks and back.reference == "B"
+    assert (back.statistic, back.p, back.cd) == (f.statistic, f.p, f.cd)
+    assert back.posthoc == f.posthoc and len(back.blocks) == 5
+    empty = compare.Friedman.from_json({**compare.friedman({}, ["A", "B"]).to_json(),
+                                        "mean_ranks": {"A": "nan", "B": "nan"}})
+    assert empty.cd is None and math.isnan(empty.mean_ranks["A"])

@@ -314,6 +314,22 @@ class Friedman:
     posthoc: dict[str, dict[str, Any]]  # algorithm -> z, p, p_holm, marker (vs the reference)
     note: str = ""
 
+    @classmethod
+    def from_json(cls, doc: Mapping[str, Any]) -> Friedman:
+        """The test back from :meth:`to_json` (``blocks`` comes back as that many indexes;
+        non-finite numbers may be the strings "nan", "inf")."""
+
+        def num(v: Any) -> float | None:
+            return None if v is None else float(v)
+
+        ranks = {str(a): float(r) for a, r in doc["mean_ranks"].items()}
+        return cls(
+            tuple(ranks), str(doc["reference"]), float(doc["alpha"]),
+            tuple(range(int(doc["blocks"]))), ranks, num(doc["statistic"]), num(doc["p"]),
+            num(doc["nemenyi_cd"]), {a: dict(v) for a, v in doc["posthoc"].items()},
+            str(doc.get("note", "")),
+        )
+
     def to_json(self) -> dict[str, Any]:
         return {
             "test": "friedman", "reference": self.reference, "alpha": self.alpha,

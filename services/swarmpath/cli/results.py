@@ -138,6 +138,20 @@ def _ioh(client: Any, job: str, directory: Path) -> None:
                   if written.skipped else ""), err=True)
 
 
+def _cd_plots(summary: dict[str, Any], directory: Path) -> list[Path]:
+    """A critical-difference diagram per dimension from the summary's Friedman tests."""
+    from swarmpath.cli.cdplot import draw_cd
+    from swarmpath.compare import Friedman
+
+    out = []
+    for doc in (summary.get("statistics") or {}).get("friedman", []):
+        path = draw_cd(Friedman.from_json(doc), directory / f"cd-D{doc['dim']}.png",
+                       f"D = {doc['dim']}")
+        if path is not None:
+            out.append(path)
+    return out
+
+
 def _plots(client: Any, job: str, directory: Path) -> list[Path]:
     from swarmpath import plots
 
@@ -145,7 +159,8 @@ def _plots(client: Any, job: str, directory: Path) -> list[Path]:
     if not items:
         return []
     if "algorithm" in items[0]:
-        return plots.write_benchmark_plots(items, directory)
+        return [*plots.write_benchmark_plots(items, directory),
+                *_cd_plots(_call(client.summary, job), directory)]
     from swarmpath.service.recorder import scenario_for, world_for
 
     scenarios: dict[str, Any] = {}
