@@ -195,9 +195,23 @@ def test_benchmark_job_page_table_curves_and_boxes(server, jobs, browser):
         assert labels == ["iteration", "best-so-far f(x) - f*"]
     for chart in browser.find_elements(By.CSS_SELECTOR, "#charts .box"):
         assert len(chart.find_elements(By.CSS_SELECTOR, "g.sp-box")) == len(BENCH["algorithms"])
-    links = {a.get_attribute("id") for a in browser.find_elements(By.CSS_SELECTOR, "#downloads a")}
-    assert {"dl-mcap", "dl-summary-csv", "dl-runs-csv", "dl-runs-parquet"} <= links
+    import httpx
+
+    links = {a.get_attribute("id"): a.get_attribute("href")
+             for a in browser.find_elements(By.CSS_SELECTOR, "#downloads a")}
+    assert {"dl-mcap", "dl-summary-csv", "dl-summary-json", "dl-runs-csv", "dl-runs-parquet",
+            "dl-runs-json"} <= set(links)
+    for href in links.values():  # every download answers
+        r = httpx.get(href, timeout=WAIT)
+        assert r.status_code == 200 and r.content, href
+    legend = texts(browser.find_elements(By.CSS_SELECTOR, "#legend dt"))
+    assert legend == ["failed", "rank", "marker"]
     shot(browser, "job-benchmark")
+    # the table's values open the cell's best run
+    first = browser.find_element(By.CSS_SELECTOR, "#pivot tbody a.run-link")
+    first.click()
+    wait_for(browser, "#plot g.sp-series")
+    assert "/runs/" in browser.current_url
 
 
 def test_map_job_page_paths_failures_and_boxes(server, jobs, browser):
@@ -224,7 +238,15 @@ def test_map_job_page_paths_failures_and_boxes(server, jobs, browser):
         assert len(boxes) >= len(MAP["maps"])
     cells = browser.find_elements(By.CSS_SELECTOR, "#success tbody tr")
     assert len(cells) == len(MAP["maps"])
+    per_cell = browser.find_elements(By.CSS_SELECTOR, "#cells tbody tr")
+    assert len(per_cell) == len(MAP["maps"]) * len(MAP["planners"])
+    legend = texts(browser.find_elements(By.CSS_SELECTOR, "#legend dt"))
+    assert {"failed", "collisions", "gap_mean"} <= set(legend)
     shot(browser, "job-map")
+    # a path opens its run
+    link = browser.find_element(By.CSS_SELECTOR, "#maps a.sp-path-group")
+    browser.get(url + browser.execute_script("return arguments[0].getAttribute('href')", link))
+    wait_for(browser, "#plot svg .sp-robot")
 
 
 def test_run_pages(server, jobs, browser):
@@ -286,3 +308,44 @@ def test_submit_form_shows_errors_at_fields_then_submits(server, jobs, browser):
     status = app.state.core.store.job_status(link.text)
     assert status is not None and status.runs_total == 2
     assert not browser.find_element(By.CSS_SELECTOR, '[data-error="runs"]').text
+
+
+def test_token_is_asked_for_and_sent(tmp_path, browser, monkeypatch):
+    """With SWARMPATH_TOKEN set, the pages ask for it; submit and cancel send it."""
+    import httpx
+    import uvicorn
+
+    monkeypatch.setenv("SWARMPATH_TOKEN", "s3cret-token")
+    app = create_app(CoordinatorSettings(data_dir=tmp_path / "data"), use_zenoh=False)
+    port = _free_port()
+    srv = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning",
+                                        timeout_graceful_shutdown=2))
+    thread = threading.Thread(target=srv.run, daemon=True)
+    thread.start()
+    try:
+        while not srv.started and thread.is_alive():
+            time.sleep(0.05)
+        url = f"http://127.0.0.1:{port}"
+        browser.get(url + "/ui/submit")
+        browser.execute_script("localStorage.clear()")
+        browser.get(url + "/ui/submit")
+        wait_for(browser, "#token-box:not([hidden])")  # the page asks at once
+        assert "SWARMPATH_TOKEN" in browser.find_element(By.ID, "token-message").text
+        wait_for(browser, "#submit-form input[name=algorithms]")
+        form = browser.find_element(By.ID, "submit-form")
+        form.find_element(By.CSS_SELECTOR, "input[name=algorithms][value=GWO]").click()
+        form.find_element(By.CSS_SELECTOR, "input[name=functions][value=F1]").click()
+        browser.find_element(By.ID, "submit-button").click()  # no token yet: 401
+        wait_for(browser, '#general-error:not(:empty)')
+        browser.find_element(By.ID, "token-input").send_keys("s3cret-token")
+        browser.find_element(By.CSS_SELECTOR, "#token-box button").click()
+        browser.find_element(By.ID, "submit-button").click()
+        job = wait_for(browser, "#new-job")[0].text
+        assert httpx.get(f"{url}/jobs/{job}").json()["state"] == "queued"
+        browser.get(url + "/")
+        wait_for(browser, f'#jobs tbody tr[data-job="{job}"] button.cancel')[0].click()
+        wait_for(browser, f'#jobs tbody tr[data-job="{job}"][data-state="cancelled"]')
+    finally:
+        browser.execute_script("localStorage.clear()")
+        srv.should_exit = True
+        thread.join(timeout=WAIT)

@@ -161,8 +161,10 @@ class _BenchmarkCell:
 
             rows = self.rows[self.ok]
             best = self.best[self.ok]
+            valid = np.where(self.ok, self.best, np.inf)
             self.cache = {
                 "runs": int(self.ok.sum()), "failed": self.failed,
+                "best_run": int(np.argmin(valid)) if best.size else None,
                 "band": band(rows), "box": box_stats(best),
                 "describe": describe(best) if best.size else None,
             }
@@ -194,6 +196,7 @@ class _MapCell:
         self.finished = 0
         self.succeeded = 0
         self.crashed = 0
+        self.collisions = 0  # colliding steps summed over the runs
         self.failures: dict[str, int] = {}
         self.cache: dict[str, Any] | None = None
 
@@ -206,6 +209,7 @@ class _MapCell:
             return
         success = metrics.get("success") is True
         kind = None if success else failure_kind(metrics)
+        self.collisions += int(_number(metrics.get("collisions")) or 0)
         if success:
             self.succeeded += 1
             for name in ("length", "gap"):
@@ -225,7 +229,7 @@ class _MapCell:
                 "collisions": self._collisions(run, path) if kind == "collision" else [],
             }
 
-    _FIELDS = ("paths", "values", "finished", "succeeded", "crashed", "failures")
+    _FIELDS = ("paths", "values", "finished", "succeeded", "crashed", "collisions", "failures")
 
     def state(self) -> dict[str, Any]:
         data = {name: getattr(self, name) for name in self._FIELDS}
@@ -257,6 +261,7 @@ class _MapCell:
         if self.cache is None:
             self.cache = {
                 "runs": self.finished, "crashed": self.crashed, "succeeded": self.succeeded,
+                "collisions": self.collisions,
                 "success_rate": self.succeeded / self.finished if self.finished else None,
                 "failures": dict(self.failures),
                 "box": {k: box_stats(v) for k, v in self.values.items()},
@@ -285,6 +290,7 @@ class JobAggregates:
         self.version = 0  # bumped by every add(): a client's cached copy is current if equal
         self._lock = threading.Lock()
         self._keys = {c["key"]: int(c["index"]) for c in cells}
+        self.runs_per_cell = max((int(c["runs"]) for c in cells), default=0)
         self._cells: list[_BenchmarkCell | _MapCell] = []
         for c in sorted(cells, key=lambda c: int(c["index"])):
             spec = c["spec"]
@@ -386,7 +392,7 @@ class JobAggregates:
     def _benchmark_view(self) -> dict[str, Any]:
         groups: dict[tuple[str, int], dict[str, Any]] = {}
         algorithms: list[str] = []
-        for cell in self._cells:
+        for index, cell in enumerate(self._cells):
             assert isinstance(cell, _BenchmarkCell)
             s = cell.spec
             if s["algorithm"] not in algorithms:
@@ -395,7 +401,7 @@ class JobAggregates:
                 "function": s["function"], "dim": int(s["dim"]),
                 "iterations": cell.grid.tolist(), "algorithms": {},
             })
-            g["algorithms"][s["algorithm"]] = cell.view()
+            g["algorithms"][s["algorithm"]] = {**cell.view(), "cell": index}
         samples: dict[tuple[str, int], dict[str, np.ndarray]] = {}
         for g in groups.values():
             means = {a: v["describe"]["avg"] for a, v in g["algorithms"].items()
@@ -409,6 +415,7 @@ class JobAggregates:
             samples.setdefault((s["function"], int(s["dim"])), {})[s["algorithm"]] = (
                 cell.best[cell.ok])
         return {"job_id": self.job_id, "kind": "benchmark", "version": self.version,
+                "runs_per_cell": self.runs_per_cell,
                 "algorithms": algorithms, "groups": list(groups.values()),
                 "statistics": benchmark_statistics(samples, groups, algorithms,
                                                    self.reference)}
@@ -421,8 +428,9 @@ class JobAggregates:
             if s["planner"] not in planners:
                 planners.append(s["planner"])
             g = groups.setdefault(s["map"], {"map": s["map"], "cell": index, "planners": {}})
-            g["planners"][s["planner"]] = cell.view()
+            g["planners"][s["planner"]] = {**cell.view(), "cell": index}
         return {"job_id": self.job_id, "kind": "map", "version": self.version,
+                "runs_per_cell": self.runs_per_cell,
                 "planners": planners, "groups": list(groups.values()),
                 "statistics": map_statistics(groups, planners, self.reference)}
 

@@ -23,6 +23,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, HTTPException, Query, Request
 from fastapi.responses import Response, StreamingResponse
 
+from swarmpath.legend import legend
 from swarmpath.service.http.deps import CoreDep
 from swarmpath.service.util import json_safe
 
@@ -112,7 +113,12 @@ def job_data(job_id: str, request: Request, core: CoreDep) -> Response:
     etag = f'"{job_id}-{agg.version}"'
     if request.headers.get("if-none-match") == etag:
         return Response(status_code=304, headers={"ETag": etag})
-    return _json(agg.view(), headers={"ETag": etag, "Cache-Control": "no-cache"})
+    view = agg.view()
+    columns = (("failed", "rank", "marker") if view["kind"] == "benchmark" else
+               ("failed", "success_rate", "success_marker", "collisions", "length_mean",
+                "gap_mean", "seconds_mean"))
+    body = {**view, "legend": legend(columns)}
+    return _json(body, headers={"ETag": etag, "Cache-Control": "no-cache"})
 
 
 @router.get("/ui/jobs/{job_id}/scene")

@@ -8,7 +8,7 @@
   const main = SP.q("#main");
   SP.q("h1").textContent = "Job " + id;
   main.insertAdjacentHTML("beforeend", `<p id="summary"></p><p class="downloads" id="downloads"></p>
-    <div id="content"></div><p class="legend" id="legend"></p>`);
+    <div id="content"></div><p class="legend" id="notes"></p><dl class="legend" id="legend"></dl>`);
   let etag = null, colors = {}, status = null;
 
   function color(name, list) {
@@ -22,7 +22,8 @@
       <a href="${j}/summary?format=csv" id="dl-summary-csv">summary CSV</a>
       <a href="${j}/summary" id="dl-summary-json">summary JSON</a>
       <a href="${j}/runs?format=csv" id="dl-runs-csv">runs CSV</a>
-      <a href="${j}/runs?format=parquet" id="dl-runs-parquet">runs Parquet</a>`;
+      <a href="${j}/runs?format=parquet" id="dl-runs-parquet">runs Parquet</a>
+      <a href="${j}/runs?format=jsonl" id="dl-runs-json">runs JSON lines</a>`;
   }
 
   function renderStatus(s) {
@@ -47,7 +48,10 @@
       for (const a of algs) {
         const c = g.algorithms[a], d = c && c.describe;
         const m = (st.markers[g.function + "/" + g.dim] || {})[a];
-        html += `<td class="${g.best.includes(a) ? "best" : ""}">${d ? SP.num(d.avg, 3) + " (" + SP.num(d.std, 2) + ")" : "-"}`
+        const run = c && c.best_run !== null && c.best_run !== undefined ? c.cell * data.runs_per_cell + c.best_run : null;
+        const value = d ? SP.num(d.avg, 3) + " (" + SP.num(d.std, 2) + ")" : "-";
+        html += `<td class="${g.best.includes(a) ? "best" : ""}">${run === null ? value
+          : `<a class="run-link" title="open the best run" href="/ui/jobs/${encodeURIComponent(id)}/runs/${run}">${value}</a>`}`
           + `${m ? `<span class="marker">${m}</span>` : ""}</td>`;
       }
       html += "</tr>";
@@ -108,7 +112,18 @@
     }
     html += `</tbody></table>`;
     if (st.reference) html += `<p class="legend">Markers: Fisher's exact test of each planner's success rate against ${SP.esc(st.reference)} (Holm-adjusted, alpha ${st.alpha}): + significantly higher, = no significant difference, - significantly lower.</p>`;
-    html += `<div id="maps"></div>`;
+    html += `<h2>Per planner and map</h2><table id="cells"><thead><tr><th class="l">map</th><th class="l">planner</th>
+      <th>runs</th><th>failed</th><th>success_rate</th><th>collisions</th><th>length (median)</th><th>gap (median)</th>
+      <th>planning s (median)</th><th class="l">why runs did not reach the goal</th></tr></thead><tbody>`;
+    for (const g of data.groups) for (const p of planners) {
+      const c = g.planners[p]; if (!c) continue;
+      const med = (b) => (b ? SP.num(b.median, 3) : "");
+      html += `<tr><td class="l">${SP.esc(g.map)}</td><td class="l">${SP.esc(p)}</td><td>${c.runs}</td><td>${c.crashed}</td>
+        <td>${c.success_rate === null ? "" : SP.num(c.success_rate, 3)}</td><td>${c.collisions}</td><td>${med(c.box.length)}</td>
+        <td>${med(c.box.gap)}</td><td>${med(c.box.seconds)}</td>
+        <td class="l">${Object.entries(c.failures).map(([k, n]) => `${n} ${k}`).join(", ")}</td></tr>`;
+    }
+    html += `</tbody></table><div id="maps"></div>`;
     content.innerHTML = html;
     const maps = SP.q("#maps");
     for (const g of data.groups) {
@@ -122,7 +137,8 @@
       for (const p of planners) {
         const c = g.planners[p]; if (!c) continue;
         for (const r of c.paths) {
-          paths.push({ name: p, color: color(p, planners), points: r.path, run: r.run, success: r.success, failure: r.failure, reason: r.reason, collisions: r.collisions });
+          paths.push({ name: p, color: color(p, planners), points: r.path, run: r.run, success: r.success, failure: r.failure, reason: r.reason, collisions: r.collisions,
+            href: `/ui/jobs/${encodeURIComponent(id)}/runs/${c.cell * data.runs_per_cell + r.run}` });
           if (r.path.length) tEnd = Math.max(tEnd, r.path[r.path.length - 1][2]);
         }
       }
@@ -152,7 +168,8 @@
     if (r.status === 200) {
       etag = r.headers.get("etag");
       if (r.data.kind === "benchmark") renderBenchmark(r.data); else await renderMap(r.data);
-      SP.q("#legend").textContent = r.data.kind === "benchmark"
+      SP.q("#legend").innerHTML = (r.data.legend || []).map(([c, t]) => `<dt>${SP.esc(c)}</dt><dd>${SP.esc(t)}</dd>`).join("");
+      SP.q("#notes").textContent = r.data.kind === "benchmark"
         ? "Curves: median best-so-far error f(x) - f* over the successful runs, band from the 25th to the 75th percentile, log scale; box plots: quartiles, whiskers at 1.5 IQR, outliers as circles. Crashed runs (an exception in the optimizer) have no value."
         : "Paths: up to 200 runs per planner and map. Success: the run reached the goal without touching an obstacle. Crashed runs (an exception) are counted in 'runs' but have no path. Gap: length / optimum - 1 (the exact shortest path), only on static maps: with moving obstacles there is no optimum. Collisions count colliding steps.";
       document.body.dataset.version = r.data.version;

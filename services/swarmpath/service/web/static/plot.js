@@ -215,7 +215,8 @@
     if (motion.goal && motion.goal.length)
       el("polyline", { points: motion.goal.map((p) => p.join(",")).join(" "), class: "sp-track sp-goal-track" }, world);
     for (const p of paths) {
-      const g = el("g", { class: "sp-path-group", "data-run": p.run, "data-name": p.name || "" }, world);
+      const g = el(p.href ? "a" : "g", { class: "sp-path-group", "data-run": p.run, "data-name": p.name || "" }, world);
+      if (p.href) g.setAttribute("href", p.href);
       const pl = el("polyline", { points: p.points.map((q) => q[0] + "," + q[1]).join(" "), stroke: p.color,
         class: "sp-path" + (p.success ? "" : " sp-failed") }, g);
       const tt = el("title", {}, pl); tt.textContent = `${p.name || ""} run ${p.run}${p.reason ? ": " + p.reason : ""}`;
