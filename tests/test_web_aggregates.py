@@ -149,3 +149,40 @@ def test_scene_and_motion_of_a_dynamic_preset():
         assert sc.obstacles[int(k)].is_moving
         assert track[0] == [0.0, 0.0] and len(track) == 11
     assert m == motion(sc, seed=1, run=0, t_end=10.0, samples=11)  # reproducible
+
+
+@pytest.mark.parametrize("reference", [None, "GWO"])
+def test_statistics_are_compare_on_the_runs_best_values(reference):
+    from swarmpath.compare import compare_samples, friedman
+
+    job = agg.JobAggregates("j3", "benchmark", _bench_cells(runs=8), reference=reference)
+    rng = np.random.default_rng(5)
+    values: dict[tuple[str, int], dict[str, list[float]]] = {}
+    for cell, c in enumerate(_bench_cells(runs=8)):
+        s = c["spec"]
+        for run in range(8):
+            v = float(rng.random() * (3 if s["algorithm"] == "PSO" else 1))
+            job.add(cell, run, ok=True, metrics={"best_fitness": v})
+            values.setdefault((s["function"], 2), {}).setdefault(s["algorithm"], []).append(v)
+    st = job.view()["statistics"]
+    expected = compare_samples(values, ["GWO", "PSO"], reference)
+    assert st["reference"] == (reference or "PSO")
+    for (function, dim), per in values.items():
+        for a in per:
+            assert st["markers"].get(f"{function}/{dim}", {}).get(a) == expected.marker(
+                (function, dim), a)
+    means = {f: {a: float(np.mean(v)) for a, v in per.items()} for (f, _d), per in values.items()}
+    assert st["friedman"]["2"]["mean_ranks"] == pytest.approx(
+        friedman(means, ["GWO", "PSO"], reference).mean_ranks)
+    assert st["counts"] == expected.counts()
+
+
+def test_a_young_view_is_shared_until_max_age():
+    job = agg.JobAggregates("j4", "benchmark", _bench_cells(runs=3))
+    job.add(0, 0, ok=True, metrics={"best_fitness": 1.0}, curve=[3.0, 2.0, 1.0])
+    first = job.view(max_age=3600.0)
+    job.add(0, 1, ok=True, metrics={"best_fitness": 2.0}, curve=[3.0, 2.5, 2.0])
+    assert job.view(max_age=3600.0) is first and first["version"] == 1  # younger than max_age
+    fresh = job.view()  # max_age 0: recomputed since a run was added
+    assert fresh["version"] == 2 and fresh["groups"][0]["algorithms"]["GWO"]["runs"] == 2
+    assert job.view() is fresh  # nothing added since

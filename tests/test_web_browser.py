@@ -18,7 +18,10 @@ from pathlib import Path
 import pytest
 
 webdriver = pytest.importorskip("selenium.webdriver", reason="selenium (the test extra)")
-from selenium.common.exceptions import TimeoutException  # noqa: E402
+from selenium.common.exceptions import (  # noqa: E402
+    NoSuchElementException,
+    TimeoutException,
+)
 from selenium.webdriver.common.by import By  # noqa: E402
 from selenium.webdriver.support.ui import Select, WebDriverWait  # noqa: E402
 
@@ -308,6 +311,20 @@ def test_submit_form_shows_errors_at_fields_then_submits(server, jobs, browser):
     status = app.state.core.store.job_status(link.text)
     assert status is not None and status.runs_total == 2
     assert not browser.find_element(By.CSS_SELECTOR, '[data-error="runs"]').text
+    # a map job: an unknown reference planner is named at its field
+    browser.find_element(By.CSS_SELECTOR, "input[name=kind][value=map]").click()
+    form.find_element(By.CSS_SELECTOR, "input[name=planners][value=MFB]").click()
+    form.find_element(By.CSS_SELECTOR, "input[name=maps][value=mfb-static]").click()
+    form.find_element(By.NAME, "map_reference").send_keys("NOPE")
+    browser.find_element(By.ID, "submit-button").click()
+    wait_for(browser, '[data-error="map_reference"]:not(:empty)')
+    form.find_element(By.NAME, "map_reference").clear()
+    browser.find_element(By.ID, "submit-button").click()
+    WebDriverWait(browser, WAIT, ignored_exceptions=(NoSuchElementException,)).until(
+        lambda d: d.find_element(By.ID, "new-job").text not in ("", status.id))
+    new = app.state.core.store.job_status(browser.find_element(By.ID, "new-job").text)
+    assert new is not None and new.kind == "map"
+    assert new.runs_total == 10  # the form's default runs per cell, one cell
 
 
 def test_token_is_asked_for_and_sent(tmp_path, browser, monkeypatch):

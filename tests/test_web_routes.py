@@ -101,7 +101,10 @@ def test_eta_from_the_rate_of_a_running_job(tmp_path):
         store.close()
 
 
-def test_aggregates_fed_on_accept_equal_those_built_from_the_store(client, app):
+def test_aggregates_fed_on_accept_equal_those_built_from_the_store(client, app, monkeypatch):
+    from swarmpath.service.web import live
+
+    monkeypatch.setattr(live, "VIEW_SECONDS", 0.0)  # no sharing of a young view here
     core = app.state.core
     job = client.post("/jobs", json=BENCH).json()["id"]
     r = client.get(f"/ui/jobs/{job}/data")
@@ -161,6 +164,9 @@ def test_finished_jobs_aggregates_are_saved_and_reloaded(client, app, tmp_path):
     for j in (job, map_job):
         saved = core.dashboard.cache_dir / f"{j}.npz"
         assert saved.is_file()
+        page = Dashboard(core.store, core.dashboard.cache_dir)  # after a restart: the saved
+        assert page.page_data(j) == core.dashboard.page_data(j)  # page, the arrays not loaded
+        assert page.aggregates_loaded() == []
         fresh = Dashboard(core.store, core.dashboard.cache_dir)
         reloaded = fresh.aggregates(j)
         assert json.dumps(reloaded.view(), default=str) == json.dumps(

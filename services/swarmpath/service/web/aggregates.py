@@ -18,17 +18,26 @@ from __future__ import annotations
 import json
 import math
 import threading
+import time
+import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from swarmpath.legend import legend
+from swarmpath.service.web.statistics import benchmark_statistics, map_statistics
+
 GRID_POINTS = 64  # iterations sampled per convergence curve
 PATH_POINTS = 150  # points kept per map path
 MAX_PATHS = 200  # paths kept per map cell (the first ones by run index arrive first)
 MAX_OUTLIERS = 40  # outliers listed per box (the most extreme ones)
 SAVE_FORMAT = "swarmpath-dashboard-1"
+#: Columns of the job page whose meaning is shown under it (swarmpath.legend).
+BENCHMARK_LEGEND = ("failed", "rank", "marker")
+MAP_LEGEND = ("failed", "success_rate", "success_marker", "collisions", "length_mean", "gap_mean",
+              "seconds_mean")
 
 
 def curve_grid(iterations: int, points: int = GRID_POINTS) -> np.ndarray:
@@ -70,10 +79,12 @@ def band(rows: np.ndarray) -> dict[str, list[float]]:
         nan = [math.nan] * rows.shape[1]
         return {"median": nan, "q1": list(nan), "q3": list(nan)}
     x = rows.astype(np.float64)
-    with np.errstate(invalid="ignore"):
-        if np.isnan(x).any():  # nanquantile works column by column: only when needed
+    if np.isnan(x).any():  # nanquantile works column by column: only when needed
+        with warnings.catch_warnings():  # an all-NaN column (no run sent a curve) gives NaN
+            warnings.simplefilter("ignore", RuntimeWarning)
             q1, med, q3 = np.nanquantile(x, [0.25, 0.5, 0.75], axis=0)
-        else:
+    else:
+        with np.errstate(invalid="ignore"):
             q1, med, q3 = np.quantile(x, [0.25, 0.5, 0.75], axis=0)
     return {"median": med.tolist(), "q1": q1.tolist(), "q3": q3.tolist()}
 
@@ -300,6 +311,7 @@ class JobAggregates:
             else:
                 self._cells.append(_MapCell(spec, int(c["runs"]), seed))
         self._view: dict[str, Any] | None = None
+        self._view_at = 0.0  # time.monotonic() of the last view
 
     def cell_index(self, key: str) -> int | None:
         return self._keys.get(key)
@@ -326,7 +338,6 @@ class JobAggregates:
             else:
                 cell.add(run, ok, metrics, path)
             self.version += 1
-            self._view = None
             return True
 
     def add_record(self, record: Mapping[str, Any]) -> bool:
@@ -380,14 +391,20 @@ class JobAggregates:
             self._view = None
         return True
 
-    def view(self) -> dict[str, Any]:
+    def view(self, max_age: float = 0.0) -> dict[str, Any]:
         """The job page's data: ``benchmark`` groups (one per function x dim) or ``map`` groups
-        (one per map), each with one entry per algorithm/planner."""
+        (one per map), each with one entry per algorithm/planner. Recomputed (the changed cells
+        only) when runs were added since, unless the last view is younger than ``max_age``
+        seconds: many clients of a running job then share one view per ``max_age``."""
         with self._lock:
-            if self._view is None:
-                self._view = (self._benchmark_view() if self.kind == "benchmark"
-                              else self._map_view())
-            return self._view
+            view = self._view
+            now = time.monotonic()
+            if view is None or (view["version"] != self.version
+                                and now - self._view_at >= max_age):
+                view = (self._benchmark_view() if self.kind == "benchmark"
+                        else self._map_view())
+                self._view, self._view_at = view, now
+            return view
 
     def _benchmark_view(self) -> dict[str, Any]:
         groups: dict[tuple[str, int], dict[str, Any]] = {}
@@ -415,7 +432,7 @@ class JobAggregates:
             samples.setdefault((s["function"], int(s["dim"])), {})[s["algorithm"]] = (
                 cell.best[cell.ok])
         return {"job_id": self.job_id, "kind": "benchmark", "version": self.version,
-                "runs_per_cell": self.runs_per_cell,
+                "runs_per_cell": self.runs_per_cell, "legend": legend(BENCHMARK_LEGEND),
                 "algorithms": algorithms, "groups": list(groups.values()),
                 "statistics": benchmark_statistics(samples, groups, algorithms,
                                                    self.reference)}
@@ -430,60 +447,7 @@ class JobAggregates:
             g = groups.setdefault(s["map"], {"map": s["map"], "cell": index, "planners": {}})
             g["planners"][s["planner"]] = {**cell.view(), "cell": index}
         return {"job_id": self.job_id, "kind": "map", "version": self.version,
-                "runs_per_cell": self.runs_per_cell,
+                "runs_per_cell": self.runs_per_cell, "legend": legend(MAP_LEGEND),
                 "planners": planners, "groups": list(groups.values()),
                 "statistics": map_statistics(groups, planners, self.reference)}
 
-
-def benchmark_statistics(
-    samples: Mapping[tuple[str, int], Mapping[str, np.ndarray]],
-    groups: Mapping[tuple[str, int], Mapping[str, Any]],
-    algorithms: Sequence[str],
-    reference: str | None = None,
-) -> dict[str, Any] | None:
-    """+/=/- of every algorithm against ``reference`` (default: the last one listed) per
-    function x dim (Wilcoxon rank-sum, Holm over the table) and Friedman mean ranks per dimension
-    (:mod:`swarmpath.compare`). None with fewer than two algorithms."""
-    if len(algorithms) < 2:
-        return None
-    from swarmpath.compare import compare_samples, friedman
-
-    comparison = compare_samples(samples, algorithms, reference)
-    markers: dict[str, dict[str, str]] = {}
-    for (function, dim), per in samples.items():
-        for a in per:
-            m = comparison.marker((function, dim), a)
-            if m is not None:
-                markers.setdefault(f"{function}/{dim}", {})[a] = m
-    ranks: dict[str, Any] = {}
-    for dim in sorted({d for _, d in groups}):
-        values = {f: g["means"] for (f, d), g in groups.items() if d == dim}
-        fr = friedman(values, algorithms, reference)
-        ranks[str(dim)] = {"mean_ranks": fr.mean_ranks, "p": fr.p, "blocks": len(fr.blocks),
-                           "note": fr.note}
-    return {"test": comparison.test, "reference": comparison.reference,
-            "alpha": comparison.alpha, "markers": markers, "counts": comparison.counts(),
-            "friedman": ranks}
-
-
-def map_statistics(
-    groups: Mapping[str, Mapping[str, Any]], planners: Sequence[str],
-    reference: str | None = None,
-) -> dict[str, Any] | None:
-    """Success rates of every planner against ``reference`` (default: the last one) per map:
-    Fisher's exact test, Holm over the table (:mod:`swarmpath.compare`)."""
-    if len(planners) < 2:
-        return None
-    from swarmpath.compare import compare_success
-
-    counts = {name: {p: (v["succeeded"], v["runs"] - v["crashed"])
-                     for p, v in g["planners"].items()} for name, g in groups.items()}
-    comparison = compare_success(counts, planners, reference)
-    markers: dict[str, dict[str, str]] = {}
-    for name, per in counts.items():
-        for p in per:
-            m = comparison.marker(name, p)
-            if m is not None:
-                markers.setdefault(name, {})[p] = m
-    return {"test": comparison.test, "reference": comparison.reference,
-            "alpha": comparison.alpha, "markers": markers, "counts": comparison.counts()}

@@ -19,10 +19,11 @@ import re
 import threading
 import time
 from collections import OrderedDict, deque
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
+from swarmpath.service.util import json_safe
 from swarmpath.service.web.aggregates import JobAggregates
 
 FINAL_STATES = frozenset({"done", "failed", "cancelled"})
@@ -32,6 +33,7 @@ log = logging.getLogger("swarmpath.dashboard")
 
 RATE_WINDOW = 30.0  # seconds of accepted results behind a job's runs/s
 SNAPSHOT_SECONDS = 0.5  # the jobs list is recomputed at most this often
+VIEW_SECONDS = 1.0  # a running job's page data is recomputed at most this often
 SNAPSHOT_JOBS = 200  # jobs in the live list (newest first)
 
 
@@ -47,6 +49,7 @@ class Dashboard:
         self._ready: dict[str, threading.Event] = {}
         self._rates: dict[str, deque[tuple[float, int]]] = {}
         self._scenes: OrderedDict[tuple[Any, ...], dict[str, Any]] = OrderedDict()
+        self._encoded: OrderedDict[str, tuple[int, bytes]] = OrderedDict()
         self._snapshot: tuple[float, bytes] = (-1.0, b"")
 
     # ------------------------------------------------------------------------------- feeding
@@ -130,6 +133,11 @@ class Dashboard:
                  time.perf_counter() - started)
         return job
 
+    def aggregates_loaded(self) -> list[str]:
+        """The jobs whose aggregates are in memory (least recently used first)."""
+        with self._lock:
+            return list(self._jobs)
+
     def _saved(self, job_id: str) -> Path | None:
         if self.cache_dir is None or not _SAFE_ID.match(job_id):
             return None
@@ -146,8 +154,13 @@ class Dashboard:
 
     @staticmethod
     def _save(job: JobAggregates, path: Path) -> None:
+        """The arrays (.npz) and the page (.json) of a finished job."""
         try:
             job.save(path)
+            page = path.with_suffix(".json")
+            tmp = page.with_suffix(".tmp")
+            tmp.write_bytes(_encode(job.view()))
+            tmp.replace(page)
         except OSError:
             log.exception("saving the dashboard's aggregates of job %s failed", job.job_id)
 
@@ -167,6 +180,56 @@ class Dashboard:
         thread = threading.Thread(target=run, name="dashboard-warm", daemon=True)
         thread.start()
         return thread
+
+    def page_data(self, job_id: str) -> tuple[int, bytes] | None:
+        """(version, JSON bytes) of the job page's data: the aggregates' view, recomputed at
+        most once per VIEW_SECONDS while results arrive and encoded once per version, whatever
+        the number of clients; a finished job that is not in memory is served from its saved
+        page (no arrays loaded). None for an unknown job."""
+        with self._lock:
+            loaded = job_id in self._jobs
+        if not loaded:
+            saved = self._saved_page(job_id)
+            if saved is not None:
+                return saved
+        job = self.aggregates(job_id)
+        if job is None:
+            return None
+        view = job.view(max_age=VIEW_SECONDS)
+        version = int(view["version"])
+        with self._lock:
+            hit = self._encoded.get(job_id)
+        if hit is not None and hit[0] == version:
+            return hit
+        return self._remember(job_id, version, _encode(view))
+
+    def _remember(self, job_id: str, version: int, body: bytes) -> tuple[int, bytes]:
+        with self._lock:
+            self._encoded[job_id] = (version, body)
+            self._encoded.move_to_end(job_id)
+            while len(self._encoded) > self.max_jobs:
+                self._encoded.popitem(last=False)
+        return version, body
+
+    def _saved_page(self, job_id: str) -> tuple[int, bytes] | None:
+        """A finished job's saved page, if it holds every finished run of the job."""
+        path = self._saved(job_id)
+        status = self.store.job_status(job_id)
+        if path is None or status is None or status.state not in FINAL_STATES:
+            return None
+        finished = status.runs_done + status.runs_failed
+        with self._lock:
+            hit = self._encoded.get(job_id)
+        if hit is not None and hit[0] == finished:
+            return hit
+        try:
+            body = path.with_suffix(".json").read_bytes()
+            version = int(json.loads(body)["version"])
+        except (OSError, ValueError, KeyError, TypeError):
+            return None
+        if version != finished:  # one add() per finished run: anything else is stale
+            return None
+        return self._remember(job_id, version, body)
 
     # --------------------------------------------------------------------------------- rates
     def rate(self, job_id: str, now: float | None = None) -> float:
@@ -240,3 +303,7 @@ class Dashboard:
             while len(self._scenes) > self.max_scenes:
                 self._scenes.popitem(last=False)
         return out
+
+
+def _encode(view: Mapping[str, Any]) -> bytes:
+    return json.dumps(json_safe(dict(view)), separators=(",", ":")).encode()

@@ -23,7 +23,6 @@ from typing import Annotated, Any
 from fastapi import APIRouter, HTTPException, Query, Request
 from fastapi.responses import Response, StreamingResponse
 
-from swarmpath.legend import legend
 from swarmpath.service.http.deps import CoreDep
 from swarmpath.service.util import json_safe
 
@@ -107,18 +106,15 @@ async def events(request: Request, core: CoreDep) -> StreamingResponse:
 @router.get("/ui/jobs/{job_id}/data", responses={304: {"description": "unchanged"}})
 def job_data(job_id: str, request: Request, core: CoreDep) -> Response:
     """The job page's aggregates (see :meth:`JobAggregates.view`); ETag = the job's version."""
-    agg = core.dashboard.aggregates(job_id)
-    if agg is None:
+    data = core.dashboard.page_data(job_id)
+    if data is None:
         raise HTTPException(404, f"unknown job {job_id!r}")
-    etag = f'"{job_id}-{agg.version}"'
+    version, body = data
+    etag = f'"{job_id}-{version}"'
     if request.headers.get("if-none-match") == etag:
         return Response(status_code=304, headers={"ETag": etag})
-    view = agg.view()
-    columns = (("failed", "rank", "marker") if view["kind"] == "benchmark" else
-               ("failed", "success_rate", "success_marker", "collisions", "length_mean",
-                "gap_mean", "seconds_mean"))
-    body = {**view, "legend": legend(columns)}
-    return _json(body, headers={"ETag": etag, "Cache-Control": "no-cache"})
+    return Response(body, headers={"ETag": etag, "Cache-Control": "no-cache"},
+                    media_type="application/json")
 
 
 @router.get("/ui/jobs/{job_id}/scene")

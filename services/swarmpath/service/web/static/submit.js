@@ -36,12 +36,14 @@
         ${number("runs", b.runs, "runs per cell")}${number("agents", b.agents, "agents")}
         ${number("iterations", b.iterations, "iterations")}${number("seed", b.seed, "seed")}
         <label><input type="checkbox" name="shifted"> shifted</label><div class="err" data-error="shifted"></div>
+        ${number("reference", "", "reference algorithm for the statistics (empty: the last one)")}
         ${cat.optimizers.map((o) => paramInputs("benchmark", o)).join("")}
       </fieldset>
       <fieldset id="map-fields" hidden><legend>Map</legend>
         <b>planners</b>${checks("planners", cat.planners, (p) => p.description)}
         <b>maps</b>${checks("maps", cat.maps, (x) => x.description)}
         ${number("map_runs", m.runs, "runs per cell")}${number("map_seed", m.seed, "seed")}
+        ${number("map_reference", "", "reference planner for the statistics (empty: the last one)")}
         ${cat.planners.map((p) => paramInputs("map", p)).join("")}
       </fieldset>
       <div class="err" data-error="_general" id="general-error"></div>
@@ -85,11 +87,13 @@
         dims: value(form, "dims").split(",").map((s) => asNumber(s.trim())).filter((s) => s !== ""),
         runs: asNumber(value(form, "runs")), agents: asNumber(value(form, "agents")),
         iterations: asNumber(value(form, "iterations")), seed: asNumber(value(form, "seed")),
-        shifted: form.querySelector("[name=shifted]").checked, params: params(form, "benchmark", algorithms) };
+        shifted: form.querySelector("[name=shifted]").checked, params: params(form, "benchmark", algorithms),
+        ...(value(form, "reference") ? { reference: value(form, "reference") } : {}) };
     }
     const planners = checked(form, "planners");
     return { kind: "map", planners: planners, maps: checked(form, "maps"), runs: asNumber(value(form, "map_runs")),
-      seed: asNumber(value(form, "map_seed")), params: params(form, "map", planners) };
+      seed: asNumber(value(form, "map_seed")), params: params(form, "map", planners),
+      ...(value(form, "map_reference") ? { reference: value(form, "map_reference") } : {}) };
   }
 
   /* The form field of an error's loc: ["body", kind?, field, ...]. */
@@ -98,7 +102,7 @@
     if (rest[0] === kind || rest[0] === "benchmark" || rest[0] === "map") rest = rest.slice(1);
     if (!rest.length) return "_general";
     let f = String(rest[0]);
-    if (kind === "map" && (f === "runs" || f === "seed")) f = "map_" + f;
+    if (kind === "map" && (f === "runs" || f === "seed" || f === "reference")) f = "map_" + f;
     if (f === "params" && rest.length >= 3) return `params.${rest[1]}.${rest[2]}`;
     if (f === "params" && rest.length === 2) return `params.${rest[1]}`;
     return f;
