@@ -135,10 +135,13 @@ def test_scene_routes(client, app):
     assert client.get(f"/ui/jobs/{job}/scene?cell=5").status_code == 404
     assert client.get(f"/ui/jobs/{job}/scene?run=5").status_code == 404
     s = client.get(f"/ui/jobs/{job}/scene?cell=0&t_end=5").json()
-    assert s["dynamic"] and s["motion"]["offsets"] and s["collisions"] == []
+    assert s["dynamic"] and s["motion"]["times"] == []  # no run yet: no track to show
     work_off(core)
-    s = client.get(f"/ui/jobs/{job}/scene?run=0&t_end=5").json()
-    assert s["run"] == 0 and len(s["motion"]["times"]) > 1
+    s = client.get(f"/ui/jobs/{job}/scene?cell=0&t_end=5").json()
+    assert s["motion"]["offsets"] and s["motion"]["times"][-1] == 5.0
+    s = client.get(f"/ui/jobs/{job}/scene?run=0&t_end=1000000").json()  # hostile t_end
+    path = core.store.run(job, 0)["path"]
+    assert s["run"] == 0 and s["motion"]["times"][-1] == pytest.approx(path[-1][2], abs=1e-3)
 
 
 def test_events_stream_pushes_the_jobs_list(client, app, monkeypatch):

@@ -3,7 +3,7 @@
 workers' throughput.
 
     .venv/bin/python scripts/bench/dashboard.py [--skip pages|polling] [--runs 1000]
-                                                [--clients 50] [--poll-runs 6000]
+                                                [--clients 50] [--poll-runs 6000] [--repeat 2]
 
 Part (a) pages: a coordinator (REST only, in this process, uvicorn on a free loopback port) gets
 the ICOOT paper's Table 2 job (PSO, SSA, FDO, mCOOT, COOT, ICOOT x F1-F13 x 30 dims x 500
@@ -12,16 +12,18 @@ best-so-far curves of 500 iterations, as a worker would send them: encoded, pack
 coordinator's result handler, so the store and the dashboard's aggregates see the real path).
 Then it times, median of 5: every request of the job page (HTML, scripts, status, aggregates),
 the jobs list and its snapshot; the same page in headless Chromium from navigation to the last
-chart drawn (when chromium is here); and the aggregates built from the store alone (the first
-page load after a coordinator restart).
+chart drawn (when chromium is here); after a coordinator restart: the page data served from the
+page saved when the job ended, the aggregates loaded from the saved arrays, and rebuilt from the
+store alone.
 
 Part (b) polling: ``swarmpath up --workers 2`` runs a benchmark job (GWO, PSO, ICOOT x F1-F13 x
-10 dims, 30 agents, 200 iterations, runs per cell to make ``--poll-runs`` runs) three times:
-alone, with ``--clients`` simulated dashboards (each holds the /events stream open and polls the
-job page's requests every 2 s, as job.js does: status and aggregates with If-None-Match), and
-alone again. Throughput = runs / (finished - started) on the coordinator's clock; request
-latencies of the dashboards' polls (p50, p99). The clients run in this process, on the same
-machine: their own CPU time is reported beside the numbers.
+10 dims, 30 agents, 200 iterations, runs per cell to make ``--poll-runs`` runs) alone and with
+``--clients`` simulated dashboards, alternated (``--repeat`` pairs, then alone once more), each
+dashboard holding the /events stream open and polling the job page's requests every 2 s, as
+job.js does (status, and the aggregates with If-None-Match). Throughput = runs / (finished -
+started) on the coordinator's clock; request latencies of the dashboards' polls (p50, p99). The
+clients run in this process, on the same machine: their own CPU time is reported beside the
+numbers.
 
 Markdown goes to stdout, progress to stderr.
 """
@@ -252,16 +254,17 @@ async def dashboards(url: str, job: str, clients: int, stop: asyncio.Event,
         await asyncio.gather(*tasks, return_exceptions=True)
 
 
-def polling(clients: int, total_runs: int, tmp: Path) -> list[str]:
+def polling(clients: int, total_runs: int, tmp: Path, repeat: int = 2) -> list[str]:
     algorithms, functions, dims = ["GWO", "PSO", "ICOOT"], FUNCTIONS, [10]
     runs = max(1, total_runs // (len(algorithms) * len(functions) * len(dims)))
     spec = {"kind": "benchmark", "algorithms": algorithms, "functions": functions, "dims": dims,
             "runs": runs, "agents": 30, "iterations": 200, "seed": 1}
     rows = ["| dashboards | runs | runs/s | coordinator CPU s | poll p50 | poll p99 | "
             "client CPU s | load before/after |", "|---:|---:|---:|---:|---:|---:|---:|---|"]
+    order = [0, clients] * repeat + [0]  # alternated, so drifts in the machine's load show
     with Up(2, tmp) as up:
-        for k, n in enumerate((0, clients, 0)):
-            note(f"  job {k + 1}/3 with {n} dashboards")
+        for k, n in enumerate(order):
+            note(f"  job {k + 1}/{len(order)} with {n} dashboards")
             cpu0 = time.process_time()
             status, latencies = with_dashboards(up, spec, n)
             seconds = float(status["finished"]) - float(status["started"])
@@ -326,6 +329,8 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=1000, help="runs per cell of the big job")
     ap.add_argument("--clients", type=int, default=50)
     ap.add_argument("--poll-runs", type=int, default=6000, help="runs of the polled job")
+    ap.add_argument("--repeat", type=int, default=2,
+                    help="jobs with dashboards, alternated with jobs without (one more)")
     args = ap.parse_args()
     print(f"Machine: {platform.machine()}, {os.cpu_count()} CPUs, Python "
           f"{platform.python_version()}, load average {os.getloadavg()[0]:.1f} at the start.\n")
@@ -336,7 +341,7 @@ def main() -> None:
             print("\n".join(pages(args.runs, tmp)) + "\n")
         if "polling" not in args.skip:
             note(f"(b) {args.clients} polling dashboards")
-            print("\n".join(polling(args.clients, args.poll_runs, tmp)) + "\n")
+            print("\n".join(polling(args.clients, args.poll_runs, tmp, args.repeat)) + "\n")
 
 
 if __name__ == "__main__":

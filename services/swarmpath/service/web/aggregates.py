@@ -348,6 +348,17 @@ class JobAggregates:
             path=record.get("path"),
         )
 
+    def longest_path(self, cell_index: int) -> float:
+        """Seconds of the longest kept path of a map cell (0 when none, or not a map cell)."""
+        with self._lock:
+            if not 0 <= cell_index < len(self._cells):
+                return 0.0
+            cell = self._cells[cell_index]
+            if not isinstance(cell, _MapCell):
+                return 0.0
+            return max((p["path"][-1][2] for p in cell.paths.values() if p["path"]),
+                       default=0.0)
+
     def finished_runs(self) -> int:
         with self._lock:
             return int(sum(int(c.seen.sum()) for c in self._cells))

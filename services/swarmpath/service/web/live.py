@@ -133,6 +133,11 @@ class Dashboard:
                  time.perf_counter() - started)
         return job
 
+    def longest_path(self, job_id: str, cell_index: int) -> float:
+        """Seconds of the longest path kept for a map cell (0 when none)."""
+        job = self.aggregates(job_id)
+        return job.longest_path(cell_index) if job is not None else 0.0
+
     def aggregates_loaded(self) -> list[str]:
         """The jobs whose aggregates are in memory (least recently used first)."""
         with self._lock:

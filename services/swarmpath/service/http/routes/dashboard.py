@@ -126,7 +126,8 @@ def job_scene(
     t_end: Annotated[float, Query(ge=0, le=1e6)] = 0.0,
 ) -> Response:
     """A map cell's scene and (for ``run``, else its cell's run 0) the moving obstacles' and
-    goal's tracks up to ``t_end`` seconds."""
+    goal's tracks up to ``t_end`` seconds (at most as long as that run's path, or the cell's
+    longest path: the tracks are simulated, so their length is bounded by what ran)."""
     spec = core.store.job_spec(job_id)
     status = core.store.job_status(job_id)
     if spec is None or status is None:
@@ -142,8 +143,10 @@ def job_scene(
             raise HTTPException(404, f"job {job_id} has no run {run}")
         cell, within = divmod(run, spec.runs)
         path = (core.store.run(job_id, run) or {}).get("path")
+        t_end = min(t_end, float(path[-1][2]) if path else 0.0)
     else:
         within = 0
+        t_end = min(t_end, core.dashboard.longest_path(job_id, cell))
     assert cell is not None
     out = core.dashboard.scene(job_id, cell, within, t_end, spec.seed, path)
     if out is None:
