@@ -299,6 +299,9 @@ def test_ioh_evaluation_points_follow_thinned_curves():
 
     assert evaluation_points(4, 4, 40) == [10, 20, 30, 40]
     assert evaluation_points(3, 9, 90, stride=4) == [10, 50, 90]  # iterations 1, 5, 9
+    # 10 agents evaluated first, then 10 per iteration: iteration 1 ends at 20, 50 at 510
+    assert evaluation_points(50, 50, 510, initial=10)[:2] == [20, 30]
+    assert evaluation_points(50, 50, 510, initial=10)[-1] == 510
     assert run_block([float("inf"), 5.0, 5.0, 2.0], [1, 2, 3, 4]) == [(2, 5.0), (4, 2.0)]
     assert run_block([3.0, 3.0], [1, 2]) == [(1, 3.0), (2, 3.0)]
 

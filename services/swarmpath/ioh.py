@@ -17,13 +17,14 @@ run a separation line ``"function evaluation" "best-so-far f(x)"``, then one lin
 evaluation.
 
 swarmpath records the best-so-far after each iteration. The evaluations after iteration k are
-taken as ``round(k * E / T)`` (E: the run's evaluations, T: the iterations), exact for the
-algorithms that evaluate the same number of agents each iteration. A curve the service thinned
-(``curve_stride`` s) has iterations 1, 1 + s, 1 + 2s, ... and the last one. Function ids are the
-positions in the function registry (F1 = 1, ...). Runs of a transformed job (shift, rotate)
-are instances 1 + run (each run moves or turns the function); otherwise every run is instance 1.
-Non-finite values (an infeasible start) are left out; a run without a finite value is left out
-and counted.
+taken as ``round(N + k * (E - N) / T)`` (N: the agents, evaluated once before the first
+iteration; E: the run's evaluations; T: the iterations), exact for the algorithms that evaluate
+the initial population and then the same number of agents each iteration. A curve the service
+thinned (``curve_stride`` s) has iterations 1, 1 + s, 1 + 2s, ... and the last one. Function ids
+are the positions in the function registry (F1 = 1, ...). Runs of a transformed job (shift,
+rotate) are instances 1 + run (each run moves or turns the function); otherwise every run is
+instance 1. Non-finite values (an infeasible start) are left out; a run without a finite value
+is left out and counted.
 """
 
 from __future__ import annotations
@@ -48,17 +49,19 @@ def function_id(name: str) -> int:
     return list_functions().index(name) + 1
 
 
-def evaluation_points(length: int, iterations: int, evaluations: int, stride: int = 1
-                      ) -> list[int]:
-    """Evaluations spent after each stored curve sample (see the module doc)."""
+def evaluation_points(length: int, iterations: int, evaluations: int, stride: int = 1,
+                      initial: int = 0) -> list[int]:
+    """Evaluations spent after each stored curve sample (see the module doc): ``initial`` for
+    the first population, then an equal share of the rest per iteration."""
     iterations = max(iterations, length)
     its = [min(j * stride, iterations - 1) + 1 for j in range(length)]
     if length:
         its[-1] = iterations
-    per = evaluations / iterations if iterations else 0.0
+    initial = min(max(initial, 0), evaluations)
+    per = (evaluations - initial) / iterations if iterations else 0.0
     out: list[int] = []
     for k in its:
-        e = max(1, round(k * per))
+        e = max(1, round(initial + k * per))
         out.append(max(e, out[-1] + 1) if out else e)
     return out
 
@@ -122,8 +125,9 @@ def write_ioh(items: Iterable[Mapping[str, Any]], directory: Path, job_id: str =
             iterations = int(spec.get("iterations") or len(curve))
             evaluations = int(item.get("evaluations") or iterations)
             stride = int(item.get("curve_stride") or 1)
-            block = run_block(curve, evaluation_points(len(curve), iterations, evaluations,
-                                                       stride))
+            points = evaluation_points(len(curve), iterations, evaluations, stride,
+                                       int(spec.get("agents") or 0))
+            block = run_block(curve, points)
             if not block:
                 out.skipped += 1
                 continue
