@@ -28,6 +28,7 @@ from typing import Annotated, Any, Literal, TypeVar
 
 from pydantic import (
     BaseModel,
+    BeforeValidator,
     ConfigDict,
     Field,
     TypeAdapter,
@@ -92,6 +93,38 @@ class FieldProblems(ValueError):
         self.problems = list(problems)
         super().__init__("; ".join(
             f"{'.'.join(str(p) for p in loc)}: {msg}" if loc else msg for loc, msg in problems))
+
+
+#: Parameter numbers: integers within 64 bits, floats finite (anything else would only fail later,
+#: inside numpy, with numpy's words).
+INT64 = 2**63
+
+
+def _bounded_numbers(value: Any) -> Any:
+    """Every number inside job parameters, checked before the parameters' own validation:
+    integers within +-2**63, floats finite; each problem at its place (``GWO.a_max``)."""
+    problems: list[tuple[Loc, str]] = []
+    todo: list[tuple[Loc, Any]] = [((), value)]
+    while todo and len(problems) < 20:
+        loc, v = todo.pop()
+        if isinstance(v, bool) or v is None or isinstance(v, str):
+            continue
+        if isinstance(v, int):
+            if not -INT64 <= v < INT64:
+                digits = len(str(abs(v))) if abs(v) < 10**4300 else 4300
+                problems.append((loc, f"an integer of {digits} digits is out of range "
+                                      f"(parameters are 64-bit: |value| < 9.22e18)"))
+        elif isinstance(v, float):
+            if not math.isfinite(v):
+                problems.append((loc, f"must be a finite number, got {v}"))
+        elif isinstance(v, dict):
+            if len(loc) < 8:
+                todo += [((*loc, k), x) for k, x in v.items()]
+        elif isinstance(v, list | tuple) and len(loc) < 8:
+            todo += [((*loc, i), x) for i, x in enumerate(v)]
+    if problems:
+        raise FieldProblems(problems)
+    return value
 
 
 def _scenario_loc(path: str) -> Loc:
@@ -173,19 +206,21 @@ class BenchmarkJobSpec(Model):
     functions: list[str] = Field(
         min_length=1, description="function names; ranges such as 'F1-F13' are expanded"
     )
-    dims: list[Annotated[int, Field(ge=1, le=MAX_DIM)]] = Field(default=[30], min_length=1)
-    runs: int = Field(default=30, ge=1, le=MAX_RUNS_PER_CELL, description="runs per cell")
-    agents: int = Field(default=30, ge=1, le=MAX_AGENTS)
-    iterations: int = Field(default=500, ge=1, le=MAX_ITERATIONS)
-    seed: int = Field(default=1, ge=0, le=MAX_SEED)
-    shifted: bool = Field(default=False, description="alias of transform 'shift'")
+    dims: list[Annotated[int, Field(ge=1, le=MAX_DIM, strict=True)]] = Field(
+        default=[30], min_length=1)
+    runs: int = Field(default=30, ge=1, le=MAX_RUNS_PER_CELL, strict=True,
+                      description="runs per cell")
+    agents: int = Field(default=30, ge=1, le=MAX_AGENTS, strict=True)
+    iterations: int = Field(default=500, ge=1, le=MAX_ITERATIONS, strict=True)
+    seed: int = Field(default=1, ge=0, le=MAX_SEED, strict=True)
+    shifted: bool = Field(default=False, strict=True, description="alias of transform 'shift'")
     transform: str = Field(
         default="none",
         validate_default=True,
         description="none, shift, rotate or shift+rotate: each run's function moved and/or "
         "turned with numbers from the run's own streams",
     )
-    params: dict[str, dict[str, ParamValue]] = Field(
+    params: Annotated[dict[str, dict[str, ParamValue]], BeforeValidator(_bounded_numbers)] = Field(
         default_factory=dict, description="{algorithm: {parameter: value}}"
     )
 
@@ -320,13 +355,13 @@ def _params_of_members(
         for key, value in params.items():  # each parameter on its own: loc params.NAME.KEY
             try:
                 resolve(name, {key: value})
-            except (ValueError, TypeError, KeyError) as exc:
+            except (ValueError, TypeError, KeyError, ArithmeticError) as exc:
                 problems.append(((name, key), str(exc.args[0]) if exc.args else str(exc)))
                 keyed = True
         if not keyed:  # then together (a rule across parameters)
             try:
                 resolve(name, params)
-            except (ValueError, TypeError, KeyError) as exc:
+            except (ValueError, TypeError, KeyError, ArithmeticError) as exc:
                 problems.append(((name,), str(exc.args[0]) if exc.args else str(exc)))
     if problems:
         raise FieldProblems(problems)
@@ -349,9 +384,10 @@ class MapJobSpec(Model):
     maps: list[MapEntry] = Field(
         min_length=1, description="preset map names or inline scenario objects (with a 'name')"
     )
-    runs: int = Field(default=10, ge=1, le=MAX_RUNS_PER_CELL, description="runs per cell")
-    seed: int = Field(default=1, ge=0, le=MAX_SEED)
-    params: dict[str, dict[str, Any]] = Field(
+    runs: int = Field(default=10, ge=1, le=MAX_RUNS_PER_CELL, strict=True,
+                      description="runs per cell")
+    seed: int = Field(default=1, ge=0, le=MAX_SEED, strict=True)
+    params: Annotated[dict[str, dict[str, Any]], BeforeValidator(_bounded_numbers)] = Field(
         default_factory=dict, description="{planner: {parameter: value}}"
     )
 

@@ -2,14 +2,29 @@
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from swarmpath.service.cost import DEFAULT_MAX_EVALUATIONS, DEFAULT_MAX_STEPS
 from swarmpath.service.protocol import DEFAULT_PREFIX
 from swarmpath.service.zenoh_config import DEFAULT_ZENOH, router_config
 
 DEFAULT_HTTP = "127.0.0.1:8000"
+
+
+def _env_number(name: str, default: float) -> float:
+    text = os.environ.get(name)
+    if not text:
+        return float(default)
+    try:
+        value = float(text)
+    except ValueError:
+        raise ValueError(f"{name}={text!r} is not a number") from None
+    if not value > 0:
+        raise ValueError(f"{name} must be positive, got {text}")
+    return value
 
 
 @dataclass
@@ -33,6 +48,11 @@ class CoordinatorSettings:
     require_liveliness: bool = True  # lease only to workers whose liveliness token is seen
     max_workers: int = 1024  # worker table entries at most (see worker_table.py)
     forget_workers_seconds: float = 600.0  # a gone worker is listed this long, then forgotten
+    # the job cost guard (see cost.py): larger jobs are refused with a 422 naming the estimate
+    max_job_evaluations: float = field(default_factory=lambda: _env_number(
+        "SWARMPATH_MAX_JOB_EVALUATIONS", DEFAULT_MAX_EVALUATIONS))
+    max_job_steps: float = field(default_factory=lambda: _env_number(
+        "SWARMPATH_MAX_JOB_STEPS", DEFAULT_MAX_STEPS))
 
     def zenoh_config(self) -> dict[str, Any]:
         return router_config(

@@ -15,6 +15,7 @@ from swarmpath import __version__
 from swarmpath.service.bridge import ZenohBridge
 from swarmpath.service.catalog import warm_registries
 from swarmpath.service.coordinator import Coordinator
+from swarmpath.service.http import handlers, openapi
 from swarmpath.service.http.errors import validation_detail
 from swarmpath.service.http.middleware import BodyLimit
 from swarmpath.service.http.routes import ROUTERS
@@ -83,6 +84,9 @@ def create_app(
     async def _invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
         return JSONResponse({"detail": validation_detail(list(exc.errors()))}, status_code=422)
 
+    routes = [route for router in ROUTERS for route in router.routes]
+    handlers.install(app, routes)
     for router in ROUTERS:
         app.include_router(router)
+    openapi.install(app, routes)
     return app

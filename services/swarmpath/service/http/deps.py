@@ -4,10 +4,18 @@ check of mutating endpoints, the 404 of an unknown job."""
 import secrets
 from typing import Annotated
 
-from fastapi import Depends, HTTPException, Request
+from fastapi import Depends, HTTPException, Path, Query, Request
 
 from swarmpath.service.coordinator import Coordinator
-from swarmpath.service.protocol import JobStatus
+from swarmpath.service.protocol import MAX_RUNS_PER_JOB, JobStatus
+
+#: Paging bounds of every list route: SQLite's integers end at 2**63 - 1, and a page this far
+#: down is empty anyway.
+MAX_OFFSET = 1_000_000_000
+MAX_LIMIT = 1000
+Limit = Annotated[int, Query(ge=1, le=MAX_LIMIT, description="items per page")]
+Offset = Annotated[int, Query(ge=0, le=MAX_OFFSET, description="items skipped")]
+RunId = Annotated[int, Path(ge=0, lt=MAX_RUNS_PER_JOB, description="cell_index * runs + run")]
 
 
 def core_of(request: Request) -> Coordinator:

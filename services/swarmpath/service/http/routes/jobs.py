@@ -2,9 +2,10 @@
 
 from typing import Annotated, Any, Literal
 
-from fastapi import APIRouter, Body, Depends, HTTPException, Query
+from fastapi import APIRouter, Body, Depends, HTTPException
 
-from swarmpath.service.http.deps import CoreDep, authorized, status_or_404
+from swarmpath.service.cost import check as check_cost
+from swarmpath.service.http.deps import CoreDep, Limit, Offset, authorized, status_or_404
 from swarmpath.service.protocol import BenchmarkJobSpec, JobStatus, MapJobSpec
 
 router = APIRouter(tags=["jobs"])
@@ -17,7 +18,13 @@ def submit_job(
     spec: Annotated[BenchmarkJobSpec | MapJobSpec, Body(discriminator="kind")],
     core: CoreDep,
 ) -> dict[str, Any]:
-    """Submit a benchmark or map job (a JobSpec). 201 with its id, state and runs_total."""
+    """Submit a benchmark or map job (a JobSpec). 201 with its id, state and runs_total; 422
+    when the job is invalid, or larger than this coordinator's cost limit (the detail gives the
+    estimate, the limit and how to raise it)."""
+    settings = core.settings
+    problem = check_cost(spec, settings.max_job_evaluations, settings.max_job_steps)
+    if problem is not None:
+        raise HTTPException(422, [problem])
     status = core.submit(spec)
     return {"id": status.id, "state": status.state, "runs_total": status.runs_total}
 
@@ -26,8 +33,8 @@ def submit_job(
 def list_jobs(
     core: CoreDep,
     state: _STATE | None = None,
-    limit: Annotated[int, Query(ge=1, le=1000)] = 100,
-    offset: Annotated[int, Query(ge=0)] = 0,
+    limit: Limit = 100,
+    offset: Offset = 0,
 ) -> list[JobStatus]:
     """Jobs, newest first, optionally only those in one state."""
     return core.store.list_jobs(state, limit, offset)

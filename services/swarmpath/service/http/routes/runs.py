@@ -1,13 +1,13 @@
 """A job's results: the summary tables, the runs, one run, the MCAP file."""
 
 import json
-from typing import Annotated, Any, Literal
+from typing import Any, Literal
 
-from fastapi import APIRouter, HTTPException, Query
+from fastapi import APIRouter, HTTPException
 from fastapi.responses import FileResponse, PlainTextResponse, StreamingResponse
 
 from swarmpath.legend import legend
-from swarmpath.service.http.deps import CoreDep, status_or_404
+from swarmpath.service.http.deps import CoreDep, Limit, Offset, RunId, status_or_404
 from swarmpath.service.http.models import Run, RunsPage, Summary
 from swarmpath.service.util import json_safe
 
@@ -38,8 +38,8 @@ def job_summary(
 def job_runs(
     job_id: str,
     core: CoreDep,
-    limit: Annotated[int, Query(ge=1, le=1000)] = 100,
-    offset: Annotated[int, Query(ge=0)] = 0,
+    limit: Limit = 100,
+    offset: Offset = 0,
     format: Literal["json", "csv", "parquet", "jsonl"] = "json",
 ) -> Any:
     """One item per run (finished or not), in run_id order: a page of JSON items, or every
@@ -77,7 +77,7 @@ def _stream(core: Any, job_id: str, kind: str, format: str) -> StreamingResponse
 
 
 @router.get("/jobs/{job_id}/runs/{run_id}", responses={200: {"model": Run}})
-def job_run(job_id: str, run_id: int, core: CoreDep) -> Any:
+def job_run(job_id: str, run_id: RunId, core: CoreDep) -> Any:
     """One run with its convergence curve (benchmark) or path rows [x, y, t] (map)."""
     status_or_404(core, job_id)
     item = core.store.run(job_id, run_id)
