@@ -16,6 +16,7 @@ gap, planning time) per map. One colour per algorithm or planner, the same in ev
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -320,7 +321,7 @@ def write_map_plots(
     out = []
     for (planner, name), cell_runs in cells.items():
         scenario = scenarios[name]
-        fig = map_figure(planner, scenario, cell_runs, lambda run, sc=scenario: world_of(sc, run))
+        fig = map_figure(planner, scenario, cell_runs, functools.partial(world_of, scenario))
         out.append(_save(fig, directory / f"{slug(planner)}_{slug(name)}.png"))
     by_map: dict[str, list[Mapping[str, Any]]] = {}
     for (_, name), cell_runs in cells.items():
