@@ -176,6 +176,24 @@ def test_jobs_page_lists_jobs_live_and_filters(server, jobs, browser):
     assert app.state.core.store.job_status(new).state == "cancelled"
 
 
+def test_job_page_follows_a_running_job(server, jobs, browser):
+    """The page of a queued job fills itself in as results arrive, without a reload."""
+    import httpx
+
+    url, app = server
+    job = httpx.post(f"{url}/jobs", json={**BENCH, "runs": 2, "seed": 11}).json()["id"]
+    browser.get(f"{url}/ui/jobs/{job}")
+    wait_for(browser, "body[data-version='0']")
+    assert browser.find_element(By.ID, "job-state").text == "queued"
+    assert not browser.find_elements(By.CSS_SELECTOR, "#charts g.sp-series")  # no runs yet
+    work_off(app.state.core)
+    wait_for(browser, "body[data-loaded='1']")  # the refresh loop saw the job end
+    assert browser.find_element(By.ID, "job-state").text == "done"
+    groups = len(BENCH["functions"]) * len(BENCH["dims"])
+    assert len(browser.find_elements(By.CSS_SELECTOR, "#charts g.sp-series")) == groups * len(
+        BENCH["algorithms"])
+
+
 def test_benchmark_job_page_table_curves_and_boxes(server, jobs, browser):
     url, _app = server
     browser.get(f"{url}/ui/jobs/{jobs['benchmark']}")

@@ -61,7 +61,14 @@
     if (hi === lo) { hi = lo + Math.max(1, Math.abs(lo)) * 0.5; lo = lo - (hi - lo); }
     const pad = (hi - lo) * 0.04;
     lo -= pad; hi += pad;
-    return { log: false, lo: lo, hi: hi, ticks: niceTicks(lo, hi, 5),
+    const ticks = niceTicks(lo, hi, 5);
+    const step = +(ticks.length > 1 ? ticks[1] - ticks[0] : Math.abs(hi - lo) || 1).toPrecision(6);
+    const digits = Math.max(0, Math.min(10, Math.ceil(-Math.log10(step) - 1e-9)));
+    const label = (v) => {  // enough decimals to tell neighbouring ticks apart
+      const a = Math.abs(v);
+      return a !== 0 && (a >= 1e5 || step < 1e-4) ? fmt(v) : v.toFixed(digits);
+    };
+    return { log: false, lo: lo, hi: hi, ticks: ticks, label: label,
       map: (v) => p0 + (v - lo) / (hi - lo) * (p1 - p0) };
   }
 
@@ -78,13 +85,14 @@
       const x = xs.map(v);
       if (x < box.l - 0.5 || x > box.r + 0.5) continue;
       el("line", { x1: x, x2: x, y1: box.b, y2: box.b + 4, class: "sp-tick" }, g);
-      text(g, x, box.b + 15, fmt(v), { "text-anchor": "middle", class: "sp-ticklabel" });
+      text(g, x, box.b + 15, (xs.label || fmt)(v), { "text-anchor": "middle", class: "sp-ticklabel" });
     }
     for (const v of ys.ticks) {
+      if (ys.log && (v < ys.lo * (1 - 1e-9) || v > ys.hi * (1 + 1e-9))) continue;  // map() clamps
       const y = ys.map(v);
       if (y < box.t - 0.5 || y > box.b + 0.5) continue;
       el("line", { x1: box.l, x2: box.r, y1: y, y2: y, class: "sp-grid" }, g);
-      text(g, box.l - 5, y + 4, fmt(v), { "text-anchor": "end", class: "sp-ticklabel" });
+      text(g, box.l - 5, y + 4, (ys.label || fmt)(v), { "text-anchor": "end", class: "sp-ticklabel" });
     }
     if (opts.xlabel) text(g, (box.l + box.r) / 2, box.b + 32, opts.xlabel, { "text-anchor": "middle", class: "sp-axis-label sp-xlabel" });
     if (opts.ylabel) text(g, 0, 0, opts.ylabel, { "text-anchor": "middle", class: "sp-axis-label sp-ylabel",
