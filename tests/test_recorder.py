@@ -124,6 +124,27 @@ def test_a_run_is_written_once(store, tmp_path):
     assert [m["run_id"] for _s, c, m, _t in messages if c.topic == "/results"] == [3]
 
 
+def test_finish_takes_stored_results_a_concurrent_batch_has_not_recorded_yet(store):
+    """One thread stores the job's last results and finalizes while another has stored its
+    batch but not yet handed it to the recorder: the file still holds every stored run."""
+    job = store.create_job(SPEC, now=T0)
+    recorders = Recorders(store)
+    recorders.open(job)
+    held_back = set()
+    while (lease := store.lease("w1", 3, now=T0)) is not None:
+        for run_id, status in zip(lease.run_ids(), store.accept_results(execute(lease), T0),
+                                  strict=True):
+            assert status == "accepted"
+            if len(held_back) < 5:
+                held_back.add(run_id)  # stored, never passed to record_run
+            else:
+                recorders.record_run(job, run_id)
+    _summary, meta, messages = read_all(recorders.finish(job))
+    ids = [m["run_id"] for _s, c, m, _t in messages if c.topic == "/results"]
+    assert sorted(ids) == list(range(20)) and held_back <= set(ids)
+    assert meta["swarmpath.summary"]["runs_written"] == "20"
+
+
 def test_non_finite_curve_values_are_clamped(store, tmp_path):
     job = store.create_job({**SPEC, "runs": 1}, now=T0)
     drain(store)

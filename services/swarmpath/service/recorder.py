@@ -654,6 +654,12 @@ class Recorders:
         with self._lock:
             rec = self.open(job_id)
             status = self.store.job_status(job_id)
+            stored = status.runs_done + status.runs_failed if status else 0
+            if len(rec.written) < stored:
+                # A concurrent batch stored its results but has not handed them to the recorder
+                # yet (it will find the file finalized): take them from the store now.
+                for record in self.store.iter_run_records(job_id):
+                    rec.add(record)
             summary = self.store.summary(job_id)
             path = rec.finish(summary, status.state if status else "done")
             del self._open[job_id]
