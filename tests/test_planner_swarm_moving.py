@@ -14,7 +14,7 @@ import pytest
 from swarmpath.planners import Episode, sensed_map
 from swarmpath.world.scenario import Motion, Obstacle, RobotSpec, Scenario
 
-OLD = {"lead": 0.0, "moving_memory": 2.0}  # the behaviour before tracking (same code path)
+OLD = {"lead": 0.0, "moving_memory": 2.0, "aim_hits": "near"}  # before tracking (same code)
 
 
 def crossing() -> Scenario:

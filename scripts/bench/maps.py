@@ -17,11 +17,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import statistics
 import sys
 import time
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 
 def load(name: str) -> Any:
@@ -83,14 +84,14 @@ def main() -> None:
                 print(f"{p} {label} seed {s}: {o.reason}", file=sys.stderr)
             ok = [r for r in rows if r["success"]]
             gaps = [100 * r["gap"] for r in ok if r["gap"] is not None]
-            med = f"{statistics.median(gaps):.2f} %" if gaps else "-"
+            med = f"{float(np.median(gaps)):.2f} %" if gaps else "-"
             worst = f"{max(gaps):.2f} %" if gaps else "-"
             coll = sum(r["collisions"] for r in rows)
             rob = sum(r["robot"] for r in rows)
             obs = sum(r["obstacle"] for r in rows)
             touched = sum(1 for r in rows if r["collisions"])
-            wall = statistics.median(r["seconds"] for r in rows)
-            cpu_s = statistics.median(r["cpu"] for r in rows)
+            wall = float(np.median([r["seconds"] for r in rows]))
+            cpu_s = float(np.median([r["cpu"] for r in rows]))
             print(f"| {p} | {label} | {len(ok)}/{len(rows)} | {coll} ({rob} / {obs}) in "
                   f"{touched} runs | {med} | {worst} | {wall:.2f} / {cpu_s:.2f} |", flush=True)
     if sink:
