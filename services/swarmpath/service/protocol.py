@@ -368,12 +368,27 @@ def _params_of_members(
     return v
 
 
-MapEntry = str | dict[str, Any]
+class MapRef(Model):
+    """A map uploaded with ``POST /maps``, by id, with optional start and goal (metres from the
+    map's lower-left corner). The coordinator replaces it with the stored scenario when the job
+    is submitted, so the job carries its map (:func:`swarmpath.service.maps.resolve_refs`)."""
+
+    map: str = Field(pattern=ID_PATTERN, description="id from POST /maps")
+    start: tuple[float, float] | None = None
+    goal: tuple[float, float] | None = None
 
 
-def map_name(entry: MapEntry) -> str:
-    """The name of a map entry: a preset name, or an inline scenario's ``name``."""
-    return entry if isinstance(entry, str) else str(entry["name"])
+MapEntry = Annotated[str | MapRef | dict[str, Any], Field(union_mode="left_to_right")]
+
+
+def map_name(entry: str | MapRef | dict[str, Any]) -> str:
+    """The name of a map entry: a preset name, an uploaded map's id, or an inline scenario's
+    ``name``."""
+    if isinstance(entry, str):
+        return entry
+    if isinstance(entry, MapRef):
+        return entry.map
+    return str(entry["name"])
 
 
 class MapJobSpec(Model):
@@ -382,7 +397,8 @@ class MapJobSpec(Model):
     kind: Literal["map"]
     planners: list[str] = Field(min_length=1, description="registered planner names")
     maps: list[MapEntry] = Field(
-        min_length=1, description="preset map names or inline scenario objects (with a 'name')"
+        min_length=1, description="preset map names, inline scenario objects (with a 'name') "
+        "or uploaded maps {'map': id, 'start'?: [x, y], 'goal'?: [x, y]}"
     )
     runs: int = Field(default=10, ge=1, le=MAX_RUNS_PER_CELL, strict=True,
                       description="runs per cell")
@@ -411,6 +427,8 @@ class MapJobSpec(Model):
                     presets = _map_names()
                 if entry not in presets:
                     problems.append(((i,), unknown("map", entry, presets)))
+                continue
+            if isinstance(entry, MapRef):  # resolved against the stored maps on submission
                 continue
             name = entry.get("name")
             if not isinstance(name, str) or not _ID_RE.match(name):
@@ -535,11 +553,13 @@ def expand_cells(spec: BenchmarkJobSpec | MapJobSpec) -> list[BenchmarkCell | Ma
             for f in spec.functions
             for d in spec.dims
         ]
+    if any(isinstance(m, MapRef) for m in spec.maps):
+        raise ValueError("uploaded maps must be resolved (swarmpath.service.maps.resolve_refs)")
     return [
         MapCell(
             planner=p,
             map=map_name(m),
-            scenario=None if isinstance(m, str) else dict(m),
+            scenario=None if isinstance(m, str) else dict(m),  # type: ignore[arg-type]
             params=dict(spec.params.get(p, {})),
         )
         for p in spec.planners

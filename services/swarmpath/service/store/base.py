@@ -100,6 +100,14 @@ CREATE TABLE IF NOT EXISTS results (
     created  REAL NOT NULL,
     UNIQUE (job_seq, cell_idx, run)                    -- a run has at most one result
 );
+CREATE TABLE IF NOT EXISTS maps (                      -- uploaded with POST /maps
+    id       TEXT PRIMARY KEY,
+    name     TEXT NOT NULL,
+    format   TEXT NOT NULL,                            -- 'nav2' or 'movingai'
+    source   TEXT NOT NULL,                            -- the upload (JSON), kept as sent
+    scenario TEXT NOT NULL,                            -- the imported scenario (JSON)
+    created  REAL NOT NULL
+);
 """
 
 _COUNTERS = ("leases", "requeued_runs", "results_accepted", "duplicates", "stale")

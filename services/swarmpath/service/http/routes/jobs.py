@@ -6,7 +6,8 @@ from fastapi import APIRouter, Body, Depends, HTTPException
 
 from swarmpath.service.cost import check as check_cost
 from swarmpath.service.http.deps import CoreDep, Limit, Offset, authorized, status_or_404
-from swarmpath.service.protocol import BenchmarkJobSpec, JobStatus, MapJobSpec
+from swarmpath.service.maps import resolve_refs
+from swarmpath.service.protocol import BenchmarkJobSpec, FieldProblems, JobStatus, MapJobSpec
 
 router = APIRouter(tags=["jobs"])
 
@@ -20,7 +21,15 @@ def submit_job(
 ) -> dict[str, Any]:
     """Submit a benchmark or map job (a JobSpec). 201 with its id, state and runs_total; 422
     when the job is invalid, or larger than this coordinator's cost limit (the detail gives the
-    estimate, the limit and how to raise it)."""
+    estimate, the limit and how to raise it). A map job's uploaded maps (``{"map": id, ...}``)
+    are replaced by their scenarios first, so the job keeps its maps."""
+    if isinstance(spec, MapJobSpec):
+        try:
+            spec = resolve_refs(spec, core.store.map_scenario)
+        except FieldProblems as exc:
+            raise HTTPException(422, [{"loc": ["body", "maps", *loc], "msg": msg,
+                                       "type": "value_error"} for loc, msg in exc.problems]
+                                ) from None
     settings = core.settings
     problem = check_cost(spec, settings.max_job_evaluations, settings.max_job_steps)
     if problem is not None:

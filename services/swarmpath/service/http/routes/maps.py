@@ -1,0 +1,50 @@
+"""/maps: upload a nav2 or MovingAI map, list and read the uploaded maps (logic:
+:mod:`swarmpath.service.maps`)."""
+
+import asyncio
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Depends, HTTPException, Query
+
+from swarmpath.service.http.deps import CoreDep, authorized
+from swarmpath.service.maps import MapUpload, MapUploadError, import_upload
+
+router = APIRouter(tags=["maps"])
+
+
+@router.post("/maps", status_code=201, dependencies=[Depends(authorized)])
+async def upload_map(up: MapUpload, core: CoreDep) -> dict[str, Any]:
+    """Import a nav2 YAML + base64 image or a MovingAI .map; 201 with the map id (name it in a
+    map job: ``{"map": id, "start": [x, y], "goal": [x, y]}``). 413 when the map is over a size
+    limit (named in the message), 422 when it cannot be imported."""
+    try:
+        scenario = await asyncio.to_thread(import_upload, up)
+    except MapUploadError as exc:
+        raise HTTPException(exc.status, [{"loc": ["body", exc.field], "msg": str(exc),
+                                          "type": "map_too_large" if exc.status == 413
+                                          else "map_invalid"}]) from None
+    source = up.model_dump()
+    map_id = await asyncio.to_thread(core.store.add_map, up.name, up.format, source, scenario)
+    info = core.store.map_info(map_id)
+    assert info is not None
+    info.pop("scenario")
+    return info
+
+
+@router.get("/maps")
+def list_maps(
+    core: CoreDep,
+    limit: Annotated[int, Query(ge=1, le=1000)] = 100,
+    offset: Annotated[int, Query(ge=0)] = 0,
+) -> list[dict[str, Any]]:
+    """Uploaded maps, newest first: id, name, format, size, start, goal, obstacle count."""
+    return core.store.list_maps(limit, offset)
+
+
+@router.get("/maps/{map_id}")
+def read_map(map_id: str, core: CoreDep) -> dict[str, Any]:
+    """One uploaded map with its imported scenario."""
+    info = core.store.map_info(map_id)
+    if info is None:
+        raise HTTPException(404, f"unknown map {map_id!r}")
+    return info

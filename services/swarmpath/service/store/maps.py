@@ -1,0 +1,55 @@
+"""Maps uploaded with ``POST /maps``: the upload as sent and the scenario imported from it."""
+
+from __future__ import annotations
+
+import json
+import secrets
+import time
+from typing import Any
+
+from swarmpath.service.store.base import StoreBase, _dumps
+
+
+class MapsMixin(StoreBase):
+    def add_map(self, name: str, fmt: str, source: dict[str, Any], scenario: dict[str, Any],
+                now: float | None = None) -> str:
+        """Store an imported map durably (committed before it returns); returns its new id."""
+        map_id = f"map-{secrets.token_hex(6)}"
+        with self._tx() as db:
+            db.execute(
+                "INSERT INTO maps (id, name, format, source, scenario, created) "
+                "VALUES (?, ?, ?, ?, ?, ?)",
+                (map_id, name, fmt, _dumps(source), _dumps(scenario),
+                 time.time() if now is None else now),
+            )
+        return map_id
+
+    def map_scenario(self, map_id: str) -> dict[str, Any] | None:
+        """The scenario (JSON object) of an uploaded map, or None for an unknown id."""
+        with self._read() as db:
+            row = db.execute("SELECT scenario FROM maps WHERE id = ?", (map_id,)).fetchone()
+        return None if row is None else dict(json.loads(row[0]))
+
+    def map_info(self, map_id: str) -> dict[str, Any] | None:
+        with self._read() as db:
+            row = db.execute("SELECT id, name, format, scenario, created FROM maps WHERE id = ?",
+                             (map_id,)).fetchone()
+        return None if row is None else _info(row, with_scenario=True)
+
+    def list_maps(self, limit: int = 100, offset: int = 0) -> list[dict[str, Any]]:
+        """Uploaded maps, newest first (without their scenarios)."""
+        with self._read() as db:
+            rows = db.execute(
+                "SELECT id, name, format, scenario, created FROM maps "
+                "ORDER BY created DESC, id LIMIT ? OFFSET ?", (limit, offset)).fetchall()
+        return [_info(r, with_scenario=False) for r in rows]
+
+
+def _info(row: Any, with_scenario: bool) -> dict[str, Any]:
+    scenario = json.loads(row["scenario"])
+    out = {"id": row["id"], "name": row["name"], "format": row["format"],
+           "created": row["created"], "size": scenario["size"], "start": scenario["start"],
+           "goal": scenario["goal"], "obstacles": len(scenario.get("obstacles", ()))}
+    if with_scenario:
+        out["scenario"] = scenario
+    return out

@@ -1,0 +1,111 @@
+"""POST /maps (nav2 YAML + image, MovingAI .map), GET /maps, map jobs that name an uploaded map,
+durability across a coordinator restart, and the size limits (413/422 naming the limit)."""
+
+from __future__ import annotations
+
+import base64
+from pathlib import Path
+
+import pytest
+from fastapi.testclient import TestClient
+
+from swarmpath.service.http.app import create_app
+from swarmpath.service.settings import CoordinatorSettings
+
+DATA = Path(__file__).parent / "data"
+ARENA = (DATA / "arena.map").read_text()
+
+
+def _app(data_dir: Path):
+    return create_app(CoordinatorSettings(data_dir=data_dir), use_zenoh=False)
+
+
+@pytest.fixture
+def data_dir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    monkeypatch.delenv("SWARMPATH_TOKEN", raising=False)
+    return tmp_path / "data"
+
+
+def _nav2_body() -> dict:
+    return {"name": "tb3", "format": "nav2",
+            "yaml": (DATA / "tb3_sandbox.yaml").read_text(),
+            "image": base64.b64encode((DATA / "tb3_sandbox.pgm").read_bytes()).decode()}
+
+
+def test_upload_list_read_and_use_in_a_job_across_a_restart(data_dir: Path) -> None:
+    with TestClient(_app(data_dir)) as client:
+        up = client.post("/maps", json={"name": "arena", "format": "movingai", "map": ARENA,
+                                        "resolution": 0.5})
+        assert up.status_code == 201, up.text
+        arena = up.json()
+        assert arena["size"] == [24.5, 24.5] and arena["obstacles"] > 0
+        nav = client.post("/maps", json=_nav2_body())
+        assert nav.status_code == 201, nav.text
+        tb3 = nav.json()
+        assert tb3["format"] == "nav2" and tb3["size"] == pytest.approx([19.2, 19.2])
+        listed = client.get("/maps").json()
+        assert {m["id"] for m in listed} == {arena["id"], tb3["id"]}
+        job = client.post("/jobs", json={
+            "kind": "map", "planners": ["OMPL-RRTstar"], "runs": 1,
+            "maps": [{"map": arena["id"], "start": [0.75, 1.25], "goal": [23.25, 23.75]},
+                     {"map": tb3["id"]}],
+        })
+        assert job.status_code == 201, job.text
+        job_id = job.json()["id"]
+    with TestClient(_app(data_dir)) as client:  # a restarted coordinator lost nothing
+        read = client.get(f"/maps/{arena['id']}").json()
+        assert read["scenario"]["size"] == [24.5, 24.5] and read["name"] == "arena"
+        status = client.get(f"/jobs/{job_id}").json()
+        assert status["runs_total"] == 2
+        spec = client.app.state.core.store.job_spec(job_id)  # type: ignore[attr-defined]
+        first, second = spec.maps  # the job carries the scenarios, not references
+        assert first["name"] == arena["id"] and first["start"] == [0.75, 1.25]
+        assert second["name"] == tb3["id"] and second["goal"] == tb3["goal"]
+
+
+def test_unknown_map_and_bad_start_name_the_field(data_dir: Path) -> None:
+    with TestClient(_app(data_dir)) as client:
+        arena = client.post("/maps", json={"name": "arena", "format": "movingai",
+                                           "map": ARENA}).json()
+        r = client.post("/jobs", json={"kind": "map", "planners": ["MFB"],
+                                       "maps": [{"map": "map-nothere"}]})
+        assert r.status_code == 422
+        assert r.json()["detail"][0]["loc"] == ["body", "maps", 0, "map"]
+        r = client.post("/jobs", json={"kind": "map", "planners": ["MFB"],
+                                       "maps": [{"map": arena["id"], "start": [0.5, 0.5]}]})
+        assert r.status_code == 422  # the corner cell of arena is blocked
+        assert r.json()["detail"][0]["loc"] == ["body", "maps", 0, "start"]
+        assert client.get("/maps/map-nothere").status_code == 404
+
+
+@pytest.mark.parametrize(
+    ("body", "status", "field", "words"),
+    [
+        ({"name": "big", "format": "movingai",  # refused on its header, before the grid
+          "map": "type octile\nheight 1100\nwidth 1000\nmap\n" + ("." * 1000 + "\n") * 10},
+         413, "map", "max_cells=1,048,576"),
+        ({"name": "noise", "format": "movingai",  # a checkerboard: 4,500 single cells
+          "map": "type octile\nheight 90\nwidth 100\nmap\n"
+          + "\n".join(("@." if r % 2 else ".@") * 50 for r in range(90)) + "\n"},
+         413, "map", "max_obstacles=2,000"),
+        ({"name": "bad", "format": "movingai",
+          "map": "type octile\nheight 2\nwidth 2\nmap\n.x\n..\n"},
+         422, "map", "unknown terrain"),
+        ({"name": "nav", "format": "nav2", "yaml": "image: m.pgm\nresolution: 0.05\n"
+          "origin: [0, 0, 0]\n", "image": "!!!"}, 422, "image", "base64"),
+        ({"name": "nav", "format": "nav2", "image": "AAAA"}, 422, "yaml", "required"),
+    ],
+)
+def test_limits_and_bad_uploads(data_dir: Path, body: dict, status: int, field: str,
+                                words: str) -> None:
+    with TestClient(_app(data_dir)) as client:
+        r = client.post("/maps", json=body)
+        assert r.status_code == status, r.text
+        detail = r.json()["detail"][0]
+        assert detail["loc"] == ["body", field] and words in detail["msg"]
+
+
+def test_body_over_the_limit_is_refused_naming_it(data_dir: Path) -> None:
+    with TestClient(_app(data_dir)) as client:
+        r = client.post("/maps", json={"name": "x", "format": "movingai", "map": "." * 1_100_000})
+        assert r.status_code in (413, 422) and "exceeds" in r.text
