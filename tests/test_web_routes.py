@@ -180,3 +180,63 @@ def test_finished_jobs_aggregates_are_saved_and_reloaded(client, app, tmp_path):
     (core.dashboard.cache_dir / f"{job}.npz").replace(other / f"{map_job}.npz")
     again = Dashboard(core.store, other).aggregates(map_job)
     assert again.view()["kind"] == "map" and again.finished_runs() == 1
+
+
+class _Result:
+    """The fields Dashboard.observe reads of a RunResult."""
+
+    def __init__(self, cell: str, run: int):
+        self.cell, self.run, self.status = cell, run, "ok"
+        self.metrics = {"best_fitness": float(run)}
+        self.curve = self.path = None
+
+
+def test_observe_never_waits_for_a_build_from_the_store(tmp_path, monkeypatch):
+    import threading
+
+    from swarmpath.service.protocol import parse_job_spec
+    from swarmpath.service.store import Store
+
+    store = Store(tmp_path)
+    try:
+        job = store.create_job(parse_job_spec(BENCH))
+        release = threading.Event()
+        reading = threading.Event()
+
+        def slow_records(job_id, batch=500):  # a store scan that takes as long as we like
+            reading.set()
+            release.wait(30)
+            yield {"cell_index": 0, "run": 0, "status": "ok", "metrics": {"best_fitness": 0.0}}
+
+        monkeypatch.setattr(store, "iter_run_records", slow_records)
+        dash = Dashboard(store)
+        page = threading.Thread(target=dash.aggregates, args=(job,))
+        page.start()  # a page asks first: it builds (and blocks in the scan)
+        assert reading.wait(30)
+        dash.observe(job, [_Result("GWO/F1/2", 0), _Result("GWO/F1/2", 1)])  # returns at once
+        agg = dash.aggregates(job, wait=False)
+        assert agg is not None and agg.finished_runs() == 2
+        release.set()
+        page.join(30)
+        assert dash.aggregates(job).finished_runs() == 2  # run 0 once, not twice
+    finally:
+        store.close()
+
+
+def test_eviction_keeps_running_jobs_before_ended_ones(tmp_path):
+    from swarmpath.service.protocol import parse_job_spec
+    from swarmpath.service.store import Store
+
+    store = Store(tmp_path)
+    try:
+        ids = [store.create_job(parse_job_spec({**BENCH, "seed": s})) for s in range(4)]
+        dash = Dashboard(store, max_jobs=2)
+        dash.aggregates(ids[0])
+        dash.aggregates(ids[1])
+        dash.finished(ids[1])  # ended: goes first although used more recently
+        dash.aggregates(ids[2])
+        assert dash.aggregates_loaded() == [ids[0], ids[2]]
+        dash.aggregates(ids[3])  # nothing ended left: the least recently used goes
+        assert dash.aggregates_loaded() == [ids[2], ids[3]]
+    finally:
+        store.close()

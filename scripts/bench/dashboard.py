@@ -58,8 +58,10 @@ FUNCTIONS = [f"F{i}" for i in range(1, 14)]
 
 # ------------------------------------------------------------------------------ (a) pages
 def synthetic_results(lease: Any, rng: np.random.Generator, iterations: int) -> list[bytes]:
-    """Encoded RunResults of a lease: monotone best-so-far curves, like a worker's."""
-    from swarmpath.service.protocol import RunResult, encode
+    """Encoded RunResults of a lease (with their proofs): monotone best-so-far curves, like a
+    worker's."""
+    from swarmpath.service.protocol import RunResult
+    from swarmpath.service.worker.packing import fit_result
 
     n = len(lease.runs)
     steps = rng.exponential(0.02, size=(n, iterations))
@@ -67,11 +69,12 @@ def synthetic_results(lease: Any, rng: np.random.Generator, iterations: int) -> 
     out = []
     for i, run in enumerate(lease.runs):
         curve = np.minimum.accumulate(curves[i])
-        out.append(encode(RunResult(
+        out.append(fit_result(RunResult(
             lease_id=lease.lease_id, job_id=lease.job_id, cell=lease.cell, run=run,
             worker=lease.worker, seconds=0.001,
             metrics={"best_fitness": float(curve[-1]), "evaluations": 30 * iterations},
-            curve=curve.tolist(), best_position=rng.uniform(-1, 1, 30).tolist())))
+            curve=curve.tolist(), best_position=rng.uniform(-1, 1, 30).tolist()),
+            capability=lease.capability))
     return out
 
 
@@ -105,6 +108,9 @@ def fill(core: Any, spec: dict[str, Any]) -> str:
             done += len(lease.runs)
         if done % 5000 < 1000:
             note(f"  {done}/{status.runs_total} runs stored ({time.perf_counter() - t0:.0f} s)")
+    final = core.store.job_status(status.id)
+    if final is None or final.runs_done != final.runs_total:
+        raise RuntimeError(f"the synthetic results were not all accepted: {final}")
     return status.id
 
 

@@ -50,6 +50,7 @@ class Dashboard:
         self._rates: dict[str, deque[tuple[float, int]]] = {}
         self._scenes: OrderedDict[tuple[Any, ...], dict[str, Any]] = OrderedDict()
         self._encoded: OrderedDict[str, tuple[int, bytes]] = OrderedDict()
+        self._ended: set[str] = set()  # jobs seen ending (evicted first)
         self._snapshot: tuple[float, bytes] = (-1.0, b"")
 
     # ------------------------------------------------------------------------------- feeding
@@ -66,8 +67,8 @@ class Dashboard:
             if len(self._rates) > 4 * self.max_jobs:  # forget the rates of the oldest jobs
                 for old in list(self._rates)[: len(self._rates) - 4 * self.max_jobs]:
                     del self._rates[old]
-        job = self.aggregates(job_id)
-        if job is None:
+        job = self.aggregates(job_id, wait=False)  # never wait here: this is the store's
+        if job is None:  # result thread, and a job built from the store takes seconds
             return
         for r in results:
             index = job.cell_index(r.cell)
@@ -75,41 +76,59 @@ class Dashboard:
                 job.add(index, r.run, ok=r.status == "ok", metrics=r.metrics, curve=r.curve,
                         path=r.path)
 
-    def aggregates(self, job_id: str) -> JobAggregates | None:
-        """The job's aggregates (None: unknown job), built from the store the first time."""
+    def aggregates(self, job_id: str, wait: bool = True) -> JobAggregates | None:
+        """The job's aggregates (None: unknown job), built from the store (or its saved
+        arrays) the first time. With ``wait`` False a build runs in a background thread and the
+        aggregates are returned at once, possibly incomplete (adding to them is safe meanwhile:
+        runs are deduplicated)."""
         with self._lock:
             job = self._jobs.get(job_id)
             if job is not None:
                 self._jobs.move_to_end(job_id)
-                ready = self._ready.get(job_id)
-            else:
-                ready = None
-        if job is not None:
-            if ready is not None:
-                ready.wait()
-            return job
-        status = self.store.job_status(job_id)
-        spec = self.store.job_spec(job_id)
-        cells = self.store.cells(job_id)
-        if status is None or spec is None or cells is None:
-            return None
-        with self._lock:
-            job = self._jobs.get(job_id)
-            if job is None:  # we build it; results arriving meanwhile are added (deduplicated)
-                job = JobAggregates(job_id, status.kind, cells, spec.seed,
-                                    getattr(spec, "reference", None))
-                self._jobs[job_id] = job
-                ready = self._ready[job_id] = threading.Event()
-                while len(self._jobs) > self.max_jobs:
-                    self._jobs.popitem(last=False)
-                build = True
-            else:
-                ready, build = self._ready.get(job_id), False
-        if not build:
-            if ready is not None:
-                ready.wait()
-            return job
+            ready = self._ready.get(job_id)
+        if job is None:
+            status = self.store.job_status(job_id)
+            spec = self.store.job_spec(job_id)
+            cells = self.store.cells(job_id)
+            if status is None or spec is None or cells is None:
+                return None
+            with self._lock:
+                job = self._jobs.get(job_id)
+                if job is None:
+                    job = JobAggregates(job_id, status.kind, cells, spec.seed,
+                                        getattr(spec, "reference", None))
+                    self._jobs[job_id] = job
+                    ready = self._ready[job_id] = threading.Event()
+                    self._evict()
+                    args = (job, status, spec, cells)
+                    if not wait:
+                        threading.Thread(target=self._build, args=args, daemon=True,
+                                         name=f"dashboard-{job_id}").start()
+                        return job
+                else:
+                    args = None
+                    ready = self._ready.get(job_id)
+            if args is not None:
+                return self._build(*args)
+        if ready is not None and wait:
+            ready.wait()
+        return job
+
+    def _evict(self) -> None:
+        """Drop least recently used jobs beyond max_jobs, finished ones first (caller locks)."""
+        while len(self._jobs) > self.max_jobs:
+            idle = [j for j in self._jobs if j not in self._ready]
+            ended = [j for j in idle if j in self._ended]
+            if not idle:
+                return
+            victim = (ended or idle)[0]
+            del self._jobs[victim]
+
+    def _build(self, job: JobAggregates, status: Any, spec: Any,
+               cells: list[dict[str, Any]]) -> JobAggregates:
+        job_id = job.job_id
         started = time.perf_counter()
+        how = "nothing"
         try:
             finished = status.runs_done + status.runs_failed
             saved = self._saved(job_id)
@@ -119,13 +138,15 @@ class Dashboard:
             else:
                 if job.finished_runs():  # a stale file: start again from the store
                     job = JobAggregates(job_id, status.kind, cells, spec.seed,
-                                    getattr(spec, "reference", None))
+                                        getattr(spec, "reference", None))
                     with self._lock:
                         self._jobs[job_id] = job
                 n = sum(job.add_record(rec) for rec in self.store.iter_run_records(job_id))
                 how = f"{n} stored runs"
                 if status.state in FINAL_STATES and saved is not None:
                     self._save(job, saved)
+        except Exception:
+            log.exception("building the dashboard's aggregates of job %s failed", job_id)
         finally:
             with self._lock:
                 self._ready.pop(job_id).set()
@@ -153,6 +174,9 @@ class Dashboard:
         saved when its page first rebuilds them)."""
         path = self._saved(job_id)
         with self._lock:
+            self._ended.add(job_id)
+            if len(self._ended) > 64 * self.max_jobs:
+                self._ended.intersection_update(self._jobs)
             job = self._jobs.get(job_id) if job_id not in self._ready else None
         if path is not None and job is not None:
             self._save(job, path)
