@@ -50,7 +50,7 @@ two vertex disks through an obstacle's interior blocks all four tangents).
 
 Limits
 ------
-``budget`` (default ``DEFAULT_BUDGET`` = 10 s of wall time) and ``max_disks`` (default 20,000):
+``budget`` (default ``DEFAULT_BUDGET`` = 30 s of wall time) and ``max_disks`` (default 20,000):
 past either, the result has ``length = nan``, ``exact = False`` and a ``reason`` that says which
 limit and how far the search got. If no collision-free path exists the length is ``inf``
 (``exact = True``). At margin 0 separate polygons that share an edge are separate closed sets:
@@ -86,7 +86,7 @@ __all__ = ["DEFAULT_BUDGET", "MAX_DISKS", "TOL", "OptimalPath", "shortest_path"]
 
 TOL = 1e-9
 MAX_DISKS = 20_000
-DEFAULT_BUDGET = 10.0  # s
+DEFAULT_BUDGET = 30.0  # s of wall time (a loaded machine shares its cores)
 INDEX_ABOVE = 600  # disks above which the spatial index decides pairs, segments and arcs
 _PAIRS = 1 << 17  # disk pairs per chunk
 TWO_PI = 2.0 * math.pi
