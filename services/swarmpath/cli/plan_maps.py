@@ -105,7 +105,8 @@ def _problem_option(field_: str, opts: MapOptions) -> str:
     return "--maps"
 
 
-def _load_file(path: Path, opts: MapOptions) -> tuple[Any, bool]:
+def _load_file(path: Path, opts: MapOptions,
+               progress: Callable[[float], None] | None = None) -> tuple[Any, bool]:
     """The scenario, and whether it was imported (start / goal then went to the importer)."""
     import yaml
 
@@ -116,14 +117,14 @@ def _load_file(path: Path, opts: MapOptions) -> tuple[Any, bool]:
     suffix = path.suffix.lower()
     if suffix == ".map":
         return load_movingai_map(path, resolution=opts.resolution or 1.0, **ends,
-                                 **_limits(opts)).scenario, True
+                                 progress=progress, **_limits(opts)).scenario, True
     if suffix in (".yaml", ".yml"):
         try:
             doc = yaml.safe_load(path.read_text(encoding="utf-8"))
         except yaml.YAMLError as exc:
             raise InputError("--maps", f"{path}: not valid YAML ({exc})") from None
         if isinstance(doc, dict) and "image" in doc:
-            return load_ros_map(path, **ends, **_limits(opts)).scenario, True
+            return load_ros_map(path, **ends, progress=progress, **_limits(opts)).scenario, True
         if not isinstance(doc, dict):
             raise InputError("--maps", f"{path}: expected a YAML mapping")
         return scenario_from_dict(doc, str(path)), False
@@ -164,8 +165,17 @@ def load_map(item: str, opts: MapOptions | None = None,
             "JSON/YAML, nav2 map YAML or MovingAI .map file",
         )
     started = time.perf_counter()
+    last = [started]
+
+    def progress(fraction: float) -> None:
+        now = time.perf_counter()
+        if note is not None and now - started > SLOW and now - last[0] > SLOW:
+            last[0] = now
+            note(f"importing {item}: {100 * fraction:.0f}% of the grid turned into polygons, "
+                 f"{now - started:.1f} s")
+
     try:
-        scenario, imported = _load_file(path, opts)
+        scenario, imported = _load_file(path, opts, progress)
     except InputError:
         raise
     except (ValueError, KeyError, OSError) as exc:  # ScenarioError, MapImportError, ...

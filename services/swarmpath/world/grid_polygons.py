@@ -23,6 +23,7 @@ parts of its boundary; :func:`swarmpath.world.optimum.shortest_path` ignores suc
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -103,15 +104,19 @@ def _trace(part: NDArray[np.bool_]) -> NDArray[np.int64]:
 
 
 def grid_polygons(
-    blocked: NDArray[np.bool_], tile: int = DEFAULT_TILE
+    blocked: NDArray[np.bool_], tile: int = DEFAULT_TILE,
+    progress: Callable[[float], None] | None = None,
 ) -> list[NDArray[np.int64]]:
     """Simple counter-clockwise polygons (vertices in cell units) covering exactly the blocked
-    cells; ordered by tile (rows of tiles from the bottom), then by position."""
+    cells; ordered by tile (rows of tiles from the bottom), then by position. ``progress`` gets
+    the fraction of tile rows done."""
     b = np.asarray(blocked, dtype=bool)
     if tile < 1:
         raise ValueError(f"tile must be >= 1, got {tile}")
     out: list[NDArray[np.int64]] = []
     for r0 in range(0, b.shape[0], tile):
+        if progress is not None:
+            progress(r0 / b.shape[0])
         for c0 in range(0, b.shape[1], tile):
             window = b[r0 : r0 + tile, c0 : c0 + tile]
             if not window.any():

@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -144,10 +144,12 @@ def blocked_rectangles(blocked: NDArray[np.bool_]) -> list[tuple[int, int, int, 
     return out
 
 
-def _polygon_obstacles(blocked: NDArray[np.bool_], res: float) -> tuple[Obstacle, ...]:
+def _polygon_obstacles(
+    blocked: NDArray[np.bool_], res: float, progress: Callable[[float], None] | None = None
+) -> tuple[Obstacle, ...]:
     return tuple(
         Obstacle.polygon([(float(x) * res, float(y) * res) for x, y in poly])
-        for poly in grid_polygons(blocked)
+        for poly in grid_polygons(blocked, progress=progress)
     )
 
 
@@ -233,13 +235,14 @@ def _build(
     max_obstacles: int = MAX_OBSTACLES,
     endpoint_margin: float = ENDPOINT_MARGIN,
     allowed: NDArray[np.bool_] | None = None,
+    progress: Callable[[float], None] | None = None,
 ) -> ImportedMap:
     spec = GridSpec((0.0, 0.0), res, (data.shape[0], data.shape[1]))
     grid = OccupancyGrid(spec, data)
     blocked = grid.blocked(unknown_as_occupied)
     check_limits(blocked, source, blocked.size, max_obstacles)
     robot = robot or ROBOT_PRESETS["turtlebot3-burger"]
-    obstacles = _polygon_obstacles(blocked, res)
+    obstacles = _polygon_obstacles(blocked, res, progress)
     if len(obstacles) > max_obstacles:
         raise MapLimitError(
             f"{source}: the blocked cells make {len(obstacles):,} polygons, more than "
@@ -350,6 +353,7 @@ def load_ros_map(
     max_cells: int = MAX_CELLS,
     max_obstacles: int = MAX_OBSTACLES,
     endpoint_margin: float = ENDPOINT_MARGIN,
+    progress: Callable[[float], None] | None = None,
 ) -> ImportedMap:
     """Import a ROS map_server / nav2 map (YAML + PGM/PNG/BMP image).
 
@@ -424,6 +428,7 @@ def load_ros_map(
         max_obstacles=max_obstacles,
         endpoint_margin=endpoint_margin,
         allowed=sure_free,
+        progress=progress,
     )
 
 
@@ -507,6 +512,7 @@ def load_movingai_map(
     max_cells: int = MAX_CELLS,
     max_obstacles: int = MAX_OBSTACLES,
     endpoint_margin: float = ENDPOINT_MARGIN,
+    progress: Callable[[float], None] | None = None,
 ) -> ImportedMap:
     """Import a MovingAI ``.map`` grid; each cell is ``resolution`` metres wide.
 
@@ -536,4 +542,5 @@ def load_movingai_map(
         meta={"format": "movingai", "height": data.shape[0], "width": data.shape[1]},
         max_obstacles=max_obstacles,
         endpoint_margin=endpoint_margin,
+        progress=progress,
     )
