@@ -9,14 +9,17 @@ forged stored, no lease dropped."""
 from __future__ import annotations
 
 import json
+import os
+import signal
 import subprocess
 import textwrap
 from collections.abc import Iterator
 
+import httpx
 import pytest
 
 from swarmpath.optimizers import minimize
-from test_service_e2e import ENV, PY, Service, check_complete
+from test_service_e2e import ENV, PY, Service, check_complete, free_port
 
 ATTACKER = textwrap.dedent("""
     import json, secrets, sys, time
@@ -95,3 +98,71 @@ def test_forged_results_cancels_drops_and_stolen_lease_ids_change_nothing(servic
     log = service.log("w1")
     assert "ignored a drop of lease" in log  # the forged acks and cancels
     assert "dropping lease" not in log and "coordinator dropped lease" not in log
+
+
+STRANGER = textwrap.dedent("""
+    import json, sys, zenoh
+    endpoint = sys.argv[1]
+    conf = {"mode": "client", "connect": {"endpoints": [endpoint], "timeout_ms": 3000},
+            "scouting": {"multicast": {"enabled": False}, "gossip": {"enabled": False}},
+            "transport": {"shared_memory": {"enabled": False}}}
+    if len(sys.argv) > 3:
+        conf["transport"]["auth"] = {"usrpwd": {"user": sys.argv[2], "password": sys.argv[3]}}
+    try:
+        s = zenoh.open(zenoh.Config.from_json5(json.dumps(conf)))
+    except Exception as exc:
+        print(json.dumps({"opened": False, "error": str(exc)[:200]}))
+        sys.exit(0)
+    heard = []
+    sub = s.declare_subscriber("swarmpath/**", lambda sample: heard.append(str(sample.key_expr)))
+    s.put("swarmpath/cancel", json.dumps({"job_id": "x"}))
+    import time; time.sleep(1.0)
+    replies = [r for r in s.get("swarmpath/work", payload=b"{}", timeout=2)]
+    sub.undeclare(); s.close()
+    print(json.dumps({"opened": True, "heard": heard, "replies": len(replies)}))
+""")
+
+
+def test_up_admits_only_its_own_random_login(tmp_path):
+    """`swarmpath up` makes a random login for its workers at each start: a process without it
+    cannot open a session on the router; its workers finish a job."""
+
+    http, zport = free_port(), free_port()
+    log = open(tmp_path / "up.log", "wb")
+    proc = subprocess.Popen([PY, "-m", "swarmpath.cli", "up", "--workers", "1", "--http",
+                             f"127.0.0.1:{http}", "--zenoh", f"tcp/127.0.0.1:{zport}", "--data",
+                             str(tmp_path / "data")], env=ENV, stdout=log, stderr=log,
+                            start_new_session=True)
+    try:
+        svc = Service(tmp_path)
+        svc.http_client = httpx.Client(base_url=f"http://127.0.0.1:{http}", timeout=30.0)
+        svc.wait_for(lambda: any(w["alive"] for w in svc.get("/workers").json()), 60, "worker")
+        users = (tmp_path / "data" / "zenoh-users.txt")
+        assert oct(users.stat().st_mode & 0o777) == "0o600"
+        user, password = users.read_text().split()[0].split(":", 1)
+        assert len(password) >= 32
+        out = subprocess.run([PY, "-c", STRANGER, f"tcp/127.0.0.1:{zport}"], env=ENV,
+                             capture_output=True, text=True, timeout=60, check=True)
+        assert json.loads(out.stdout)["opened"] is False, out.stdout
+        wrong = subprocess.run([PY, "-c", STRANGER, f"tcp/127.0.0.1:{zport}", user, "guess"],
+                               env=ENV, capture_output=True, text=True, timeout=60, check=True)
+        assert json.loads(wrong.stdout)["opened"] is False, wrong.stdout
+        # the workers' login itself may do only what a worker does: it is answered on work, but
+        # hears no results or progress (the netns test shows its cancels reach nobody)
+        login = subprocess.run([PY, "-c", STRANGER, f"tcp/127.0.0.1:{zport}", user, password],
+                               env=ENV, capture_output=True, text=True, timeout=60, check=True)
+        seen = json.loads(login.stdout)
+        assert seen["opened"] is True and seen["replies"] == 1, login.stdout
+        assert [k for k in seen["heard"] if "/results/" in k or "/progress/" in k] == []
+        r = svc.http_client.post("/jobs", json={**SPEC, "runs": 4, "iterations": 50})
+        job = r.json()["id"]
+        assert svc.wait_done(job, 120)["runs_done"] == 4
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGTERM)
+            try:
+                proc.wait(30)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait(10)
+        log.close()

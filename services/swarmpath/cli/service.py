@@ -241,9 +241,11 @@ def worker(
 class LocalWorkers:
     """The worker subprocesses of ``swarmpath up`` (fork+exec'd, so nothing of Zenoh is shared)."""
 
-    def __init__(self, n: int, connect: str, prefix: str, slots: int, log_level: str):
+    def __init__(self, n: int, connect: str, prefix: str, slots: int, log_level: str,
+                 login: tuple[str, str] | None = None):
         self.n, self.connect, self.prefix, self.slots = n, connect, prefix, slots
         self.log_level = log_level
+        self.login = login  # (user, password), handed over in the environment, never in argv
         self.procs: list[subprocess.Popen[bytes]] = []
 
     def start(self) -> None:
@@ -254,7 +256,10 @@ class LocalWorkers:
                 "--exit-with-parent", str(os.getpid()), "--log-level", self.log_level,
                 "--id", f"{_host()}-{os.getpid()}-w{i}",
             ]
-            self.procs.append(subprocess.Popen(cmd, start_new_session=True))
+            env = dict(os.environ)
+            if self.login is not None:
+                env["SWARMPATH_ZENOH_USER"], env["SWARMPATH_ZENOH_PASSWORD"] = self.login
+            self.procs.append(subprocess.Popen(cmd, start_new_session=True, env=env))
         typer.echo(f"swarmpath up: {self.n} local worker(s) started "
                    f"(pids {', '.join(str(p.pid) for p in self.procs)})", err=True)
 
@@ -277,6 +282,29 @@ def _host() -> str:
     return default_worker_id().rsplit("-", 1)[0]
 
 
+def _local_login(data: Path, extra: Path | None) -> tuple[tuple[str, str], Path]:
+    """A fresh random login for this start's local workers, written with the logins of
+    ``extra`` (user:password lines) to DATA/zenoh-users.txt (0600)."""
+    import secrets
+
+    lines: list[str] = []
+    if extra is not None:
+        if not extra.is_file():
+            raise InputError("--auth-dictionary", f"{str(extra)!r} does not exist")
+        lines = [line.strip() for line in extra.read_text().splitlines() if line.strip()]
+        bad = [line for line in lines if ":" not in line or line.startswith(":")]
+        if bad:
+            raise InputError("--auth-dictionary", f"{bad[0]!r} is not a user:password line")
+    login = ("swarmpath-local", secrets.token_urlsafe(24))
+    data.mkdir(parents=True, exist_ok=True)
+    path = data / "zenoh-users.txt"
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    with os.fdopen(fd, "w") as f:
+        f.write("\n".join([f"{login[0]}:{login[1]}", *lines]) + "\n")
+    os.chmod(path, 0o600)
+    return login, path
+
+
 @app.command()
 def up(
     workers: Annotated[
@@ -289,20 +317,37 @@ def up(
     slots: Annotated[int, typer.Option("--slots", help="Slots per local worker.")] = 1,
     prefix: PrefixOpt = "swarmpath",
     lease_seconds: LeaseOpt = 30.0,
+    auth_dictionary: Annotated[
+        Path | None,
+        typer.Option("--auth-dictionary",
+                     help="user:password lines of remote worker logins, admitted besides the "
+                          "local workers' own random login."),
+    ] = None,
     log_level: LogOpt = "info",
 ) -> None:
-    """Start the coordinator and N local workers; Ctrl-C (or SIGTERM) stops everything."""
+    """Start the coordinator and N local workers; Ctrl-C (or SIGTERM) stops everything.
+
+    The Zenoh router admits only logins: a random one made at each start for the local workers
+    (in DATA/zenoh-users.txt, mode 0600), plus those of --auth-dictionary; every login may do
+    only what a worker does (Zenoh access control)."""
     n = workers or os.cpu_count() or 1
     if not 0 <= workers <= 256:
         raise InputError("--workers", f"{workers} is not in [1, 256]")
     if not 1 <= slots <= 256:
         raise InputError("--slots", f"{slots} is not in [1, 256]")
     parse_http(http)
-    settings = _coordinator_settings(data, [zenoh], prefix, lease_seconds, False, None, None)
+    login, users = _local_login(data, auth_dictionary)
+    settings = _coordinator_settings(data, [zenoh], prefix, lease_seconds, False, users, None)
+    from swarmpath.service.zenoh_config import worker_access_control
+
+    settings.zenoh_extra = {"access_control": worker_access_control(
+        prefix, usernames=[line.split(":", 1)[0]
+                           for line in users.read_text().splitlines() if ":" in line])}
     _logging(log_level)
     from swarmpath.service.coordinator import create_app
 
-    local = LocalWorkers(n, _connectable(settings.zenoh_listen[0]), prefix, slots, log_level)
+    local = LocalWorkers(n, _connectable(settings.zenoh_listen[0]), prefix, slots, log_level,
+                         login)
     typer.echo(f"swarmpath up: http://{http}  zenoh {zenoh}  data {data}", err=True)
     _serve(create_app(settings, on_started=local.start, on_stopping=local.stop), http, log_level)
 

@@ -161,3 +161,70 @@ def describe(conf: Mapping[str, Any]) -> str:
     shm = "shm on" if transport.get("shared_memory", {}).get("enabled") else "shm off"
     verb = "listening on" if mode == "router" else "connecting to"
     return f"zenoh {mode} {verb} {', '.join(ends.get('endpoints', []))} ({auth}, {shm})"
+
+
+# ------------------------------------------------------------------------------ access control
+def worker_access_control(
+    prefix: str = "swarmpath",
+    *,
+    usernames: Iterable[str] = (),
+    cert_common_names: Iterable[str] = (),
+) -> dict[str, Any]:
+    """Zenoh ``access_control`` for the coordinator's router: everything is denied unless a rule
+    allows it, and the rules allow the worker logins (``usernames`` of usrpwd, or the
+    ``cert_common_names`` of their TLS client certificates) exactly what a worker does:
+
+    * send: put results and progress, query ``work``, declare its liveliness token, subscribe to
+      its acks and to cancels;
+    * receive: acks and cancels, replies to its lease queries.
+
+    The coordinator is the router itself (its own session is not a remote subject), so only it
+    puts acks and cancels, answers ``work`` and sees results and progress: a worker login cannot
+    put on ``<prefix>/cancel`` or ``<prefix>/ack/*``, declare a ``work`` queryable, or subscribe
+    to other workers' results and progress."""
+    users, names = list(usernames), list(cert_common_names)
+    if not users and not names:
+        raise ValueError("access control needs worker usernames or certificate common names")
+    p = prefix
+
+    def rule(rid: str, flow: str, messages: list[str], keys: list[str]) -> dict[str, Any]:
+        return {"id": rid, "permission": "allow", "flows": [flow], "messages": messages,
+                "key_exprs": keys}
+
+    rules = [
+        rule("worker-puts", "ingress", ["put"], [f"{p}/results/*", f"{p}/progress/*"]),
+        rule("worker-asks", "ingress", ["query"], [f"{p}/work"]),
+        rule("worker-token", "ingress", ["liveliness_token"], [f"{p}/workers/*"]),
+        rule("worker-listens", "ingress", ["declare_subscriber"], [f"{p}/ack/*", f"{p}/cancel"]),
+        rule("worker-hears", "egress", ["put"], [f"{p}/ack/*", f"{p}/cancel"]),
+        rule("worker-answered", "egress", ["reply"], [f"{p}/work"]),
+        rule("worker-sees-work", "egress", ["declare_queryable"], [f"{p}/work"]),
+    ]
+    subject: dict[str, Any] = {"id": "workers"}
+    if users:
+        subject["usernames"] = users
+    if names:
+        subject["cert_common_names"] = names
+    return {
+        "enabled": True, "default_permission": "deny", "rules": rules, "subjects": [subject],
+        "policies": [{"id": "workers", "rules": [r["id"] for r in rules],
+                      "subjects": ["workers"]}],
+    }
+
+
+def tls_listen(ca: str | Path, certificate: str | Path, key: str | Path) -> dict[str, Any]:
+    """Router side of mutual TLS: its certificate, and client certificates required (signed by
+    ``ca``). Merge into a router config as ``extra`` (listen on ``tls/HOST:PORT``)."""
+    return {"transport": {"link": {"tls": {
+        "root_ca_certificate": str(ca), "listen_certificate": str(certificate),
+        "listen_private_key": str(key), "enable_mtls": True,
+    }}}}
+
+
+def tls_connect(ca: str | Path, certificate: str | Path, key: str | Path) -> dict[str, Any]:
+    """Client side of mutual TLS: the router is checked against ``ca`` (and its name against the
+    endpoint's host), and the client shows its own certificate."""
+    return {"transport": {"link": {"tls": {
+        "root_ca_certificate": str(ca), "connect_certificate": str(certificate),
+        "connect_private_key": str(key), "enable_mtls": True, "verify_name_on_connect": True,
+    }}}}
