@@ -50,7 +50,7 @@ def execute(lease: Lease, worker: str | None = None) -> list[RunResult]:
     """What a worker does with a benchmark lease."""
     c = lease.spec
     res = minimize(c.algorithm, c.function, c.dim, c.agents, c.iterations, seed=lease.seed,
-                   params=c.params, shifted=c.shifted, run_ids=lease.runs)
+                   params=c.params, transform=c.transform, run_ids=lease.runs)
     return [
         signed(lease, RunResult(
             lease_id=lease.lease_id, job_id=lease.job_id, cell=lease.cell, run=r,
@@ -376,6 +376,18 @@ def test_partial_summary_while_running(store):
     rows = s["rows"]
     assert rows[0]["runs"] == 3 and rows[0]["rank"] == 1
     assert rows[1]["runs"] == 0 and rows[1]["avg"] is None
+
+
+@pytest.mark.parametrize("transform", ["none", "shift"])
+def test_summary_flags_origin_suspect_cells_of_untransformed_jobs(store, transform):
+    """HPO's hunter rule reaches exact zeros on plain F1 (optimum at the origin), not on F5."""
+    spec = {**SPEC, "algorithms": ["HPO"], "functions": ["F1", "F5"], "dims": [10], "runs": 2,
+            "agents": 20, "iterations": 300, "transform": transform}
+    job = store.create_job(spec, now=T0)
+    drain(store)
+    flags = {r["function"]: r["origin_suspect"] for r in store.summary(job)["rows"]}
+    assert flags == ({"F1": True, "F5": False} if transform == "none" else
+                     {"F1": None, "F5": None})
 
 
 def test_map_summary(store):

@@ -20,6 +20,10 @@ NOTES: dict[str, str] = {
     "error_mean": "mean final distance to the goal over all runs (m)",
     "seconds_mean": "mean planning wall time per run (s)",
     "rank": "rank of avg among the algorithms on this function and dimension (1 = best)",
+    "origin_suspect": "true when runs reached exact zeros or values below 1e-100 on a function "
+                      "whose optimum is at the origin (usually a move that scales positions "
+                      "toward 0, not search; rerun with transform shift); blank for "
+                      "transformed jobs",
     "marker": "+ / = / -: significantly better / no significant difference / worse than the "
               "reference algorithm (two-sided Wilcoxon rank-sum test, Holm-adjusted over the "
               "table, alpha 0.05; blank for the reference itself; docs/statistics.md)",

@@ -9,6 +9,7 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
+from swarmpath.audit import origin_suspect
 from swarmpath.service.store.base import StoreBase, _safe
 from swarmpath.service.summary_stats import (
     BENCHMARK_TEST_COLUMNS,
@@ -19,7 +20,7 @@ from swarmpath.service.summary_stats import (
 
 BENCHMARK_COLUMNS = (
     "algorithm", "function", "dim", "runs", "failed", "min", "max", "avg", "std", "median", "rank",
-    *BENCHMARK_TEST_COLUMNS,
+    "origin_suspect", *BENCHMARK_TEST_COLUMNS,
 )
 MAP_COLUMNS = (
     "planner", "map", "runs", "failed", "success_rate", "collisions", "length_mean", "length_std",
@@ -135,6 +136,10 @@ class SummariesMixin(StoreBase):
                 }
                 if c["idx"] in values:
                     row.update(describe(values[c["idx"]]))
+                    plain = (spec.get("transform") or "none") == "none" and not spec.get("shifted")
+                    row["origin_suspect"] = (
+                        origin_suspect(spec["function"], values[c["idx"]]) if plain else None
+                    )
                     groups.setdefault((row["function"], row["dim"]), {})[row["algorithm"]] = row[
                         "avg"
                     ]
@@ -144,7 +149,9 @@ class SummariesMixin(StoreBase):
                 if "avg" in row:
                     row["rank"] = ranks[(row["function"], row["dim"])][row["algorithm"]]
                 else:
-                    row.update(dict.fromkeys(("min", "max", "avg", "std", "median", "rank")))
+                    row.update(dict.fromkeys(
+                        ("min", "max", "avg", "std", "median", "rank", "origin_suspect")
+                    ))
             statistics = benchmark_statistics(
                 rows, [values.get(c["idx"]) for c in cells], job_spec["algorithms"],
                 job_spec.get("reference"),
