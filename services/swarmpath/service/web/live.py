@@ -23,10 +23,10 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
+from swarmpath.service.store import FINAL_STATES
 from swarmpath.service.util import json_safe
 from swarmpath.service.web.aggregates import JobAggregates
 
-FINAL_STATES = frozenset({"done", "failed", "cancelled"})
 _SAFE_ID = re.compile(r"^[A-Za-z0-9_.-]{1,64}$")
 
 log = logging.getLogger("swarmpath.dashboard")

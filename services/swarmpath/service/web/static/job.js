@@ -158,13 +158,20 @@
     }
   }
 
+  /* While the job runs: its status every 2 s, its charts every DATA_EVERY-th time (the data is
+     tens to hundreds of KiB; many open pages must not slow the workers down), and once more
+     when it ends. */
+  const DATA_EVERY = 3;
+  let tick = 0;
   async function refresh() {
     const s = await SP.api("/jobs/" + encodeURIComponent(id));
     if (!s.ok) { SP.q("#status").textContent = `job ${id}: ${s.status} ${JSON.stringify(s.data && s.data.detail)}`; return; }
+    const ended = status && (status.state === "queued" || status.state === "running") && !(s.data.state === "queued" || s.data.state === "running");
     renderStatus(s.data);
     if (!SP.q("#downloads").innerHTML) downloads(s.data.kind);
+    const due = tick++ % DATA_EVERY === 0 || ended || etag === null;
     const headers = etag ? { "If-None-Match": etag } : {};
-    const r = await SP.api(`/ui/jobs/${encodeURIComponent(id)}/data`, { headers: headers });
+    const r = due ? await SP.api(`/ui/jobs/${encodeURIComponent(id)}/data`, { headers: headers }) : { status: 304 };
     if (r.status === 200) {
       etag = r.headers.get("etag");
       if (r.data.kind === "benchmark") renderBenchmark(r.data); else await renderMap(r.data);
