@@ -10,7 +10,9 @@ import pytest
 from fastapi.testclient import TestClient
 
 from swarmpath.service.http.app import create_app
+from swarmpath.service.protocol import Lease, LeaseRequest, decode_work_reply, encode
 from swarmpath.service.settings import CoordinatorSettings
+from swarmpath.service.worker import execute_lease, pack_batches
 
 DATA = Path(__file__).parent / "data"
 ARENA = (DATA / "arena.map").read_text()
@@ -109,3 +111,34 @@ def test_body_over_the_limit_is_refused_naming_it(data_dir: Path) -> None:
     with TestClient(_app(data_dir)) as client:
         r = client.post("/maps", json={"name": "x", "format": "movingai", "map": "." * 1_100_000})
         assert r.status_code in (413, 422) and "exceeds" in r.text
+
+
+def test_a_job_on_an_uploaded_map_is_worked_off(data_dir: Path) -> None:
+    """A worker runs the cells of an uploaded map from the scenario the job carries."""
+    with TestClient(_app(data_dir)) as client:
+        arena = client.post("/maps", json={"name": "arena", "format": "movingai",
+                                           "map": ARENA}).json()
+        job = client.post("/jobs", json={
+            "kind": "map", "planners": ["OMPL-RRTstar"], "runs": 2, "seed": 3,
+            "params": {"OMPL-RRTstar": {"time": 0.2}}, "maps": [{"map": arena["id"]}],
+        }).json()
+        core = client.app.state.core  # type: ignore[attr-defined]
+        core.publish = lambda key, payload: None
+        core.worker_alive("w1")
+        done = 0
+        reply = decode_work_reply(core.handle_lease_request(
+            encode(LeaseRequest(worker="w1", max_runs=10))))
+        while isinstance(reply, Lease):
+            results = execute_lease(reply)
+            for payload in pack_batches("w1", [data for _run, data in results]):
+                core.handle_results(f"swarmpath/results/{reply.job_id}", payload)
+            done += len(results)
+            reply = decode_work_reply(core.handle_lease_request(
+                encode(LeaseRequest(worker="w1", max_runs=10))))
+        assert done == 2
+        status = client.get(f"/jobs/{job['id']}").json()
+        assert status["state"] == "done" and status["runs_done"] + status["runs_failed"] == 2
+        rows = client.get(f"/jobs/{job['id']}/summary").json()["rows"]
+        assert rows[0]["map"] == arena["id"] and rows[0]["runs"] == 2
+        assert rows[0]["success_rate"] == 1.0 and rows[0]["collisions"] == 0
+        assert rows[0]["gap_mean"] > 0  # the workers computed the uploaded map's exact optimum
