@@ -25,6 +25,7 @@ def test_help_shows_every_option_text_and_default(name):
     assert result.exit_code == 0, result.output
     shown = squeeze(result.output)
     command = GROUP.commands[name]  # type: ignore[attr-defined]
+    assert squeeze(command.help or "") in shown, (name, command.help)
     checked = 0
     for param in command.params:
         if getattr(param, "hidden", False) or not getattr(param, "help", None):
