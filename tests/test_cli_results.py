@@ -380,3 +380,16 @@ def test_download_layout_shows_the_files_topics_and_plots_curves(service, tmp_pa
     assert (topic, panels["Plot!swarmpath"]["xAxisVal"]) == ("/curves", "index")
     assert CURVE_SCHEMA["properties"][field]["type"] == "array"
     assert json.loads(foxglove.LAYOUT_FILE.read_text()) == foxglove.layout()
+
+
+def test_runs_of_a_job_not_run_yet_export_with_empty_metrics(service, tmp_path):
+    from swarmpath import exports
+
+    cli, http, _core = service
+    job = http.post("/jobs", json=BENCH).json()["id"]
+    out = tmp_path / "queued.parquet"
+    result = cli("results", job, "--runs", "--format", "parquet", "-o", str(out))
+    assert result.exit_code == 0, result.stderr
+    df = exports.load_results(out)
+    assert len(df) == 12 and set(df["state"]) == {"queued"}
+    assert df["curve"].isna().all() and df["best_fitness"].isna().all()

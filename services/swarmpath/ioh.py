@@ -29,12 +29,13 @@ is left out and counted.
 
 from __future__ import annotations
 
-import math
 import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 SEPARATOR = '"function evaluation" "best-so-far f(x)"'
 
@@ -52,34 +53,33 @@ def function_id(name: str) -> int:
 def evaluation_points(length: int, iterations: int, evaluations: int, stride: int = 1,
                       initial: int = 0) -> list[int]:
     """Evaluations spent after each stored curve sample (see the module doc): ``initial`` for
-    the first population, then an equal share of the rest per iteration."""
+    the first population, then an equal share of the rest per iteration (strictly increasing)."""
+    if length == 0:
+        return []
     iterations = max(iterations, length)
-    its = [min(j * stride, iterations - 1) + 1 for j in range(length)]
-    if length:
-        its[-1] = iterations
+    its = np.minimum(np.arange(length) * stride, iterations - 1) + 1
+    its[-1] = iterations
     initial = min(max(initial, 0), evaluations)
-    per = (evaluations - initial) / iterations if iterations else 0.0
-    out: list[int] = []
-    for k in its:
-        e = max(1, round(initial + k * per))
-        out.append(max(e, out[-1] + 1) if out else e)
+    per = (evaluations - initial) / iterations
+    e = np.maximum(1, np.rint(initial + its * per)).astype(np.int64)
+    k = np.arange(length)
+    out: list[int] = (np.maximum.accumulate(e - k) + k).tolist()
     return out
 
 
 def run_block(curve: list[float], points: list[int]) -> list[tuple[int, float]]:
     """The (evaluations, best-so-far) lines of one run: the first finite value, each
     improvement, and the last evaluation."""
-    lines: list[tuple[int, float]] = []
-    best = math.inf
-    for e, v in zip(points, curve, strict=True):
-        v = float(v)
-        if not math.isfinite(v):
-            continue
-        if not lines or v < best:
-            best = v
-            lines.append((e, v))
-    if lines and lines[-1][0] != points[-1]:
-        lines.append((points[-1], best))
+    c = np.asarray(curve, dtype=float)
+    finite = np.isfinite(c)
+    if not finite.any():
+        return []
+    cf = np.where(finite, c, np.inf)
+    before = np.concatenate([[np.inf], np.minimum.accumulate(cf)[:-1]])
+    keep = np.flatnonzero(finite & (cf < before))
+    lines = [(int(points[i]), float(c[i])) for i in keep]
+    if lines[-1][0] != points[-1]:
+        lines.append((int(points[-1]), lines[-1][1]))
     return lines
 
 

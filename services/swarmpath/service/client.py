@@ -142,13 +142,16 @@ class ServiceClient:
         """Save every run as CSV or Parquet (``GET /jobs/{id}/runs?format=...``)."""
         return self._save(f"/jobs/{job_id}/runs", Path(path), {"format": fmt})
 
-    def _stream_lines(self, path: str, params: dict[str, Any]) -> Iterator[str]:
+    def _stream_lines(self, path: str, params: dict[str, Any]) -> Iterator[bytes]:
         try:
             with self._http.stream("GET", path, params=params) as response:
                 self._raise_streamed(response)
-                for line in response.iter_lines():
-                    if line.strip():
-                        yield line
+                rest = b""
+                for chunk in response.iter_bytes():  # bytes split by hand: iter_lines decodes
+                    *lines, rest = (rest + chunk).split(b"\n")  # and splits 3x slower
+                    yield from (line for line in lines if line.strip())
+                if rest.strip():
+                    yield rest
         except httpx.TransportError as exc:
             raise Unreachable(0, f"cannot reach the coordinator at {self.url}: {exc}") from None
 

@@ -1,8 +1,8 @@
 """A job's results: the summary tables, the runs, one run, the MCAP file."""
 
-import json
 from typing import Any, Literal
 
+import pydantic_core
 from fastapi import APIRouter, HTTPException
 from fastapi.responses import FileResponse, PlainTextResponse, StreamingResponse
 
@@ -61,7 +61,7 @@ def _stream(core: Any, job_id: str, kind: str, format: str) -> StreamingResponse
     name = f"{job_id}-runs.{format}"
     headers = {"Content-Disposition": f'attachment; filename="{name}"'}
     if format == "jsonl":
-        lines = (json.dumps(json_safe(item), allow_nan=False) + "\n" for item in items)
+        lines = (pydantic_core.to_json(json_safe(item)) + b"\n" for item in items)
         return StreamingResponse(lines, media_type="application/x-ndjson", headers=headers)
     rows = exports.rows(items, job_id)
     if format == "csv":

@@ -1,0 +1,146 @@
+#!/usr/bin/env python3
+"""Per-run exports of a big benchmark job: how fast every run streams out as CSV, Parquet and
+JSON lines (``GET /jobs/{id}/runs?format=...``), and the IOHprofiler files written from the JSON
+lines (``swarmpath results JOB --format ioh``).
+
+    .venv/bin/python scripts/bench/exports.py [--runs 100]
+
+The job is the ICOOT paper's Table 2 (6 algorithms x F1-F13 x 30 dims x 500 iterations x
+``--runs`` runs per cell: 7,800 runs at 100, 78,000 at 1000) with synthetic results fed through
+the coordinator's result handler (scripts/bench/dashboard.py ``fill``). The coordinator serves
+REST with uvicorn on a free loopback port in this process; each export is downloaded once with
+httpx. Markdown goes to stdout, progress to stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+import httpx
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "services"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from dashboard import FUNCTIONS, TABLE2_ALGORITHMS  # noqa: E402
+from service import free_port, note  # noqa: E402
+
+
+def fill(core: Any, spec: dict[str, Any]) -> str:
+    """Submit ``spec`` and hand the coordinator's result handler synthetic results (monotone
+    best-so-far curves, each result proven with its lease's capability, as a worker sends them).
+    """
+    from swarmpath.service.capability import result_proof
+    from swarmpath.service.protocol import (
+        Lease,
+        LeaseBundle,
+        LeaseRequest,
+        RunResult,
+        decode_work_reply,
+        encode,
+        parse_job_spec,
+    )
+    from swarmpath.service.worker import pack_batches
+
+    status = core.submit(parse_job_spec(spec))
+    rng = np.random.default_rng(1)
+    core.worker_alive("bench")
+    iterations = spec["iterations"]
+    while True:
+        reply = decode_work_reply(core.handle_lease_request(
+            encode(LeaseRequest(worker="bench", max_runs=1000, max_leases=8))))
+        leases = [reply] if isinstance(reply, Lease) else (
+            reply.leases if isinstance(reply, LeaseBundle) else [])
+        if not leases:
+            break
+        for lease in leases:
+            n = len(lease.runs)
+            steps = rng.exponential(0.02, size=(n, iterations))
+            curves = np.minimum.accumulate(
+                10.0 ** (4.0 - np.cumsum(steps, axis=1) * rng.uniform(0.2, 2.0, (n, 1))), axis=1)
+            payloads = []
+            for i, run in enumerate(lease.runs):
+                result = RunResult(
+                    lease_id=lease.lease_id, job_id=lease.job_id, cell=lease.cell, run=run,
+                    worker="bench", seconds=0.001,
+                    metrics={"best_fitness": float(curves[i, -1]),
+                             "evaluations": spec["agents"] * (iterations + 1)},
+                    curve=curves[i].tolist(), best_position=rng.uniform(-1, 1, 30).tolist())
+                proof = result_proof(lease.capability, result)
+                payloads.append(encode(result.model_copy(update={"proof": proof})))
+            core.handle_result_batches([(f"swarmpath/results/{lease.job_id}", p)
+                                        for p in pack_batches("bench", payloads)])
+    done = core.store.job_status(status.id)
+    if done.runs_done != done.runs_total:
+        raise SystemExit(f"only {done.runs_done} of {done.runs_total} results were accepted")
+    return status.id
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=100, help="runs per cell")
+    args = parser.parse_args()
+    import uvicorn
+
+    from swarmpath.ioh import write_ioh
+    from swarmpath.service.client import ServiceClient
+    from swarmpath.service.coordinator import CoordinatorSettings, create_app
+
+    spec = {"kind": "benchmark", "algorithms": TABLE2_ALGORITHMS, "functions": FUNCTIONS,
+            "dims": [30], "runs": args.runs, "agents": 30, "iterations": 500, "seed": 1}
+    with tempfile.TemporaryDirectory() as tmp:
+        app = create_app(CoordinatorSettings(data_dir=Path(tmp) / "d", synchronous="NORMAL"),
+                         use_zenoh=False)
+        port = free_port()
+        server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port,
+                                               log_level="warning", timeout_graceful_shutdown=2))
+        thread = threading.Thread(target=server.run, daemon=True)
+        thread.start()
+        while not server.started:
+            time.sleep(0.05)
+        url = f"http://127.0.0.1:{port}"
+        rows = []
+        try:
+            job = fill(app.state.core, spec)
+            total = app.state.core.store.job_status(job).runs_total
+            note(f"  {total} runs stored")
+            with httpx.Client(base_url=url, timeout=600) as http:
+                for fmt in ("csv", "parquet", "jsonl"):
+                    t = time.perf_counter()
+                    size = 0
+                    with http.stream("GET", f"/jobs/{job}/runs", params={"format": fmt}) as r:
+                        r.raise_for_status()
+                        for chunk in r.iter_bytes():
+                            size += len(chunk)
+                    s = time.perf_counter() - t
+                    rows.append(f"| `?format={fmt}` | {s:.1f} | {total / s:,.0f} | "
+                                f"{size / 1e6:.1f} |")
+                    note(f"  {fmt}: {s:.1f} s")
+            with ServiceClient(url) as client:
+                t = time.perf_counter()
+                written = write_ioh(client.iter_runs(job), Path(tmp) / "ioh", job)
+                s = time.perf_counter() - t
+                size = sum(p.stat().st_size for p in written.files)
+                rows.append(f"| `--format ioh` ({written.runs} runs, {len(written.files)} "
+                            f"files) | {s:.1f} | {total / s:,.0f} | {size / 1e6:.1f} |")
+        finally:
+            server.should_exit = True
+            thread.join(10)
+    print(f"Exports of a {total:,}-run benchmark job (500-iteration curves), "
+          f"{platform.python_implementation()} {platform.python_version()}, "
+          f"command: `scripts/bench/exports.py --runs {args.runs}`\n")
+    print("| export | seconds | runs/s | MB |")
+    print("| --- | --- | --- | --- |")
+    print("\n".join(rows))
+
+
+if __name__ == "__main__":
+    main()
