@@ -221,7 +221,7 @@ def test_a_job_worked_off_through_the_handlers(client, core):
     csv = client.get(f"/jobs/{job['id']}/summary", params={"format": "csv"})
     assert csv.headers["content-type"].startswith("text/csv")
     assert csv.text.splitlines()[0].startswith("algorithm,function,dim")
-    assert csv.text.splitlines()[0].endswith(",rank,marker,p,p_holm")
+    assert csv.text.splitlines()[0].endswith(",rank,origin_suspect,marker,p,p_holm")
     assert summary["statistics"]["comparison"]["reference"] == "PSO"  # the last algorithm
     assert [r["marker"] for r in summary["rows"] if r["algorithm"] == "PSO"] == [None, None]
     assert all(r["marker"] in ("+", "=", "-") for r in summary["rows"] if r["algorithm"] == "GWO")
