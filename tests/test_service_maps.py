@@ -142,3 +142,30 @@ def test_a_job_on_an_uploaded_map_is_worked_off(data_dir: Path) -> None:
         assert rows[0]["map"] == arena["id"] and rows[0]["runs"] == 2
         assert rows[0]["success_rate"] == 1.0 and rows[0]["collisions"] == 0
         assert rows[0]["gap_mean"] > 0  # the workers computed the uploaded map's exact optimum
+
+
+def test_upload_map_command_bodies_and_the_client(data_dir: Path, tmp_path: Path) -> None:
+    """`swarmpath upload-map FILE`: the body it sends for each format, bad arguments exit 2
+    naming them, and the client's upload against the app."""
+    from typer.testing import CliRunner
+
+    from swarmpath.cli import app as cli
+    from swarmpath.cli.upload import upload_body
+    from swarmpath.service.client import ServiceClient
+
+    nav = upload_body(DATA / "tb3_sandbox.yaml", None, None)
+    assert nav["name"] == "tb3_sandbox" and nav["format"] == "nav2"
+    assert base64.b64decode(nav["image"]) == (DATA / "tb3_sandbox.pgm").read_bytes()
+    grid = upload_body(DATA / "arena.map", "a1", 0.25)
+    assert grid == {"name": "a1", "format": "movingai", "map": ARENA, "resolution": 0.25}
+    runner = CliRunner()
+    for args, option in ((["upload-map", str(tmp_path / "none.map")], "FILE"),
+                         (["upload-map", str(DATA / "arena.map.scen")], "FILE"),
+                         (["upload-map", str(DATA / "tb3_sandbox.yaml"), "--resolution", "2"],
+                          "--resolution")):
+        result = runner.invoke(cli, args)
+        assert result.exit_code == 2 and option in result.stderr
+    with TestClient(_app(data_dir)) as c:
+        client = ServiceClient("http://testserver", transport=c._transport)
+        info = client.upload_map(grid)
+        assert info["size"] == [12.25, 12.25] and client.maps()[0]["id"] == info["id"]

@@ -103,6 +103,13 @@ class ServiceClient:
     def submit(self, spec: Mapping[str, Any]) -> dict[str, Any]:
         return self._json("POST", "/jobs", json=dict(spec))
 
+    def upload_map(self, body: Mapping[str, Any]) -> dict[str, Any]:
+        """POST /maps (see :class:`swarmpath.service.maps.MapUpload`)."""
+        return self._json("POST", "/maps", json=dict(body))
+
+    def maps(self, limit: int = 100, offset: int = 0) -> list[dict[str, Any]]:
+        return list(self._json("GET", "/maps", params={"limit": limit, "offset": offset}))
+
     def jobs(self, state: str | None = None, limit: int = 100, offset: int = 0) -> list[dict]:
         params: dict[str, Any] = {"limit": limit, "offset": offset}
         if state:

@@ -1,0 +1,77 @@
+"""``swarmpath upload-map``: send a nav2 map (YAML + image) or a MovingAI .map to a coordinator
+(``POST /maps``); prints the map id to name in a map job: ``{"map": ID, "start": [x, y],
+"goal": [x, y]}``."""
+
+from __future__ import annotations
+
+import base64
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from swarmpath.cli.core import InputError, app
+from swarmpath.cli.service import UrlOpt, _client, _fail
+
+
+def upload_body(path: Path, name: str | None, resolution: float | None) -> dict[str, Any]:
+    """The POST /maps body for a file; raises InputError naming the argument at fault."""
+    import yaml
+
+    if not path.is_file():
+        raise InputError("FILE", f"no such file {str(path)!r}")
+    stem = name or path.stem
+    if path.suffix.lower() == ".map":
+        body: dict[str, Any] = {"name": stem, "format": "movingai",
+                                "map": path.read_text(encoding="utf-8")}
+        if resolution is not None:
+            body["resolution"] = resolution
+        return body
+    if path.suffix.lower() not in (".yaml", ".yml"):
+        raise InputError("FILE", "a nav2 map .yaml (with its image) or a MovingAI .map")
+    if resolution is not None:
+        raise InputError("--resolution", "applies to MovingAI .map files only")
+    text = path.read_text(encoding="utf-8")
+    try:
+        doc = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise InputError("FILE", f"{path}: not valid YAML ({exc})") from None
+    if not isinstance(doc, dict) or not isinstance(doc.get("image"), str):
+        raise InputError("FILE", f"{path}: a nav2 map YAML needs an 'image' key")
+    image = Path(doc["image"])
+    image = image if image.is_absolute() else path.parent / image
+    if not image.is_file():
+        raise InputError("FILE", f"{path}: image file not found: {image}")
+    return {"name": stem, "format": "nav2", "yaml": text,
+            "image": base64.b64encode(image.read_bytes()).decode()}
+
+
+@app.command("upload-map")
+def upload_map(
+    file: Annotated[Path, typer.Argument(metavar="FILE", help="nav2 map .yaml or MovingAI .map")],
+    name: Annotated[str | None, typer.Option("--name", help="Map name (default: file stem).")]
+    = None,
+    resolution: Annotated[float | None, typer.Option(
+        "--resolution", metavar="M", help="MovingAI cell size in metres (default 1).")] = None,
+    url: UrlOpt = None,
+) -> None:
+    """Upload a map to the coordinator; prints its id (name it in a map job's maps as
+    {"map": ID, "start": [x, y], "goal": [x, y]})."""
+    from swarmpath.service.client import ServiceError, describe_detail
+
+    body = upload_body(file, name, resolution)
+    with _client(url) as client:
+        try:
+            info = client.upload_map(body)
+        except ServiceError as exc:
+            if exc.status == 413:
+                raise InputError("FILE", describe_detail(exc.detail)) from None
+            _fail(exc)
+            raise
+        except Exception as exc:
+            _fail(exc)
+            raise
+    typer.echo(info["id"])
+    typer.echo(f"map {info['id']}: {info['name']}, {info['size'][0]:g} x {info['size'][1]:g} m, "
+               f"{info['obstacles']} obstacles, default start {info['start']} goal "
+               f"{info['goal']}", err=True)
