@@ -55,8 +55,8 @@ def upload_map(
         "--resolution", metavar="M", help="MovingAI cell size in metres (default 1).")] = None,
     url: UrlOpt = None,
 ) -> None:
-    """Upload a map to the coordinator; prints its id (name it in a map job's maps as
-    {"map": ID, "start": [x, y], "goal": [x, y]})."""
+    """Upload a map to the coordinator (POST /maps); prints its id, which a map job names in
+    its maps as {"map": ID} with an optional start and goal."""
     from swarmpath.service.client import ServiceError, describe_detail
 
     body = upload_body(file, name, resolution)
