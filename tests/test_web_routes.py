@@ -9,6 +9,7 @@ import json
 import pytest
 from fastapi.testclient import TestClient
 
+from swarmpath.functions.transforms import TRANSFORMS
 from swarmpath.service.coordinator import CoordinatorSettings, create_app
 from swarmpath.service.http.routes import dashboard as dashboard_routes
 from swarmpath.service.http.routes.pages import ASSETS
@@ -73,6 +74,9 @@ def test_jobs_snapshot_rate_eta_and_config(client, app):
     cfg = client.get("/ui/config").json()
     assert cfg["token_required"] is False
     assert cfg["defaults"]["benchmark"]["runs"] == 30 and cfg["defaults"]["map"]["runs"] == 10
+    assert cfg["transforms"] == list(TRANSFORMS) and cfg["defaults"]["benchmark"]["transform"] == (
+        "none"
+    )
 
 
 def test_eta_from_the_rate_of_a_running_job(tmp_path):

@@ -50,7 +50,9 @@ def _json(data: Any, status: int = 200, headers: dict[str, str] | None = None) -
 
 @router.get("/ui/config")
 def config(request: Request) -> dict[str, Any]:
-    """Whether submit/cancel need a bearer token, and the defaults of the job specs' fields."""
+    """Whether submit/cancel need a bearer token, the defaults of the job specs' fields, and the
+    registered function transforms (the benchmark form's choices)."""
+    from swarmpath.functions.transforms import TRANSFORMS
     from swarmpath.service.protocol import BenchmarkJobSpec, MapJobSpec
 
     token = getattr(request.app.state, "token", None)  # create_app resolved $SWARMPATH_TOKEN
@@ -60,7 +62,8 @@ def config(request: Request) -> dict[str, Any]:
                 for name, f in cls.model_fields.items() if not f.is_required()}
 
     return {"token_required": bool(token),
-            "defaults": {"benchmark": defaults(BenchmarkJobSpec), "map": defaults(MapJobSpec)}}
+            "defaults": {"benchmark": defaults(BenchmarkJobSpec), "map": defaults(MapJobSpec)},
+            "transforms": list(TRANSFORMS)}
 
 
 @router.get("/ui/jobs")

@@ -35,7 +35,8 @@
         ${number("dims", b.dims.join(", "), "dims (comma-separated)")}
         ${number("runs", b.runs, "runs per cell")}${number("agents", b.agents, "agents")}
         ${number("iterations", b.iterations, "iterations")}${number("seed", b.seed, "seed")}
-        <label><input type="checkbox" name="shifted"> shifted</label><div class="err" data-error="shifted"></div>
+        <label>transform <select name="transform">${cfg.transforms.map((t) =>
+          `<option value="${SP.esc(t)}"${t === b.transform ? " selected" : ""}>${SP.esc(t)}</option>`).join("")}</select></label><div class="err" data-error="transform"></div>
         ${number("reference", "", "reference algorithm for the statistics (empty: the last one)")}
         ${cat.optimizers.map((o) => paramInputs("benchmark", o)).join("")}
       </fieldset>
@@ -87,7 +88,7 @@
         dims: value(form, "dims").split(",").map((s) => asNumber(s.trim())).filter((s) => s !== ""),
         runs: asNumber(value(form, "runs")), agents: asNumber(value(form, "agents")),
         iterations: asNumber(value(form, "iterations")), seed: asNumber(value(form, "seed")),
-        shifted: form.querySelector("[name=shifted]").checked, params: params(form, "benchmark", algorithms),
+        transform: form.querySelector("[name=transform]").value, params: params(form, "benchmark", algorithms),
         ...(value(form, "reference") ? { reference: value(form, "reference") } : {}) };
     }
     const planners = checked(form, "planners");
