@@ -246,6 +246,8 @@ def reproduce(
     if not 0 <= jobs <= parallel.MAX_JOBS:
         raise InputError("--jobs", f"{jobs} is not in [0, {parallel.MAX_JOBS}]")
     results: list[Result] = []
+    if from_ is not None and (table is not None or runs is not None or url is not None):
+        raise InputError("--from", "judges saved runs: give no TABLE, --runs or --url with it")
     if from_ is not None:
         try:
             loaded = json.loads(from_.read_text(encoding="utf-8"))
