@@ -53,6 +53,11 @@ def test_bad_input_is_one_line_naming_the_field(args, field):
     assert len(res.stderr.strip().splitlines()) == 1
 
 
+def test_tables_by_name_list_or_all():
+    assert cli.resolve_tables("all") == list(reference.TABLES)
+    assert cli.resolve_tables("mfb-maps, icoot-table2,mfb-maps") == ["mfb-maps", "icoot-table2"]
+
+
 def test_study_setting_is_the_papers_with_runs_lowered():
     s = cli.study_setting(T2, None, 1)
     assert (s["runs"], s["agents"], s["iterations"], s["dims"]) == (1000, 30, 500, [30])

@@ -32,10 +32,14 @@ def resolve_tables(name: str | None) -> list[str]:
         raise InputError("TABLE", f"name a table ({', '.join(reference.TABLES)}) or use --list")
     if name.strip().lower() == "all":
         return list(reference.TABLES)
-    if name not in reference.TABLES:
-        raise InputError("TABLE", f"unknown table {name!r}; reproducible: "
-                                  f"{', '.join(reference.TABLES)}")
-    return [name]
+    names = [n.strip() for n in name.split(",") if n.strip()]
+    for n in names:
+        if n not in reference.TABLES:
+            raise InputError("TABLE", f"unknown table {n!r}; reproducible: "
+                                      f"{', '.join(reference.TABLES)}")
+    if not names:
+        raise InputError("TABLE", "no table given")
+    return list(dict.fromkeys(names))
 
 
 def study_setting(table: reference.Table, runs: int | None, seed: int) -> dict[str, Any]:
@@ -208,7 +212,9 @@ def command_line(name: str, runs: int | None, seed: int, fmt: str) -> str:
 @app.command()
 def reproduce(
     table: Annotated[
-        str | None, typer.Argument(metavar="TABLE", help="A table of --list, or 'all'.")
+        str | None,
+        typer.Argument(metavar="TABLE", help="A table of --list, several joined by commas, "
+                                            "or 'all'."),
     ] = None,
     list_: Annotated[
         bool, typer.Option("--list", help="Name the reproducible tables and exit.")
@@ -266,7 +272,8 @@ def reproduce(
         for name in names:  # validate every table's options before running anything
             study_setting(reference.load(name), runs, seed)
     if fmt == "markdown" and not as_json:
-        whole = table if table is not None else ("all" if len(names) > 1 else names[0])
+        whole = table if table is not None else (
+            "all" if names == list(reference.TABLES) else ",".join(names))
         first_runs = runs
         if from_ is not None:
             first_runs = int(results[0][1]["runs"])
