@@ -809,7 +809,7 @@ def shortest_path(
             i1 += 1
         ii, jj = _pair_rows(i0, i1, n_disks)
         done += len(ii)
-        if edge_index is not None:  # disks of radius <= margin whose centres see no obstacle
+        if edge_index is not None:  # small disks whose centre line crosses an interior
             small = (radii[ii] <= margin + TOL) & (radii[jj] <= margin + TOL)
             drop = np.zeros(len(ii), dtype=bool)
             drop[small] = edge_index.pairs_blocked(centres[ii[small]], centres[jj[small]])

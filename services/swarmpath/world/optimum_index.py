@@ -23,9 +23,12 @@ Segments that end the march with uncertain samples are tested exactly (segment-t
 distance) against the edges in the buckets of those samples: an edge closer than ``margin`` to a
 point within ``margin`` of a sample is within ``2 margin`` of the sample, hence listed in its
 bucket. Each point of the segment is therefore certified clear or tested exactly, so the
-result equals the brute-force test. Arcs on vertex disks (radius ``margin`` around a vertex ``v``)
-are tested exactly against the edges in the bucket of ``v`` (every such edge closer than
-``margin`` to the arc is within ``2 margin`` of ``v``).
+result equals the brute-force test. Before any tangent is built, :meth:`EdgeIndex.pairs_blocked`
+drops a pair of disks of radius <= ``margin`` whose centre segment passes through a cell lying
+wholly inside an obstacle (a finer raster: centre inside and no edge near). Arcs on vertex
+disks (radius ``margin`` around a vertex ``v``) are tested exactly against the edges in the
+bucket of ``v`` (every such edge closer than ``margin`` to the arc is within ``2 margin`` of
+``v``).
 """
 
 from __future__ import annotations
