@@ -183,7 +183,9 @@ def load_map(item: str, opts: MapOptions | None = None,
         if problems:  # a scenario: one line per problem
             raise InputErrors([(_problem_option(p, opts), f"{item}: {p}: {m}" if p
                                 else f"{item}: {m}") for p, m in problems]) from None
-        raise InputError(_option_of(exc), f"{item}: {exc}") from None
+        text = str(exc)  # the importers' messages start with the file already
+        raise InputError(_option_of(exc), text if text.startswith(item) else f"{item}: {text}"
+                         ) from None
     if note is not None and time.perf_counter() - started > SLOW:
         note(f"imported {item} in {time.perf_counter() - started:.1f} s "
              f"({len(scenario.obstacles)} obstacles)")
