@@ -164,9 +164,11 @@ def boxed_problem(lower, upper, runs=2):
                    np.full((runs, 5), upper))
 
 
-def test_hpo_centre_hunter_is_the_paper_rule_on_symmetric_boxes_only():
+@pytest.mark.parametrize("algo", ["HPO", "IHPO"])
+def test_hpo_centre_hunter_is_the_paper_rule_on_symmetric_boxes_only(algo):
+    """For IHPO this includes eq 14a's alpha, which scales P about the box centre."""
     def curve(problem, hunter):
-        opt = create("HPO", problem, agents=10, iterations=40, streams=RunStreams.for_runs(2, 2),
+        opt = create(algo, problem, agents=10, iterations=40, streams=RunStreams.for_runs(2, 2),
                      params={"hunter": hunter})
         out = []
         while not opt.done:
@@ -270,3 +272,27 @@ def test_ihpo_published_cells_need_the_optimum_at_the_origin(function):
         assert moved.max() < low
     else:
         assert low <= 1e-15
+
+
+def test_ihpo_with_the_centre_hunter_is_translation_covariant():
+    """hunter = "centre" (the planners): eq 14a's alpha scales P about the box centre, so moving
+    the box and the objective together moves the whole run (no pull toward the world origin)."""
+    def best(shift):
+        f = get_function("F1")
+        problem = Problem(lambda X, s: f.kernel(X - 3.0 - shift), np.full((2, 5), -10.0 + shift),
+                          np.full((2, 5), 10.0 + shift))
+        opt = create("IHPO", problem, agents=10, iterations=12,
+                     streams=RunStreams.for_runs(2, 2), params={"hunter": "centre"})
+        while not opt.done:
+            opt.step()
+        return opt.best_fitness, opt.best_position - shift
+
+    f0, x0 = best(0.0)
+    f1, x1 = best(40.0)
+    assert np.allclose(f0, f1, rtol=1e-6) and np.allclose(x0, x1, atol=1e-6)
+    paper = create("IHPO", Problem(lambda X, s: np.sum((X - 43.0) ** 2, axis=-1),
+                                   np.full((2, 5), 30.0), np.full((2, 5), 50.0)),
+                   agents=10, iterations=12, streams=RunStreams.for_runs(2, 2))
+    while not paper.done:
+        paper.step()
+    assert not np.allclose(paper.best_fitness, f0, rtol=1e-3)  # the paper's rule is not
