@@ -64,10 +64,36 @@ def test_configs_match_what_the_code_builds(tmp_path):
     assert load_json5("worker.json5") == built
 
 
+def test_security_extras_match_the_builders():
+    """access-control.json5 (usrpwd logins), coordinator-tls.json5 and worker-tls.json5 (mutual
+    TLS, certificates from deploy/tls/make-certs.sh) are --zenoh-config files: exactly what
+    zenoh_config builds, with placeholder names and paths."""
+    tls = "/etc/swarmpath/tls/"
+    assert load_json5("access-control.json5") == {"access_control": zenoh_config.
+        worker_access_control(usernames=["lab-worker-1", "lab-worker-2"])}
+    router = zenoh_config.tls_listen(tls + "ca.pem", tls + "coordinator.pem",
+                                     tls + "coordinator.key")
+    router["access_control"] = zenoh_config.worker_access_control(
+        cert_common_names=["worker-1", "worker-2"])
+    assert load_json5("coordinator-tls.json5") == router
+    assert load_json5("worker-tls.json5") == zenoh_config.tls_connect(
+        tls + "ca.pem", tls + "WORKER.pem", tls + "WORKER.key")
+    acl = load_json5("coordinator-tls.json5")["access_control"]
+    assert acl["default_permission"] == "deny"
+    allowed = {(r["flows"][0], m, k) for r in acl["rules"] for m in r["messages"]
+               for k in r["key_exprs"]}
+    assert ("ingress", "put", "swarmpath/cancel") not in allowed  # only the coordinator
+    assert not any(flow == "ingress" and k.startswith("swarmpath/ack")
+                   and m in ("put", "delete") for flow, m, k in allowed)
+
+
 def test_configs_are_accepted_by_zenoh():
     pytest.importorskip("zenoh")
-    for name in ("coordinator.json5", "worker.json5"):
-        zenoh_config.to_zenoh(load_json5(name))  # parses; opens nothing
+    for name in ("coordinator.json5", "worker.json5", "access-control.json5"):
+        conf = load_json5(name)
+        if name == "access-control.json5":
+            conf = zenoh_config.router_config("tcp/127.0.0.1:7447", extra=conf)
+        zenoh_config.to_zenoh(conf)  # parses; opens nothing
 
 
 def exec_start(unit: str) -> list[str]:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import ipaddress
+import json
 import os
 import random
 import shutil
@@ -22,7 +23,9 @@ from pathlib import Path
 
 import pytest
 
-from test_service_e2e import ENV, PY, Service, free_port
+from swarmpath.optimizers import minimize
+from swarmpath.service import zenoh_config
+from test_service_e2e import ENV, PY, ROOT, Service, free_port
 
 
 def ip(*args: str, check: bool = True) -> subprocess.CompletedProcess[str]:
@@ -130,5 +133,115 @@ def test_worker_in_a_namespace_completes_a_job_over_veth(netns, tmp_path):
         assert {r["worker"] for r in runs} == {"netns-w1"}
         pids = ip("netns", "pids", netns.ns).stdout.split()
         assert str(svc.workers["netns-w1"].pid) in pids  # the worker ran inside the namespace
+    finally:
+        svc.close()
+
+
+# ------------------------------------------------------------------ mutual TLS + access control
+INTRUDER = """
+import json, sys, time, zenoh
+conf, job = json.loads(sys.argv[1]), sys.argv[2]
+try:
+    s = zenoh.open(zenoh.Config.from_json5(json.dumps(conf)))
+except Exception as exc:
+    print(json.dumps({"opened": False, "error": str(exc)[:200]}))
+    sys.exit(0)
+heard, relayed = [], []
+listener = zenoh.open(zenoh.Config.from_json5(json.dumps(conf)))  # a second worker session
+listener.declare_subscriber("swarmpath/cancel", lambda x: relayed.append(str(x.key_expr)))
+listener.declare_subscriber("swarmpath/ack/intruder", lambda x: relayed.append(str(x.key_expr)))
+s.declare_subscriber("swarmpath/progress/*", lambda x: heard.append(str(x.key_expr)))
+s.declare_subscriber("swarmpath/results/*", lambda x: heard.append(str(x.key_expr)))
+time.sleep(5)
+before = list(heard)  # what reached us from others (our own puts come back to us locally)
+forged = {"worker": "netns-w1", "results": [
+    {"lease_id": "0" * 32, "job_id": job, "cell": "ICOOT/F5/10", "run": r, "worker": "netns-w1",
+     "seconds": 0.0, "proof": "0" * 64, "metrics": {"best_fitness": -12345.0}}
+    for r in range(40)]}
+s.put(f"swarmpath/results/{job}", json.dumps(forged))
+s.put(f"swarmpath/progress/{job}", json.dumps({"lease_id": "0" * 32, "job_id": job,
+      "worker": "netns-w1", "cell": "ICOOT/F5/10", "runs": [0], "seq": 9, "proof": "0" * 64}))
+s.put("swarmpath/cancel", json.dumps({"job_id": job}))
+s.put("swarmpath/ack/intruder", json.dumps({"worker": "intruder", "drop_leases": []}))
+time.sleep(1)
+s.close()
+listener.close()
+print(json.dumps({"opened": True, "heard": before, "relayed": relayed}))
+"""
+
+
+class TlsService(NamespacedService):
+    """The coordinator listens with mutual TLS and access control; the namespaced worker shows
+    its certificate (deploy/tls/make-certs.sh made them)."""
+
+    def __init__(self, tmp: Path, net: Netns):
+        super().__init__(tmp, net)
+        self.zenoh = f"tls/{net.host_ip}:{free_port()}"
+        self.certs = tmp / "certs"
+        subprocess.run([str(ROOT / "deploy" / "tls" / "make-certs.sh"), str(self.certs),
+                        net.host_ip, "netns-w1", "intruder"], check=True, capture_output=True)
+        c = self.certs
+        router = {**zenoh_config.tls_listen(c / "ca.pem", c / "coordinator.pem",
+                                            c / "coordinator.key"),
+                  "access_control": zenoh_config.worker_access_control(
+                      cert_common_names=["netns-w1", "intruder"])}
+        (tmp / "router.json").write_text(json.dumps(router))
+
+    def client_conf(self, name: str | None) -> dict:
+        c = self.certs
+        conf = zenoh_config.client_config(self.zenoh, timeout_ms=3000)
+        tls = (zenoh_config.tls_connect(c / "ca.pem", c / f"{name}.pem", c / f"{name}.key")
+               if name else {"transport": {"link": {"tls": {"root_ca_certificate":
+                                                             str(c / "ca.pem")}}}})
+        conf["transport"]["link"] = tls["transport"]["link"]
+        return conf
+
+    def _spawn(self, name: str, args: list[str]) -> subprocess.Popen[bytes]:
+        if name == "coordinator":
+            args = [*args, "--zenoh-config", str(self.tmp / "router.json")]
+        else:
+            worker = {"transport": self.client_conf(name)["transport"]}
+            (self.tmp / f"{name}.json").write_text(json.dumps(worker))
+            args = [*args, "--zenoh-config", str(self.tmp / f"{name}.json")]
+        return super()._spawn(name, args)
+
+    def intruder(self, name: str | None, job: str) -> dict:
+        done = subprocess.run(["ip", "netns", "exec", self.net.ns, PY, "-c", INTRUDER,
+                               json.dumps(self.client_conf(name)), job],
+                              capture_output=True, text=True, env=ENV, timeout=60, check=True)
+        return json.loads(done.stdout)
+
+
+def metric(svc: Service, name: str) -> float:
+    line = next(x for x in svc.get("/metrics").text.splitlines() if x.startswith(name + " "))
+    return float(line.split()[1])
+
+
+def test_mutual_tls_and_access_control_keep_intruders_out(netns, tmp_path):
+    """A worker over TLS with its certificate completes a job; a client without a certificate
+    cannot connect; a client with a valid worker certificate hears no results or progress of
+    others, its cancel and acks are relayed to nobody (access control), and its forged results
+    and progress, which a worker login may put, are refused by the lease capabilities."""
+    svc = TlsService(tmp_path, netns)
+    try:
+        svc.start_coordinator(lease_seconds=6.0)  # progress every 2 s: there is traffic to hear
+        svc.start_worker("netns-w1")
+        svc.wait_workers(["netns-w1"], timeout=30)
+        spec = {"kind": "benchmark", "algorithms": ["ICOOT"], "functions": ["F5"], "dims": [10],
+                "runs": 40, "agents": 20, "iterations": 4000, "seed": 3}
+        job = svc.submit(spec)
+        svc.wait_for(lambda: svc.status(job)["state"] == "running", 30, "the job running")
+        assert svc.intruder(None, job)["opened"] is False  # no certificate: no session
+        seen = svc.intruder("intruder", job)
+        assert seen["opened"] is True and seen["heard"] == [] and seen["relayed"] == [], seen
+        assert svc.status(job)["state"] == "running"  # it listened while the job ran
+        status = svc.wait_done(job, 240)
+        assert status["state"] == "done" and status["runs_done"] == 40, status
+        direct = minimize("ICOOT", "F5", 10, 20, 4000, runs=40, seed=3).best_fitness.tolist()
+        assert [r["best_fitness"] for r in svc.runs(job)] == direct
+        # the 40 forged results and the forged progress reached the coordinator: refused
+        assert metric(svc, "swarmpath_messages_unproven_total") == 41
+        assert metric(svc, "swarmpath_results_stale_total") == 40
+        assert "dropping lease" not in svc.log("netns-w1")
     finally:
         svc.close()
