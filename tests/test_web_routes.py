@@ -112,11 +112,11 @@ def test_aggregates_fed_on_accept_equal_those_built_from_the_store(client, app, 
     core = app.state.core
     job = client.post("/jobs", json=BENCH).json()["id"]
     r = client.get(f"/ui/jobs/{job}/data")
-    assert r.status_code == 200 and r.json()["version"] == 0
+    assert r.status_code == 200 and r.json()["finished"] == 0
     work_off(core)
     live = client.get(f"/ui/jobs/{job}/data")
     etag = live.headers["etag"]
-    assert live.json()["version"] == 8
+    assert live.json()["finished"] == 8 and live.json()["loading"] is False
     assert client.get(f"/ui/jobs/{job}/data", headers={"If-None-Match": etag}).status_code == 304
     cold = Dashboard(core.store).aggregates(job)  # as after a restart
     assert cold is not None
@@ -172,18 +172,25 @@ def test_finished_jobs_aggregates_are_saved_and_reloaded(client, app, tmp_path):
         saved = core.dashboard.cache_dir / f"{j}.npz"
         assert saved.is_file()
         page = Dashboard(core.store, core.dashboard.cache_dir)  # after a restart: the saved
-        assert page.page_data(j) == core.dashboard.page_data(j)  # page, the arrays not loaded
-        assert page.aggregates_loaded() == []
+        assert content(page.page_data(j)[1]) == content(core.dashboard.page_data(j)[1])
+        assert page.aggregates_loaded() == []  # page, the arrays not loaded
         fresh = Dashboard(core.store, core.dashboard.cache_dir)
         reloaded = fresh.aggregates(j)
-        assert json.dumps(reloaded.view(), default=str) == json.dumps(
-            core.dashboard.aggregates(j).view(), default=str)
+        assert content(json.dumps(reloaded.view(), default=str)) == content(
+            json.dumps(core.dashboard.aggregates(j).view(), default=str))
     # a file that does not match the store is ignored: the store is read again
     other = tmp_path / "other"
     other.mkdir()
     (core.dashboard.cache_dir / f"{job}.npz").replace(other / f"{map_job}.npz")
     again = Dashboard(core.store, other).aggregates(map_job)
     assert again.view()["kind"] == "map" and again.finished_runs() == 1
+
+
+def content(page: bytes | str) -> dict:
+    """A page's data without its version (a counter of changes, not content)."""
+    data = json.loads(page)
+    data.pop("version")
+    return data
 
 
 class _Result:
@@ -213,6 +220,9 @@ def test_observe_never_waits_for_a_build_from_the_store(tmp_path, monkeypatch):
             yield {"cell_index": 0, "run": 0, "status": "ok", "metrics": {"best_fitness": 0.0}}
 
         monkeypatch.setattr(store, "iter_run_records", slow_records)
+        from swarmpath.service.web import live
+
+        monkeypatch.setattr(live, "VIEW_SECONDS", 0.0)  # no sharing of a young view here
         dash = Dashboard(store)
         page = threading.Thread(target=dash.aggregates, args=(job,))
         page.start()  # a page asks first: it builds (and blocks in the scan)
@@ -220,9 +230,12 @@ def test_observe_never_waits_for_a_build_from_the_store(tmp_path, monkeypatch):
         dash.observe(job, [_Result("GWO/F1/2", 0), _Result("GWO/F1/2", 1)])  # returns at once
         agg = dash.aggregates(job, wait=False)
         assert agg is not None and agg.finished_runs() == 2
+        _version, body = dash.page_data(job)  # a page does not wait either: it says "loading"
+        assert json.loads(body)["loading"] is True
         release.set()
         page.join(30)
         assert dash.aggregates(job).finished_runs() == 2  # run 0 once, not twice
+        assert json.loads(dash.page_data(job)[1])["loading"] is False
     finally:
         store.close()
 

@@ -299,6 +299,8 @@ class JobAggregates:
         self.reference = reference  # the statistics' reference (None: the last one listed)
         self.kind = kind
         self.version = 0  # bumped by every add(): a client's cached copy is current if equal
+        self.loading = False  # being read from the store: the view is still incomplete
+        self.finished = 0  # runs added (each run once)
         self._lock = threading.Lock()
         self._keys = {c["key"]: int(c["index"]) for c in cells}
         self.runs_per_cell = max((int(c["runs"]) for c in cells), default=0)
@@ -338,6 +340,7 @@ class JobAggregates:
             else:
                 cell.add(run, ok, metrics, path)
             self.version += 1
+            self.finished += 1
             return True
 
     def add_record(self, record: Mapping[str, Any]) -> bool:
@@ -347,6 +350,12 @@ class JobAggregates:
             metrics=record.get("metrics") or {}, curve=record.get("curve"),
             path=record.get("path"),
         )
+
+    def set_loading(self, loading: bool) -> None:
+        """Mark the aggregates as being (re)built from the store, or done; a new version."""
+        with self._lock:
+            self.loading = loading
+            self.version += 1
 
     def longest_path(self, cell_index: int) -> float:
         """Seconds of the longest kept path of a map cell (0 when none, or not a map cell)."""
@@ -399,6 +408,7 @@ class JobAggregates:
                     cell.restore(state)
                 return False
             self.version = version
+            self.finished = int(sum(int(c.seen.sum()) for c in self._cells))
             self._view = None
         return True
 
@@ -443,6 +453,7 @@ class JobAggregates:
             samples.setdefault((s["function"], int(s["dim"])), {})[s["algorithm"]] = (
                 cell.best[cell.ok])
         return {"job_id": self.job_id, "kind": "benchmark", "version": self.version,
+                "loading": self.loading, "finished": self.finished,
                 "runs_per_cell": self.runs_per_cell, "legend": legend(BENCHMARK_LEGEND),
                 "algorithms": algorithms, "groups": list(groups.values()),
                 "statistics": benchmark_statistics(samples, groups, algorithms,
@@ -458,6 +469,7 @@ class JobAggregates:
             g = groups.setdefault(s["map"], {"map": s["map"], "cell": index, "planners": {}})
             g["planners"][s["planner"]] = {**cell.view(), "cell": index}
         return {"job_id": self.job_id, "kind": "map", "version": self.version,
+                "loading": self.loading, "finished": self.finished,
                 "runs_per_cell": self.runs_per_cell, "legend": legend(MAP_LEGEND),
                 "planners": planners, "groups": list(groups.values()),
                 "statistics": map_statistics(groups, planners, self.reference)}

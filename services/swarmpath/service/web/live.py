@@ -129,6 +129,7 @@ class Dashboard:
         job_id = job.job_id
         started = time.perf_counter()
         how = "nothing"
+        job.set_loading(True)
         try:
             finished = status.runs_done + status.runs_failed
             saved = self._saved(job_id)
@@ -137,17 +138,21 @@ class Dashboard:
                 how = "its saved aggregates"
             else:
                 if job.finished_runs():  # a stale file: start again from the store
+                    job.set_loading(False)
                     job = JobAggregates(job_id, status.kind, cells, spec.seed,
                                         getattr(spec, "reference", None))
+                    job.set_loading(True)
                     with self._lock:
                         self._jobs[job_id] = job
                 n = sum(job.add_record(rec) for rec in self.store.iter_run_records(job_id))
                 how = f"{n} stored runs"
                 if status.state in FINAL_STATES and saved is not None:
+                    job.set_loading(False)  # the saved page is the complete one
                     self._save(job, saved)
         except Exception:
             log.exception("building the dashboard's aggregates of job %s failed", job_id)
         finally:
+            job.set_loading(False)
             with self._lock:
                 self._ready.pop(job_id).set()
         log.info("dashboard: job %s aggregated from %s in %.2f s", job_id, how,
@@ -221,8 +226,8 @@ class Dashboard:
             saved = self._saved_page(job_id)
             if saved is not None:
                 return saved
-        job = self.aggregates(job_id)
-        if job is None:
+        job = self.aggregates(job_id, wait=False)  # a page never waits for a build: it shows
+        if job is None:  # what is there ("loading") and asks again
             return None
         view = job.view(max_age=VIEW_SECONDS)
         version = int(view["version"])
@@ -249,14 +254,15 @@ class Dashboard:
         finished = status.runs_done + status.runs_failed
         with self._lock:
             hit = self._encoded.get(job_id)
-        if hit is not None and hit[0] == finished:
+        if hit is not None and json.loads(hit[1]).get("finished") == finished:
             return hit
         try:
             body = path.with_suffix(".json").read_bytes()
-            version = int(json.loads(body)["version"])
+            page = json.loads(body)
+            version, complete = int(page["version"]), int(page["finished"]) == finished
         except (OSError, ValueError, KeyError, TypeError):
             return None
-        if version != finished:  # one add() per finished run: anything else is stale
+        if not complete or page.get("loading"):  # stale or partial: rebuild
             return None
         return self._remember(job_id, version, body)
 

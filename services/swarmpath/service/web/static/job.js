@@ -9,7 +9,7 @@
   SP.q("h1").textContent = "Job " + id;
   main.insertAdjacentHTML("beforeend", `<p id="summary"></p><p class="downloads" id="downloads"></p>
     <div id="content"></div><p class="legend" id="notes"></p><dl class="legend" id="legend"></dl>`);
-  let etag = null, colors = {}, status = null;
+  let etag = null, colors = {}, status = null, loading = false;
 
   function color(name, list) {
     if (!(name in colors)) colors[name] = SP.color(list.indexOf(name));
@@ -169,7 +169,7 @@
     const ended = status && (status.state === "queued" || status.state === "running") && !(s.data.state === "queued" || s.data.state === "running");
     renderStatus(s.data);
     if (!SP.q("#downloads").innerHTML) downloads(s.data.kind);
-    const due = tick++ % DATA_EVERY === 0 || ended || etag === null;
+    const due = tick++ % DATA_EVERY === 0 || ended || etag === null || loading;
     const headers = etag ? { "If-None-Match": etag } : {};
     const r = due ? await SP.api(`/ui/jobs/${encodeURIComponent(id)}/data`, { headers: headers }) : { status: 304 };
     if (r.status === 200) {
@@ -180,8 +180,10 @@
         ? "Curves: median best-so-far error f(x) - f* over the successful runs, band from the 25th to the 75th percentile, log scale; box plots: quartiles, whiskers at 1.5 IQR, outliers as circles. Crashed runs (an exception in the optimizer) have no value."
         : "Paths: up to 200 runs per planner and map. Success: the run reached the goal without touching an obstacle. Crashed runs (an exception) are counted in 'runs' but have no path. Gap: length / optimum - 1 (the exact shortest path), only on static maps: with moving obstacles there is no optimum. Collisions count colliding steps.";
       document.body.dataset.version = r.data.version;
+      loading = !!r.data.loading;
+      if (loading) SP.q("#notes").textContent = "Still reading this job's stored runs (after a coordinator restart): the charts fill in as they are read.";
     }
-    if (status && (status.state === "queued" || status.state === "running")) setTimeout(refresh, 2000);
+    if (loading || (status && (status.state === "queued" || status.state === "running"))) setTimeout(refresh, 2000);
     else document.body.dataset.loaded = "1";
   }
   refresh();
