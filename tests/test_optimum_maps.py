@@ -36,7 +36,7 @@ def test_index_matches_the_tangent_graph_on_the_presets(name: str) -> None:
 @pytest.mark.parametrize("seed", range(6))
 def test_index_matches_the_tangent_graph_on_random_grids(seed: int) -> None:
     rng = np.random.default_rng(seed)
-    blocked = rng.random((24, 30)) < 0.3
+    blocked = rng.random((24, 30)) < 0.2  # sparse enough for a path between the corners
     blocked[0, 0] = blocked[-1, -1] = False
     res = 0.5
     polys = tuple(p.astype(float) * res for p in grid_polygons(blocked, tile=8))
@@ -44,11 +44,8 @@ def test_index_matches_the_tangent_graph_on_random_grids(seed: int) -> None:
     start, goal = (0.25, 0.25), (14.75, 11.75)
     margin = float(rng.uniform(0.01, 0.2))
     fast, slow = _both(start, goal, obs, margin, (0.0, 0.0, 15.0, 12.0))
-    assert fast.exact and slow.exact
-    if math.isinf(slow.length):
-        assert math.isinf(fast.length)
-    else:
-        assert fast.length == pytest.approx(slow.length, abs=1e-9)
+    assert fast.exact and slow.exact and math.isfinite(slow.length)
+    assert fast.length == pytest.approx(slow.length, abs=1e-9)
 
 
 def _scen(path: Path, every: int) -> list[tuple[int, int, int, int, float]]:
@@ -104,3 +101,34 @@ def test_tb3_sandbox_optimum_and_progress() -> None:
         np.tile(np.arange(20) / 20, len(pts) - 1)[:, None] * np.repeat(np.diff(pts, axis=0), 20, 0)
     )
     assert s.static_obstacles().point_clearance(seg).min() >= s.robot.radius - 1e-6
+
+
+@pytest.mark.parametrize("seed", [1, 2, 4, 5])  # seeds with a path between the corners
+def test_union_vertex_filter_keeps_exactly_the_union_corners_and_the_length(
+    seed: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Grid parts touch along cut lines and at corners; the optimum keeps only the convex
+    corners of their union (exactly one of the four cells around the corner blocked), and the
+    length equals the one computed with every part's own convex vertices."""
+    from swarmpath.world import optimum
+
+    rng = np.random.default_rng(100 + seed)
+    blocked = rng.random((16, 20)) < 0.2
+    blocked[0, 0] = blocked[-1, -1] = False
+    polys = tuple(p.astype(float) for p in grid_polygons(blocked, tile=5))
+    obs = ObstacleSet(np.zeros((0, 3)), polys)
+    margin = 0.05
+    start, goal = np.array([0.5, 0.5]), np.array([19.5, 15.5])
+    centres = optimum._disks(start, goal, obs, margin)[0][2:]
+    padded = np.pad(blocked, 1)
+    count = (padded[:-1, :-1].astype(int) + padded[1:, :-1] + padded[:-1, 1:] + padded[1:, 1:])
+    ys, xs = np.nonzero(count == 1)  # corner (x, y) of the grid lines
+    expected = {(float(x), float(y)) for x, y in zip(xs, ys, strict=True)}
+    assert {(float(x), float(y)) for x, y in centres} == expected
+    world = (0.0, 0.0, 20.0, 16.0)
+    kept = shortest_path(start, goal, obs, margin, world, budget=None)
+    monkeypatch.setattr(optimum, "_covered_vertices",
+                        lambda points, *_: np.zeros(len(points), dtype=bool))
+    every = shortest_path(start, goal, obs, margin, world, budget=None, index=False)
+    assert kept.exact and every.exact and math.isfinite(every.length)
+    assert kept.length == pytest.approx(every.length, abs=1e-9)
