@@ -158,8 +158,8 @@ def test_jobs_page_lists_jobs_live_and_filters(server, jobs, browser):
     url, app = server
     browser.get(url + "/")
     rows = wait_for(browser, "#jobs tbody tr", 2)
-    assert {r.get_attribute("data-job") for r in rows} >= set(jobs.values())
-    assert all(r.get_attribute("data-state") == "done" for r in rows)
+    states = {r.get_attribute("data-job"): r.get_attribute("data-state") for r in rows}
+    assert all(states.get(j) == "done" for j in jobs.values())
     # a job submitted elsewhere appears without a reload (pushed over /events)
     import httpx
 
@@ -168,9 +168,11 @@ def test_jobs_page_lists_jobs_live_and_filters(server, jobs, browser):
     shot(browser, "jobs")
     Select(browser.find_element(By.ID, "filter")).select_by_visible_text("queued")
     rows = wait_for(browser, "#jobs tbody tr")
-    assert [r.get_attribute("data-job") for r in rows] == [new]
+    assert new in [r.get_attribute("data-job") for r in rows]
+    assert {r.get_attribute("data-state") for r in rows} == {"queued"}
+    assert set(jobs.values()).isdisjoint(r.get_attribute("data-job") for r in rows)
     # cancel it from the page
-    rows[0].find_element(By.CSS_SELECTOR, "button.cancel").click()
+    browser.find_element(By.CSS_SELECTOR, f'tr[data-job="{new}"] button.cancel').click()
     Select(browser.find_element(By.ID, "filter")).select_by_visible_text("cancelled")
     wait_for(browser, f'#jobs tbody tr[data-job="{new}"][data-state="cancelled"]')
     assert app.state.core.store.job_status(new).state == "cancelled"
