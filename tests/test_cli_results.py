@@ -387,6 +387,9 @@ def test_runs_of_a_job_not_run_yet_export_with_empty_metrics(service, tmp_path):
 
     cli, http, _core = service
     job = http.post("/jobs", json=BENCH).json()["id"]
+    nothing = cli("results", job, "--plot", str(tmp_path / "none"))
+    assert nothing.exit_code == 0 and "no finished run to plot" in nothing.stderr
+    assert list((tmp_path / "none").iterdir()) == []
     out = tmp_path / "queued.parquet"
     result = cli("results", job, "--runs", "--format", "parquet", "-o", str(out))
     assert result.exit_code == 0, result.stderr

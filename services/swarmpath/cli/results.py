@@ -76,8 +76,11 @@ def results(
         plot_dir(plot, "--plot")
     with svc._client(url) as client:
         if plot is not None:
-            for out in _plots(client, job, plot):
+            figures = _plots(client, job, plot)
+            for out in figures:
                 typer.echo(f"wrote {out}", err=True)
+            if not figures:
+                typer.echo(f"job {job}: no finished run to plot yet", err=True)
         if format == "ioh":
             _ioh(client, job, output)  # type: ignore[arg-type]
         elif runs:
