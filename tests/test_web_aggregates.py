@@ -186,3 +186,34 @@ def test_a_young_view_is_shared_until_max_age():
     fresh = job.view()  # max_age 0: recomputed since a run was added
     assert fresh["version"] == 2 and fresh["groups"][0]["algorithms"]["GWO"]["runs"] == 2
     assert job.view() is fresh  # nothing added since
+
+
+def test_map_statistics_are_compare_on_the_runs():
+    from swarmpath.compare import compare_samples, compare_success
+
+    cells = [{"index": i, "key": f"{p}/m1", "runs": 12,
+              "spec": {"kind": "map", "planner": p, "map": "m1", "scenario": None}}
+             for i, p in enumerate(("MFB", "ICOOT"))]
+    job = agg.JobAggregates("j5", "map", cells)
+    rng = np.random.default_rng(2)
+    lengths: dict[str, list[float]] = {"MFB": [], "ICOOT": []}
+    seconds: dict[str, list[float]] = {"MFB": [], "ICOOT": []}
+    success = {"MFB": 0, "ICOOT": 0}
+    for i, p in enumerate(("MFB", "ICOOT")):
+        for run in range(12):
+            ok = run % (2 if p == "MFB" else 6) != 0
+            m = {"success": ok, "length": 14.0 + 0.1 * rng.random() + (1.0 if p == "MFB" else 0.0),
+                 "seconds": float(rng.random()), "collisions": 0 if ok else 1}
+            job.add(i, run, ok=True, metrics=m, path=[[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]])
+            seconds[p].append(m["seconds"])
+            if ok:
+                lengths[p].append(m["length"])
+                success[p] += 1
+    st = job.view()["statistics"]
+    assert st["reference"] == "ICOOT"
+    assert st["markers"]["m1"]["MFB"] == compare_success(
+        {"m1": {p: (success[p], 12) for p in success}}, ["MFB", "ICOOT"]).marker("m1", "MFB")
+    for name, values in (("length", lengths), ("seconds", seconds)):
+        expected = compare_samples({"m1": values}, ["MFB", "ICOOT"]).marker("m1", "MFB")
+        assert st[f"{name}_markers"]["m1"]["MFB"] == expected
+    assert st["length_markers"]["m1"]["MFB"] == "-"  # every MFB path is longer

@@ -36,8 +36,8 @@ MAX_OUTLIERS = 40  # outliers listed per box (the most extreme ones)
 SAVE_FORMAT = "swarmpath-dashboard-1"
 #: Columns of the job page whose meaning is shown under it (swarmpath.legend).
 BENCHMARK_LEGEND = ("failed", "rank", "marker")
-MAP_LEGEND = ("failed", "success_rate", "success_marker", "collisions", "length_mean", "gap_mean",
-              "seconds_mean")
+MAP_LEGEND = ("failed", "success_rate", "success_marker", "collisions", "length_mean",
+              "length_marker", "gap_mean", "seconds_mean", "seconds_marker")
 
 
 def curve_grid(iterations: int, points: int = GRID_POINTS) -> np.ndarray:
@@ -461,6 +461,7 @@ class JobAggregates:
 
     def _map_view(self) -> dict[str, Any]:
         groups: dict[str, dict[str, Any]] = {}
+        samples: dict[str, dict[str, dict[str, list[float]]]] = {"length": {}, "seconds": {}}
         planners: list[str] = []
         for index, cell in enumerate(self._cells):
             s = cell.spec
@@ -468,9 +469,11 @@ class JobAggregates:
                 planners.append(s["planner"])
             g = groups.setdefault(s["map"], {"map": s["map"], "cell": index, "planners": {}})
             g["planners"][s["planner"]] = {**cell.view(), "cell": index}
+            for metric in ("length", "seconds"):
+                samples[metric].setdefault(s["map"], {})[s["planner"]] = cell.values[metric]
         return {"job_id": self.job_id, "kind": "map", "version": self.version,
                 "loading": self.loading, "finished": self.finished,
                 "runs_per_cell": self.runs_per_cell, "legend": legend(MAP_LEGEND),
                 "planners": planners, "groups": list(groups.values()),
-                "statistics": map_statistics(groups, planners, self.reference)}
+                "statistics": map_statistics(groups, planners, self.reference, samples)}
 

@@ -43,21 +43,34 @@ def benchmark_statistics(
 def map_statistics(
     groups: Mapping[str, Mapping[str, Any]], planners: Sequence[str],
     reference: str | None = None,
+    samples: Mapping[str, Mapping[str, Mapping[str, Sequence[float]]]] | None = None,
 ) -> dict[str, Any] | None:
-    """Success rates of every planner against ``reference`` (default: the last one) per map:
-    Fisher's exact test, Holm over the table (:mod:`swarmpath.compare`)."""
+    """Every planner against ``reference`` (default: the last one) per map, each test Holm over
+    its table (:mod:`swarmpath.compare`): success rates (Fisher's exact test, ``markers``) and,
+    from ``samples`` (metric -> map -> planner -> values), path lengths of successful runs and
+    planning times (Wilcoxon rank-sum, lower is better: ``length_markers``,
+    ``seconds_markers``)."""
     if len(planners) < 2:
         return None
-    from swarmpath.compare import compare_success
+    from swarmpath.compare import compare_samples, compare_success
 
     counts = {name: {p: (v["succeeded"], v["runs"] - v["crashed"])
                      for p, v in g["planners"].items()} for name, g in groups.items()}
     comparison = compare_success(counts, planners, reference)
+    out = {"test": comparison.test, "reference": comparison.reference,
+           "alpha": comparison.alpha, "markers": _markers(comparison, counts),
+           "counts": comparison.counts()}
+    for metric, values in (samples or {}).items():
+        out[f"{metric}_markers"] = _markers(
+            compare_samples(values, planners, reference), values)
+    return out
+
+
+def _markers(comparison: Any, table: Mapping[str, Mapping[str, Any]]) -> dict[str, dict[str, str]]:
     markers: dict[str, dict[str, str]] = {}
-    for name, per in counts.items():
+    for name, per in table.items():
         for p in per:
             m = comparison.marker(name, p)
             if m is not None:
                 markers.setdefault(name, {})[p] = m
-    return {"test": comparison.test, "reference": comparison.reference,
-            "alpha": comparison.alpha, "markers": markers, "counts": comparison.counts()}
+    return markers

@@ -118,9 +118,10 @@
     for (const g of data.groups) for (const p of planners) {
       const c = g.planners[p]; if (!c) continue;
       const med = (b) => (b ? SP.num(b.median, 3) : "");
+      const mark = (what) => { const m = ((st[what + "_markers"] || {})[g.map] || {})[p]; return m ? `<span class="marker">${m}</span>` : ""; };
       html += `<tr><td class="l">${SP.esc(g.map)}</td><td class="l">${SP.esc(p)}</td><td>${c.runs}</td><td>${c.crashed}</td>
-        <td>${c.success_rate === null ? "" : SP.num(c.success_rate, 3)}</td><td>${c.collisions}</td><td>${med(c.box.length)}</td>
-        <td>${med(c.box.gap)}</td><td>${med(c.box.seconds)}</td>
+        <td>${c.success_rate === null ? "" : SP.num(c.success_rate, 3)}</td><td>${c.collisions}</td><td>${med(c.box.length)}${mark("length")}</td>
+        <td>${med(c.box.gap)}</td><td>${med(c.box.seconds)}${mark("seconds")}</td>
         <td class="l">${Object.entries(c.failures).map(([k, n]) => `${n} ${k}`).join(", ")}</td></tr>`;
     }
     html += `</tbody></table><div id="maps"></div>`;
