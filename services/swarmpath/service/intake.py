@@ -1,0 +1,267 @@
+"""What the workers report, as the coordinator takes it: result batches (fenced by the store,
+proven by their lease capability, stored in one transaction per group, recorded in the MCAP and
+the dashboard, acknowledged) and progress (proven, renewing the lease or answered with a drop).
+A mixin of :class:`~swarmpath.service.coordinator.Coordinator`, which owns the state it uses."""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections import Counter, OrderedDict, deque
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from swarmpath.service.capability import drop_proof, result_ok
+from swarmpath.service.lease_sizer import LeaseSizer
+from swarmpath.service.protocol import (
+    Ack,
+    BenchmarkCell,
+    Keys,
+    LeaseDrop,
+    MapCell,
+    ResultBatch,
+    RunAck,
+    RunProgress,
+    RunResult,
+    decode,
+    encode,
+)
+from swarmpath.service.recorder import Recorders
+from swarmpath.service.settings import CoordinatorSettings
+from swarmpath.service.store import FINAL_STATES, Store
+from swarmpath.service.util import short as _short
+
+log = logging.getLogger("swarmpath.coordinator")
+
+SETTLED_LEASES = 20_000  # leases remembered for recognizing re-sent results
+CACHED_CAPABILITIES = 50_000  # capabilities of recent leases kept in memory
+
+
+class ResultIntake:
+    """Result batches and progress (see the module docstring)."""
+
+    settings: CoordinatorSettings
+    keys: Keys
+    store: Store
+    recorders: Recorders
+    dashboard: Any
+    sizer: LeaseSizer
+    stats: Counter[str]
+    _lock: threading.Lock
+    _final_lock: threading.RLock
+    _accepted: deque[tuple[float, int]]
+    _jobs: dict[str, dict[str, Any]]
+    _recording: set[str]
+    _settled: OrderedDict[str, tuple[str, str, set[int]]]
+    _caps: OrderedDict[str, str]
+    _seen: Callable[..., None]
+    _send: Callable[[str, bytes], None]
+    finalize: Callable[[str], Path | None]
+
+    # ------------------------------------------------------------------------------ results
+    def _job_info(self, job_id: str) -> dict[str, Any] | None:
+        info = self._jobs.get(job_id)
+        if info is None:
+            status = self.store.job_status(job_id)
+            spec = self.store.job_spec(job_id)
+            cells = self.store.cells(job_id)
+            if status is None or spec is None or cells is None:
+                return None
+            info = {
+                "kind": status.kind, "seed": spec.seed, "rpc": spec.runs,
+                "cells": {c["key"]: (c["index"], c["spec"], _cell(c["spec"])) for c in cells},
+            }
+            if len(self._jobs) > 256:
+                self._jobs.clear()
+            self._jobs[job_id] = info
+        return info
+
+    def _record(self, job_id: str, results: list[RunResult], now: float) -> None:
+        """Write accepted results to the job's MCAP (the store has them already)."""
+        info = self._job_info(job_id)
+        if info is None:
+            return
+        with self._final_lock:
+            if self.recorders.ready(job_id):  # finalized meanwhile (e.g. cancelled)
+                return
+            self._recording.add(job_id)
+            for r in results:
+                idx, spec, _parsed = info["cells"][r.cell]
+                record: dict[str, Any] = {
+                    "job_id": job_id, "kind": info["kind"],
+                    "run_id": idx * info["rpc"] + r.run, "cell_index": idx, "cell": r.cell,
+                    "spec": spec, "run": r.run, "seed": info["seed"], "worker": r.worker,
+                    "lease_id": r.lease_id, "status": r.status, "failure": r.failure,
+                    "seconds": r.seconds, "metrics": r.metrics, "created": now,
+                }
+                for name in ("curve", "best_position", "path"):
+                    value = getattr(r, name)
+                    if value is not None:
+                        record[name] = value
+                self.recorders.add(job_id, record)
+
+    def handle_results(self, key: str, payload: bytes, now: float | None = None) -> Ack | None:
+        """A ResultBatch on ``results/<job>``: store (one transaction), record, acknowledge.
+        Malformed batches are logged and dropped (None)."""
+        return self.handle_result_batches([(key, payload)], now)[0]
+
+    def handle_result_batches(
+        self, messages: Sequence[tuple[str, bytes]], now: float | None = None
+    ) -> list[Ack | None]:
+        """Several ResultBatch messages (key, payload) at once - group commit: the results of all
+        of them are stored in one transaction (one fsync), then each batch is recorded and
+        acknowledged to its worker. Returns each message's Ack (None: malformed, dropped)."""
+        now = time.time() if now is None else now
+        batches: list[tuple[str, ResultBatch, list[RunResult]] | None] = []
+        for key, payload in messages:
+            job_id = Keys.last_chunk(key)
+            try:
+                batch = decode(ResultBatch, payload)
+            except Exception as exc:
+                self.stats["malformed"] += 1
+                log.warning("dropped a malformed result batch on %s: %s", key, _short(exc))
+                batches.append(None)
+                continue
+            self._seen(batch.worker, now)
+            valid = [r for r in batch.results if r.job_id == job_id and r.worker == batch.worker]
+            if len(valid) < len(batch.results):
+                log.warning("%d results of %s name another job or worker than their batch: "
+                            "stale", len(batch.results) - len(valid), batch.worker)
+            # no valid proof, no store round trip (a flood of forged results costs no fsync)
+            proven = [r for r in valid if result_ok(self._capability(r.lease_id), r)]
+            if len(proven) < len(valid):
+                self.stats["unproven"] += len(valid) - len(proven)
+                self.stats["unproven_results"] += len(valid) - len(proven)
+                if self.stats["unproven_results"] == len(valid) - len(proven):
+                    log.warning("results without a valid proof of their lease's capability "
+                                "(counted in swarmpath_messages_unproven_total): stale")
+            batches.append((job_id, batch, proven))
+        by_id: dict[int, str] = {}
+        todo: list[RunResult] = []
+        with self._lock:  # re-sent copies of results stored moments ago: no store round trip
+            for item in batches:
+                for r in item[2] if item is not None else ():
+                    owner, cap, runs = self._settled.get(r.lease_id, ("", "", ()))
+                    if owner == r.worker and r.run in runs and result_ok(cap, r):
+                        by_id[id(r)] = "duplicate"
+                        self.stats["duplicates_fast"] += 1
+                    else:
+                        todo.append(r)
+        statuses = self.store.accept_results(todo, now) if todo else []
+        by_id.update((id(r), s) for r, s in zip(todo, statuses, strict=True))
+        with self._lock:
+            fresh = {r.lease_id for r, s in zip(todo, statuses, strict=True)
+                     if s != "stale" and r.lease_id not in self._settled}
+        caps = {lease_id: self._capability(lease_id) or "" for lease_id in fresh}
+        with self._lock:
+            for r, s in zip(todo, statuses, strict=True):
+                if s != "stale":  # the lease exists, is r.worker's and r proved its capability
+                    entry = self._settled.get(r.lease_id)
+                    if entry is None:
+                        entry = self._settled[r.lease_id] = (r.worker, caps.get(r.lease_id, ""),
+                                                             set())
+                    entry[2].add(r.run)
+                    self._settled.move_to_end(r.lease_id)
+            while len(self._settled) > SETTLED_LEASES:
+                self._settled.popitem(last=False)
+        accepted: dict[str, list[RunResult]] = {}
+        for r in todo:
+            if by_id[id(r)] == "accepted":
+                accepted.setdefault(r.job_id, []).append(r)
+        for job_id, results in accepted.items():
+            self._after_accept(job_id, results, now)
+        acks: list[Ack | None] = []
+        for item in batches:
+            if item is None:
+                acks.append(None)
+                continue
+            _job_id, batch, _valid = item
+            ack = Ack(
+                worker=batch.worker,
+                results=[
+                    RunAck(lease_id=r.lease_id, job_id=r.job_id, cell=r.cell, run=r.run,
+                           status=by_id.get(id(r), "stale"))  # type: ignore[arg-type]
+                    for r in batch.results
+                ],
+            )
+            self._send(self.keys.ack(batch.worker), encode(ack))
+            acks.append(ack)
+        return acks
+
+    def _capability(self, lease_id: str) -> str | None:
+        """A lease's secret: from the cache of recent leases, else from the store."""
+        with self._lock:
+            cap = self._caps.get(lease_id)
+        if cap is None:
+            cap = self.store.capability(lease_id)
+            if cap is not None:
+                self._remember_caps({lease_id: cap})
+        return cap
+
+    def _remember_caps(self, caps: Mapping[str, str]) -> None:
+        with self._lock:
+            self._caps.update(caps)
+            while len(self._caps) > CACHED_CAPABILITIES:
+                self._caps.popitem(last=False)
+
+    def _after_accept(self, job_id: str, accepted: list[RunResult], now: float) -> None:
+        """Learn run costs, write the MCAP, finalize the job when it ended."""
+        with self._lock:
+            self._accepted.append((now, len(accepted)))
+        info = self._job_info(job_id)
+        if info is not None:
+            for r in accepted:
+                if r.status == "ok" and r.cell in info["cells"]:
+                    try:
+                        self.sizer.observe(info["cells"][r.cell][2], r.seconds)
+                    except Exception:  # pragma: no cover - specs come from the store
+                        pass
+        try:
+            self._record(job_id, accepted, now)
+        except Exception:
+            log.exception("recording results of job %s in its MCAP failed", job_id)
+        try:
+            self.dashboard.observe(job_id, accepted, now)
+        except Exception:
+            log.exception("updating the dashboard's aggregates of job %s failed", job_id)
+        status = self.store.job_status(job_id)
+        if status is not None and status.state in FINAL_STATES:
+            self.finalize(job_id)
+
+    def handle_progress(self, key: str, payload: bytes, now: float | None = None) -> Ack | None:
+        """A RunProgress: renew the lease; tell the worker to drop it when it is not active.
+        Progress without the lease's proof, or replayed (an old seq), changes nothing and gets
+        no answer."""
+        now = time.time() if now is None else now
+        try:
+            msg = decode(RunProgress, payload)
+        except Exception as exc:
+            self.stats["malformed"] += 1
+            log.warning("dropped a malformed progress message on %s: %s", key, _short(exc))
+            return None
+        if msg.job_id != Keys.last_chunk(key):
+            self.stats["malformed"] += 1
+            log.warning("dropped progress for job %s published on %s", msg.job_id, key)
+            return None
+        state = self.store.heartbeat(msg.lease_id, msg.worker, now, self.settings.lease_seconds,
+                                     seq=msg.seq, proof=msg.proof)
+        if state == "unknown":
+            self.stats["unproven"] += 1
+            return None
+        self._seen(msg.worker, now)
+        if state == "active":
+            return None
+        cap = self.store.capability(msg.lease_id)
+        if cap is None:  # pragma: no cover - heartbeat just proved it exists
+            return None
+        drop = LeaseDrop(lease_id=msg.lease_id, proof=drop_proof(cap, msg.lease_id))
+        ack = Ack(worker=msg.worker, drop_leases=[drop])
+        self._send(self.keys.ack(msg.worker), encode(ack))
+        return ack
+
+
+def _cell(spec: Mapping[str, Any]) -> BenchmarkCell | MapCell:
+    return BenchmarkCell(**spec) if spec.get("kind") == "benchmark" else MapCell(**spec)
+
