@@ -30,6 +30,7 @@ def tight_goal():
     return s
 
 
+@pytest.mark.slow  # every planner on tb3_sandbox: about 100 s on a loaded machine
 @pytest.mark.parametrize("planner", list_planners())
 def test_no_success_short_of_a_static_goal(tight_goal, planner: str) -> None:
     params = {"time": 0.5} if planner.startswith("OMPL") else None
