@@ -86,7 +86,7 @@ def optimum_of(
         _OPTIMA.move_to_end(key)
         return _OPTIMA[key]
     if scenario.is_dynamic:
-        return None, "moving obstacles or goal: no exact optimum"
+        return None, "the map has moving obstacles or a moving goal"
     w, h = scenario.size
     value: float | None = None
     try:
