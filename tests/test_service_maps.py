@@ -13,6 +13,7 @@ from swarmpath.service.http.app import create_app
 from swarmpath.service.protocol import Lease, LeaseRequest, decode_work_reply, encode
 from swarmpath.service.settings import CoordinatorSettings
 from swarmpath.service.worker import execute_lease, pack_batches
+from swarmpath.world.importers import MAX_CELLS, MAX_OBSTACLES
 
 DATA = Path(__file__).parent / "data"
 ARENA = (DATA / "arena.map").read_text()
@@ -84,12 +85,12 @@ def test_unknown_map_and_bad_start_name_the_field(data_dir: Path) -> None:
     ("body", "status", "field", "words"),
     [
         ({"name": "big", "format": "movingai",  # refused on its header, before the grid
-          "map": "type octile\nheight 1100\nwidth 1000\nmap\n" + ("." * 1000 + "\n") * 10},
-         413, "map", "max_cells=1,048,576"),
-        ({"name": "noise", "format": "movingai",  # a checkerboard: 4,500 single cells
-          "map": "type octile\nheight 90\nwidth 100\nmap\n"
-          + "\n".join(("@." if r % 2 else ".@") * 50 for r in range(90)) + "\n"},
-         413, "map", "max_obstacles=2,000"),
+          "map": "type octile\nheight 2100\nwidth 2000\nmap\n" + ("." * 2000 + "\n") * 10},
+         413, "map", f"max_cells={MAX_CELLS:,}"),
+        ({"name": "noise", "format": "movingai",  # a checkerboard: 5,500 single cells
+          "map": "type octile\nheight 110\nwidth 100\nmap\n"
+          + "\n".join(("@." if r % 2 else ".@") * 50 for r in range(110)) + "\n"},
+         413, "map", f"max_obstacles={MAX_OBSTACLES:,}"),
         ({"name": "bad", "format": "movingai",
           "map": "type octile\nheight 2\nwidth 2\nmap\n.x\n..\n"},
          422, "map", "unknown terrain"),
@@ -107,10 +108,43 @@ def test_limits_and_bad_uploads(data_dir: Path, body: dict, status: int, field: 
         assert detail["loc"] == ["body", field] and words in detail["msg"]
 
 
-def test_body_over_the_limit_is_refused_naming_it(data_dir: Path) -> None:
+def _walled_pgm(width: int, height: int) -> bytes:
+    """A nav2 PGM (P5): free (254) cells inside a one-cell border wall, with two inner walls."""
+    import numpy as np
+
+    img = np.full((height, width), 254, dtype=np.uint8)
+    img[0, :] = img[-1, :] = img[:, 0] = img[:, -1] = 0
+    img[: height * 2 // 3, width // 3] = 0
+    img[height // 3:, 2 * width // 3] = 0
+    return f"P5\n{width} {height}\n255\n".encode() + img.tobytes()
+
+
+BIG_YAML = ("image: big.pgm\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\nnegate: 0\n"
+            "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+
+
+def test_map_uploads_have_their_own_body_limit(data_dir: Path) -> None:
+    """A 1.8 MB PGM (2.4 MB of base64) is over the 1 MB limit of the other routes but within
+    max_map_upload_bytes; over that setting the upload is a 413 naming it, and /jobs keeps its
+    small limit."""
+    image = base64.b64encode(_walled_pgm(1500, 1200)).decode()
+    assert len(image) > 2_000_000
     with TestClient(_app(data_dir)) as client:
-        r = client.post("/maps", json={"name": "x", "format": "movingai", "map": "." * 1_100_000})
-        assert r.status_code in (413, 422) and "exceeds" in r.text
+        r = client.post("/maps", json={"name": "big", "format": "nav2", "yaml": BIG_YAML,
+                                       "image": image})
+        assert r.status_code == 201, r.text
+        assert r.json()["size"] == pytest.approx([75.0, 60.0])
+        r = client.post("/jobs", json={"kind": "map", "planners": ["MFB"],
+                                       "maps": ["x" * 1_100_000]})
+        assert r.status_code == 422 and "exceeds 1000000 bytes" in r.text
+    small = create_app(CoordinatorSettings(data_dir=data_dir, max_map_upload_bytes=1_000_000),
+                       use_zenoh=False)
+    with TestClient(small) as client:
+        r = client.post("/maps", json={"name": "big", "format": "nav2", "yaml": BIG_YAML,
+                                       "image": image})
+        assert r.status_code == 413
+        msg = r.json()["detail"][0]["msg"]
+        assert "exceeds 1000000 bytes" in msg and "max_map_upload_bytes" in msg
 
 
 def test_a_job_on_an_uploaded_map_is_worked_off(data_dir: Path) -> None:

@@ -23,8 +23,6 @@ from swarmpath.service.protocol import ID_PATTERN, FieldProblems, MapJobSpec, Ma
 
 #: a lease carries a cell's scenario to a worker in one message (MAX_BODY_BYTES): keep room
 MAX_SCENARIO_BYTES = 400_000
-MAX_CELLS = 1_048_576  # an upload's grid (cells); the CLI allows more
-MAX_OBSTACLES = 2_000
 
 
 class MapUpload(Model):
@@ -48,7 +46,9 @@ class MapUploadError(ValueError):
 
 def import_upload(up: MapUpload) -> dict[str, Any]:
     """The scenario (JSON object) of an upload; raises :class:`MapUploadError`."""
-    from swarmpath.world.importers import (
+    from swarmpath.world.importers import (  # the grid limits are the CLI's
+        MAX_CELLS,
+        MAX_OBSTACLES,
         MapImportError,
         MapLimitError,
         load_movingai_map,

@@ -12,6 +12,7 @@ from swarmpath.service.protocol import DEFAULT_PREFIX
 from swarmpath.service.zenoh_config import DEFAULT_ZENOH, router_config
 
 DEFAULT_HTTP = "127.0.0.1:8000"
+DEFAULT_MAX_MAP_UPLOAD_BYTES = 32 * 1024 * 1024
 
 
 def _env_number(name: str, default: float) -> float:
@@ -53,6 +54,9 @@ class CoordinatorSettings:
         "SWARMPATH_MAX_JOB_EVALUATIONS", DEFAULT_MAX_EVALUATIONS))
     max_job_steps: float = field(default_factory=lambda: _env_number(
         "SWARMPATH_MAX_JOB_STEPS", DEFAULT_MAX_STEPS))
+    # POST /maps bodies (a base64 image is 4/3 of the file); every other route: MAX_BODY_BYTES
+    max_map_upload_bytes: int = field(default_factory=lambda: int(_env_number(
+        "SWARMPATH_MAX_MAP_UPLOAD_BYTES", DEFAULT_MAX_MAP_UPLOAD_BYTES)))
 
     def zenoh_config(self) -> dict[str, Any]:
         return router_config(

@@ -78,7 +78,10 @@ def create_app(
     )
     app.state.settings = settings
     app.state.token = token or None
-    app.add_middleware(BodyLimit, limit=MAX_BODY_BYTES)
+    app.add_middleware(BodyLimit, limit=MAX_BODY_BYTES, routes={("POST", "/maps"): (
+        settings.max_map_upload_bytes,
+        f"max_map_upload_bytes={settings.max_map_upload_bytes} "
+        "(SWARMPATH_MAX_MAP_UPLOAD_BYTES)")})
 
     @app.exception_handler(RequestValidationError)
     async def _invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
