@@ -154,6 +154,7 @@ def test_map_verdicts():
     (row,) = reproduction.map_rows(rfo, {("RFO", "rfogwo-map1"): [_outcome(300.0)]}, {},
                                    {m: get_map(m) for m in rfo.maps})
     assert row.verdict == NOT_COMPARABLE and "no measured counterpart" in row.reason
+    assert row.measured["avg"] == 300.0  # our executed length, shown beside the units
 
 
 def test_document_counts_and_is_strict_json():

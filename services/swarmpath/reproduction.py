@@ -209,7 +209,8 @@ def map_rows(
                 published[other] = value
         ok = [r for r in runs if r.get("success")]
         field_ = MEASURED_FIELD.get(column)
-        values = [float(r[field_]) for r in ok] if field_ else []
+        # the executed lengths are shown even when the published column has no counterpart
+        values = [float(r[field_ or "length"]) for r in ok]
         measured = describe(values) if values else None
         optima = [float(r["optimum"]) for r in runs if r.get("optimum") is not None]
         extra = {
