@@ -108,3 +108,27 @@ def test_closest_name():
     assert closest("icot", ["COOT", "ICOOT", "GWO"]) == "ICOOT"
     assert closest("gwo", ["GWO"]) == "GWO"
     assert closest("zzz", ["GWO", "PSO"]) is None and did_you_mean("zzz", ["GWO"]) == ""
+
+
+def test_a_missing_scenario_name_is_one_problem_said_once(http):
+    """The name check and the scenario reader both see a missing name: one item, one message
+    (not "... '-' or required", two problems glued on one line)."""
+    r = http.post("/jobs", json={"kind": "map", "planners": ["MFB"], "maps": [
+        {"size": [10, 10], "start": [1, 1], "goal": [9, 9]}]})
+    assert r.status_code == 422
+    items = [d for d in r.json()["detail"] if error_field(d["loc"]) == "maps.0.name"]
+    assert len(items) == 1
+    assert items[0]["msg"] == "an inline scenario needs a 'name' of letters, digits, '_', '.', '-'"
+
+
+def test_near_miss_values_of_a_fixed_set_are_suggested(http):
+    scenario = {"name": "box", "size": [10, 10], "start": [0, 0], "goal": [9, 9],
+                "robot": {"preset": "turtlebot3-burgr"},
+                "obstacles": [{"shape": "circel", "center": [2, 2], "radius": 1}]}
+    got = details(http, {"kind": "map", "planners": ["MFB"], "maps": [scenario]})
+    assert got["maps.0.robot.preset"].endswith("(did you mean 'turtlebot3-burger'?)")
+    assert got["maps.0.obstacles.0.shape"].endswith("(did you mean 'circle'?)")
+    assert details(http, {"kind": "mapp"}) == {
+        "kind": "must be one of 'benchmark', 'map', got 'mapp' (did you mean 'map'?)"}
+    assert details(http, {"kind": "benchmark", "algorithms": ["GWO"], "functions": ["F1"],
+                          "transform": "shfit"})["transform"].endswith("(did you mean 'shift'?)")

@@ -4,6 +4,7 @@ the scenario reader and by the coordinator's 422 answers; pure (works on the dic
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 
@@ -13,6 +14,17 @@ def _g(v: Any) -> str:
 
 def _items(n: Any) -> str:
     return f"{n} item" + ("" if n == 1 else "s")
+
+
+def near_miss(given: Any, expected: Any) -> str:
+    """``" (did you mean 'omni'?)"`` when ``given`` is a near miss of one of the quoted names in
+    pydantic's ``expected`` text (``"'diff-drive', 'turtlebot3-burger' or 'omni'"``), else
+    ``""``."""
+    from swarmpath.names import did_you_mean
+
+    if not isinstance(given, str):
+        return ""
+    return did_you_mean(given, re.findall(r"'([^']*)'", str(expected)))
 
 
 def plain_message(err: dict[str, Any], fields: list[str] | None = None) -> str:
@@ -61,11 +73,12 @@ def plain_message(err: dict[str, Any], fields: list[str] | None = None) -> str:
     if kind == "string_pattern_mismatch":
         return f"must match {ctx.get('pattern')}"
     if kind == "literal_error":
-        return f"must be {ctx.get('expected')}"
+        return f"must be {ctx.get('expected')}" + near_miss(err.get("input"), ctx.get("expected"))
     if kind == "enum":
         return f"must be {ctx.get('expected')}"
     if kind == "union_tag_invalid":
-        return f"must be one of {ctx.get('expected_tags')}, got {ctx.get('tag')!r}"
+        return (f"must be one of {ctx.get('expected_tags')}, got {ctx.get('tag')!r}"
+                + near_miss(ctx.get("tag"), ctx.get("expected_tags")))
     if kind == "union_tag_not_found":
         return f"required: {ctx.get('discriminator', 'a tag')}"
     if kind == "json_invalid":

@@ -318,9 +318,11 @@ class BenchmarkJobSpec(Model):
 def _transform(v: str, shifted: bool) -> str:
     """A registered transform; ``shifted`` (the former flag) means ``shift`` and must agree."""
     from swarmpath.functions.transforms import TRANSFORMS
+    from swarmpath.names import did_you_mean
 
     if v not in TRANSFORMS:
-        raise ValueError(f"must be one of {', '.join(TRANSFORMS)}, got {v!r}")
+        raise ValueError(f"must be one of {', '.join(TRANSFORMS)}, got {v!r}"
+                         + did_you_mean(v, TRANSFORMS))
     if shifted and v == "none":
         return "shift"
     if shifted and "shift" not in v:
@@ -430,11 +432,14 @@ class MapJobSpec(Model):
                 continue
             if isinstance(entry, MapRef):  # resolved against the stored maps on submission
                 continue
+            inner = [((i, *loc), msg) for loc, msg in _inline_scenario_problems(entry)]
             name = entry.get("name")
             if not isinstance(name, str) or not _ID_RE.match(name):
+                # this one message says all about the name (the reader's "required" is dropped)
+                inner = [(loc, msg) for loc, msg in inner if loc != (i, "name")]
                 problems.append(((i, "name"), "an inline scenario needs a 'name' of letters, "
                                  "digits, '_', '.', '-'"))
-            problems += [((i, *loc), msg) for loc, msg in _inline_scenario_problems(entry)]
+            problems += inner
         if problems:
             raise FieldProblems(problems)
         _unique([map_name(e) for e in v], "map name")

@@ -205,13 +205,15 @@ def _message(err: Any) -> tuple[str, str]:
         return path, f"allows at most {ctx['max_length']} items"
     if kind == "union_tag_not_found":
         return (f"{path}.shape" if path else "shape"), "required: 'circle' or 'polygon'"
+    from swarmpath.errors import near_miss, plain_message
+
     if kind == "union_tag_invalid":
-        return f"{path}.shape", f"must be one of {ctx['expected_tags']}, got {ctx['tag']!r}"
+        return f"{path}.shape", (f"must be one of {ctx['expected_tags']}, got {ctx['tag']!r}"
+                                 + near_miss(ctx["tag"], ctx["expected_tags"]))
     if kind == "literal_error":
-        return path, f"must be {ctx['expected']}"
+        return path, f"must be {ctx['expected']}" + near_miss(err.get("input"), ctx["expected"])
     if kind == "string_too_short":
         return path, "must not be empty"
-    from swarmpath.errors import plain_message
 
     return path, plain_message(err)
 

@@ -39,15 +39,19 @@ def validation_detail(errors: list[dict[str, Any]]) -> list[dict[str, Any]]:
         kind = str(e.get("type", ""))
         problem = (e.get("ctx") or {}).get("error")
         if isinstance(problem, FieldProblems):
-            items += [{"loc": loc + list(sub), "msg": msg, "type": kind}
+            # each its own problem: never merged with another at the same place
+            items += [{"loc": loc + list(sub), "msg": msg, "type": kind, "own": True}
                       for sub, msg in problem.problems]
             continue
         if kind in ("union_tag_invalid", "union_tag_not_found") and loc == ["body"]:
             loc = ["body", "kind"]
         items.append({"loc": loc, "msg": plain_message(e, _spec_fields()), "type": kind})
     merged: dict[tuple[str, ...], dict[str, Any]] = {}
-    for item in items:  # a union's members fail at the same place: one item, "a or b"
+    for n, item in enumerate(items):  # a union's members fail at the same place: "a or b"
         key = tuple(str(p) for p in item["loc"])
+        if item.pop("own", False):
+            merged[(*key, f"#{n}")] = item
+            continue
         if key in merged:
             first = merged[key]
             if item["msg"] not in first["msg"]:
