@@ -32,7 +32,7 @@ def problem(r) -> tuple[str, str]:
     return ".".join(str(p) for p in item["loc"]), item["msg"]
 
 
-@pytest.mark.parametrize("path", ["/jobs", "/jobs/x/runs"])
+@pytest.mark.parametrize("path", ["/jobs", "/jobs/x/runs", "/maps"])
 @pytest.mark.parametrize(("name", "value"), [("offset", 2**63), ("offset", -1), ("limit", 0),
                                              ("limit", 10**6), ("offset", "1e3")])
 def test_paging_is_bounded(client, path, name, value):

@@ -2,11 +2,11 @@
 :mod:`swarmpath.service.maps`)."""
 
 import asyncio
-from typing import Annotated, Any
+from typing import Any
 
-from fastapi import APIRouter, Depends, HTTPException, Query
+from fastapi import APIRouter, Depends, HTTPException
 
-from swarmpath.service.http.deps import CoreDep, authorized
+from swarmpath.service.http.deps import CoreDep, Limit, Offset, authorized
 from swarmpath.service.maps import MapUpload, MapUploadError, import_upload
 
 router = APIRouter(tags=["maps"])
@@ -34,8 +34,8 @@ async def upload_map(up: MapUpload, core: CoreDep) -> dict[str, Any]:
 @router.get("/maps")
 def list_maps(
     core: CoreDep,
-    limit: Annotated[int, Query(ge=1, le=1000)] = 100,
-    offset: Annotated[int, Query(ge=0)] = 0,
+    limit: Limit = 100,
+    offset: Offset = 0,
 ) -> list[dict[str, Any]]:
     """Uploaded maps, newest first: id, name, format, size, start, goal, obstacle count."""
     return core.store.list_maps(limit, offset)
