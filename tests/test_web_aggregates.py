@@ -199,12 +199,14 @@ def test_map_statistics_are_compare_on_the_runs():
     lengths: dict[str, list[float]] = {"MFB": [], "ICOOT": []}
     seconds: dict[str, list[float]] = {"MFB": [], "ICOOT": []}
     success = {"MFB": 0, "ICOOT": 0}
+    runs = []
     for i, p in enumerate(("MFB", "ICOOT")):
         for run in range(12):
             ok = run % (2 if p == "MFB" else 6) != 0
             m = {"success": ok, "length": 14.0 + 0.1 * rng.random() + (1.0 if p == "MFB" else 0.0),
                  "seconds": float(rng.random()), "collisions": 0 if ok else 1}
             job.add(i, run, ok=True, metrics=m, path=[[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]])
+            runs.append({**m, "planner": p, "map": "m1"})
             seconds[p].append(m["seconds"])
             if ok:
                 lengths[p].append(m["length"])
@@ -217,3 +219,11 @@ def test_map_statistics_are_compare_on_the_runs():
         expected = compare_samples({"m1": values}, ["MFB", "ICOOT"]).marker("m1", "MFB")
         assert st[f"{name}_markers"]["m1"]["MFB"] == expected
     assert st["length_markers"]["m1"]["MFB"] == "-"  # every MFB path is longer
+    # the +/=/- counts and Friedman mean ranks are those swarmpath plan / results print
+    from swarmpath.compare_maps import map_statistics
+
+    cli = map_statistics(runs, ["MFB", "ICOOT"])
+    for name in ("length", "seconds"):
+        assert st[f"{name}_counts"] == cli.comparisons[name].counts()
+        assert st["friedman"][name]["mean_ranks"] == cli.friedman[name].mean_ranks
+    assert st["friedman"]["length"]["mean_ranks"] == {"MFB": 2.0, "ICOOT": 1.0}

@@ -263,6 +263,17 @@ def test_map_job_page_paths_failures_and_boxes(server, jobs, browser):
     assert len(cells) == len(MAP["maps"])
     per_cell = browser.find_elements(By.CSS_SELECTOR, "#cells tbody tr")
     assert len(per_cell) == len(MAP["maps"]) * len(MAP["planners"])
+    ranks = browser.find_elements(By.CSS_SELECTOR, "#map-ranks tbody tr")
+    assert [r.get_attribute("data-planner") for r in ranks] == MAP["planners"]
+    header = texts(browser.find_elements(By.CSS_SELECTOR, "#map-ranks thead th"))
+    assert header[1:] == ["success +/=/-", "length +/=/-", "planning s +/=/-",
+                          "length mean rank", "planning s mean rank"]
+    st = view["statistics"]
+    for row, p in zip(ranks, MAP["planners"], strict=True):
+        cells = texts(row.find_elements(By.TAG_NAME, "td"))
+        rank = st["friedman"]["seconds"]["mean_ranks"][p]
+        assert abs(float(cells[-1]) - rank) < 0.006  # shown with 2 decimals
+        assert (cells[1] == "ref.") == (p == st["reference"])
     legend = texts(browser.find_elements(By.CSS_SELECTOR, "#legend dt"))
     assert {"failed", "collisions", "gap_mean"} <= set(legend)
     shot(browser, "job-map")

@@ -49,10 +49,12 @@ def map_statistics(
     its table (:mod:`swarmpath.compare`): success rates (Fisher's exact test, ``markers``) and,
     from ``samples`` (metric -> map -> planner -> values), path lengths of successful runs and
     planning times (Wilcoxon rank-sum, lower is better: ``length_markers``,
-    ``seconds_markers``)."""
+    ``seconds_markers``, their +/=/- ``length_counts``, ``seconds_counts``) and the Friedman mean
+    ranks of the planners' means over the maps (``friedman``: metric -> ranks), as
+    ``swarmpath plan`` and ``swarmpath results`` print them (:mod:`swarmpath.compare_maps`)."""
     if len(planners) < 2:
         return None
-    from swarmpath.compare import compare_samples, compare_success
+    from swarmpath.compare import compare_samples, compare_success, friedman
 
     counts = {name: {p: (v["succeeded"], v["runs"] - v["crashed"])
                      for p, v in g["planners"].items()} for name, g in groups.items()}
@@ -60,9 +62,17 @@ def map_statistics(
     out = {"test": comparison.test, "reference": comparison.reference,
            "alpha": comparison.alpha, "markers": _markers(comparison, counts),
            "counts": comparison.counts()}
+    ranks: dict[str, Any] = {}
     for metric, values in (samples or {}).items():
-        out[f"{metric}_markers"] = _markers(
-            compare_samples(values, planners, reference), values)
+        tests = compare_samples(values, planners, reference)
+        out[f"{metric}_markers"] = _markers(tests, values)
+        out[f"{metric}_counts"] = tests.counts()
+        means = {name: {p: float(np.mean(v)) for p, v in per.items() if len(v)}
+                 for name, per in values.items()}
+        fr = friedman(means, planners, comparison.reference)
+        ranks[metric] = {"mean_ranks": fr.mean_ranks, "p": fr.p, "blocks": len(fr.blocks),
+                         "note": fr.note}
+    out["friedman"] = ranks
     return out
 
 

@@ -124,7 +124,23 @@
         <td>${med(c.box.gap)}</td><td>${med(c.box.seconds)}${mark("seconds")}</td>
         <td class="l">${Object.entries(c.failures).map(([k, n]) => `${n} ${k}`).join(", ")}</td></tr>`;
     }
-    html += `</tbody></table><div id="maps"></div>`;
+    html += `</tbody></table>`;
+    if (st.reference) {
+      const measures = ["success", "length", "seconds"].filter((w) => st[w === "success" ? "counts" : w + "_counts"]);
+      const ranked = Object.keys(st.friedman || {});
+      const label = { success: "success", length: "length", seconds: "planning s" };
+      html += `<h2>Planners against ${SP.esc(st.reference)}</h2><table id="map-ranks"><thead><tr><th class="l">planner</th>`
+        + measures.map((w) => `<th>${label[w]} +/=/-</th>`).join("")
+        + ranked.map((w) => `<th>${label[w]} mean rank</th>`).join("") + `</tr></thead><tbody>`;
+      for (const p of planners) {
+        html += `<tr data-planner="${SP.esc(p)}"><td class="l">${SP.esc(p)}</td>` + measures.map((w) => {
+          const c = st[w === "success" ? "counts" : w + "_counts"][p];
+          return `<td>${c ? `${c["+"]}/${c["="]}/${c["-"]}` : "ref."}</td>`;
+        }).join("") + ranked.map((w) => `<td>${SP.num(st.friedman[w].mean_ranks[p], 2)}</td>`).join("") + "</tr>";
+      }
+      html += `</tbody></table><p class="legend">+/=/-: maps where the planner is significantly better / not significantly different / worse than ${SP.esc(st.reference)}. Mean rank: Friedman ranks of the planners' mean length (successful runs) and mean planning time over the maps (1 = best; a map where a planner has no value is left out).</p>`;
+    }
+    html += `<div id="maps"></div>`;
     content.innerHTML = html;
     const maps = SP.q("#maps");
     for (const g of data.groups) {
