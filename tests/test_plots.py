@@ -114,3 +114,17 @@ def test_write_plots_names_files_by_cell(tmp_path):
     out = plots.write_map_plots(runs, {sc.name: sc}, lambda s, r: None, tmp_path / "m")
     assert sorted(p.name for p in out) == ["OMPL-RRT_mfb-static.png", "box_mfb-static.png"]
     assert all(p.read_bytes().startswith(b"\x89PNG") for p in out)
+
+
+def _panel_texts(fig):
+    return [[t.get_text() for t in ax.texts] for ax in fig.axes]
+
+
+def test_map_box_figure_says_why_each_empty_panel_is_empty():
+    moving = [{"planner": "MFB", "success": True, "length": 14.0, "gap": None, "seconds": 0.5},
+              {"planner": "ICOOT", "success": True, "length": 14.2, "gap": None, "seconds": 0.6}]
+    texts = _panel_texts(plots.map_box_figure("m", moving))
+    assert texts == [[], ["no exact optimum:\nthe map moves"], []]
+    stuck = [{**r, "success": False, "length": None} for r in moving]
+    texts = _panel_texts(plots.map_box_figure("m", stuck))
+    assert texts == [["no successful run"], ["no successful run"], []]

@@ -108,16 +108,17 @@ def convergence_figure(title: str, curves: Mapping[str, Sequence[Sequence[float]
 
 
 def box_figure(title: str, panels: Sequence[tuple[str, Mapping[str, Sequence[float | None]]]],
-               log: bool = False, empty: str = "no values") -> Any:
+               log: bool = False, empty: str | Sequence[str] = "no values") -> Any:
     """One box plot per panel (label, {name: values}): a box per name in its colour (None and
     non-finite values left out); names without values are labelled "(none)", a panel without any
-    says ``empty``."""
+    says ``empty`` (one text for every panel, or one per panel)."""
+    says = [empty] * len(panels) if isinstance(empty, str) else list(empty)
     plt = _pyplot()
     names = list(dict.fromkeys(n for _, data in panels for n in data))
     colours = palette(names)
     fig, axes = plt.subplots(1, len(panels), figsize=(max(5.0, 0.6 * len(names) + 2) *
                                                       len(panels), 4.5), dpi=100, squeeze=False)
-    for ax, (label, data) in zip(axes[0], panels, strict=True):
+    for ax, (label, data), nothing in zip(axes[0], panels, says, strict=True):
         values = [np.asarray([v for v in data.get(n, ()) if v is not None and math.isfinite(v)],
                              dtype=float) for n in names]
         present = [i for i, v in enumerate(values) if v.size]
@@ -131,7 +132,7 @@ def box_figure(title: str, panels: Sequence[tuple[str, Mapping[str, Sequence[flo
             if log:
                 _y_scale(ax, np.concatenate([values[i] for i in present]))
         else:
-            ax.text(0.5, 0.5, empty, transform=ax.transAxes, ha="center", va="center",
+            ax.text(0.5, 0.5, nothing, transform=ax.transAxes, ha="center", va="center",
                     wrap=True, color="#616161")
         ax.set_xlim(0.5, len(names) + 0.5)
         ax.set_xticks(range(1, len(names) + 1))
@@ -199,11 +200,14 @@ def map_box_figure(map_name: str, runs: Sequence[Mapping[str, Any]]) -> Any:
             g = _finite(r.get("gap"))
             gap[p].append(None if g is None else 100.0 * g)
         seconds[p].append(_finite(r.get("seconds")))
+    succeeded = any(r.get("success") for r in runs)
+    no_success = "no successful run"
     return box_figure(f"{map_name}: runs per planner", [
         ("path length of successful runs (m)", length),
         ("gap to the exact optimum (%)", gap),
         ("planning time (s)", seconds),
-    ], empty="no values: no successful run, or (gap)\nno exact optimum on a map that moves")
+    ], empty=[no_success, "no exact optimum:\nthe map moves" if succeeded else no_success,
+              "no finished run"])
 
 
 def collision_points(path: np.ndarray, world: Any, radius: float) -> np.ndarray:
