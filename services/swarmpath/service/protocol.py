@@ -5,7 +5,8 @@ protocol itself - who sends what on which key, leases, fencing, acknowledgements
 documented for implementers in other languages in ``schemas/README.md``; the JSON Schemas exported
 from these models by :mod:`swarmpath.service.schemas` are next to it.
 
-Job specs are validated here, completely: unknown algorithm / function / planner / map names,
+Job specs are validated completely (:mod:`.jobspec`, its checks in :mod:`.spec_checks`; their
+names are importable from here too): unknown algorithm / function / planner / map names,
 unknown or out-of-range algorithm parameters, and the size limits all fail with a
 :class:`pydantic.ValidationError` whose error location names the field (FastAPI turns that into a
 422 with the same location). Use :func:`parse_job_spec` (or :data:`JOB_SPEC_ADAPTER`).
@@ -18,569 +19,134 @@ it gives the same numbers.
 
 from __future__ import annotations
 
-import importlib
-import json
-import math
-import re
-from collections.abc import Callable, Mapping, Sequence
 from datetime import UTC, datetime
 from typing import Annotated, Any, Literal, TypeVar
 
 from pydantic import (
     BaseModel,
-    BeforeValidator,
-    ConfigDict,
     Field,
     TypeAdapter,
-    ValidationInfo,
     computed_field,
-    field_validator,
-    model_validator,
 )
 
-# ----------------------------------------------------------------------------------------- limits
-MAX_DIM = 1000
-MAX_AGENTS = 1000
-MAX_ITERATIONS = 100_000
-MAX_RUNS_PER_CELL = 10_000
-MAX_RUNS_PER_JOB = 1_000_000
-MAX_BODY_BYTES = 1_000_000  # REST bodies and Zenoh payloads a coordinator accepts
-MAX_SEED = 2**63 - 1
-MAX_LEASE_RUNS = MAX_RUNS_PER_CELL
-MAX_BUNDLE_LEASES = 64  # leases in one reply to a LeaseRequest
-CANCEL_LEASES = 2000  # lease drops in one Cancel message
-
-PROTOCOL_VERSION = 2  # 2: lease capabilities (see swarmpath.service.capability)
-DEFAULT_PREFIX = "swarmpath"
-
-# Identifiers that appear inside key expressions: one chunk, none of the reserved characters.
-ID_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,127}$"
-_ID_RE = re.compile(ID_PATTERN)
-
-ParamValue = bool | int | float | str
-Scalar = bool | int | float | str | None
-JobState = Literal["queued", "running", "done", "failed", "cancelled"]
-RunState = Literal["queued", "leased", "done", "failed", "cancelled"]
-AckStatus = Literal["accepted", "duplicate", "stale"]
-LeaseState = Literal["active", "done", "expired", "released", "cancelled", "unknown"]
-
-Identifier = Annotated[str, Field(pattern=ID_PATTERN)]
-#: A capability (64 hex digits) or an HMAC-SHA256 tag made with one (64 hex digits).
-Secret = Annotated[str, Field(pattern=r"^[0-9a-f]{64}$")]
-
-
-class Model(BaseModel):
-    """Base of every message: unknown fields are an error; NaN and infinities travel as the JSON
-    extensions ``NaN``, ``Infinity`` and ``-Infinity`` (Python's json and pydantic read them)."""
-
-    model_config = ConfigDict(
-        extra="forbid",
-        ser_json_inf_nan="constants",
-        json_schema_serialization_defaults_required=True,
-    )
-
-
-# ------------------------------------------------------------------------------------ validation
-Loc = tuple[str | int, ...]
-
-
-class FieldProblems(ValueError):
-    """Problems inside one field, each at its own place: ``(location below the field,
-    message)``. The REST error handler (:mod:`swarmpath.service.errors`) gives each its own
-    detail item, so that ``loc`` reaches the field (``maps.0.obstacles.2.radius``)."""
-
-    def __init__(self, problems: Sequence[tuple[Loc, str]]):
-        self.problems = list(problems)
-        super().__init__("; ".join(
-            f"{'.'.join(str(p) for p in loc)}: {msg}" if loc else msg for loc, msg in problems))
-
-
-#: Parameter numbers: integers within 64 bits, floats finite (anything else would only fail later,
-#: inside numpy, with numpy's words).
-INT64 = 2**63
-
-
-def _bounded_numbers(value: Any) -> Any:
-    """Every number inside job parameters, checked before the parameters' own validation:
-    integers within +-2**63, floats finite; each problem at its place (``GWO.a_max``)."""
-    problems: list[tuple[Loc, str]] = []
-    todo: list[tuple[Loc, Any]] = [((), value)]
-    while todo and len(problems) < 20:
-        loc, v = todo.pop()
-        if isinstance(v, bool) or v is None or isinstance(v, str):
-            continue
-        if isinstance(v, int):
-            if not -INT64 <= v < INT64:
-                digits = len(str(abs(v))) if abs(v) < 10**4300 else 4300
-                problems.append((loc, f"an integer of {digits} digits is out of range "
-                                      f"(parameters are 64-bit: |value| < 9.22e18)"))
-        elif isinstance(v, float):
-            if not math.isfinite(v):
-                problems.append((loc, f"must be a finite number, got {v}"))
-        elif isinstance(v, dict):
-            if len(loc) < 8:
-                todo += [((*loc, k), x) for k, x in v.items()]
-        elif isinstance(v, list | tuple) and len(loc) < 8:
-            todo += [((*loc, i), x) for i, x in enumerate(v)]
-    if problems:
-        raise FieldProblems(problems)
-    return value
-
-
-def _scenario_loc(path: str) -> Loc:
-    """``obstacles[2].radius`` (the world layer's paths) -> ``('obstacles', 2, 'radius')``."""
-    parts: list[str | int] = []
-    for token in re.findall(r"\[(\d+)\]|([^.\[\]]+)", path):
-        parts.append(int(token[0]) if token[0] else token[1])
-    return tuple(parts)
-
-
-def _unknown_names(v: Sequence[str], valid: Sequence[str], kind: str) -> None:
-    from swarmpath.names import unknown
-
-    problems: list[tuple[Loc, str]] = [
-        ((i,), unknown(kind, name, valid)) for i, name in enumerate(v) if name not in valid
-    ]
-    if problems:
-        raise FieldProblems(problems)
-
-
-def _unique(values: Sequence[Any], what: str) -> None:
-    seen: set[Any] = set()
-    for v in values:
-        key = json.dumps(v, sort_keys=True) if isinstance(v, dict) else v
-        if key in seen:
-            raise ValueError(f"duplicate {what} {v!r}")
-        seen.add(key)
-
-
-def _check_total(info: ValidationInfo, runs: int, axes: Sequence[str]) -> int:
-    """The 1,000,000-runs-per-job limit, raised on ``runs`` (a field the user can change)."""
-    sizes = []
-    for axis in axes:
-        value = info.data.get(axis)
-        if value is None:  # that field failed its own validation: its error is reported already
-            return runs
-        sizes.append(len(value))
-    total = runs * math.prod(sizes)
-    if total > MAX_RUNS_PER_JOB:
-        shape = " x ".join(f"{n} {axis}" for n, axis in zip(sizes, axes, strict=True))
-        raise ValueError(
-            f"{shape} x {runs} runs = {total} runs; a job may have at most {MAX_RUNS_PER_JOB}"
-        )
-    return runs
-
-
-def _planner_registry() -> Any:
-    """``swarmpath.planners``, imported on first use (it pulls in the whole planning stack)."""
-    return importlib.import_module("swarmpath.planners")
-
-
-def _map_names() -> list[str]:
-    from swarmpath.world.presets import list_maps
-
-    return list(list_maps())
-
-
-def _inline_scenario_problems(scenario: Mapping[str, Any]) -> list[tuple[Loc, str]]:
-    """Full validation of an inline scenario by the world layer's JSON reader: each problem at
-    its place inside the scenario."""
-    from swarmpath.world.scenario_io import ScenarioError, scenario_from_dict
-
-    try:
-        scenario_from_dict(dict(scenario))
-    except ScenarioError as exc:
-        return [(_scenario_loc(path), msg) for path, msg in exc.problems]
-    except (ValueError, TypeError, KeyError) as exc:
-        return [((), str(exc))]
-    return []
-
-
-# -------------------------------------------------------------------------------------- job specs
-class BenchmarkJobSpec(Model):
-    """Optimizer benchmark: every algorithm on every function at every dimension, ``runs`` runs
-    each. The field order matters for validation (later fields are checked against earlier ones)."""
-
-    kind: Literal["benchmark"]
-    algorithms: list[str] = Field(min_length=1, description="registered optimizer names")
-    functions: list[str] = Field(
-        min_length=1, description="function names; ranges such as 'F1-F13' are expanded"
-    )
-    dims: list[Annotated[int, Field(ge=1, le=MAX_DIM, strict=True)]] = Field(
-        default=[30], min_length=1)
-    runs: int = Field(default=30, ge=1, le=MAX_RUNS_PER_CELL, strict=True,
-                      description="runs per cell")
-    agents: int = Field(default=30, ge=1, le=MAX_AGENTS, strict=True)
-    iterations: int = Field(default=500, ge=1, le=MAX_ITERATIONS, strict=True)
-    seed: int = Field(default=1, ge=0, le=MAX_SEED, strict=True)
-    shifted: bool = Field(default=False, strict=True, description="alias of transform 'shift'")
-    transform: str = Field(
-        default="none",
-        validate_default=True,
-        description="none, shift, rotate or shift+rotate: each run's function moved and/or "
-        "turned with numbers from the run's own streams",
-    )
-    params: Annotated[dict[str, dict[str, ParamValue]], BeforeValidator(_bounded_numbers)] = Field(
-        default_factory=dict, description="{algorithm: {parameter: value}}"
-    )
-
-    @field_validator("transform")
-    @classmethod
-    def _known_transform(cls, v: str, info: ValidationInfo) -> str:
-        return _transform(v, bool(info.data.get("shifted")))
-
-    @model_validator(mode="after")
-    def _shifted_follows_transform(self) -> BenchmarkJobSpec:
-        self.shifted = "shift" in self.transform
-        return self
-
-    @field_validator("algorithms")
-    @classmethod
-    def _known_algorithms(cls, v: list[str]) -> list[str]:
-        from swarmpath.optimizers import list_optimizers
-
-        _unknown_names(v, list_optimizers(), "algorithm")
-        _unique(v, "algorithm")
-        return v
-
-    @field_validator("functions")
-    @classmethod
-    def _known_functions(cls, v: list[str]) -> list[str]:
-        from swarmpath.functions import expand_function_names
-
-        names: list[str] = []
-        problems: list[tuple[Loc, str]] = []
-        for i, item in enumerate(v):
-            try:
-                names.extend(expand_function_names(item))
-            except KeyError as exc:
-                problems.append(((i,), str(exc.args[0]) if exc.args else str(exc)))
-        if problems:
-            raise FieldProblems(problems)
-        if not names:
-            raise ValueError("no function names given")
-        _unique(names, "function")
-        return names
-
-    @field_validator("dims")
-    @classmethod
-    def _unique_dims(cls, v: list[int], info: ValidationInfo) -> list[int]:
-        _unique(v, "dim")
-        from swarmpath.functions import get_function
-
-        for name in info.data.get("functions") or ():
-            low = int(getattr(get_function(name), "min_dim", 1))
-            bad = [d for d in v if d < low]
-            if bad:
-                raise ValueError(f"{name} needs dim >= {low}, got {bad[0]}")
-        return v
-
-    @field_validator("runs")
-    @classmethod
-    def _total_runs(cls, v: int, info: ValidationInfo) -> int:
-        return _check_total(info, v, ("algorithms", "functions", "dims"))
-
-    @field_validator("agents")
-    @classmethod
-    def _enough_agents(cls, v: int, info: ValidationInfo) -> int:
-        from swarmpath.optimizers import get_optimizer
-
-        for name in info.data.get("algorithms") or ():
-            low = get_optimizer(name).min_agents
-            if v < low:
-                raise ValueError(f"{name} needs agents >= {low}, got {v}")
-        return v
-
-    @field_validator("params")
-    @classmethod
-    def _known_params(
-        cls, v: dict[str, dict[str, ParamValue]], info: ValidationInfo
-    ) -> dict[str, dict[str, ParamValue]]:
-        from swarmpath.optimizers import get_optimizer
-
-        return _params_of_members(
-            v, info.data.get("algorithms"), "algorithms",
-            lambda name, params: get_optimizer(name).resolve_params(params),
-        )
-
-    reference: str | None = Field(
-        default=None,
-        description="algorithm the summary's +/=/- markers compare against "
-        "(default: the last of algorithms)",
-    )
-
-    @field_validator("reference")
-    @classmethod
-    def _reference_of_members(cls, v: str | None, info: ValidationInfo) -> str | None:
-        return _reference(v, info.data.get("algorithms"))
-
-
-def _transform(v: str, shifted: bool) -> str:
-    """A registered transform; ``shifted`` (the former flag) means ``shift`` and must agree."""
-    from swarmpath.functions.transforms import TRANSFORMS
-    from swarmpath.names import did_you_mean
-
-    if v not in TRANSFORMS:
-        raise ValueError(f"must be one of {', '.join(TRANSFORMS)}, got {v!r}"
-                         + did_you_mean(v, TRANSFORMS))
-    if shifted and v == "none":
-        return "shift"
-    if shifted and "shift" not in v:
-        raise ValueError(f"{v!r} contradicts shifted: true (which means 'shift')")
-    return v
-
-
-def _reference(v: str | None, members: list[str] | None) -> str | None:
-    """A reference among the job's members (case-insensitive, stored as registered)."""
-    if v is None or members is None:  # no reference, or the members failed their validation
-        return v
-    from swarmpath.compare import resolve_reference
-
-    return resolve_reference(members, v)
-
-
-def _params_of_members(
-    v: dict[str, Any], members: list[str] | None, what: str, resolve: Callable[[str, Any], Any]
-) -> dict[str, Any]:
-    """Per-member parameters: only for the job's own members, each accepted by its resolver."""
-    from swarmpath.names import did_you_mean
-
-    if members is None:  # the member list itself failed validation: that error is reported
-        return v
-    problems: list[tuple[Loc, str]] = []
-    for name, params in v.items():
-        if name not in members:
-            problems.append(((name,), f"not one of the job's {what}{did_you_mean(name, members)}"
-                             f" ({', '.join(members)})"))
-            continue
-        keyed = False
-        for key, value in params.items():  # each parameter on its own: loc params.NAME.KEY
-            try:
-                resolve(name, {key: value})
-            except (ValueError, TypeError, KeyError, ArithmeticError) as exc:
-                problems.append(((name, key), str(exc.args[0]) if exc.args else str(exc)))
-                keyed = True
-        if not keyed:  # then together (a rule across parameters)
-            try:
-                resolve(name, params)
-            except (ValueError, TypeError, KeyError, ArithmeticError) as exc:
-                problems.append(((name,), str(exc.args[0]) if exc.args else str(exc)))
-    if problems:
-        raise FieldProblems(problems)
-    return v
-
-
-class MapRef(Model):
-    """A map uploaded with ``POST /maps``, by id, with optional start and goal (metres from the
-    map's lower-left corner). The coordinator replaces it with the stored scenario when the job
-    is submitted, so the job carries its map (:func:`swarmpath.service.maps.resolve_refs`)."""
-
-    map: str = Field(pattern=ID_PATTERN, description="id from POST /maps")
-    start: tuple[float, float] | None = None
-    goal: tuple[float, float] | None = None
-
-
-MapEntry = Annotated[str | MapRef | dict[str, Any], Field(union_mode="left_to_right")]
-
-
-def map_name(entry: str | MapRef | dict[str, Any]) -> str:
-    """The name of a map entry: a preset name, an uploaded map's id, or an inline scenario's
-    ``name``."""
-    if isinstance(entry, str):
-        return entry
-    if isinstance(entry, MapRef):
-        return entry.map
-    return str(entry["name"])
-
-
-class MapJobSpec(Model):
-    """Path-planning study: every planner on every map (preset name or inline scenario object)."""
-
-    kind: Literal["map"]
-    planners: list[str] = Field(min_length=1, description="registered planner names")
-    maps: list[MapEntry] = Field(
-        min_length=1, description="preset map names, inline scenario objects (with a 'name') "
-        "or uploaded maps {'map': id, 'start'?: [x, y], 'goal'?: [x, y]}"
-    )
-    runs: int = Field(default=10, ge=1, le=MAX_RUNS_PER_CELL, strict=True,
-                      description="runs per cell")
-    seed: int = Field(default=1, ge=0, le=MAX_SEED, strict=True)
-    params: Annotated[dict[str, dict[str, Any]], BeforeValidator(_bounded_numbers)] = Field(
-        default_factory=dict, description="{planner: {parameter: value}}"
-    )
-
-    @field_validator("planners")
-    @classmethod
-    def _known_planners(cls, v: list[str]) -> list[str]:
-        _unknown_names(v, list(_planner_registry().list_planners()), "planner")
-        _unique(v, "planner")
-        return v
-
-    @field_validator("maps")
-    @classmethod
-    def _known_maps(cls, v: list[MapEntry]) -> list[MapEntry]:
-        from swarmpath.names import unknown
-
-        presets: list[str] | None = None
-        problems: list[tuple[Loc, str]] = []
-        for i, entry in enumerate(v):
-            if isinstance(entry, str):
-                if presets is None:
-                    presets = _map_names()
-                if entry not in presets:
-                    problems.append(((i,), unknown("map", entry, presets)))
-                continue
-            if isinstance(entry, MapRef):  # resolved against the stored maps on submission
-                continue
-            inner = [((i, *loc), msg) for loc, msg in _inline_scenario_problems(entry)]
-            name = entry.get("name")
-            if not isinstance(name, str) or not _ID_RE.match(name):
-                # this one message says all about the name (the reader's "required" is dropped)
-                inner = [(loc, msg) for loc, msg in inner if loc != (i, "name")]
-                problems.append(((i, "name"), "an inline scenario needs a 'name' of letters, "
-                                 "digits, '_', '.', '-'"))
-            problems += inner
-        if problems:
-            raise FieldProblems(problems)
-        _unique([map_name(e) for e in v], "map name")
-        return v
-
-    @field_validator("runs")
-    @classmethod
-    def _total_runs(cls, v: int, info: ValidationInfo) -> int:
-        return _check_total(info, v, ("planners", "maps"))
-
-    @field_validator("params")
-    @classmethod
-    def _known_params(
-        cls, v: dict[str, dict[str, Any]], info: ValidationInfo
-    ) -> dict[str, dict[str, Any]]:
-        def resolve(name: str, params: Any) -> None:
-            getter = getattr(_planner_registry(), "get_planner", None)
-            resolver = getattr(getter(name), "resolve_params", None) if getter else None
-            if resolver is not None:
-                resolver(params)
-
-        return _params_of_members(v, info.data.get("planners"), "planners", resolve)
-
-    reference: str | None = Field(
-        default=None,
-        description="planner the summary's +/=/- markers compare against "
-        "(default: the last of planners)",
-    )
-
-    @field_validator("reference")
-    @classmethod
-    def _reference_of_members(cls, v: str | None, info: ValidationInfo) -> str | None:
-        return _reference(v, info.data.get("planners"))
-
-
-JobSpec = Annotated[BenchmarkJobSpec | MapJobSpec, Field(discriminator="kind")]
-JOB_SPEC_ADAPTER: TypeAdapter[BenchmarkJobSpec | MapJobSpec] = TypeAdapter(JobSpec)
-
-
-def parse_job_spec(data: Mapping[str, Any] | str | bytes) -> BenchmarkJobSpec | MapJobSpec:
-    """Validate a job spec (a dict, or JSON text). Raises :class:`pydantic.ValidationError`."""
-    if isinstance(data, str | bytes):
-        return JOB_SPEC_ADAPTER.validate_json(data)
-    return JOB_SPEC_ADAPTER.validate_python(data)
-
-
-def load_job_spec(data: Mapping[str, Any] | str | bytes) -> BenchmarkJobSpec | MapJobSpec:
-    """A spec this service stored earlier (validated and normalized then): rebuilt without
-    registry lookups, so stored jobs stay readable when the registries change."""
-    obj = json.loads(data) if isinstance(data, str | bytes) else dict(data)
-    cls: type[BenchmarkJobSpec] | type[MapJobSpec] = (
-        BenchmarkJobSpec if obj.get("kind") == "benchmark" else MapJobSpec
-    )
-    return cls.model_construct(**obj)
-
-
-# ---------------------------------------------------------------------------------------- cells
-class BenchmarkCell(Model):
-    """Everything a worker needs to run one benchmark cell (besides the job seed and run index):
-    ``minimize(algorithm, function, dim, agents, iterations, seed=seed, params=params,
-    shifted=shifted, run_ids=[...])``."""
-
-    kind: Literal["benchmark"] = "benchmark"
-    algorithm: str
-    function: str
-    dim: int
-    agents: int
-    iterations: int
-    shifted: bool = False
-    params: dict[str, ParamValue] = Field(default_factory=dict)
-    transform: str = Field(default="none", validate_default=True)
-
-    @field_validator("transform")
-    @classmethod
-    def _known_transform(cls, v: str, info: ValidationInfo) -> str:
-        return _transform(v, bool(info.data.get("shifted")))
-
-    @property
-    def key(self) -> str:
-        return f"{self.algorithm}/{self.function}/{self.dim}"
-
-
-class MapCell(Model):
-    """One planner on one map. ``scenario`` is the inline scenario object, or null for a preset."""
-
-    kind: Literal["map"] = "map"
-    planner: str
-    map: str
-    scenario: dict[str, Any] | None = None
-    params: dict[str, Any] = Field(default_factory=dict)
-
-    @property
-    def key(self) -> str:
-        return f"{self.planner}/{self.map}"
-
-
-CellSpec = Annotated[BenchmarkCell | MapCell, Field(discriminator="kind")]
-CELL_ADAPTER: TypeAdapter[BenchmarkCell | MapCell] = TypeAdapter(CellSpec)
-
-
-def expand_cells(spec: BenchmarkJobSpec | MapJobSpec) -> list[BenchmarkCell | MapCell]:
-    """The job's cells in table order (algorithm-major / planner-major); index = position."""
-    if isinstance(spec, BenchmarkJobSpec):
-        return [
-            BenchmarkCell(
-                algorithm=a,
-                function=f,
-                dim=d,
-                agents=spec.agents,
-                iterations=spec.iterations,
-                shifted=spec.shifted,
-                params=dict(spec.params.get(a, {})),
-                transform=spec.transform,
-            )
-            for a in spec.algorithms
-            for f in spec.functions
-            for d in spec.dims
-        ]
-    if any(isinstance(m, MapRef) for m in spec.maps):
-        raise ValueError("uploaded maps must be resolved (swarmpath.service.maps.resolve_refs)")
-    return [
-        MapCell(
-            planner=p,
-            map=map_name(m),
-            scenario=None if isinstance(m, str) else dict(m),  # type: ignore[arg-type]
-            params=dict(spec.params.get(p, {})),
-        )
-        for p in spec.planners
-        for m in spec.maps
-    ]
-
-
-def runs_total(spec: BenchmarkJobSpec | MapJobSpec) -> int:
-    if isinstance(spec, BenchmarkJobSpec):
-        return len(spec.algorithms) * len(spec.functions) * len(spec.dims) * spec.runs
-    return len(spec.planners) * len(spec.maps) * spec.runs
-
-
-def run_key(job_id: str, run_id: int) -> str:
-    """A run's name across jobs, as listed in ``WorkerStatus.current_runs``."""
-    return f"{job_id}:{run_id}"
+from swarmpath.service.jobspec import (
+    CELL_ADAPTER,
+    JOB_SPEC_ADAPTER,
+    BenchmarkCell,
+    BenchmarkJobSpec,
+    CellSpec,
+    JobSpec,
+    MapCell,
+    MapEntry,
+    MapJobSpec,
+    MapRef,
+    expand_cells,
+    load_job_spec,
+    map_name,
+    parse_job_spec,
+    run_key,
+    runs_total,
+)
+from swarmpath.service.model import (
+    _ID_RE,
+    CANCEL_LEASES,
+    DEFAULT_PREFIX,
+    ID_PATTERN,
+    MAX_AGENTS,
+    MAX_BODY_BYTES,
+    MAX_BUNDLE_LEASES,
+    MAX_DIM,
+    MAX_ITERATIONS,
+    MAX_LEASE_RUNS,
+    MAX_RUNS_PER_CELL,
+    MAX_RUNS_PER_JOB,
+    MAX_SEED,
+    PROTOCOL_VERSION,
+    AckStatus,
+    Identifier,
+    JobState,
+    LeaseState,
+    Model,
+    ParamValue,
+    RunState,
+    Scalar,
+    Secret,
+)
+from swarmpath.service.spec_checks import (
+    INT64,
+    FieldProblems,
+    Loc,
+)
+
+#: Every name of the protocol, those defined in model, spec_checks and jobspec included.
+__all__ = [
+    "CANCEL_LEASES",
+    "CELL_ADAPTER",
+    "DEFAULT_PREFIX",
+    "ID_PATTERN",
+    "INT64",
+    "JOB_SPEC_ADAPTER",
+    "MAX_AGENTS",
+    "MAX_BODY_BYTES",
+    "MAX_BUNDLE_LEASES",
+    "MAX_DIM",
+    "MAX_ITERATIONS",
+    "MAX_LEASE_RUNS",
+    "MAX_RUNS_PER_CELL",
+    "MAX_RUNS_PER_JOB",
+    "MAX_SEED",
+    "PROTOCOL_VERSION",
+    "SCHEMA_MODELS",
+    "SENT_BY_COORDINATOR",
+    "WORK_REPLY_ADAPTER",
+    "Ack",
+    "AckStatus",
+    "BenchmarkCell",
+    "BenchmarkJobSpec",
+    "Cancel",
+    "CellSpec",
+    "FieldProblems",
+    "Identifier",
+    "JobSpec",
+    "JobState",
+    "JobStatus",
+    "Keys",
+    "Lease",
+    "LeaseBundle",
+    "LeaseDrop",
+    "LeaseRequest",
+    "LeaseState",
+    "Loc",
+    "M",
+    "MapCell",
+    "MapEntry",
+    "MapJobSpec",
+    "MapRef",
+    "Model",
+    "NoWork",
+    "ParamValue",
+    "ResultBatch",
+    "RunAck",
+    "RunProgress",
+    "RunRequest",
+    "RunResult",
+    "RunState",
+    "Scalar",
+    "Secret",
+    "WorkReply",
+    "WorkerStatus",
+    "decode",
+    "decode_work_reply",
+    "encode",
+    "error_fields",
+    "expand_cells",
+    "iso_time",
+    "load_job_spec",
+    "map_name",
+    "parse_job_spec",
+    "run_key",
+    "runs_total",
+]
 
 
 # ------------------------------------------------------------------------------------ messages
