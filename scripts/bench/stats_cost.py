@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Cost of the statistical tests of a job summary (docs/statistics.md).
 
-    .venv/bin/python scripts/bench/statistics.py [--runs 30,1000] [--repeat 5]
+    .venv/bin/python scripts/bench/stats_cost.py [--runs 30,1000] [--repeat 5]
 
 Times :func:`swarmpath.service.summary_stats.benchmark_statistics` (every algorithm against the
 last one by the Wilcoxon rank-sum test, Holm over the table, Friedman per dimension): what
