@@ -1,0 +1,82 @@
+"""The JSON schemas of swarmpath's own MCAP topics (/results and /curves); the Foxglove
+well-known ones come from :mod:`swarmpath.service.foxglove`."""
+
+from __future__ import annotations
+
+from typing import Any
+
+# -------------------------------------------------------------------------- own JSON schemas
+_IDENTITY = {
+    "job_id": {"type": "string"},
+    "run_id": {"type": "integer", "description": "cell_index * runs_per_cell + run"},
+    "cell": {"type": "string"},
+    "run": {"type": "integer", "description": "run index within the cell"},
+    "seed": {"type": "integer", "description": "job seed"},
+}
+
+# who ran the run and how it ended: the same fields on both kinds of result
+_OUTCOME: dict[str, Any] = {
+    "worker": {"type": "string"},
+    "status": {"type": "string", "description": "ok or failed"},
+    "failure": {"type": "string", "description": "exception text; empty unless failed"},
+    "seconds": {"type": "number"},
+}
+
+BENCHMARK_RESULT_SCHEMA: dict[str, Any] = {
+    "title": "swarmpath.BenchmarkRunResult",
+    "description": "One finished benchmark run (non-finite metrics are left out)",
+    "type": "object",
+    "properties": {
+        **_IDENTITY,
+        "algorithm": {"type": "string"},
+        "function": {"type": "string"},
+        "dim": {"type": "integer"},
+        **_OUTCOME,
+        "best_fitness": {"type": "number"},
+        "evaluations": {"type": "integer"},
+    },
+}
+
+MAP_RESULT_SCHEMA: dict[str, Any] = {
+    "title": "swarmpath.MapRunResult",
+    "description": "One finished map run: the fields of `swarmpath plan --json` except the path",
+    "type": "object",
+    "properties": {
+        **_IDENTITY,
+        "planner": {"type": "string"},
+        "map": {"type": "string"},
+        **_OUTCOME,
+        "success": {"type": "boolean"},
+        "collisions": {"type": "integer"},
+        "robot_driven_contacts": {"type": "integer", "description": "collisions: robot moved in"},
+        "obstacle_driven_contacts": {"type": "integer",
+                                     "description": "collisions: a moving obstacle reached it"},
+        "planned_length": {"type": "number", "description": "a global planner's planned length"},
+        "length": {"type": "number"},
+        "error": {"type": "number", "description": "final distance to the goal"},
+        "smoothness": {"type": "number"},
+        "min_clearance": {"type": "number"},
+        "steps": {"type": "integer"},
+        "iterations": {"type": "integer"},
+        "optimum": {"type": "number"},
+        "gap": {"type": "number"},
+    },
+}
+
+CURVE_SCHEMA: dict[str, Any] = {
+    "title": "swarmpath.ConvergenceCurve",
+    "description": "Best fitness after each iteration of one run (Plot: best_fitness[:] by index)",
+    "type": "object",
+    "properties": {
+        **_IDENTITY,
+        "algorithm": {"type": "string"},
+        "function": {"type": "string"},
+        "dim": {"type": "integer"},
+        "iterations": {"type": "integer"},
+        "best_fitness": {"type": "array", "items": {"type": "number"}},
+    },
+}
+
+OWN_SCHEMAS = {
+    s["title"]: s for s in (BENCHMARK_RESULT_SCHEMA, MAP_RESULT_SCHEMA, CURVE_SCHEMA)
+}
