@@ -713,7 +713,9 @@ def test_cli_bad_input_names_the_field(cli, tmp_path):
     one_error_line(cli("worker", "--prefetch", "-1"), "worker", "--prefetch")
     one_error_line(cli("worker", "--id", "bad id!"), "worker", "--id")
     one_error_line(cli("coordinator", "--http", "nowhere"), "coordinator", "--http")
-    one_error_line(cli("up", "--zenoh", "tcp/127.0.0.1"), "up", "--zenoh")
+    data = tmp_path / "up-data"
+    one_error_line(cli("up", "--zenoh", "tcp/127.0.0.1", "--data", str(data)), "up", "--zenoh")
+    assert not data.exists()  # refused before the local login file is written
 
 
 # ------------------------------------------------------------- bundles, group commit, prefetch

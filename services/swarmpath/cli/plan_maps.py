@@ -52,7 +52,7 @@ def parse_ids(text: str | None) -> tuple[int, ...] | None:
     if text is None:
         return None
     try:
-        ids = tuple(int(p) for p in text.split(",") if p.strip())
+        ids = tuple(int(p) for p in text.split(","))  # an empty item ('0,,1') is an error too
     except ValueError:
         raise InputError("--scen-ids",
                          f"{text!r} is not a comma-separated list of integers") from None
@@ -192,9 +192,11 @@ def load_map(item: str, opts: MapOptions | None = None,
     return scenario if imported else _with_endpoints(scenario, opts)
 
 
-def scen_pairs(path: Path, ids: Sequence[int] | None) -> list[tuple[int, tuple[int, int],
-                                                                     tuple[int, int], float]]:
-    """(row, start cell, goal cell, octile length) of the chosen rows of a MovingAI .scen."""
+def scen_pairs(path: Path, ids: Sequence[int] | None,
+               shape: tuple[int, int] | None = None) -> list[tuple[int, tuple[int, int],
+                                                              tuple[int, int], float]]:
+    """(row, start cell, goal cell, octile length) of the chosen rows of a MovingAI .scen;
+    with ``shape`` (the map's width, height in cells) a row stated for another size is refused."""
     try:
         lines = path.read_text(encoding="utf-8").splitlines()
     except (OSError, UnicodeDecodeError) as exc:
@@ -207,11 +209,14 @@ def scen_pairs(path: Path, ids: Sequence[int] | None) -> list[tuple[int, tuple[i
             continue
         cols = line.split("\t") if "\t" in line else line.split()
         try:
-            sx, sy, gx, gy = (int(c) for c in cols[4:8])
+            width, height, sx, sy, gx, gy = (int(c) for c in cols[2:8])
             rows.append(((sx, sy), (gx, gy), float(cols[8])))
         except (ValueError, IndexError):
             raise InputError("--scen", f"{path}: line {k}: expected 9 columns "
                              "(bucket map width height sx sy gx gy length)") from None
+        if shape is not None and (width, height) != shape:
+            raise InputError("--scen", f"{path}: line {k}: a pair of a {width} x {height} map "
+                             f"({cols[1]}), but the .map in --maps is {shape[0]} x {shape[1]}")
     if ids is None:
         if len(rows) > MAX_SCEN_PAIRS:
             raise InputError("--scen-ids", f"{path} has {len(rows)} pairs; choose some with "
@@ -243,10 +248,10 @@ def resolve_maps(spec: str, opts: MapOptions | None = None,
         grids = [i for i in items if i.lower().endswith(".map")]
         if len(grids) != 1:
             raise InputError("--scen", "needs exactly one MovingAI .map in --maps")
-        pairs = scen_pairs(opts.scen, opts.scen_ids)
         base = load_map(grids[0], opts, note)
-        height = round(base.size[1] / (opts.resolution or 1.0))
         res = opts.resolution or 1.0
+        height = round(base.size[1] / res)
+        pairs = scen_pairs(opts.scen, opts.scen_ids, (round(base.size[0] / res), height))
         for i, s_cell, g_cell, length in pairs:
             s = dataclasses.replace(
                 base, name=f"{base.name}#{i}",
