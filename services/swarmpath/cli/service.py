@@ -336,6 +336,8 @@ def up(
     if not 1 <= slots <= 256:
         raise InputError("--slots", f"{slots} is not in [1, 256]")
     parse_http(http)
+    # every option checked before anything is written into the data directory
+    _coordinator_settings(data, [zenoh], prefix, lease_seconds, False, auth_dictionary, None)
     login, users = _local_login(data, auth_dictionary)
     settings = _coordinator_settings(data, [zenoh], prefix, lease_seconds, False, users, None)
     from swarmpath.service.zenoh_config import worker_access_control
