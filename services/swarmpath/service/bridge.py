@@ -14,6 +14,7 @@ from typing import Any
 
 from swarmpath.service.coordinator import Coordinator
 from swarmpath.service.protocol import MAX_BODY_BYTES, Keys
+from swarmpath.service.scenarios import ByteLRU, ScenarioRefused, answer
 
 log = logging.getLogger("swarmpath.coordinator")
 
@@ -32,6 +33,9 @@ class ZenohBridge:
     MAX_QUERIES = 1024
     MAX_EVENTS = 100_000
     MAX_EVENT_BYTES = 256_000_000
+    #: scenario queries waiting for their thread at most, and the canonical JSON kept for them
+    MAX_SCENARIO_QUERIES = 64
+    SCENARIO_CACHE_BYTES = 128 * 1024 * 1024
 
     def __init__(self, core: Coordinator, config: Mapping[str, Any]):
         self.core = core
@@ -40,6 +44,8 @@ class ZenohBridge:
         self.session: Any = None
         self._entities: list[Any] = []
         self._work: queue.Queue[Any] = queue.Queue(self.MAX_QUERIES)
+        self._scenario_queries: queue.Queue[Any] = queue.Queue(self.MAX_SCENARIO_QUERIES)
+        self.scenarios = ByteLRU(self.SCENARIO_CACHE_BYTES)
         self._events: queue.SimpleQueue[Any] = queue.SimpleQueue()
         self._queued = [0, 0]  # events and their payload bytes waiting in _events
         self._queued_lock = threading.Lock()
@@ -55,13 +61,15 @@ class ZenohBridge:
         self._zenoh = zenoh
         log.info("%s", describe(self.config))
         self.core.publish = self.put
-        for target, name in ((self._serve_work, "lease"), (self._serve_events, "events")):
+        for target, name in ((self._serve_work, "lease"), (self._serve_events, "events"),
+                             (self._serve_scenarios, "scenarios")):
             t = threading.Thread(target=target, name=f"coordinator-{name}", daemon=True)
             t.start()
             self._threads.append(t)
         s = self.session
         self._entities = [
             s.declare_queryable(self.keys.work, self._on_query, complete=True),
+            s.declare_queryable(self.keys.all_scenarios, self._on_scenario_query),
             s.declare_subscriber(self.keys.all_results, self._on_results),
             s.declare_subscriber(self.keys.all_progress, self._on_progress),
             s.liveliness().declare_subscriber(
@@ -85,6 +93,15 @@ class ZenohBridge:
             query.drop()  # no reply: the worker asks again after its backoff
         except Exception:  # pragma: no cover
             log.exception("queueing a lease request failed")
+
+    def _on_scenario_query(self, query: Any) -> None:
+        try:
+            self._scenario_queries.put_nowait(query)
+        except queue.Full:
+            self.core.stats["overload"] += 1
+            query.drop()  # no reply: the worker's runs fail with "no reply" and are reported
+        except Exception:  # pragma: no cover
+            log.exception("queueing a scenario request failed")
 
     def _on_results(self, sample: Any) -> None:
         self._queue_sample("results", sample)
@@ -147,6 +164,35 @@ class ZenohBridge:
                 except Exception:  # pragma: no cover
                     pass
 
+    def _serve_scenarios(self) -> None:
+        """Answer ``scenarios/<sha256>`` queries (:func:`swarmpath.service.scenarios.answer`)."""
+        store = self.core.store
+        while True:
+            query = self._scenario_queries.get()
+            if query is None:
+                return
+            try:
+                payload = query.payload.to_bytes() if query.payload is not None else b""
+                try:
+                    if len(payload) > MAX_BODY_BYTES:
+                        raise ScenarioRefused("scenario request too large")
+                    data = answer(str(query.key_expr), payload, store.lease_scenario_ref,
+                                  store.lease_scenario, self.scenarios)
+                except ScenarioRefused as exc:
+                    self.core.stats["malformed"] += 1
+                    log.warning("refused a scenario request: %s", exc)
+                    query.reply_err(str(exc).encode())
+                else:
+                    query.reply(query.key_expr, data,
+                                encoding=self._zenoh.Encoding.APPLICATION_JSON)
+            except Exception:
+                log.exception("answering a scenario request failed")
+            finally:
+                try:
+                    query.drop()
+                except Exception:  # pragma: no cover
+                    pass
+
     def _serve_events(self) -> None:
         held: Any = _NOTHING  # an item taken from the queue while grouping results
         while True:
@@ -190,6 +236,7 @@ class ZenohBridge:
         self._entities = []
         self._work.put(None)
         self._events.put(None)
+        self._scenario_queries.put(None)
         for t in self._threads:
             t.join(timeout=10.0)
         self._closed = True

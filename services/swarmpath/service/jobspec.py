@@ -26,6 +26,7 @@ from swarmpath.service.model import (
     MAX_DIM,
     MAX_ITERATIONS,
     MAX_RUNS_PER_CELL,
+    MAX_SCENARIO_BYTES,
     MAX_SEED,
     Model,
     ParamValue,
@@ -369,14 +370,25 @@ class BenchmarkCell(Model):
         return f"{self.algorithm}/{self.function}/{self.dim}"
 
 
+class ScenarioRef(Model):
+    """A scenario by content: the SHA-256 and length of its canonical JSON
+    (:func:`swarmpath.service.scenarios.canonical`)."""
+
+    sha256: str = Field(pattern=r"^[0-9a-f]{64}$")
+    bytes: int = Field(ge=1, le=MAX_SCENARIO_BYTES)
+
+
 class MapCell(Model):
-    """One planner on one map. ``scenario`` is the inline scenario object, or null for a preset."""
+    """One planner on one map. ``scenario`` is the inline scenario object, or null for a preset.
+    In a lease, a scenario over INLINE_SCENARIO_BYTES is replaced by ``scenario_ref``: the worker
+    fetches it from the coordinator and checks the hash before it runs."""
 
     kind: Literal["map"] = "map"
     planner: str
     map: str
     scenario: dict[str, Any] | None = None
     params: dict[str, Any] = Field(default_factory=dict)
+    scenario_ref: ScenarioRef | None = None
 
     @property
     def key(self) -> str:

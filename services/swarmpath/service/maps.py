@@ -19,10 +19,14 @@ from typing import Any, Literal
 import yaml
 from pydantic import Field
 
-from swarmpath.service.protocol import ID_PATTERN, FieldProblems, MapJobSpec, MapRef, Model
-
-#: a lease carries a cell's scenario to a worker in one message (MAX_BODY_BYTES): keep room
-MAX_SCENARIO_BYTES = 400_000
+from swarmpath.service.protocol import (
+    ID_PATTERN,
+    MAX_SCENARIO_BYTES,
+    FieldProblems,
+    MapJobSpec,
+    MapRef,
+    Model,
+)
 
 
 class MapUpload(Model):
@@ -81,11 +85,11 @@ def import_upload(up: MapUpload) -> dict[str, Any]:
                                  _strip(str(exc), d)) from None
     scenario = scenario_to_dict(imported.scenario)
     size = len(json.dumps(scenario))
-    if size > MAX_SCENARIO_BYTES:
+    if size > MAX_SCENARIO_BYTES:  # leases name it by hash; a worker fetches it in one reply
         raise MapUploadError(413, "map" if up.format == "movingai" else "image",
                              f"the imported scenario is {size:,} bytes of JSON, over "
-                             f"MAX_SCENARIO_BYTES={MAX_SCENARIO_BYTES:,} (a lease carries it to "
-                             "a worker in one message): upload a smaller or coarser map")
+                             f"MAX_SCENARIO_BYTES={MAX_SCENARIO_BYTES:,}: upload a smaller or "
+                             "coarser map")
     return scenario
 
 

@@ -23,8 +23,12 @@ MAX_SEED = 2**63 - 1
 MAX_LEASE_RUNS = MAX_RUNS_PER_CELL
 MAX_BUNDLE_LEASES = 64  # leases in one reply to a LeaseRequest
 CANCEL_LEASES = 2000  # lease drops in one Cancel message
+#: a map cell's scenario travels in its lease up to this many bytes of canonical JSON; a larger
+#: one travels as a ScenarioRef and the worker fetches it (ScenarioRequest on Keys.scenario)
+INLINE_SCENARIO_BYTES = 16_000
+MAX_SCENARIO_BYTES = 64 * 1024 * 1024  # a fetched scenario (canonical JSON) at most
 
-PROTOCOL_VERSION = 2  # 2: lease capabilities (see swarmpath.service.capability)
+PROTOCOL_VERSION = 3  # 2: lease capabilities (swarmpath.service.capability); 3: ScenarioRef
 DEFAULT_PREFIX = "swarmpath"
 
 # Identifiers that appear inside key expressions: one chunk, none of the reserved characters.

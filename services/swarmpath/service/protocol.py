@@ -19,6 +19,7 @@ it gives the same numbers.
 
 from __future__ import annotations
 
+import re
 from datetime import UTC, datetime
 from typing import Annotated, Any, Literal, TypeVar
 
@@ -40,6 +41,7 @@ from swarmpath.service.jobspec import (
     MapEntry,
     MapJobSpec,
     MapRef,
+    ScenarioRef,
     expand_cells,
     load_job_spec,
     map_name,
@@ -52,6 +54,7 @@ from swarmpath.service.model import (
     CANCEL_LEASES,
     DEFAULT_PREFIX,
     ID_PATTERN,
+    INLINE_SCENARIO_BYTES,
     MAX_AGENTS,
     MAX_BODY_BYTES,
     MAX_BUNDLE_LEASES,
@@ -60,6 +63,7 @@ from swarmpath.service.model import (
     MAX_LEASE_RUNS,
     MAX_RUNS_PER_CELL,
     MAX_RUNS_PER_JOB,
+    MAX_SCENARIO_BYTES,
     MAX_SEED,
     PROTOCOL_VERSION,
     AckStatus,
@@ -84,6 +88,7 @@ __all__ = [
     "CELL_ADAPTER",
     "DEFAULT_PREFIX",
     "ID_PATTERN",
+    "INLINE_SCENARIO_BYTES",
     "INT64",
     "JOB_SPEC_ADAPTER",
     "MAX_AGENTS",
@@ -94,6 +99,7 @@ __all__ = [
     "MAX_LEASE_RUNS",
     "MAX_RUNS_PER_CELL",
     "MAX_RUNS_PER_JOB",
+    "MAX_SCENARIO_BYTES",
     "MAX_SEED",
     "PROTOCOL_VERSION",
     "SCHEMA_MODELS",
@@ -132,6 +138,8 @@ __all__ = [
     "RunResult",
     "RunState",
     "Scalar",
+    "ScenarioRef",
+    "ScenarioRequest",
     "Secret",
     "WorkReply",
     "WorkerStatus",
@@ -218,6 +226,17 @@ class Lease(Model):
             )
             for r in self.runs
         ]
+
+
+class ScenarioRequest(Model):
+    """Payload of a query on ``<prefix>/scenarios/<sha256>``: the scenario of a lease the worker
+    holds. ``proof`` is :func:`swarmpath.service.scenarios.request_proof` (HMAC with the lease's
+    capability), so only the holder of a live lease on that scenario is answered. The reply is
+    the canonical JSON itself (a reply error with the reason otherwise)."""
+
+    worker: Identifier
+    lease_id: Identifier
+    proof: str = Field(max_length=128)
 
 
 class NoWork(Model):
@@ -419,6 +438,16 @@ class Keys:
     def cancel(self) -> str:
         return f"{self.prefix}/cancel"
 
+    def scenario(self, sha256: str) -> str:
+        """Queryable of the coordinator: ScenarioRequest -> the scenario's canonical JSON."""
+        if not re.fullmatch(r"[0-9a-f]{64}", sha256):
+            raise ValueError(f"{sha256!r} is not a SHA-256 hex digest")
+        return f"{self.prefix}/scenarios/{sha256}"
+
+    @property
+    def all_scenarios(self) -> str:
+        return f"{self.prefix}/scenarios/*"
+
     # subscriptions of the coordinator
     @property
     def all_results(self) -> str:
@@ -485,6 +514,7 @@ SCHEMA_MODELS: dict[str, Any] = {
     "cell_spec": CELL_ADAPTER,
     "run_request": RunRequest,
     "lease_request": LeaseRequest,
+    "scenario_request": ScenarioRequest,
     "work_reply": WORK_REPLY_ADAPTER,
     "lease": Lease,
     "lease_bundle": LeaseBundle,

@@ -29,7 +29,8 @@ lease, another worker's lease, a run outside the lease, or a cancelled job are `
 
 Layout: :mod:`.base` (schema, connection, transactions), :mod:`.jobs`, :mod:`.leases`,
 :mod:`.results` (fencing), :mod:`.runs` (run views and records), :mod:`.summaries` (tables, CSV),
-:mod:`.series` (binary run series), :mod:`.maps` (uploaded maps). :class:`Store` combines them.
+:mod:`.series` (binary run series), :mod:`.maps` (uploaded maps),
+:mod:`.scenarios` (a lease's scenario by reference). :class:`Store` combines them.
 """
 
 from swarmpath.service.store.base import (
@@ -46,6 +47,7 @@ from swarmpath.service.store.leases import LeasesMixin
 from swarmpath.service.store.maps import MapsMixin
 from swarmpath.service.store.results import ResultsMixin
 from swarmpath.service.store.runs import RunViewsMixin
+from swarmpath.service.store.scenarios import ScenariosMixin
 from swarmpath.service.store.series import SERIES_MAGIC, decode_series, encode_series
 from swarmpath.service.store.summaries import (
     BENCHMARK_COLUMNS,
@@ -56,7 +58,8 @@ from swarmpath.service.store.summaries import (
 )
 
 
-class Store(JobsMixin, LeasesMixin, ResultsMixin, RunViewsMixin, SummariesMixin, MapsMixin):
+class Store(JobsMixin, ScenariosMixin, LeasesMixin, ResultsMixin, RunViewsMixin, SummariesMixin,
+            MapsMixin):
     """See the module docstring. ``now`` arguments are Unix seconds (default: ``time.time()``)."""
 
 

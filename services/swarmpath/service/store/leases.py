@@ -16,6 +16,7 @@ from swarmpath.service.protocol import (
     Lease,
     LeaseState,
 )
+from swarmpath.service.scenarios import by_reference
 from swarmpath.service.store.base import CellSpec, RunsFor, StoreBase, _dumps
 
 _STOP = object()  # _pick_runs: the sizer ends the bundle
@@ -137,7 +138,9 @@ class LeasesMixin(StoreBase):
         return None
 
     def _cell_spec(self, db: sqlite3.Connection, seq: int, cell_idx: int) -> tuple[str, CellSpec]:
-        """(key, spec) of a cell; specs never change, so they are parsed once."""
+        """(key, spec) of a cell as leases carry it (a map cell's large scenario replaced by its
+        ScenarioRef, see swarmpath.service.scenarios); specs never change, so they are parsed
+        once."""
         hit = self._cell_specs.get((seq, cell_idx))
         if hit is None:
             row = db.execute(
@@ -145,8 +148,8 @@ class LeasesMixin(StoreBase):
             ).fetchone()
             if len(self._cell_specs) > 100_000:
                 self._cell_specs.clear()
-            hit = self._cell_specs[(seq, cell_idx)] = (
-                row["key"], CELL_ADAPTER.validate_json(row["spec"])
+            hit = self._cell_specs[(seq, cell_idx)] = (  # a large scenario by reference
+                row["key"], by_reference(CELL_ADAPTER.validate_json(row["spec"]))
             )
         return hit
 

@@ -59,6 +59,13 @@ def _result(lease: Lease, run: int, seconds: float, **fields: Any) -> RunResult:
     )
 
 
+def failed_lease(lease: Lease, failure: str) -> list[tuple[int, bytes]]:
+    """Every run of ``lease`` as a ``failed`` result with ``failure`` as the reason (a lease that
+    cannot start, e.g. its scenario could not be fetched)."""
+    return [(r, fit_result(_result(lease, r, 0.0, status="failed", failure=failure[:20_000]),
+                           capability=lease.capability)) for r in lease.runs]
+
+
 def _failure_text(exc: BaseException) -> str:
     text = "".join(traceback.format_exception_only(type(exc), exc)).strip()
     return text[:20_000]
@@ -123,6 +130,9 @@ def _benchmark(
 
 def load_scenario(spec: MapCell) -> Any:
     """The cell's scenario: the inline object, or the preset named ``spec.map``."""
+    if spec.scenario_ref is not None:  # the worker puts it in place first (scenarios.resolve)
+        raise ValueError(f"map {spec.map}: scenario {spec.scenario_ref.sha256[:16]}... was not "
+                         "fetched")
     if spec.scenario is not None:
         from swarmpath.world.scenario_io import scenario_from_dict
 

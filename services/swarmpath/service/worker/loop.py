@@ -31,7 +31,8 @@ from swarmpath.service.protocol import (
     decode_work_reply,
     encode,
 )
-from swarmpath.service.worker.execution import benchmark_batches
+from swarmpath.service.scenarios import ByteLRU, ScenarioUnavailable, resolve
+from swarmpath.service.worker.execution import benchmark_batches, failed_lease
 from swarmpath.service.worker.reporting import Reporting, _Active, _Pending
 from swarmpath.service.worker.settings import WorkerSettings, default_worker_id
 from swarmpath.service.worker.slots import ProcessSlot, Slot, ThreadSlot
@@ -66,6 +67,7 @@ class Worker(Reporting):
         self._seq = 0  # puts of results so far
         self._acked_seq = 0  # highest put with an acknowledged result
         self._last_ack = time.monotonic()
+        self.scenarios = ByteLRU(settings.scenario_cache_bytes)  # fetched scenarios by hash
 
     # ------------------------------------------------------------------------------ control
     def stop(self) -> None:
@@ -236,6 +238,7 @@ class Worker(Reporting):
         mine = [lease for lease in leases if lease.worker == self.id]
         if len(mine) < len(leases):  # pragma: no cover - we asked for ourselves
             log.warning("ignored %d leases granted to another worker", len(leases) - len(mine))
+        mine = self._with_scenarios(mine)
         if not mine:
             return
         with self._lock:
@@ -245,6 +248,36 @@ class Worker(Reporting):
                 log.debug("lease %s: %s runs %s", lease.lease_id, lease.cell, lease.runs)
             self._queue.append(mine)
         self._dispatch()
+
+    def _with_scenarios(self, leases: Sequence[Lease]) -> list[Lease]:
+        """The leases with their scenarios by reference in place (cached or fetched); a lease
+        whose scenario cannot be had is reported at once, every run failed with the reason."""
+        out: list[Lease] = []
+        for lease in leases:
+            spec = lease.spec
+            ref = getattr(spec, "scenario_ref", None)
+            if ref is None:
+                out.append(lease)
+                continue
+            try:
+                out.append(resolve(lease, self.keys.scenario(ref.sha256), self._fetch,
+                                   self.scenarios))
+            except ScenarioUnavailable as exc:
+                log.error("lease %s (%s): %s", lease.lease_id, lease.cell, exc)
+                self._publish_results(lease, failed_lease(lease, str(exc)))
+        return out
+
+    def _fetch(self, key: str, payload: bytes) -> bytes:
+        """One query to the coordinator; its reply payload, or an error with its reason."""
+        replies = list(self._session.get(key, payload=payload,
+                                         timeout=self.settings.query_timeout))
+        reason = "no reply from the coordinator"
+        for reply in replies:
+            if reply.ok is not None:
+                return bytes(reply.ok.payload.to_bytes())
+            if reply.err is not None:
+                reason = "refused: " + reply.err.payload.to_bytes()[:300].decode(errors="replace")
+        raise RuntimeError(reason)
 
     def _start(self, lease: Lease) -> None:
         """Run one lease (as a group of one)."""

@@ -36,7 +36,8 @@ class WorkerSettings:
     password: str | None = None
     shm: bool = False
     zenoh_extra: dict[str, Any] | None = None
-    query_timeout: float = 10.0  # waiting for a lease reply
+    query_timeout: float = 10.0  # waiting for a lease reply (and for a scenario's)
+    scenario_cache_bytes: int = 256 * 1024 * 1024  # fetched scenarios kept (LRU by bytes)
     ack_timeout: float = 5.0  # results not settled within this are put again (with backoff)
     max_backoff: float = 5.0  # coordinator absent: retry pulls at most this far apart
     grace_seconds: float = 10.0  # on stop: running leases get this long to finish
