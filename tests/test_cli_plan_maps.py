@@ -63,6 +63,9 @@ def test_start_and_goal_override_an_imported_map() -> None:
         (("-m", ARENA, "--resolution", "0"), "--resolution"),
         (("-m", "mfb-static", "--resolution", "2"), "--resolution"),
         (("-m", ARENA, "--scen", SCEN, "--scen-ids", "999"), "--scen-ids"),
+        (("-m", ARENA, "--scen", SCEN, "--scen-ids", "0,,1"), "--scen-ids"),
+        # arena's .scen (49 x 49 cells) with maze512-32-9: its cells fit, but it is another map
+        (("-m", str(DATA / "maze512-32-9.map"), "--scen", SCEN, "--scen-ids", "0"), "--scen"),
         (("-m", ARENA, "--scen-ids", "1"), "--scen-ids"),
         (("-m", "mfb-static", "--scen", SCEN), "--scen"),
         (("-m", ARENA, "--scen", ARENA), "--scen"),
