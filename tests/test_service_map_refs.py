@@ -61,6 +61,10 @@ def pillars_pgm(width: int = 1500, height: int = 1200, spacing: int = 150) -> by
     return f"P5\n{width} {height}\n255\n".encode() + img.tobytes()
 
 
+def doc_hash(doc: dict) -> str:
+    return hashlib.sha256(canonical(doc)).hexdigest()
+
+
 def upload_body() -> dict:
     return {"name": "pillars", "format": "nav2", "yaml": YAML,
             "image": base64.b64encode(pillars_pgm()).decode()}
@@ -240,5 +244,94 @@ def test_a_real_size_map_job_through_a_coordinator_and_a_worker(tmp_path: Path) 
             assert m["length"] == direct.length and m["optimum"] == direct.optimum
             assert m["gap"] == pytest.approx((m["length"] - m["optimum"]) / m["optimum"])
         assert "refused a scenario request" not in svc.log("coordinator")
+        # over the wire: a request for a lease nobody holds gets a reply error with the reason
+        import zenoh
+
+        from swarmpath.service.zenoh_config import client_config, to_zenoh
+
+        session = zenoh.open(to_zenoh(client_config(svc.zenoh)))
+        try:
+            forged = ScenarioRequest(worker="w1", lease_id="made-up", proof="0" * 64)
+            replies = list(session.get(Keys().scenario(doc_hash(doc)),
+                                       payload=forged.model_dump_json().encode(), timeout=10.0))
+        finally:
+            session.close()
+        assert [r.ok for r in replies] == [None]
+        assert replies[0].err.payload.to_bytes() == b"unknown lease made-up"
+        assert "refused a scenario request: unknown lease made-up" in svc.log("coordinator")
+        assert svc.get("/healthz").status_code == 200
     finally:
         svc.close()
+
+
+class _Payload:
+    def __init__(self, data: bytes) -> None:
+        self.payload = type("Z", (), {"to_bytes": lambda _self: data})()
+
+
+class _Reply:
+    def __init__(self, ok: bytes | None = None, err: bytes | None = None) -> None:
+        self.ok = None if ok is None else _Payload(ok)
+        self.err = None if err is None else _Payload(err)
+
+
+class _Session:
+    """The worker's Zenoh session, answered in process by the coordinator's own
+    ``scenarios.answer`` (puts are kept)."""
+
+    def __init__(self, core) -> None:
+        self.core = core
+        self.cache = ByteLRU(1 << 26)
+        self.puts: list[tuple[str, bytes]] = []
+        self.gets: list[str] = []
+
+    def put(self, key: str, payload: bytes, **_kw) -> None:
+        self.puts.append((key, payload))
+
+    def get(self, key: str, payload: bytes, **_kw) -> list[_Reply]:
+        self.gets.append(key)
+        store = self.core.store
+        try:
+            return [_Reply(ok=answer(key, payload, store.lease_scenario_ref,
+                                     store.lease_scenario, self.cache))]
+        except ScenarioRefused as exc:
+            return [_Reply(err=str(exc).encode())]
+
+
+def test_the_worker_fails_a_lease_whose_scenario_is_refused_and_goes_on(data_dir: Path) -> None:
+    """Worker._take: a lease naming a hash the coordinator does not have for it (a wrong hash,
+    as for an unknown map) is reported at once as failed runs naming the refusal; the next lease
+    is fetched, checked and queued for a slot with its scenario in place."""
+    from types import SimpleNamespace
+
+    from swarmpath.service.worker import Worker, WorkerSettings
+
+    with TestClient(create_app(CoordinatorSettings(data_dir=data_dir), use_zenoh=False)) as c:
+        map_id = c.post("/maps", json=upload_body()).json()["id"]
+        c.post("/jobs", json={"kind": "map", "planners": ["OMPL-RRTstar"], "runs": 2,
+                              "params": PARAMS, "maps": [{"map": map_id}]})
+        core = c.app.state.core  # type: ignore[attr-defined]
+        core.publish = lambda key, payload: None
+        worker = Worker(WorkerSettings(worker_id="w1", max_runs=1))
+        worker._session = session = _Session(core)
+        worker._zenoh = SimpleNamespace(Encoding=SimpleNamespace(APPLICATION_JSON=None),
+                                        CongestionControl=SimpleNamespace(BLOCK=None))
+        good = _lease(core)
+        wrong = _lease(core)
+        spec = wrong.spec
+        assert isinstance(spec, MapCell) and spec.scenario_ref is not None
+        wrong = wrong.model_copy(update={"spec": spec.model_copy(update={
+            "scenario_ref": spec.scenario_ref.model_copy(update={"sha256": "ab" * 32})})})
+        worker._take([wrong])
+        assert wrong.lease_id not in worker._active and not worker._queue
+        (key, payload), = session.puts
+        batch = payload.decode()
+        assert key.endswith(wrong.job_id) and '"status":"failed"' in batch
+        assert f"map {map_id}: the coordinator did not send scenario" in batch
+        assert "refused: lease" in batch and "has no scenario" in batch
+        worker._take([good])
+        (queued,), = worker._queue
+        assert isinstance(queued.spec, MapCell) and queued.spec.scenario is not None
+        assert worker.scenarios.size == good.spec.scenario_ref.bytes  # type: ignore[union-attr]
+        assert session.gets == [Keys().scenario("ab" * 32),
+                                Keys().scenario(good.spec.scenario_ref.sha256)]  # type: ignore
