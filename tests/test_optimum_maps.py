@@ -110,7 +110,7 @@ def test_union_vertex_filter_keeps_exactly_the_union_corners_and_the_length(
     """Grid parts touch along cut lines and at corners; the optimum keeps only the convex
     corners of their union (exactly one of the four cells around the corner blocked), and the
     length equals the one computed with every part's own convex vertices."""
-    from swarmpath.world import optimum
+    from swarmpath.world import optimum, optimum_tangents
 
     rng = np.random.default_rng(100 + seed)
     blocked = rng.random((16, 20)) < 0.2
@@ -127,7 +127,7 @@ def test_union_vertex_filter_keeps_exactly_the_union_corners_and_the_length(
     assert {(float(x), float(y)) for x, y in centres} == expected
     world = (0.0, 0.0, 20.0, 16.0)
     kept = shortest_path(start, goal, obs, margin, world, budget=None)
-    monkeypatch.setattr(optimum, "_covered_vertices",
+    monkeypatch.setattr(optimum_tangents, "_covered_vertices",
                         lambda points, *_: np.zeros(len(points), dtype=bool))
     every = shortest_path(start, goal, obs, margin, world, budget=None, index=False)
     assert kept.exact and every.exact and math.isfinite(every.length)
