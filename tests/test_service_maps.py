@@ -203,3 +203,18 @@ def test_upload_map_command_bodies_and_the_client(data_dir: Path, tmp_path: Path
         client = ServiceClient("http://testserver", transport=c._transport)
         info = client.upload_map(grid)
         assert info["size"] == [12.25, 12.25] and client.maps()[0]["id"] == info["id"]
+
+
+def test_the_grid_limits_are_coordinator_settings_named_in_the_413(data_dir: Path) -> None:
+    settings = CoordinatorSettings(data_dir=data_dir, max_map_cells=100, max_map_obstacles=3)
+    with TestClient(create_app(settings, use_zenoh=False)) as client:
+        r = client.post("/maps", json={"name": "arena", "format": "movingai", "map": ARENA})
+        assert r.status_code == 413
+        msg = r.json()["detail"][0]["msg"]
+        assert "max_cells=100" in msg and "max_map_cells" in msg
+        assert "SWARMPATH_MAX_MAP_CELLS" in msg and "--max-cells" not in msg
+        checker = "type octile\nheight 4\nwidth 4\nmap\n@.@.\n....\n@.@.\n....\n"
+        r = client.post("/maps", json={"name": "c", "format": "movingai", "map": checker})
+        assert r.status_code == 413
+        msg = r.json()["detail"][0]["msg"]
+        assert "max_obstacles=3" in msg and "max_map_obstacles" in msg

@@ -48,8 +48,10 @@ class MapUploadError(ValueError):
         self.field = field
 
 
-def import_upload(up: MapUpload) -> dict[str, Any]:
-    """The scenario (JSON object) of an upload; raises :class:`MapUploadError`."""
+def import_upload(up: MapUpload, max_cells: int | None = None,
+                  max_obstacles: int | None = None) -> dict[str, Any]:
+    """The scenario (JSON object) of an upload; raises :class:`MapUploadError`. The grid limits
+    default to the importer's (the coordinator's ``max_map_cells`` / ``max_map_obstacles``)."""
     from swarmpath.world.importers import (  # the grid limits are the CLI's
         MAX_CELLS,
         MAX_OBSTACLES,
@@ -60,7 +62,7 @@ def import_upload(up: MapUpload) -> dict[str, Any]:
     )
     from swarmpath.world.scenario_io import ScenarioError, scenario_to_dict
 
-    limits = {"max_cells": MAX_CELLS, "max_obstacles": MAX_OBSTACLES}
+    limits = {"max_cells": max_cells or MAX_CELLS, "max_obstacles": max_obstacles or MAX_OBSTACLES}
     with tempfile.TemporaryDirectory(prefix="swarmpath-map-") as tmp:
         d = Path(tmp)
         try:
@@ -76,7 +78,7 @@ def import_upload(up: MapUpload) -> dict[str, Any]:
                 imported = load_ros_map(path, name=up.name, **limits)
         except MapLimitError as exc:
             raise MapUploadError(413, "map" if up.format == "movingai" else "image",
-                                 _strip(str(exc), d)) from None
+                                 _service_hint(_strip(str(exc), d))) from None
         except ScenarioError as exc:
             raise MapUploadError(422, "map" if up.format == "movingai" else "image",
                                  _strip(str(exc), d)) from None
@@ -91,6 +93,17 @@ def import_upload(up: MapUpload) -> dict[str, Any]:
                              f"MAX_SCENARIO_BYTES={MAX_SCENARIO_BYTES:,}: upload a smaller or "
                              "coarser map")
     return scenario
+
+
+def _service_hint(text: str) -> str:
+    """The importer's "how to raise it" names its keyword and CLI flag; a coordinator has a
+    setting (and an environment variable) for each."""
+    for name in ("max_cells", "max_obstacles"):
+        setting = f"max_map_{name[4:]}"
+        text = text.replace(f"(raise it with {name}= / --{name.replace('_', '-')})",
+                            f"(raise it with the coordinator setting {setting}, environment "
+                            f"SWARMPATH_{setting.upper()})")
+    return text
 
 
 def _strip(text: str, d: Path) -> str:

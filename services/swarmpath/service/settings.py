@@ -28,6 +28,11 @@ def _env_number(name: str, default: float) -> float:
     return value
 
 
+def _env_count(name: str) -> int:
+    """A positive whole number from the environment, 0 when unset."""
+    return int(_env_number(name, 1)) if os.environ.get(name) else 0
+
+
 @dataclass
 class CoordinatorSettings:
     """Everything a coordinator process is configured with (the CLI fills it)."""
@@ -57,6 +62,10 @@ class CoordinatorSettings:
     # POST /maps bodies (a base64 image is 4/3 of the file); every other route: MAX_BODY_BYTES
     max_map_upload_bytes: int = field(default_factory=lambda: int(_env_number(
         "SWARMPATH_MAX_MAP_UPLOAD_BYTES", DEFAULT_MAX_MAP_UPLOAD_BYTES)))
+    # an upload's grid limits (0: the importer's, 4,194,304 cells and 5,000 obstacles)
+    max_map_cells: int = field(default_factory=lambda: _env_count("SWARMPATH_MAX_MAP_CELLS"))
+    max_map_obstacles: int = field(
+        default_factory=lambda: _env_count("SWARMPATH_MAX_MAP_OBSTACLES"))
 
     def zenoh_config(self) -> dict[str, Any]:
         return router_config(

@@ -18,7 +18,9 @@ async def upload_map(up: MapUpload, core: CoreDep) -> dict[str, Any]:
     map job: ``{"map": id, "start": [x, y], "goal": [x, y]}``). 413 when the map is over a size
     limit (named in the message), 422 when it cannot be imported."""
     try:
-        scenario = await asyncio.to_thread(import_upload, up)
+        settings = core.settings
+        scenario = await asyncio.to_thread(import_upload, up, settings.max_map_cells,
+                                           settings.max_map_obstacles)
     except MapUploadError as exc:
         raise HTTPException(exc.status, [{"loc": ["body", exc.field], "msg": str(exc),
                                           "type": "map_too_large" if exc.status == 413
