@@ -132,3 +132,18 @@ def test_union_vertex_filter_keeps_exactly_the_union_corners_and_the_length(
     every = shortest_path(start, goal, obs, margin, world, budget=None, index=False)
     assert kept.exact and every.exact and math.isfinite(every.length)
     assert kept.length == pytest.approx(every.length, abs=1e-9)
+
+
+def test_with_a_budget_only_the_time_limits_the_optimum(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A map with more disks than max_disks (here made small) still gets its optimum within the
+    budget; the disk cap only bounds a search without a budget. The CLI can raise the budget
+    (--optimum-budget) but has no max_disks option."""
+    from swarmpath.planners import episode
+
+    s = load_ros_map(DATA / "tb3_sandbox.yaml").scenario
+    monkeypatch.setattr(episode, "MAX_DISKS", 10)
+    monkeypatch.setattr(episode, "_OPTIMA", type(episode._OPTIMA)())
+    value, reason = episode.optimum_of(s, 30.0)
+    assert reason is None and value is not None and math.isfinite(value)
+    value, reason = episode.optimum_of(s, None)
+    assert value is None and reason is not None and "max_disks=10" in reason

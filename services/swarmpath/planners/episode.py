@@ -26,7 +26,7 @@ from swarmpath.optimizers.streams import OPTIMIZER, SIMULATION, run_generator
 from swarmpath.planners.base import Planner, get_planner
 from swarmpath.planners.simulator import Simulator
 from swarmpath.world.geometry import collides
-from swarmpath.world.optimum import DEFAULT_BUDGET, shortest_path
+from swarmpath.world.optimum import DEFAULT_BUDGET, MAX_DISKS, shortest_path
 from swarmpath.world.scenario import Scenario
 
 DEFAULT_STEP_LIMIT = 2000
@@ -80,7 +80,12 @@ def optimum_of(
 ) -> tuple[float | None, str | None]:
     """``(length, None)``: the exact shortest collision-free length of a fully static scenario;
     ``(None, reason)`` when there is none (moving obstacles or goal, no path, start or goal in
-    collision, or the time ``budget`` in seconds ran out). Remembered per equal scenario."""
+    collision, or the time ``budget`` in seconds ran out). Remembered per equal scenario.
+
+    With a ``budget`` the time is the only limit (the pairs are processed in chunks, so memory
+    stays bounded): a map of many disks gives up with the budget's reason, which the CLI can
+    raise (``--optimum-budget``), not with ``max_disks``, which it cannot. Without a budget
+    ``max_disks`` (:data:`swarmpath.world.optimum.MAX_DISKS`) still bounds the search."""
     key = (scenario, budget)
     if key in _OPTIMA:
         _OPTIMA.move_to_end(key)
@@ -98,6 +103,7 @@ def optimum_of(
             world=(0.0, 0.0, float(w), float(h)),
             budget=budget,
             progress=progress,
+            max_disks=MAX_DISKS if budget is None else 2**62,
         )
     except ValueError as exc:  # start or goal in collision: the run itself reports it too
         reason: str | None = str(exc)
