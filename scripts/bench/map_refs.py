@@ -26,7 +26,6 @@ sys.path.insert(0, str(ROOT / "services"))
 sys.path.insert(0, str(ROOT / "tests"))
 
 from fastapi.testclient import TestClient  # noqa: E402
-from test_service_map_refs import YAML, pillars_pgm  # noqa: E402
 
 from swarmpath.service.http.app import create_app  # noqa: E402
 from swarmpath.service.protocol import (  # noqa: E402
@@ -34,10 +33,12 @@ from swarmpath.service.protocol import (  # noqa: E402
     LeaseRequest,
     MapCell,
     ScenarioRequest,
+    decode_work_reply,
     encode,
 )
 from swarmpath.service.scenarios import ByteLRU, answer, request_proof, resolve  # noqa: E402
 from swarmpath.service.settings import CoordinatorSettings  # noqa: E402
+from test_service_map_refs import YAML, pillars_pgm  # noqa: E402
 
 
 def main() -> None:
@@ -70,8 +71,6 @@ def main() -> None:
         lease = core.handle_lease_request(encode(LeaseRequest(worker="w1", max_runs=10)))
         rows.append(("lease request (first: parses and hashes the cell)",
                      f"{(time.perf_counter() - t) * 1e3:.1f} ms"))
-        from swarmpath.service.protocol import decode_work_reply
-
         got = decode_work_reply(lease)
         spec = got.spec  # type: ignore[union-attr]
         assert isinstance(spec, MapCell) and spec.scenario_ref is not None
