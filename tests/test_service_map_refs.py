@@ -335,3 +335,46 @@ def test_the_worker_fails_a_lease_whose_scenario_is_refused_and_goes_on(data_dir
         assert worker.scenarios.size == good.spec.scenario_ref.bytes  # type: ignore[union-attr]
         assert session.gets == [Keys().scenario("ab" * 32),
                                 Keys().scenario(good.spec.scenario_ref.sha256)]  # type: ignore
+
+
+def test_an_expired_lease_is_answered_a_cancelled_one_refused_and_silence_fails_nothing(
+        data_dir: Path) -> None:
+    """Fencing accepts an expired lease's late results, so its holder still gets the scenario;
+    a cancelled job's lease is refused; with no reply at all the worker reports nothing and
+    leaves the lease to expire (its runs are leased again, not failed)."""
+    from types import SimpleNamespace
+
+    from swarmpath.service.worker import Worker, WorkerSettings
+
+    with TestClient(create_app(CoordinatorSettings(data_dir=data_dir, lease_seconds=5.0),
+                               use_zenoh=False)) as c:
+        map_id = c.post("/maps", json=upload_body()).json()["id"]
+        job = c.post("/jobs", json={"kind": "map", "planners": ["OMPL-RRTstar"], "runs": 2,
+                                    "params": PARAMS, "maps": [{"map": map_id}]}).json()
+        core = c.app.state.core  # type: ignore[attr-defined]
+        core.publish = lambda key, payload: None
+        lease = _lease(core)
+        ref = lease.spec.scenario_ref  # type: ignore[union-attr]
+        assert ref is not None
+        key = Keys().scenario(ref.sha256)
+        store = core.store
+
+        def ask(held: Lease = lease) -> bytes:
+            return answer(key, _request(held, ref.sha256), store.lease_scenario_ref,
+                          store.lease_scenario, ByteLRU(1 << 24))
+
+        store.requeue_expired(lease.deadline + 1.0)
+        assert store.lease_scenario_ref(lease.lease_id)[2] == "expired"
+        assert hashlib.sha256(ask()).hexdigest() == ref.sha256
+        worker = Worker(WorkerSettings(worker_id="w1"))
+        worker._session = session = _Session(core)
+        session.get = lambda *_a, **_kw: []  # type: ignore[method-assign]  # nobody answers
+        worker._zenoh = SimpleNamespace(Encoding=SimpleNamespace(APPLICATION_JSON=None),
+                                        CongestionControl=SimpleNamespace(BLOCK=None))
+        worker._take([lease])
+        assert session.puts == [] and not worker._queue and lease.lease_id not in worker._active
+        again = _lease(core)  # the expired lease's runs, leased again
+        assert again.lease_id != lease.lease_id and again.runs == lease.runs
+        assert c.delete(f"/jobs/{job['id']}").status_code == 200
+        with pytest.raises(ScenarioRefused, match="is cancelled"):
+            ask(again)

@@ -8,8 +8,9 @@ worker call them.
 
 * :func:`by_reference` - the cell a lease carries (the coordinator's side);
 * :func:`answer` - the coordinator's reply to a ScenarioRequest: the canonical JSON, only to the
-  worker that holds a live lease on a cell with exactly that scenario, proven with the lease's
-  capability; :class:`ScenarioRefused` with the reason otherwise;
+  worker that holds a lease (not cancelled: an expired lease's late results are still accepted)
+  on a cell with exactly that scenario, proven with the lease's capability;
+  :class:`ScenarioRefused` with the reason otherwise;
 * :func:`resolve` - the worker's side: the lease with its scenario in place, from the cache or
   fetched and checked; :class:`ScenarioUnavailable` with the reason otherwise (the lease's runs
   then fail with it).
@@ -42,7 +43,13 @@ class ScenarioRefused(ValueError):
 
 
 class ScenarioUnavailable(RuntimeError):
-    """A worker could not get a lease's scenario (the message says why)."""
+    """A worker could not get a lease's scenario (the message says why). ``transient``: nobody
+    answered (the lease is left to expire and its runs are leased again) rather than a refusal
+    or a wrong scenario (the runs fail with the reason)."""
+
+    def __init__(self, message: str, transient: bool = False):
+        super().__init__(message)
+        self.transient = transient
 
 
 def canonical(scenario: dict[str, Any]) -> bytes:
@@ -127,8 +134,8 @@ def answer(key: str, payload: bytes, lookup: LeaseLookup, load: ScenarioLoad,
            cache: ByteLRU) -> bytes:
     """The coordinator's reply to a query on ``<prefix>/scenarios/<sha256>`` (``key``): the
     canonical JSON of the scenario, or :class:`ScenarioRefused` naming why. Answered only when
-    the request is proven with the capability of a live lease held by the asking worker whose
-    cell carries exactly that ScenarioRef."""
+    the request is proven with the capability of a lease (not cancelled) held by the asking
+    worker whose cell carries exactly that ScenarioRef."""
     sha256 = key.rsplit("/", 1)[-1]
     try:
         req = decode(ScenarioRequest, payload)
@@ -142,7 +149,7 @@ def answer(key: str, payload: bytes, lookup: LeaseLookup, load: ScenarioLoad,
     if worker != req.worker or not hmac.compare_digest(
             request_proof(capability, req.lease_id, sha256), req.proof):
         raise ScenarioRefused(f"lease {req.lease_id}: not proven by its holder")
-    if state != "active":
+    if state == "cancelled":  # an expired lease's late results still count: it is answered
         raise ScenarioRefused(f"lease {req.lease_id} is {state}")
     if ref is None or ref.sha256 != sha256:
         raise ScenarioRefused(f"lease {req.lease_id}: its cell has no scenario {sha256}")
@@ -178,7 +185,8 @@ def resolve(lease: Lease, key: str, fetch: Fetch, cache: ByteLRU) -> Lease:
         except Exception as exc:
             raise ScenarioUnavailable(
                 f"map {spec.map}: the coordinator did not send scenario {ref.sha256[:16]}: "
-                f"{' '.join(str(exc).split())[:300]}") from None
+                f"{' '.join(str(exc).split())[:300]}",
+                transient=isinstance(exc, TimeoutError)) from None
         if len(data) != ref.bytes or len(data) > MAX_SCENARIO_BYTES or \
                 hashlib.sha256(data).hexdigest() != ref.sha256:
             raise ScenarioUnavailable(

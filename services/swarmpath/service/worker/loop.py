@@ -251,7 +251,8 @@ class Worker(Reporting):
 
     def _with_scenarios(self, leases: Sequence[Lease]) -> list[Lease]:
         """The leases with their scenarios by reference in place (cached or fetched); a lease
-        whose scenario cannot be had is reported at once, every run failed with the reason."""
+        whose scenario is refused or wrong is reported at once, every run failed with the reason;
+        one nobody answered for is left to expire (its runs are leased again)."""
         out: list[Lease] = []
         for lease in leases:
             spec = lease.spec
@@ -263,6 +264,9 @@ class Worker(Reporting):
                 out.append(resolve(lease, self.keys.scenario(ref.sha256), self._fetch,
                                    self.scenarios))
             except ScenarioUnavailable as exc:
+                if exc.transient:  # not reported: the lease expires and its runs go to others
+                    log.warning("lease %s (%s) left: %s", lease.lease_id, lease.cell, exc)
+                    continue
                 log.error("lease %s (%s): %s", lease.lease_id, lease.cell, exc)
                 self._publish_results(lease, failed_lease(lease, str(exc)))
         return out
@@ -277,7 +281,7 @@ class Worker(Reporting):
                 return bytes(reply.ok.payload.to_bytes())
             if reply.err is not None:
                 reason = "refused: " + reply.err.payload.to_bytes()[:300].decode(errors="replace")
-        raise RuntimeError(reason)
+        raise (TimeoutError if not replies else RuntimeError)(reason)
 
     def _start(self, lease: Lease) -> None:
         """Run one lease (as a group of one)."""
