@@ -22,7 +22,7 @@ from swarmpath.cli.core import InputError, app
 
 __all__ = ["InputError", "app", "main"]
 
-_COMMANDS = ("bench", "plan", "reproduce", "audit", "service", "upload", "results")
+_COMMANDS = ("bench", "plan", "reproduce", "audit", "processes", "service", "upload", "results")
 
 for _name in _COMMANDS:
     importlib.import_module(f"swarmpath.cli.{_name}")
