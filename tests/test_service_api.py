@@ -675,6 +675,7 @@ def test_cli_client_commands(cli, tmp_path):
     assert table.exit_code == 0 and "GWO" in table.stdout and "partial" in table.stdout
     early = cli("download", job, "-o", str(tmp_path / "x.mcap"))
     assert early.exit_code == 1 and "409" in early.stderr and "queued" in early.stderr
+    assert early.stderr.startswith("swarmpath download: error: ")  # named like input errors
 
 
 def test_cli_results_prints_markers_counts_and_friedman(cli, app, tmp_path):

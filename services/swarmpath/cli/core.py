@@ -43,6 +43,11 @@ class InputErrors(InputError):
         super().__init__(*self.problems[0])
 
 
+class CommandFailed(RuntimeError):
+    """A command that could not do its work although the input was fine (coordinator unreachable,
+    job still running, unauthorized): ``swarmpath <cmd>: error: <message>`` on stderr, exit 1."""
+
+
 def resolve_names(spec: str, registered: Sequence[str], option: str, kind: str) -> list[str]:
     """'ICOOT,coot' -> registered names (case-insensitive, duplicates dropped); 'all' = all."""
     if spec.strip().lower() == "all":
@@ -132,6 +137,10 @@ class _Group(TyperGroup):
             for field, message in getattr(exc, "problems", [(exc.field, exc.detail)]):
                 typer.echo(error_line(path, f"{field}: {message}"), err=True)
             raise typer.Exit(EXIT_USAGE) from None
+        except CommandFailed as exc:
+            path = " ".join(p for p in (ctx.command_path, ctx.invoked_subcommand) if p)
+            typer.echo(error_line(path, str(exc)), err=True)
+            raise typer.Exit(1) from None
 
     def main(  # type: ignore[override]
         self,

@@ -16,7 +16,7 @@ from typing import Annotated, Any
 
 import typer
 
-from swarmpath.cli.core import InputError, InputErrors, app
+from swarmpath.cli.core import CommandFailed, InputError, InputErrors, app
 from swarmpath.legend import legend_text
 
 UrlOpt = Annotated[
@@ -35,12 +35,11 @@ def _client(url: str | None) -> Any:
 
 
 def _fail(exc: Exception, job_option: str = "JOB") -> None:
-    """ServiceError -> InputError (bad input, exit 2) or a one-line error (exit 1)."""
+    """ServiceError -> InputError (bad input, exit 2) or CommandFailed (one line, exit 1)."""
     from swarmpath.service.client import ServiceError, Unreachable, describe_detail, error_field
 
     if isinstance(exc, Unreachable):
-        typer.echo(f"swarmpath: error: {exc}", err=True)
-        raise typer.Exit(1)
+        raise CommandFailed(str(exc)) from None
     if isinstance(exc, ServiceError):
         if exc.status == 422:
             if isinstance(exc.detail, list) and exc.detail:
@@ -52,10 +51,8 @@ def _fail(exc: Exception, job_option: str = "JOB") -> None:
         if exc.status == 404:
             raise InputError(job_option, describe_detail(exc.detail)) from None
         if exc.status == 401:
-            typer.echo("swarmpath: error: unauthorized: set SWARMPATH_TOKEN", err=True)
-            raise typer.Exit(1)
-        typer.echo(f"swarmpath: error: {exc.status}: {describe_detail(exc.detail)}", err=True)
-        raise typer.Exit(1)
+            raise CommandFailed("unauthorized: set SWARMPATH_TOKEN") from None
+        raise CommandFailed(f"{exc.status}: {describe_detail(exc.detail)}") from None
     raise exc
 
 
