@@ -1,8 +1,10 @@
 """The coordinator's Zenoh side: opens the session as a router in this process and wires it to the
 :class:`~swarmpath.service.coordinator.Coordinator`: the ``work`` queryable, the ``results/*`` and
-``progress/*`` subscribers, the liveliness subscriber (with history). Zenoh callbacks only copy the
-payload into a queue; two threads do the work (one answers lease queries, one handles results,
-progress and liveliness in arrival order), so a callback never blocks the network."""
+``progress/*`` subscribers, the liveliness subscriber (with history), the ``scenarios/*``
+queryable (a lease's scenario by hash, :mod:`swarmpath.service.scenarios`). Zenoh callbacks only
+copy the payload into a queue; three threads do the work (one answers lease queries, one
+scenario queries, one handles results, progress and liveliness in arrival order), so a callback
+never blocks the network."""
 
 from __future__ import annotations
 
