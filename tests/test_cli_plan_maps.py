@@ -61,6 +61,7 @@ def test_start_and_goal_override_an_imported_map() -> None:
         (("-m", "mfb-static", "--start", "2,2.3"), "--start"),  # inside a circle
         (("-m", ARENA, "--goal", "0.5,0.5"), "--goal"),  # a blocked cell
         (("-m", ARENA, "--resolution", "0"), "--resolution"),
+        (("-m", ARENA, "--resolution", "1e300"), "--resolution"),  # a 4.9e301 m world
         (("-m", "mfb-static", "--resolution", "2"), "--resolution"),
         (("-m", ARENA, "--scen", SCEN, "--scen-ids", "999"), "--scen-ids"),
         (("-m", ARENA, "--scen", SCEN, "--scen-ids", "0,,1"), "--scen-ids"),

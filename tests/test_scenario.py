@@ -122,6 +122,13 @@ BAD: list[tuple[str, Any, str, str]] = [
     ("zero radius", (("obstacles", 0, "radius"), 0), "obstacles[0].radius", "must be > 0"),
     ("zero size", (("size",), [0, 10]), "size[0]", "must be > 0"),
     ("negative size", (("size",), [10, -1]), "size[1]", "must be > 0"),
+    # float64 geometry overflows (1e300 ** 2) or loses its 1e-9 m tolerances far from 0
+    ("huge size", (("size",), [1e300, 10]), "size[0]", "must be <= 1e+07"),
+    ("huge polygon", (("obstacles", 2, "points"), [[1, 5], [2e299, 5], [2, 6.5]]),
+     "obstacles[2].points", "within +-1e+07 m"),
+    ("huge centre", (("obstacles", 0, "center"), [1e300, 1.0]), "obstacles[0].center",
+     "within +-1e+07 m"),
+    ("huge speed", (("obstacles", 1, "speed"), 1e300), "obstacles[1].speed", "must be <= 1e+07"),
     ("zero time_step", (("time_step",), 0), "time_step", "must be > 0"),
     ("robot radius", (("robot", "radius"), -1), "robot.radius", "must be > 0"),
     ("robot speed", (("robot", "linear_speed"), 0), "robot.linear_speed", "must be > 0"),

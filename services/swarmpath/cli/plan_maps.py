@@ -90,7 +90,8 @@ def _limits(opts: MapOptions) -> dict[str, Any]:
 
 def _option_of(exc: Exception) -> str:
     text = str(exc)
-    for option, words in (("--max-cells", "max_cells="), ("--max-obstacles", "max_obstacles=")):
+    for option, words in (("--max-cells", "max_cells="), ("--max-obstacles", "max_obstacles="),
+                          ("--resolution", "resolution=")):
         if words in text:
             return option
     return "--maps"

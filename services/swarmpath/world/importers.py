@@ -56,6 +56,7 @@ from scipy import ndimage
 from swarmpath.world.grid_polygons import blocked_components, grid_polygons
 from swarmpath.world.raster import FREE, OCCUPIED, UNKNOWN, GridSpec, OccupancyGrid
 from swarmpath.world.scenario import (
+    MAX_METRES,
     ROBOT_PRESETS,
     Obstacle,
     RobotSpec,
@@ -527,6 +528,12 @@ def load_movingai_map(
     except UnicodeDecodeError:
         raise MapImportError(f"{p}: not a text file (UTF-8)") from None
     blocked_text = parse_movingai_map(text, str(p), max_cells)
+    rows, cols = blocked_text.shape
+    if max(rows, cols) * resolution > MAX_METRES:
+        raise MapImportError(
+            f"{p}: {cols} x {rows} cells of resolution={resolution:g} m make a map "
+            f"{cols * resolution:g} x {rows * resolution:g} m, more than {MAX_METRES:g} m across"
+        )
     data = np.where(blocked_text[::-1], OCCUPIED, FREE).astype(np.int8)
     return _build(
         name or p.stem,

@@ -49,7 +49,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from swarmpath.world.geometry import ObstacleSet
-from swarmpath.world.scenario_checks import polygon_problems, scenario_problems
+from swarmpath.world.scenario_checks import MAX_METRES, polygon_problems, scenario_problems
 from swarmpath.world.scenario_parts import (
     DEFAULT_RANDOM_MAX_SPEED,
     DEFAULT_TIME_STEP,
@@ -68,6 +68,7 @@ from swarmpath.world.world_state import WorldState
 __all__ = [
     "DEFAULT_RANDOM_MAX_SPEED",
     "DEFAULT_TIME_STEP",
+    "MAX_METRES",
     "ROBOT_PRESETS",
     "Motion",
     "MotionSpec",

@@ -20,6 +20,11 @@ if TYPE_CHECKING:
     from swarmpath.world.scenario import Scenario
 
 
+#: Largest magnitude of a length, coordinate or speed in a scenario (metres, m/s): beyond it the
+#: geometry's products overflow or lose its absolute tolerances (1e-9 m) in float64 rounding.
+MAX_METRES = 1e7
+
+
 def polygon_problems(points: ArrayLike) -> list[str]:
     """Why ``points`` is not a valid simple polygon (empty list: valid).
 
@@ -34,6 +39,8 @@ def polygon_problems(points: ArrayLike) -> list[str]:
         return [f"needs at least 3 points, got {m}"]
     if not np.all(np.isfinite(P)):
         return ["coordinates must be finite"]
+    if np.abs(P).max() > MAX_METRES:
+        return [f"coordinates must be within +-{MAX_METRES:g} m"]
     A, B = P, np.roll(P, -1, axis=0)
     span = float(np.ptp(P, axis=0).max())
     tol = 1e-12 * max(span, 1.0)
@@ -77,6 +84,9 @@ def scenario_problems(s: Scenario) -> list[tuple[str, str]]:
         if v is None or not math.isfinite(v) or v <= 0:
             out.append((path, "must be > 0"))
             return False
+        if v > MAX_METRES:
+            out.append((path, f"must be <= {MAX_METRES:g}"))
+            return False
         return True
 
     if not s.name:
@@ -96,6 +106,8 @@ def scenario_problems(s: Scenario) -> list[tuple[str, str]]:
         if isinstance(m, Motion):
             if not (math.isfinite(m.speed) and m.speed >= 0):
                 out.append((f"{path}speed", "must be >= 0"))
+            elif m.speed > MAX_METRES:
+                out.append((f"{path}speed", f"must be <= {MAX_METRES:g}"))
             if not math.isfinite(m.heading_deg):
                 out.append((f"{path}heading_deg", "must be finite"))
         elif isinstance(m, RandomMotion):
@@ -110,6 +122,9 @@ def scenario_problems(s: Scenario) -> list[tuple[str, str]]:
             ok = all(math.isfinite(c) for c in o.center)
             if not ok:
                 out.append((f"{p}.center", "coordinates must be finite"))
+            elif max(abs(c) for c in o.center) > MAX_METRES:
+                ok = False
+                out.append((f"{p}.center", f"coordinates must be within +-{MAX_METRES:g} m"))
             if positive(f"{p}.radius", o.radius) and ok:
                 valid.append(o)
         else:
