@@ -1,4 +1,5 @@
-"""The messages of the swarmpath service and the Zenoh key expressions they travel on.
+"""The messages of the swarmpath service (the Zenoh key expressions they travel on are in
+:mod:`.keys`; :class:`Keys` is importable from here too).
 
 Every message is UTF-8 JSON of one of the pydantic models below (unknown fields are rejected). The
 protocol itself - who sends what on which key, leases, fencing, acknowledgements, cancellation - is
@@ -19,7 +20,6 @@ it gives the same numbers.
 
 from __future__ import annotations
 
-import re
 from datetime import UTC, datetime
 from typing import Annotated, Any, Literal, TypeVar
 
@@ -49,8 +49,8 @@ from swarmpath.service.jobspec import (
     run_key,
     runs_total,
 )
+from swarmpath.service.keys import Keys
 from swarmpath.service.model import (
-    _ID_RE,
     CANCEL_LEASES,
     DEFAULT_PREFIX,
     ID_PATTERN,
@@ -403,73 +403,6 @@ class JobStatus(Model):
     @property
     def finished_at(self) -> str | None:
         return iso_time(self.finished)
-
-
-# ------------------------------------------------------------------------------- key expressions
-class Keys:
-    """The key expressions, all under one prefix (default ``swarmpath``)."""
-
-    def __init__(self, prefix: str = DEFAULT_PREFIX):
-        if not prefix or prefix.startswith("/") or prefix.endswith("/") or any(
-            c in prefix for c in "*$#?"
-        ):
-            raise ValueError(f"bad key prefix {prefix!r}")
-        self.prefix = prefix
-
-    @property
-    def work(self) -> str:
-        """Queryable: LeaseRequest -> Lease | NoWork."""
-        return f"{self.prefix}/work"
-
-    def results(self, job_id: str) -> str:
-        return f"{self.prefix}/results/{_chunk(job_id)}"
-
-    def progress(self, job_id: str) -> str:
-        return f"{self.prefix}/progress/{_chunk(job_id)}"
-
-    def ack(self, worker: str) -> str:
-        return f"{self.prefix}/ack/{_chunk(worker)}"
-
-    def worker_token(self, worker: str) -> str:
-        """Liveliness token of a worker."""
-        return f"{self.prefix}/workers/{_chunk(worker)}"
-
-    @property
-    def cancel(self) -> str:
-        return f"{self.prefix}/cancel"
-
-    def scenario(self, sha256: str) -> str:
-        """Queryable of the coordinator: ScenarioRequest -> the scenario's canonical JSON."""
-        if not re.fullmatch(r"[0-9a-f]{64}", sha256):
-            raise ValueError(f"{sha256!r} is not a SHA-256 hex digest")
-        return f"{self.prefix}/scenarios/{sha256}"
-
-    @property
-    def all_scenarios(self) -> str:
-        return f"{self.prefix}/scenarios/*"
-
-    # subscriptions of the coordinator
-    @property
-    def all_results(self) -> str:
-        return f"{self.prefix}/results/*"
-
-    @property
-    def all_progress(self) -> str:
-        return f"{self.prefix}/progress/*"
-
-    @property
-    def all_workers(self) -> str:
-        return f"{self.prefix}/workers/*"
-
-    @staticmethod
-    def last_chunk(key: str) -> str:
-        return key.rsplit("/", 1)[-1]
-
-
-def _chunk(value: str) -> str:
-    if not _ID_RE.match(value):
-        raise ValueError(f"{value!r} is not a valid identifier ({ID_PATTERN})")
-    return value
 
 
 # ----------------------------------------------------------------------------------- encoding
