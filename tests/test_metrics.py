@@ -85,6 +85,13 @@ def test_gap() -> None:
     assert math.isnan(gap(10.0, 0.0))
     assert math.isnan(gap(math.nan, 10.0))
     assert gap(math.inf, 10.0) == math.inf
+    # the optimum's straight line, summed in pieces, is a few ulps short of its own length
+    line = np.array([[i * 0.03 / 5, i * 0.09 / 5] for i in range(6)])
+    summed = float(np.hypot(*np.diff(line, axis=0).T).sum())
+    straight = float(np.hypot(*line[-1]))
+    assert summed < straight  # round-off, not a shorter path
+    assert gap(summed, straight) == 0.0 and f"{100 * gap(summed, straight):.2f}" == "0.00"
+    assert gap(0.99, 1.0) == pytest.approx(-0.01)  # a real shortfall stays visible
 
 
 def test_static_clearance_and_touching_counts() -> None:
