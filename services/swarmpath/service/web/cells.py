@@ -1,0 +1,175 @@
+"""One dashboard cell's accumulated runs (benchmark: sampled curves and best fitness; map: thinned
+paths, failures, collisions, length, gap and time), kept by
+:class:`swarmpath.service.web.aggregates.JobAggregates`."""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from swarmpath.service.web.series import (
+    _number,
+    band,
+    box_stats,
+    curve_grid,
+    failure_kind,
+    sample_curve,
+    thin_path,
+)
+
+MAX_PATHS = 200  # paths kept per map cell (the first ones by run index arrive first)
+
+
+class _BenchmarkCell:
+    def __init__(self, spec: Mapping[str, Any], runs: int, f_star: float):
+        self.spec = spec
+        self.grid = curve_grid(int(spec["iterations"]))
+        self.f_star = f_star
+        self.rows = np.full((runs, self.grid.size), np.nan, dtype=np.float32)
+        self.best = np.full(runs, np.nan)
+        self.ok = np.zeros(runs, dtype=bool)
+        self.seen = np.zeros(runs, dtype=bool)
+        self.failed = 0
+        self.cache: dict[str, Any] | None = None
+
+    def add(self, run: int, ok: bool, metrics: Mapping[str, Any], curve: Any) -> None:
+        self.seen[run] = True
+        self.cache = None
+        if not ok:
+            self.failed += 1
+            return
+        self.ok[run] = True
+        best = _number(metrics.get("best_fitness"))
+        self.best[run] = math.inf if best is None else best
+        if curve:
+            stride = int(_number(metrics.get("curve_stride")) or 1)
+            err = sample_curve(curve, self.grid, stride) - self.f_star
+            self.rows[run] = np.maximum(err, 0.0)
+
+    def view(self) -> dict[str, Any]:
+        if self.cache is None:
+            from swarmpath.stats import describe
+
+            rows = self.rows[self.ok]
+            best = self.best[self.ok]
+            valid = np.where(self.ok, self.best, np.inf)
+            self.cache = {
+                "runs": int(self.ok.sum()), "failed": self.failed,
+                "best_run": int(np.argmin(valid)) if best.size else None,
+                "band": band(rows), "box": box_stats(best),
+                "describe": describe(best) if best.size else None,
+            }
+        return self.cache
+
+
+    def state(self) -> dict[str, Any]:
+        return {"rows": self.rows, "best": self.best, "ok": self.ok, "seen": self.seen,
+                "failed": np.array(self.failed)}
+
+    def restore(self, state: Mapping[str, Any]) -> None:
+        for name in ("rows", "best", "ok", "seen"):
+            value = np.asarray(state[name])
+            if value.shape != getattr(self, name).shape:
+                raise ValueError(f"saved {name} has shape {value.shape}")
+            setattr(self, name, value.astype(getattr(self, name).dtype))
+        self.failed = int(state["failed"])
+        self.cache = None
+
+
+class _MapCell:
+    def __init__(self, spec: Mapping[str, Any], runs: int, seed: int):
+        self.spec = spec
+        self.seed = seed
+        self.scenario: Any = None
+        self.seen = np.zeros(runs, dtype=bool)
+        self.paths: dict[int, dict[str, Any]] = {}
+        self.values: dict[str, list[float]] = {"length": [], "gap": [], "seconds": []}
+        self.finished = 0
+        self.succeeded = 0
+        self.crashed = 0
+        self.collisions = 0  # colliding steps summed over the runs
+        self.failures: dict[str, int] = {}
+        self.cache: dict[str, Any] | None = None
+
+    def add(self, run: int, ok: bool, metrics: Mapping[str, Any], path: Any) -> None:
+        self.seen[run] = True
+        self.cache = None
+        self.finished += 1
+        if not ok:
+            self.crashed += 1
+            return
+        success = metrics.get("success") is True
+        kind = None if success else failure_kind(metrics)
+        self.collisions += int(_number(metrics.get("collisions")) or 0)
+        if success:
+            self.succeeded += 1
+            for name in ("length", "gap"):
+                v = _number(metrics.get(name))
+                if v is not None:
+                    self.values[name].append(v)
+        else:
+            self.failures[kind or "other"] = self.failures.get(kind or "other", 0) + 1
+        seconds = _number(metrics.get("seconds"))
+        if seconds is not None:
+            self.values["seconds"].append(seconds)
+        if path is not None and len(path) and len(self.paths) < MAX_PATHS:
+            self.paths[run] = {
+                "run": run, "success": success, "failure": kind,
+                "reason": str(metrics.get("reason") or ""),
+                "path": thin_path(path),
+                "collisions": self._collisions(run, path) if kind == "collision" else [],
+            }
+
+    _FIELDS = ("paths", "values", "finished", "succeeded", "crashed", "collisions", "failures")
+
+    def state(self) -> dict[str, Any]:
+        data = {name: getattr(self, name) for name in self._FIELDS}
+        data["paths"] = list(self.paths.values())
+        return {"json": np.array(json.dumps(data)), "seen": self.seen}
+
+    def restore(self, state: Mapping[str, Any]) -> None:
+        seen = np.asarray(state["seen"], dtype=bool)
+        if seen.shape != self.seen.shape:
+            raise ValueError(f"saved seen has shape {seen.shape}")
+        data = json.loads(str(state["json"]))
+        for name in self._FIELDS:
+            setattr(self, name, data[name])
+        self.paths = {int(p["run"]): p for p in data["paths"]}
+        self.seen = seen
+        self.cache = None
+
+    def _collisions(self, run: int, path: Any) -> list[list[float]]:
+        from swarmpath.service.web.scene import collision_points, load_cell_scenario
+
+        try:
+            if self.scenario is None:
+                self.scenario = load_cell_scenario(self.spec)
+            return collision_points(self.scenario, self.seed, run, path)
+        except Exception:  # a scenario that no longer loads: the path is still drawn
+            return []
+
+    def view(self) -> dict[str, Any]:
+        if self.cache is None:
+            self.cache = {
+                "runs": self.finished, "crashed": self.crashed, "succeeded": self.succeeded,
+                "collisions": self.collisions,
+                "success_rate": self.succeeded / self.finished if self.finished else None,
+                "failures": dict(self.failures),
+                "box": {k: box_stats(v) for k, v in self.values.items()},
+                "paths": [self.paths[k] for k in sorted(self.paths)],
+            }
+        return self.cache
+
+
+def _f_star(function: str, dim: int) -> float:
+    try:
+        from swarmpath.functions import get_function
+
+        return float(get_function(function).f_min_for(dim))
+    except Exception:  # an unknown (renamed) function: curves show f itself
+        return 0.0
+
