@@ -46,13 +46,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import stats
 
+from swarmpath.stats import ALPHA
+
 __all__ = [
     "ALPHA", "BETTER", "MARKERS", "SAME", "WORSE", "Comparison", "Friedman", "PairTest",
     "cliques", "compare_samples", "compare_success", "friedman", "holm", "nemenyi_cd",
     "rank_sum", "rank_sum_many", "resolve_reference",
 ]
 
-ALPHA = 0.05
 BETTER, SAME, WORSE = "+", "=", "-"
 MARKERS = (BETTER, SAME, WORSE)
 #: A cell or block key: (function, dim), a map name, ...

@@ -11,15 +11,18 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from rich import box
 from rich.table import Table
 from rich.text import Text
 
-from swarmpath import audit, compare
-from swarmpath.stats import describe, rank
+from swarmpath import audit
+from swarmpath.stats import ALPHA, describe, rank
+
+if TYPE_CHECKING:  # swarmpath.compare loads scipy.stats (~0.8 s): only when statistics are run
+    from swarmpath import compare
 
 #: Rows of the table, in the papers' order.
 TABLE_STATS = ("min", "max", "avg", "std")
@@ -80,7 +83,7 @@ def statistics(
     cells: Sequence[Cell],
     algorithms: Sequence[str],
     reference: str | None = None,
-    alpha: float = compare.ALPHA,
+    alpha: float = ALPHA,
 ) -> Statistics:
     """The tests of a study (reference: default the last algorithm; ValueError if unknown)."""
     return benchmark_tests(
@@ -93,7 +96,7 @@ def benchmark_tests(
     values: Mapping[tuple[str, str, int], Sequence[float]],
     algorithms: Sequence[str],
     reference: str | None = None,
-    alpha: float = compare.ALPHA,
+    alpha: float = ALPHA,
 ) -> Statistics:
     """:func:`statistics` from the best fitness of the runs per (algorithm, function, dim)
     (NaN: a run without a value; an empty cell is not tested and leaves the Friedman test)."""
@@ -105,6 +108,8 @@ def benchmark_tests(
         kept = arr[~np.isnan(arr)]
         avg = describe(kept)["avg"] if kept.size else math.nan
         averages.setdefault(dim, {}).setdefault(function, {})[algorithm] = avg
+    from swarmpath import compare
+
     comparison = compare.compare_samples(samples, algorithms, reference, alpha)
     ref = comparison.reference
     per_dim = {d: compare.friedman(v, algorithms, ref, alpha) for d, v in averages.items()}

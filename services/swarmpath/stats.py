@@ -18,6 +18,10 @@ from collections.abc import Mapping
 import numpy as np
 from numpy.typing import ArrayLike
 
+#: Significance level of the statistical tests (:mod:`swarmpath.compare`); here so that modules
+#: which only name it do not load scipy.stats.
+ALPHA = 0.05
+
 __all__ = ["describe", "rank"]
 
 

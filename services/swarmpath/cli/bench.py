@@ -23,7 +23,7 @@ from rich.console import Console
 from rich.measure import Measurement
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-from swarmpath import __version__, audit, compare, report
+from swarmpath import __version__, audit, report
 from swarmpath.cli import parallel
 from swarmpath.cli.core import InputError, app, parse_params_option, plot_dir, resolve_names
 from swarmpath.functions import expand_function_names, get_function
@@ -129,8 +129,10 @@ def make_spec(
     """Validate the command's options; raises :class:`InputError` naming the bad one."""
     kind = resolve_transform_option(shifted, transform)
     algos = resolve_algorithms(algorithms)
+    from swarmpath.compare import resolve_reference  # scipy.stats: not on every command's start
+
     try:
-        ref = compare.resolve_reference(algos, reference)
+        ref = resolve_reference(algos, reference)
     except ValueError as exc:
         raise InputError("--reference", str(exc)) from None
     fns = resolve_functions(functions)

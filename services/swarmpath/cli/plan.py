@@ -45,7 +45,7 @@ from swarmpath.cli.plan_maps import (
     resolve_maps,
 )
 from swarmpath.legend import legend_text
-from swarmpath.world.optimum import DEFAULT_BUDGET
+from swarmpath.world.optimum_base import DEFAULT_BUDGET
 
 MAX_RUNS = 10_000
 

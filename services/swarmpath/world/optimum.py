@@ -72,7 +72,15 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from swarmpath.world.geometry import ObstacleSet
-from swarmpath.world.optimum_base import TOL, TWO_PI, Array, IntArray, World, _norm
+from swarmpath.world.optimum_base import (
+    DEFAULT_BUDGET,
+    TOL,
+    TWO_PI,
+    Array,
+    IntArray,
+    World,
+    _norm,
+)
 from swarmpath.world.optimum_index import EdgeIndex
 from swarmpath.world.optimum_scene import _Scene
 from swarmpath.world.optimum_tangents import (
@@ -86,7 +94,6 @@ from swarmpath.world.optimum_tangents import (
 __all__ = ["DEFAULT_BUDGET", "MAX_DISKS", "TOL", "OptimalPath", "shortest_path"]
 
 MAX_DISKS = 20_000
-DEFAULT_BUDGET = 30.0  # s of wall time (a loaded machine shares its cores)
 INDEX_ABOVE = 600  # disks above which the spatial index decides pairs, segments and arcs
 _PAIRS = 1 << 17  # disk pairs per chunk
 _TINY_WEIGHT = 1e-300  # zero-length edges must stay edges in the sparse graph

@@ -10,6 +10,10 @@ from numpy.typing import NDArray
 
 from swarmpath.world.geometry import point_segment_distance
 
+#: s of wall time the exact optimum may take (a loaded machine shares its cores); here, not in
+#: :mod:`swarmpath.world.optimum`, so that the CLI can name it without loading scipy.sparse.
+DEFAULT_BUDGET = 30.0
+
 Array = NDArray[np.float64]
 IntArray = NDArray[np.intp]
 BoolArray = NDArray[np.bool_]
