@@ -256,3 +256,34 @@ def score(C: Array, ctx: StepContext) -> tuple[Array, Array]:
     elif ctx.objective != "cost":
         raise ValueError(f"unknown objective {ctx.objective!r}; valid: cost, inverse")
     return np.where(v > 0, PENALTY + v, cost), fixed
+
+
+def keep_off(position: Array, move: Array, points: Array, reach: float | Array) -> Array:
+    """``move`` (2,) changed as little as possible so that it closes on no point within ``reach``.
+
+    Every point q of ``points`` (h, 2) within ``reach`` (a distance, or one per point) of
+    ``position`` p gives the constraint ``move . n >= 0``, n the unit direction from q to p: the
+    robot may move away from q or along the tangent, never toward it. For a convex obstacle whose
+    nearest point to p is q, no such move brings p closer to it (the obstacle lies behind the
+    tangent line through q). The constraints form a cone; the nearest move in it is ``move``
+    itself, its projection on one of the cone's edges (a tangent), or zero (stop), whichever is
+    allowed and nearest.
+    """
+    p = np.asarray(position, dtype=float)
+    m = np.asarray(move, dtype=float)
+    if len(points) == 0:
+        return m
+    rel = p - np.asarray(points, dtype=float)
+    dist = np.hypot(rel[:, 0], rel[:, 1])
+    close = dist <= np.asarray(reach, dtype=float)
+    if not close.any():
+        return m
+    n = rel[close] / np.maximum(dist[close], 1e-12)[:, None]
+    # a point at the robot's centre gives no direction: only stopping is safe
+    if np.any(dist[close] <= 1e-12):
+        return np.zeros(2)
+    options = np.vstack([m[None, :], m - (n @ m)[:, None] * n, np.zeros((1, 2))])
+    allowed = np.all(options @ n.T >= -1e-12, axis=1)
+    options = options[allowed]  # zero is always allowed
+    shift = np.hypot(*(options - m).T)
+    return options[int(np.argmin(shift))]

@@ -61,6 +61,9 @@ Array = np.ndarray
 # and the robot touched the corner (rfogwo-map3, ICOOT seed 1, t = 234 s), and on mfb-static the
 # least body gap fell to 0.78 cm under a 1 cm safety distance. 1 cm: at most 1.4 cm.
 HIT_CELL = 0.01
+#: m beyond the body: a sensed point this near is touching (rays hit the surface exactly; the
+#: planner keeps at least 1 cm from every hit, so a run without contact never comes this near).
+CONTACT = 0.002
 CARROT_CLEARANCE = 0.01  # m: the known-map path keeps this much beyond the planner's margin
 
 
@@ -105,6 +108,7 @@ class SwarmLocalPlanner(Planner):
         "tolerance": 1e-6,  # relative improvement that counts for ``patience``
         "knowledge": "sensors",  # "map": the static obstacles are known from the start
         "aim_hits": "known",  # the known path avoids: "known" (all remembered) or "near"
+        "contact_band": 0.2,  # m beyond the body: no move closes on a sensed point this near
     }
     choices: ClassVar[dict[str, tuple[str, ...]]] = {
         "repair": ("mfb", "grid", "none"),
@@ -128,7 +132,7 @@ class SwarmLocalPlanner(Planner):
         for key in ("w1", "w2", "safety", "corner_safety", "corner_angle", "diff_drive_safety",
                     "memory", "moving_memory", "trail", "lead", "consistency", "track_gap",
                     "track_scans", "predict", "surface", "carrot_clearance", "rejoin", "hold_angle",
-                    "hold_min", "patience", "tolerance"):
+                    "hold_min", "patience", "tolerance", "contact_band"):
             if float(p[key]) < 0:
                 raise PlannerError(f"{cls.name}.{key} must be >= 0")
         try:
@@ -150,6 +154,7 @@ class SwarmLocalPlanner(Planner):
             self._prior = sensed_map.surface_points(static_map, HIT_CELL)
         self._memory: list[tuple[float, Array, np.ndarray]] = []  # (time, hits, moving)
         self._last_scan: tuple[float, Array] | None = None
+        self._scan: tuple[Array, NDArray[np.bool_]] = (np.zeros((0, 2)), np.zeros(0, dtype=bool))
         self._held: Array | None = None  # the last swarm waypoint (see ``hold_angle``)
         self._path: Array | None = None  # the last known path (see ``rejoin``)
         self._moving_until = -np.inf  # motion was sensed in the last ``memory`` seconds
@@ -203,6 +208,7 @@ class SwarmLocalPlanner(Planner):
             t0, previous = self._last_scan
             moving, velocity = sensed_map.motion(previous, current, obs.time - t0,
                                                  surface=float(self.p["surface"]))
+        self._scan = (current, moving)  # for ``_keep_off``
         whole = velocity.copy()
         tracked = self._track(current, moving, whole)
         self._moving = (current[tracked], whole[tracked])
@@ -389,7 +395,9 @@ class SwarmLocalPlanner(Planner):
         return bool(local.violation(held[None, :], ctx)[0] == 0)
 
     def decide(self, obs: Observation) -> Decision:
-        decision = self._decide(obs)
+        return self._keep_off(obs, self._cut(obs, self._decide(obs)))
+
+    def _cut(self, obs: Observation, decision: Decision) -> Decision:
         if decision.target is None:
             return decision
         commit = self._commit(obs.time, obs.robot_radius)
@@ -403,6 +411,28 @@ class SwarmLocalPlanner(Planner):
         target = p + move * (max(commit, 0.0) / length)
         return Decision(target, decision.iterations, decision.duration, decision.reason,
                         decision.finish)
+
+    def _keep_off(self, obs: Observation, decision: Decision) -> Decision:
+        """Never drive toward what the robot touches (:func:`local.keep_off`), whatever the
+        swarm, the hold or the fallback chose. The points of this scan within ``CONTACT`` of the
+        body (touching) and the points it saw moving within ``contact_band`` more (a moving
+        obstacle can close that much while the decision is driven) keep the part of the move
+        toward them from being driven: the robot slides along the tangent, moves away or stops,
+        and a differential drive turns in place before it drives, so that its path follows the
+        kept direction instead of bulging into the obstacle. Without such a point the decision is
+        unchanged (runs that come no nearer than that are the same as without the rule)."""
+        points, moving = self._scan
+        if decision.target is None or not len(points):
+            return decision
+        p = np.array([obs.pose.x, obs.pose.y])
+        move = np.asarray(decision.target, dtype=float) - p
+        reach = obs.robot_radius + CONTACT + float(self.p["contact_band"]) * moving.astype(float)
+        kept = local.keep_off(p, move, points, reach)
+        if np.array_equal(kept, move):
+            return decision
+        self._held = None
+        return Decision(p + kept, decision.iterations, decision.duration, decision.reason,
+                        align=True)
 
     def _commit(self, time: float, radius: float) -> float:
         """How far one decision may move the robot (see ``_travel``): within the sensing range,
