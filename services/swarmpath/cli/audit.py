@@ -21,6 +21,14 @@ from swarmpath.audit import AUDIT_TRANSFORMS, AuditRow, Key, audit
 from swarmpath.cli import parallel
 from swarmpath.cli.bench import check_range, make_spec, run_bench
 from swarmpath.cli.core import InputError, app
+from swarmpath.cli.study_options import (
+    AgentsOpt,
+    AlgorithmsOpt,
+    DimsOpt,
+    FunctionsOpt,
+    IterationsOpt,
+    SeedOpt,
+)
 from swarmpath.optimizers import ParameterError
 
 FORMATS = ("table", "markdown")
@@ -52,17 +60,13 @@ def audit_lines(rows: list[AuditRow], markdown: bool) -> list[str]:
 
 @app.command("audit")
 def audit_command(
-    algorithms: Annotated[
-        str, typer.Option("--algorithms", "-a", help="Comma-separated names, or 'all'.")
-    ] = "all",
-    functions: Annotated[
-        str, typer.Option("--functions", "-f", help="Names and ranges: F1-F13, F1,F5,F6-floor.")
-    ] = "F1-F13",
-    dims: Annotated[str, typer.Option("--dims", "-d", help="Comma-separated dimensions.")] = "30",
+    algorithms: AlgorithmsOpt = "all",
+    functions: FunctionsOpt = "F1-F13",
+    dims: DimsOpt = "30",
     runs: Annotated[int, typer.Option(help="Independent runs per cell and transform.")] = 10,
-    agents: Annotated[int, typer.Option(help="Population size.")] = 30,
-    iterations: Annotated[int, typer.Option(help="Iterations per run.")] = 500,
-    seed: Annotated[int, typer.Option(help="Study seed; run r uses its own stream of it.")] = 1,
+    agents: AgentsOpt = 30,
+    iterations: IterationsOpt = 500,
+    seed: SeedOpt = 1,
     jobs: Annotated[
         int, typer.Option("--jobs", "-j", help="Processes (0: one per CPU). Numbers do not change.")
     ] = 0,

@@ -26,6 +26,14 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from swarmpath import __version__, audit, report
 from swarmpath.cli import parallel
 from swarmpath.cli.core import InputError, app, parse_params_option, plot_dir, resolve_names
+from swarmpath.cli.study_options import (
+    AgentsOpt,
+    AlgorithmsOpt,
+    DimsOpt,
+    FunctionsOpt,
+    IterationsOpt,
+    SeedOpt,
+)
 from swarmpath.functions import expand_function_names, get_function
 from swarmpath.optimizers import ParameterError, get_optimizer, list_optimizers, minimize_many
 from swarmpath.optimizers.api import MAX_AGENTS, MAX_DIM, MAX_ITERATIONS, resolve_transform
@@ -346,17 +354,13 @@ def _run_with_progress(spec: BenchSpec, stderr: Console, jobs: int) -> list[repo
 
 @app.command()
 def bench(
-    algorithms: Annotated[
-        str, typer.Option("--algorithms", "-a", help="Comma-separated names, or 'all'.")
-    ] = "all",
-    functions: Annotated[
-        str, typer.Option("--functions", "-f", help="Names and ranges: F1-F13, F1,F5,F6-floor.")
-    ] = "F1-F13",
-    dims: Annotated[str, typer.Option("--dims", "-d", help="Comma-separated dimensions.")] = "30",
+    algorithms: AlgorithmsOpt = "all",
+    functions: FunctionsOpt = "F1-F13",
+    dims: DimsOpt = "30",
     runs: Annotated[int, typer.Option(help="Independent runs per cell.")] = 30,
-    agents: Annotated[int, typer.Option(help="Population size.")] = 30,
-    iterations: Annotated[int, typer.Option(help="Iterations per run.")] = 500,
-    seed: Annotated[int, typer.Option(help="Study seed; run r uses its own stream of it.")] = 1,
+    agents: AgentsOpt = 30,
+    iterations: IterationsOpt = 500,
+    seed: SeedOpt = 1,
     shifted: Annotated[
         bool, typer.Option("--shifted", help="Alias of --transform shift.")
     ] = False,

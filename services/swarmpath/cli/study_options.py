@@ -1,0 +1,19 @@
+"""Options shared by the commands that run a benchmark study (bench, audit): one declaration
+each, so their names, help texts and defaults cannot drift apart."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import typer
+
+AlgorithmsOpt = Annotated[
+    str, typer.Option("--algorithms", "-a", help="Comma-separated names, or 'all'.")
+]
+FunctionsOpt = Annotated[
+    str, typer.Option("--functions", "-f", help="Names and ranges: F1-F13, F1,F5,F6-floor.")
+]
+DimsOpt = Annotated[str, typer.Option("--dims", "-d", help="Comma-separated dimensions.")]
+AgentsOpt = Annotated[int, typer.Option(help="Population size.")]
+IterationsOpt = Annotated[int, typer.Option(help="Iterations per run.")]
+SeedOpt = Annotated[int, typer.Option(help="Study seed; run r uses its own stream of it.")]
