@@ -228,17 +228,19 @@ def test_mutual_tls_and_access_control_keep_intruders_out(netns, tmp_path):
         svc.start_worker("netns-w1")
         svc.wait_workers(["netns-w1"], timeout=30)
         spec = {"kind": "benchmark", "algorithms": ["ICOOT"], "functions": ["F5"], "dims": [10],
-                "runs": 40, "agents": 20, "iterations": 4000, "seed": 3}
+                "runs": 400, "agents": 20, "iterations": 4000, "seed": 3}  # outlasts the intruders
         job = svc.submit(spec)
         svc.wait_for(lambda: svc.status(job)["state"] == "running", 30, "the job running")
         assert svc.intruder(None, job)["opened"] is False  # no certificate: no session
         seen = svc.intruder("intruder", job)
         assert seen["opened"] is True and seen["heard"] == [] and seen["relayed"] == [], seen
         assert svc.status(job)["state"] == "running"  # it listened while the job ran
-        status = svc.wait_done(job, 240)
-        assert status["state"] == "done" and status["runs_done"] == 40, status
-        direct = minimize("ICOOT", "F5", 10, 20, 4000, runs=40, seed=3).best_fitness.tolist()
-        assert [r["best_fitness"] for r in svc.runs(job)] == direct
+        status = svc.wait_done(job, 600)
+        assert status["state"] == "done" and status["runs_done"] == 400, status
+        some = [*range(8), *range(392, 400)]  # run r is the same alone: a sample is enough
+        direct = minimize("ICOOT", "F5", 10, 20, 4000, seed=3, run_ids=some).best_fitness.tolist()
+        stored = {r["run_id"]: r["best_fitness"] for r in svc.runs(job)}
+        assert len(stored) == 400 and [stored[r] for r in some] == direct
         # the 40 forged results and the forged progress reached the coordinator: refused
         assert metric(svc, "swarmpath_messages_unproven_total") == 41
         assert metric(svc, "swarmpath_results_stale_total") == 40
