@@ -93,8 +93,7 @@ class Worker(Reporting):
 
     # ---------------------------------------------------------------------------------- run
     def run(self) -> int:
-        slot_cls = ProcessSlot if self.settings.executor == "process" else ThreadSlot
-        self._slots = [slot_cls(i, self._on_slot_done) for i in range(self.settings.slots)]
+        self._slots = [self.new_slot(i) for i in range(self.settings.slots)]
         for slot in self._slots:
             if isinstance(slot, ProcessSlot):
                 slot.on_ready = self._slot_ready
@@ -118,6 +117,12 @@ class Worker(Reporting):
             return 0
         finally:
             self._shutdown()
+
+    def new_slot(self, index: int) -> Slot:
+        """Slot ``index`` of this worker (the settings' executor; a subclass may run leases
+        elsewhere, e.g. scripts/bench/farm.py's simulated slots)."""
+        slot_cls = ProcessSlot if self.settings.executor == "process" else ThreadSlot
+        return slot_cls(index, self._on_slot_done)
 
     def _slot_ready(self) -> None:
         with self._wake:

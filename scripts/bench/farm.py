@@ -1,0 +1,345 @@
+#!/usr/bin/env python3
+"""The farm simulator: one real coordinator, K simulated workers, one job; how fast it is taken.
+
+    .venv/bin/python scripts/bench/farm.py [--workers K] [--slots S] [--procs P] [--runs N]
+        [--cells C] [--iterations I] [--agents A] [--dim D] [--algorithm GWO] [--function F1]
+        [--map mfb-static --planner MFB] [--run-ms MS] [--runs-per-lease R] [--max-leases L]
+        [--seconds T] [--json FILE] [--data DIR]
+
+What runs: ``swarmpath coordinator`` as a subprocess on free loopback ports (HTTP, Zenoh router
+with usrpwd authentication, a fresh data directory: its real SQLite store and MCAP recorder), and
+P subprocesses of scripts/bench/farm_workers.py holding K simulated workers between them: each is
+the real worker (own Zenoh client session logged in with the farm's login, liveliness token,
+lease queries, heartbeats, result batches with their lease capability's HMAC, acks) whose slots
+return real precomputed results (same shape as a real run: ``iterations``-point curve, best
+position, metrics; map runs: path and metrics) after ``--run-ms`` per run instead of computing.
+One job is submitted through the REST API with its bearer token: ``--cells`` cells (functions
+F1.. in turn; or one map cell per ``--map``) of ``--runs`` runs each. Bounded: the job is
+cancelled after ``--seconds``.
+
+Reported (markdown on stdout, everything as JSON with ``--json``): accepted runs/s (the job's
+runs over the coordinator's first-lease-to-last-result time), the coordinator process's CPU per
+accepted run (user + system from /proc over the job), ack latency (a worker's put of a result to
+its ack) and lease round trip (query to reply) p50/p99, store bytes per run (SQLite after the
+coordinator closed it) and MCAP bytes per run, the coordinator's RSS over time, the workers the
+coordinator saw alive, and how the runs were spread over the workers (min/median/max per worker,
+workers with none). The machine is shared: read times next to the load averages reported.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import os
+import secrets
+import signal
+import socket
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import httpx
+
+ROOT = Path(__file__).resolve().parents[2]
+HERE = Path(__file__).resolve().parent
+ENV = {**os.environ, "PYTHONPATH": str(ROOT / "services"), "PYTHONUNBUFFERED": "1"}
+CLK_TCK = os.sysconf("SC_CLK_TCK")
+PAGE = os.sysconf("SC_PAGE_SIZE")
+
+
+def note(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def proc_cpu_rss(pid: int) -> tuple[float, float]:
+    """(CPU seconds user + system, resident MB) of one process, from /proc."""
+    text = Path(f"/proc/{pid}/stat").read_text()
+    fields = text[text.rindex(")") + 2:].split()
+    cpu = (int(fields[11]) + int(fields[12])) / CLK_TCK
+    rss = int(Path(f"/proc/{pid}/statm").read_text().split()[1]) * PAGE / 2**20
+    return cpu, rss
+
+
+def percentile(values: list[float], q: float) -> float:
+    if not values:
+        return float("nan")
+    values = sorted(values)
+    return values[min(len(values) - 1, int(q / 100 * len(values)))]
+
+
+def job_spec(args: argparse.Namespace) -> dict[str, Any]:
+    if args.map:
+        return {"kind": "map", "planners": [args.planner], "maps": args.map, "runs": args.runs,
+                "seed": 1}
+    functions = [f"F{i}" for i in range(1, 14)]
+    cells = [(functions[i % 13], args.dim + i // 13) for i in range(args.cells)]
+    return {"kind": "benchmark", "algorithms": [args.algorithm],
+            "functions": sorted({f for f, _ in cells}, key=functions.index),
+            "dims": sorted({d for _, d in cells}), "runs": args.runs, "agents": args.agents,
+            "iterations": args.iterations, "seed": 1}
+
+
+class Farm:
+    """The coordinator and the simulator processes (started in __enter__, stopped in __exit__)."""
+
+    def __init__(self, args: argparse.Namespace, data: Path):
+        self.args = args
+        self.data = data
+        self.token = secrets.token_urlsafe(24)
+        self.login = ("farm", secrets.token_urlsafe(24))
+        self.http_port, self.zenoh_port = free_port(), free_port()
+        self.coordinator: subprocess.Popen[bytes] | None = None
+        self.sims: list[tuple[subprocess.Popen[bytes], Path]] = []
+        self.client = httpx.Client(base_url=f"http://127.0.0.1:{self.http_port}", timeout=30.0,
+                                   headers={"Authorization": f"Bearer {self.token}"})
+        self.log = open(data / "farm.log", "ab")
+
+    def __enter__(self) -> Farm:
+        try:
+            self._start()
+        except BaseException:
+            self.__exit__()
+            raise
+        return self
+
+    def _start(self) -> None:
+        a = self.args
+        users = self.data / "users.txt"
+        users.write_text(f"{self.login[0]}:{self.login[1]}\n")
+        users.chmod(0o600)
+        self.coordinator = subprocess.Popen(
+            [sys.executable, "-m", "swarmpath.cli", "coordinator",
+             "--http", f"127.0.0.1:{self.http_port}",
+             "--zenoh", f"tcp/127.0.0.1:{self.zenoh_port}", "--data", str(self.data / "store"),
+             "--auth-dictionary", str(users), "--lease-seconds", str(a.lease_seconds),
+             "--log-level", a.log_level],
+            stdout=self.log, stderr=self.log, env={**ENV, "SWARMPATH_TOKEN": self.token},
+            start_new_session=True)
+        self.wait(lambda: self.client.get("/healthz").status_code == 200, 60, "coordinator")
+        procs = max(1, min(a.procs, a.workers))
+        env = {**ENV, "SWARMPATH_ZENOH_USER": self.login[0],
+               "SWARMPATH_ZENOH_PASSWORD": self.login[1]}
+        for p in range(procs):
+            count = a.workers // procs + (1 if p < a.workers % procs else 0)
+            stats = self.data / f"sim-{p}.json"
+            cmd = [sys.executable, str(HERE / "farm_workers.py"),
+                   "--connect", f"tcp/127.0.0.1:{self.zenoh_port}", "--count", str(count),
+                   "--id-prefix", f"sim{p}", "--slots", str(a.slots), "--run-ms", str(a.run_ms),
+                   "--max-runs", str(a.runs_per_lease), "--max-leases", str(a.max_leases),
+                   "--seconds", str(a.seconds + 120), "--stats", str(stats),
+                   "--log-level", a.log_level]
+            if a.wrong_capability:
+                cmd.append("--wrong-capability")
+            self.sims.append((subprocess.Popen(cmd, stdout=self.log, stderr=self.log, env=env,
+                                               start_new_session=True), stats))
+
+    def wait(self, cond: Any, timeout: float, what: str, poll: float = 0.2) -> None:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if self.coordinator is not None and self.coordinator.poll() is not None:
+                raise RuntimeError(f"the coordinator exited waiting for {what}; see "
+                                   f"{self.log.name}")
+            with contextlib.suppress(httpx.HTTPError, ValueError, KeyError):
+                if cond():
+                    return
+            time.sleep(poll)
+        raise TimeoutError(f"timed out waiting for {what}; see {self.log.name}")
+
+    def alive(self) -> int:
+        return sum(1 for w in self.client.get("/workers").json() if w["alive"])
+
+    def metrics(self) -> dict[str, float]:
+        out = {}
+        for line in self.client.get("/metrics").text.splitlines():
+            if line and not line.startswith("#"):
+                name, value = line.split()
+                out[name.removeprefix("swarmpath_")] = float(value)
+        return out
+
+    def stop_sims(self) -> list[dict[str, Any]]:
+        for proc, _ in self.sims:
+            if proc.poll() is None:
+                proc.send_signal(signal.SIGTERM)
+        out: list[dict[str, Any]] = []
+        for proc, stats in self.sims:
+            try:
+                proc.wait(60)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait(10)
+            if stats.is_file():
+                out += json.loads(stats.read_text())["workers"]
+        return out
+
+    def stop_coordinator(self) -> None:
+        proc = self.coordinator
+        if proc is None or proc.poll() is not None:
+            return
+        proc.send_signal(signal.SIGTERM)
+        try:
+            proc.wait(30)
+        except subprocess.TimeoutExpired:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait(10)
+
+    def __exit__(self, *exc: object) -> None:
+        for proc, _ in self.sims:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait(10)
+        self.stop_coordinator()
+        self.client.close()
+        self.log.close()
+
+
+def store_bytes(store: Path) -> int:
+    return sum(p.stat().st_size for p in store.glob("swarmpath.sqlite3*") if p.is_file())
+
+
+def run(args: argparse.Namespace, data: Path) -> dict[str, Any]:
+    spec = job_spec(args)
+    with Farm(args, data) as farm:
+        assert farm.coordinator is not None
+        pid = farm.coordinator.pid
+        farm.wait(lambda: farm.alive() >= args.workers, 60 + args.workers * 0.2,
+                  f"{args.workers} workers alive", poll=0.5)
+        alive_before = farm.alive()
+        store0 = store_bytes(data / "store")
+        load0 = os.getloadavg()[0]
+        cpu0, rss0 = proc_cpu_rss(pid)
+        t0 = time.monotonic()
+        r = farm.client.post("/jobs", json=spec)
+        r.raise_for_status()
+        job = r.json()["id"]
+        note(f"farm: job {job} ({r.json()['runs_total']} runs) on {args.workers} workers x "
+             f"{args.slots} slots")
+        rss: list[tuple[float, float]] = [(0.0, rss0)]
+        status: dict[str, Any] = {}
+        while True:
+            status = farm.client.get(f"/jobs/{job}").json()
+            rss.append((round(time.monotonic() - t0, 2), proc_cpu_rss(pid)[1]))
+            if status["state"] in ("done", "failed", "cancelled"):
+                break
+            if time.monotonic() - t0 > args.seconds:
+                note(f"farm: {args.seconds} s are up: cancelling job {job}")
+                status = farm.client.delete(f"/jobs/{job}").raise_for_status().json()
+                break
+            time.sleep(0.5)
+        cpu1, rss1 = proc_cpu_rss(pid)
+        load1 = os.getloadavg()[0]
+        metrics = farm.metrics()
+        table = farm.client.get("/workers").json()
+        sims = farm.stop_sims()
+        farm.stop_coordinator()
+    done = int(status["runs_done"]) + int(status["runs_failed"])
+    span = (float(status["finished"] or time.time()) - float(status["started"] or 0)) \
+        if status.get("started") else float("nan")
+    per_worker = sorted(int(w["runs_done"]) for w in table)
+    rtt = [x for w in sims for x in w["lease_rtt_ms"]]
+    ack = [x for w in sims for x in w["ack_ms"]]
+    mcap = data / "store" / "mcap" / f"{job}.mcap"
+    return {
+        "workers": args.workers, "slots": args.slots, "procs": min(args.procs, args.workers),
+        "run_ms": args.run_ms, "spec": spec, "job": job, "state": status["state"],
+        "runs_total": status["runs_total"], "runs_finished": done,
+        "seconds": round(span, 3), "runs_per_s": round(done / span, 1) if span > 0 else None,
+        "coordinator_cpu_s": round(cpu1 - cpu0, 2),
+        "cpu_ms_per_run": round((cpu1 - cpu0) * 1e3 / max(1, done), 4),
+        "ack_ms_p50": round(percentile(ack, 50), 2), "ack_ms_p99": round(percentile(ack, 99), 2),
+        "lease_rtt_ms_p50": round(percentile(rtt, 50), 2),
+        "lease_rtt_ms_p99": round(percentile(rtt, 99), 2),
+        "store_bytes_per_run": round((store_bytes(data / "store") - store0) / max(1, done)),
+        "mcap_bytes_per_run": round(mcap.stat().st_size / max(1, done)) if mcap.is_file()
+        else None,
+        "rss_mb": {"start": round(rss0, 1), "max": round(max(x for _, x in rss), 1),
+                   "end": round(rss1, 1)},
+        "rss_series": [(t, round(x, 1)) for t, x in rss[:: max(1, len(rss) // 40)]],
+        "alive_seen": alive_before, "table_entries": len(table),
+        "runs_per_worker": {"min": per_worker[0] if per_worker else 0,
+                            "median": statistics.median(per_worker) if per_worker else 0,
+                            "max": per_worker[-1] if per_worker else 0,
+                            "none": sum(1 for x in per_worker if x == 0)},
+        "metrics": {k: metrics.get(k) for k in (
+            "results_accepted_total", "results_duplicate_total", "results_stale_total",
+            "messages_unproven_total", "messages_overload_total", "leases_total",
+            "lease_requeues_total", "workers_refused_total")},
+        "load": [round(load0, 2), round(load1, 2)],
+    }
+
+
+def markdown(res: dict[str, Any]) -> str:
+    head = ("| K | slots | runs | s | runs/s | coord CPU ms/run | ack p50/p99 ms | "
+            "lease RTT p50/p99 ms | store B/run | MCAP B/run | RSS MB start/max/end | "
+            "alive | runs/worker min/med/max (none) | load |")
+    sep = "|" + "---|" * (head.count("|") - 1)
+    r = res
+    w = r["runs_per_worker"]
+    row = (f"| {r['workers']} | {r['slots']} | {r['runs_finished']}/{r['runs_total']} | "
+           f"{r['seconds']} | {r['runs_per_s']} | {r['cpu_ms_per_run']} | "
+           f"{r['ack_ms_p50']}/{r['ack_ms_p99']} | {r['lease_rtt_ms_p50']}/"
+           f"{r['lease_rtt_ms_p99']} | {r['store_bytes_per_run']} | {r['mcap_bytes_per_run']} | "
+           f"{r['rss_mb']['start']}/{r['rss_mb']['max']}/{r['rss_mb']['end']} | "
+           f"{r['alive_seen']} | {w['min']}/{w['median']}/{w['max']} ({w['none']}) | "
+           f"{r['load'][0]}-{r['load'][1]} |")
+    return "\n".join([head, sep, row])
+
+
+def parse(argv: list[str] | None = None) -> argparse.Namespace:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--workers", "-k", type=int, default=2, help="simulated workers (K)")
+    ap.add_argument("--slots", type=int, default=1, help="slots per simulated worker")
+    ap.add_argument("--procs", type=int, default=2, help="simulator processes holding them")
+    ap.add_argument("--runs", type=int, default=2000, help="runs per cell")
+    ap.add_argument("--cells", type=int, default=1, help="benchmark cells (F1, F2, ...)")
+    ap.add_argument("--algorithm", default="GWO")
+    ap.add_argument("--iterations", type=int, default=500, help="curve length")
+    ap.add_argument("--agents", type=int, default=2)
+    ap.add_argument("--dim", type=int, default=2)
+    ap.add_argument("--map", action="append", help="map runs (with paths) on this preset map")
+    ap.add_argument("--planner", default="MFB")
+    ap.add_argument("--run-ms", type=float, default=0.0, help="simulated compute per run")
+    ap.add_argument("--runs-per-lease", type=int, default=1000,
+                    help="a worker's max_runs per lease (the coordinator sizes below it)")
+    ap.add_argument("--max-leases", type=int, default=32, help="leases per bundle at most")
+    ap.add_argument("--lease-seconds", type=float, default=30.0)
+    ap.add_argument("--seconds", type=float, default=300.0, help="cancel the job after this")
+    ap.add_argument("--wrong-capability", action="store_true",
+                    help="negative control: results proven with a wrong key (never accepted)")
+    ap.add_argument("--json", type=Path, help="write the whole result here")
+    ap.add_argument("--data", type=Path, help="keep the data directory here (default: temp)")
+    ap.add_argument("--log-level", default="warning")
+    args = ap.parse_args(argv)
+    if args.workers < 1 or args.slots < 1 or args.runs < 1 or not 1 <= args.cells <= 13 * 50:
+        ap.error("--workers, --slots, --runs and --cells must be positive")
+    return args
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse(argv)
+    with contextlib.ExitStack() as stack:
+        if args.data is None:
+            data = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="farm-")))
+        else:
+            data = args.data
+            data.mkdir(parents=True, exist_ok=True)
+        res = run(args, data)
+    if args.json:
+        args.json.write_text(json.dumps(res, indent=1))
+    print(markdown(res))
+    return 0 if res["state"] == "done" else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

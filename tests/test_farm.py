@@ -1,0 +1,68 @@
+"""The farm simulator (scripts/bench/farm.py): its simulated workers' results go through the
+coordinator's real checks (login, liveliness, lease capability proofs, fencing) and a job is
+completed exactly once; results proven with a wrong key are never accepted."""
+
+from __future__ import annotations
+
+import json
+import sqlite3
+import subprocess
+import sys
+from pathlib import Path
+
+from mcap.reader import make_reader
+
+from swarmpath.service.store import Store
+
+ROOT = Path(__file__).resolve().parents[1]
+FARM = ROOT / "scripts" / "bench" / "farm.py"
+
+
+def farm(tmp: Path, *args: str, timeout: float = 120.0) -> tuple[int, dict]:
+    out = tmp / "farm.json"
+    proc = subprocess.run(
+        [sys.executable, str(FARM), "--data", str(tmp / "data"), "--json", str(out), *args],
+        capture_output=True, text=True, timeout=timeout,
+        env={"PYTHONPATH": str(ROOT / "services"), "PATH": "/usr/bin:/bin"},
+    )
+    assert out.is_file(), proc.stderr[-3000:]
+    return proc.returncode, json.loads(out.read_text())
+
+
+def test_simulated_workers_complete_a_job_exactly_once(tmp_path):
+    code, res = farm(tmp_path, "--workers", "3", "--procs", "2", "--slots", "2", "--runs", "60",
+                     "--cells", "3", "--iterations", "50", "--runs-per-lease", "7",
+                     "--seconds", "60")
+    assert code == 0, res
+    assert res["state"] == "done" and res["runs_finished"] == res["runs_total"] == 180
+    m = res["metrics"]
+    assert m["results_accepted_total"] == 180
+    assert m["messages_unproven_total"] == 0 and m["results_stale_total"] == 0
+    assert res["alive_seen"] == 3 and res["runs_per_worker"]["max"] < 180
+    store = Store(tmp_path / "data" / "store")
+    try:
+        runs = list(store.iter_runs(res["job"]))
+    finally:
+        store.close()
+    assert [r["run_id"] for r in runs] == list(range(180))
+    assert all(r["state"] == "done" and len(r["curve"]) == 50 and len(r["best_position"]) == 2
+               and r["worker"].startswith("sim") for r in runs)
+    # runs of one template differ (each run's numbers are its own), as real runs do
+    assert len({r["curve"][-1] for r in runs}) == 180
+    db = sqlite3.connect(tmp_path / "data" / "store" / "swarmpath.sqlite3")
+    assert db.execute("SELECT COUNT(*) FROM results").fetchone()[0] == 180
+    db.close()
+    with open(tmp_path / "data" / "store" / "mcap" / f"{res['job']}.mcap", "rb") as f:
+        ids = [json.loads(msg.data)["run_id"]
+               for _s, channel, msg in make_reader(f).iter_messages()
+               if channel.topic == "/results"]
+    assert sorted(ids) == list(range(180))
+
+
+def test_results_proven_with_a_wrong_key_are_never_accepted(tmp_path):
+    code, res = farm(tmp_path, "--workers", "1", "--runs", "20", "--iterations", "20",
+                     "--seconds", "4", "--wrong-capability")
+    assert code == 1
+    assert res["state"] == "cancelled" and res["runs_finished"] == 0
+    assert res["metrics"]["results_accepted_total"] == 0
+    assert res["metrics"]["results_stale_total"] >= 20
