@@ -197,6 +197,28 @@ def test_mcoot_opposition_start_keeps_the_better_of_each_pair():
     assert np.array_equal(np.concatenate([opt.CP, opt.LP], axis=1), keep)
 
 
+def test_mcoot_jumps_the_coots_with_the_smallest_picks_in_their_order():
+    """The jumping coots' opposites are evaluated in ascending order of their picks, on any
+    machine (argpartition's order differs with and without AVX-512, and it decides which
+    noise value of F7 each opposite gets)."""
+    seen = []
+
+    def objective(X, s):
+        seen.append(X.copy())
+        return np.sum(X**2, axis=-1)
+
+    problem = Problem(objective, np.full((2, 3), -4.0), np.full((2, 3), 6.0))
+    # 900 coots: with that many keys even AVX-512 argpartition leaves its picks unsorted
+    opt = create("mCOOT", problem, 1000, 5, RunStreams.for_runs(2, 2), {"opposition": "static"})
+    opt.initialize()
+    u = opt._draw()
+    CP = opt.CP.copy()
+    opt._after_coot_evaluation(u)
+    order = np.argsort(u["m_pick"], axis=1)[:, : opt.jumpers]
+    expected = np.clip(-4.0 + 6.0 - CP[np.arange(2)[:, None], order], -4.0, 6.0)
+    assert opt.jumpers == 270 and np.array_equal(seen[-1], expected)
+
+
 # ----------------------------------------------------------------- parameters change behaviour
 def _alternatives():
     cases = []

@@ -12,12 +12,14 @@ common "enhanced" operators for swarm algorithms, in the form of Rahnamayan, Tiz
   opposite lb + ub - x; both are evaluated and the better one (strictly) is kept, agent by agent,
   so the coot / leader split of COOT is unchanged.
 * Generation jumping, every iteration, after the coots were moved and evaluated and before the
-  leader swap: m = ceil(``jump_rate`` N_c) coots drawn at random (without replacement) are
-  paired with their dynamic opposite a + b - x, a and b the per-axis minimum and maximum of the
-  current population (``opposition = "static"``: lb + ub - x); the better of the pair (strictly)
-  is kept. ODE jumps the whole population with probability ``jump_rate``; a fixed number of
-  opposites per iteration has the same expected cost and keeps the evaluations per iteration
-  fixed and counted exactly (a run-dependent number would need masked evaluations).
+  leader swap: m = ceil(``jump_rate`` N_c) coots drawn at random (without replacement: the m
+  smallest of one uniform pick per coot; their opposites are evaluated in ascending order of the
+  picks, on any machine) are paired with their dynamic opposite a + b - x, a and b the per-axis
+  minimum and maximum of the current population (``opposition = "static"``: lb + ub - x); the
+  better of the pair (strictly) is kept. ODE jumps the whole population with probability
+  ``jump_rate``; a fixed number of opposites per iteration has the same expected cost and keeps
+  the evaluations per iteration fixed and counted exactly (a run-dependent number would need
+  masked evaluations).
 
 Bounds: opposites of in-box points are in the box; everything is clipped before evaluation anyway.
 Evaluations: 2N at initialization (N with ``opposition_init = false``), N + m per iteration; with
@@ -88,7 +90,9 @@ class MCOOT(COOT):
         if not m:
             return
         rows = np.arange(self.R)[:, None]
-        idx = np.argpartition(u["m_pick"], m - 1, axis=1)[:, :m]  # m random coots per run
+        # m random coots per run, in the order of their picks (as sorted by argsort: the order
+        # must not depend on the machine; argpartition's does, with AVX-512 or without)
+        idx = np.argsort(u["m_pick"], axis=1, kind="stable")[:, :m]
         X = self.CP[rows, idx]  # (R, m, d)
         if self.p["opposition"] == "dynamic":
             low = np.minimum(self.CP.min(axis=1), self.LP.min(axis=1))[:, None, :]
