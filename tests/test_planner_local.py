@@ -97,3 +97,23 @@ def test_score_penalises_exactly_what_stays_infeasible(mode):
     left = local.violation(fixed, c)
     assert np.array_equal(cost >= local.PENALTY, left > 0)
     assert np.allclose(cost[left > 0], local.PENALTY + left[left > 0])
+
+
+@pytest.mark.parametrize("mode", ["mfb", "grid", "none"])
+@pytest.mark.parametrize("objective", ["cost", "inverse"])
+def test_score_is_rowwise(mode, objective):
+    """A candidate's score and repair do not depend on the candidates scored with it, to the last
+    bit: the swarm planners' problems say so (``Problem.rowwise``) and HPO's sweep relies on it."""
+    rng = np.random.default_rng(5)
+    wall = np.stack([np.full(40, 0.6), np.linspace(-0.8, 0.8, 40)], axis=1)
+    hits = np.vstack([wall, rng.uniform(-1.2, 1.2, (25, 2))])
+    c = ctx(hits, mode, objective=objective, safety=0.05)
+    cands = rng.uniform(-1.0, 1.0, (120, 2))
+    cost, fixed = local.score(cands, c)
+    assert np.any(cost >= local.PENALTY) or mode != "none"
+    for k in range(0, 120, 7):
+        one, one_fixed = local.score(cands[k : k + 1], c)
+        assert one[0] == cost[k] and np.array_equal(one_fixed[0], fixed[k])
+    sub = np.arange(3, 120, 4)
+    part, part_fixed = local.score(cands[sub], c)
+    assert np.array_equal(part, cost[sub]) and np.array_equal(part_fixed, fixed[sub])

@@ -118,7 +118,11 @@ class Optimizer(ABC):
         With ``mask`` (R, m), only the masked points count as evaluated: the others get +inf and are
         not counted (for algorithms whose number of evaluations differs per agent).
         """
-        F = np.asarray(self.problem.objective(X, self.rng), dtype=float)
+        return self.record(X, np.asarray(self.problem.objective(X, self.rng), dtype=float), mask)
+
+    def record(self, X: Array, F: Array, mask: NDArray[np.bool_] | None = None) -> Array:
+        """The bookkeeping of :meth:`evaluate` for values ``F`` (R, m) already computed at X:
+        count them and update the best ever evaluated (first index wins ties)."""
         if mask is not None:
             self.masked_evaluation = True
             F = np.where(mask, F, np.inf)

@@ -192,13 +192,44 @@ class HPO(Optimizer):
             return
         # The authors' sweep: agent i moves from the population as agents 0..i-1 left it (mu and
         # P recomputed) and toward the best point including their evaluations. A loop over
-        # agents (vectorized over runs).
+        # agents (vectorized over runs), or the same values in a few batches (``_sweep``).
+        if self.R == 1 and self.problem.rowwise:
+            self._sweep(draw, C, kbest)
+            return
         for i in range(self.N):
             rows = slice(i, i + 1)
             X = self._moved(draw, C, kbest, rows)
             self._clip_inplace(X)
             self.X[:, rows] = X
             self.evaluate(X)
+
+    def _sweep(self, draw: Draw, C: float, kbest: int) -> None:
+        """The sequential sweep of one run in batches, with the values of the loop over agents.
+
+        In the loop, a prey's new position depends on the agents moved before it only through
+        the target T (the best point evaluated so far), a hunter's also through the population
+        (mu and P). So a block of agents, from agent i up to the next hunter after it, is moved
+        at once from the current T and the current population (the population is only read for
+        agent i, when it is a hunter), evaluated in one call (``problem.rowwise``: a point's
+        value does not depend on the batch), and kept up to and including its first agent that
+        improves on T: until then every move used the T the loop would have used. The next block
+        starts after it, from the new T. The evaluations counted and the best point recorded are
+        those of the loop (``record``: strict improvement, as agent after agent). About
+        (improvements of T + hunters + 1) objective calls per iteration instead of N.
+        """
+        _, agents = draw.hunters
+        i = 0
+        while i < self.N:
+            later = agents[agents > i]
+            end = int(later[0]) if later.size else self.N
+            X = self._moved(draw, C, kbest, slice(i, end))
+            self._clip_inplace(X)
+            F = np.asarray(self.problem.objective(X, self.rng), dtype=float)
+            better = np.flatnonzero(np.where(np.isnan(F[0]), np.inf, F[0]) < self.best_fitness[0])
+            stop = X.shape[1] if better.size == 0 else int(better[0]) + 1
+            self.X[:, i : i + stop] = X[:, :stop]
+            self.record(X[:, :stop], F[:, :stop])
+            i += stop
 
     def _hunter_rows(self, draw: Draw, rows: slice) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
         """(run, agent-within-rows) of the hunters among ``rows``."""

@@ -25,6 +25,10 @@ class Problem:
     objective: Objective
     lower: Array  # (runs, dim)
     upper: Array  # (runs, dim)
+    #: True when the objective's value at a point does not depend, to the last bit, on the other
+    #: points evaluated with it (no matrix products, no draws from the streams): an optimizer may
+    #: then evaluate points of a sequential sweep in one batch (HPO's ``_sweep``).
+    rowwise: bool = False
 
     def __post_init__(self) -> None:
         self.lower = np.atleast_2d(np.asarray(self.lower, dtype=float))

@@ -507,7 +507,9 @@ class SwarmLocalPlanner(Planner):
             cost, _ = local.score(X[0], ctx)
             return cost[None, :]
 
-        problem = Problem(objective, lower[None, :], upper[None, :])
+        # local.score treats every candidate on its own (elementwise arithmetic, per-row
+        # argmin): a candidate's cost does not depend on the batch it is scored in
+        problem = Problem(objective, lower[None, :], upper[None, :], rowwise=True)
         opt = create(str(self.p["optimizer"]), problem, int(self.p["agents"]),
                      int(self.p["iterations"]), self._streams, self._opt_params)
         opt.initialize()
