@@ -26,6 +26,9 @@ MAX_ITERATIONS = 100_000
 #: Coordinates per population array of one chunk of runs (about 110 runs of 30 agents x 30 dims):
 #: measured fastest per run on the project machine; larger batches are split (see ``minimize``).
 CHUNK_ELEMENTS = 100_000
+#: Ways of computing a study: ``numpy`` is the reference; ``numba`` runs the compiled kernels of
+#: :mod:`swarmpath.optimizers.compiled` (optional dependency: ``pip install swarmpath[fast]``).
+BACKENDS: tuple[str, ...] = ("numpy", "numba")
 
 
 @dataclass
@@ -45,6 +48,10 @@ class Result:
     shifts: Array | None = None  # (runs, dim) when shifted
     params: dict[str, Any] | None = None
     transform: str = "none"
+    #: How the numbers were computed (``BACKENDS``) and the largest relative difference from the
+    #: numpy reference that backend allows (0.0: equal to the last bit).
+    backend: str = "numpy"
+    tolerance: float = 0.0
 
 
 def create(
@@ -82,9 +89,10 @@ def minimize(
     params: Mapping[str, Any] | None = None,
     shifted: bool = False,
     run_ids: Sequence[int] | None = None,
-    on_iteration: Callable[[Optimizer], None] | None = None,
+    on_iteration: Callable[[Optimizer | None], None] | None = None,
     chunk_elements: int | None = None,
     transform: str | None = None,
+    backend: str = "numpy",
 ) -> Result:
     """Minimise ``function`` with ``algorithm`` for runs 0..runs-1 (or the given ``run_ids``).
 
@@ -96,11 +104,11 @@ def minimize(
     Batches larger than about ``chunk_elements`` coordinates per population (default
     ``CHUNK_ELEMENTS``; 0: never split) run as several optimizers stepped in turn;
     ``on_iteration`` is still called once per iteration, after every chunk made it, with the last
-    chunk's optimizer. Chunking changes no number.
+    chunk's optimizer. Chunking changes no number. ``backend``: see :func:`minimize_many`.
     """
     return minimize_many(
         algorithm, [function], dim, agents, iterations, runs, seed, params, shifted, run_ids,
-        on_iteration, chunk_elements, transform,
+        on_iteration, chunk_elements, transform, backend,
     )[0]
 
 
@@ -115,9 +123,10 @@ def minimize_many(
     params: Mapping[str, Any] | None = None,
     shifted: bool = False,
     run_ids: Sequence[int] | None = None,
-    on_iteration: Callable[[Optimizer], None] | None = None,
+    on_iteration: Callable[[Optimizer | None], None] | None = None,
     chunk_elements: int | None = None,
     transform: str | None = None,
+    backend: str = "numpy",
 ) -> list[Result]:
     """``minimize`` for several functions at once: one :class:`Result` per function, in order.
 
@@ -131,7 +140,16 @@ def minimize_many(
     ``chunk_elements``: see :func:`minimize`. One thread runs fastest with the default; threads
     sharing the process run faster with larger chunks (fewer numpy calls, so fewer hand-offs of
     the GIL for the same work: docs/benchmarks.md, Table 2).
+
+    ``backend="numba"`` computes each run with its algorithm's compiled kernel
+    (:mod:`swarmpath.optimizers.compiled`), the same numbers as the reference (``"numpy"``)
+    within the kernel's ``tolerance`` (recorded in each Result; 0.0 is equal to the last bit). An
+    algorithm, transform, function or parameter without a kernel is a ParameterError naming it,
+    never a fallback. ``on_iteration`` is then called ``iterations`` times in all as runs finish,
+    with ``None``; ``chunk_elements`` does not apply.
     """
+    if backend not in BACKENDS:
+        raise ParameterError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
     kind = resolve_transform(shifted, transform)
     fns = [get_function(f) if isinstance(f, str) else f for f in functions]
     if not fns:
@@ -146,6 +164,10 @@ def minimize_many(
     if isinstance(elements, bool) or not isinstance(elements, int | np.integer) or elements < 0:
         raise ParameterError(f"chunk_elements must be an integer >= 0, got {elements!r}")
     cls = get_optimizer(algorithm)
+    if backend == "numba":
+        return _minimize_compiled(
+            cls.name, fns, dim, agents, iterations, ids, int(seed), params, kind, on_iteration
+        )
     started = time.perf_counter()
     # Large batches run as chunks of about ``elements`` coordinates per population array,
     # stepped in turn every iteration: the arrays of a step stay in the CPU caches. Runs are
@@ -199,6 +221,35 @@ def minimize_many(
             )
         )
     return results
+
+
+def _minimize_compiled(
+    algorithm: str,
+    fns: list[BenchmarkFunction],
+    dim: int,
+    agents: int,
+    iterations: int,
+    ids: list[int],
+    seed: int,
+    params: Mapping[str, Any] | None,
+    kind: str,
+    on_iteration: Callable[[Optimizer | None], None] | None,
+) -> list[Result]:
+    try:  # numba is optional and never imported by the reference path
+        from swarmpath.optimizers.compiled.run import minimize_compiled
+    except ImportError as exc:
+        raise ParameterError(
+            f"backend 'numba' needs numba (pip install 'swarmpath[fast]'): {exc}"
+        ) from None
+    parts = minimize_compiled(
+        algorithm, fns, dim, agents, iterations, ids, seed, params, kind, on_iteration
+    )
+    return [
+        Result(algorithm=algorithm, function=fn.name, dim=dim, agents=agents,
+               iterations=iterations, seed=seed, run_ids=list(ids), transform=kind,
+               backend="numba", **fields)
+        for fn, fields in zip(fns, parts, strict=True)
+    ]
 
 
 Row = tuple[BenchmarkFunction, int]

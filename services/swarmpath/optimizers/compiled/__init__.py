@@ -1,0 +1,58 @@
+"""Compiled kernels (numba): the ``backend="numba"`` of ``minimize``/``minimize_many``.
+
+The numpy optimizers are the reference; a kernel here is an accelerated copy of one of them that
+must give the same numbers, run for run (equal to the last bit, or within the ``tolerance`` it
+declares, which every Result it computes records). Nothing in the numpy path imports this
+package: numba is an optional dependency (``pip install 'swarmpath[fast]'``).
+
+Kernel signature (one run; ``@njit(cache=True)``)::
+
+    run(rng, fid, shifted, shift, lower, upper, agents, iterations, params)
+        -> (best_fitness: float, best_position: (d,), curve: (iterations,), evaluations: int)
+
+* ``rng``: the run's ``numpy.random.Generator`` (``run_generator(seed, r)``, purpose OPTIMIZER).
+* ``fid``: the function's id (:data:`functions.FUNCTION_IDS`); ``shifted`` (bool) and
+  ``shift`` (d,): the run's shift (zeros when not shifted); ``lower``, ``upper`` (d,): the box.
+* ``agents``, ``iterations``: ints. ``params``: float64 vector made by the kernel's ``pack``
+  from the resolved parameters (choices as indices into their tuple).
+* Returns what :class:`~swarmpath.optimizers.api.Result` holds for one run: the best value ever
+  evaluated and its point (``Optimizer.evaluate``'s record, not an internal leader), the record
+  after each iteration, and the number of counted evaluations.
+
+Rules for kernel authors:
+
+1. Draw through one stream (:func:`streams.open_stream` with your largest single draw as
+   capacity) and :func:`streams.take`: one ``take`` per ``rng.random``/``rng.normal`` call of the
+   reference, of the same total size (``random_parts(k, ...)``/``random(k, ...)`` is one take of
+   k parts: part i is ``[o + i * size, o + (i + 1) * size)``, C order inside a part), in the same
+   order, uniforms and normals alike. ``uniform(lo, hi, ...)`` is ``lo + (hi - lo) * u`` of one
+   take; ``permutations`` is one uniform take and a stable argsort of each row; ``integers``
+   goes to the generator itself, unbuffered (call ``rng.integers`` at that point).
+2. Evaluate through :func:`functions.evaluate` exactly where the reference calls
+   ``Optimizer.evaluate`` and with the same rows (it draws F7's noise); pass ``mask`` where the
+   reference masks (False rows are not computed and get +inf) and count evaluations as it does.
+   Keep the record with the first minimum and a strict ``<``, like ``Optimizer.evaluate``.
+3. Repeat the reference's arithmetic operation for operation: same association and order
+   (``a * b + c`` stays that, ``np.sum`` over 3 rows is ``(x0 + x1) + x2``, ``x **= 2`` is
+   ``x * x``), no ``fastmath``, no reassociation. numpy reductions along a contiguous axis add
+   in a blocked order: use :func:`functions.dot` / :func:`functions.total` for ``einsum`` sums,
+   and write ``np.sum`` along the last axis (pairwise, 8 accumulators past 8 elements) only with
+   care. Python ``min``/``max`` equal ``np.minimum``/``np.maximum`` except on NaN.
+4. Refuse what you do not implement: ``pack`` raises ``ParameterError`` naming the parameter
+   (value) it does not support; ``Kernel.transforms`` lists the transforms you handle (rotation
+   is refused by the dispatcher for every kernel). Never fall back silently.
+5. Register with ``register_kernel(Kernel("NAME", run, pack))`` in your module and add the
+   module to ``registry._MODULES``; ``tests/test_compiled.py`` then compares your kernel with
+   the reference over its functions, dimensions, seeds, run ids and batch splits, and checks
+   that every algorithm without a kernel refuses ``backend="numba"``.
+6. ``cache=True`` on every @njit (workers compile once); loops over runs stay in Python.
+"""
+
+from swarmpath.optimizers.compiled.registry import (
+    Kernel,
+    find_kernel,
+    kernel_names,
+    register_kernel,
+)
+
+__all__ = ["Kernel", "find_kernel", "kernel_names", "register_kernel"]

@@ -1,0 +1,110 @@
+"""``minimize_many(..., backend="numba")``: every run through its algorithm's compiled kernel."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from swarmpath.functions import BenchmarkFunction, get_function
+from swarmpath.functions.transforms import rotates
+from swarmpath.optimizers.base import ParameterError
+from swarmpath.optimizers.compiled.functions import FUNCTION_IDS
+from swarmpath.optimizers.compiled.registry import Kernel, find_kernel, kernel_names
+from swarmpath.optimizers.problem import BenchmarkProblem
+from swarmpath.optimizers.registry import get_optimizer
+from swarmpath.optimizers.streams import run_generator
+
+
+def kernel_for(algorithm: str, params: Mapping[str, Any] | None, transform: str) -> tuple[
+    Kernel, dict[str, Any], np.ndarray
+]:
+    """The kernel, resolved parameters and packed parameter vector for a study, or
+    ParameterError naming what has no kernel (``algorithm``, ``transform`` or a parameter)."""
+    cls = get_optimizer(algorithm)
+    kernel = find_kernel(cls.name)
+    if kernel is None:
+        raise ParameterError(
+            f"algorithm {cls.name!r} has no numba kernel (backend='numba' runs "
+            f"{', '.join(kernel_names())}); use backend='numpy'"
+        )
+    if transform not in kernel.transforms:
+        raise ParameterError(
+            f"transform {transform!r} has no numba kernel for {cls.name} (it runs "
+            f"{', '.join(kernel.transforms)}); use backend='numpy'"
+        )
+    resolved = cls.resolve_params(params)
+    return kernel, resolved, np.ascontiguousarray(kernel.pack(resolved), dtype=np.float64)
+
+
+def compiled_function(fn: BenchmarkFunction) -> int:
+    """The compiled id of a registered function (ParameterError naming ``function`` if the
+    object is not one of the registry's, e.g. a hand-made kernel)."""
+    fid = FUNCTION_IDS.get(fn.name)
+    if fid is None or fn.kernel is not get_function(fn.name).kernel:
+        raise ParameterError(f"function {fn.name!r} has no numba kernel; use backend='numpy'")
+    return fid
+
+
+def minimize_compiled(
+    algorithm: str,
+    fns: Sequence[BenchmarkFunction],
+    dim: int,
+    agents: int,
+    iterations: int,
+    ids: Sequence[int],
+    seed: int,
+    params: Mapping[str, Any] | None,
+    transform: str,
+    on_iteration: Callable[[Any], None] | None = None,
+) -> list[dict[str, Any]]:
+    """Per function: the fields of its Result (the caller builds the Result).
+
+    Runs are computed one after another, each by its kernel from its own generator, so run r
+    gives the same numbers in any batch. ``on_iteration`` (progress, cancellation) is called
+    ``iterations`` times in all, spread over the runs as they finish, with ``None``.
+    """
+    cls = get_optimizer(algorithm)
+    if rotates(transform):
+        raise ParameterError(
+            f"transform {transform!r}: the numba backend does not rotate (numpy's matmul sums "
+            "in BLAS order); use backend='numpy'"
+        )
+    kernel, resolved, packed = kernel_for(cls.name, params, transform)
+    if agents < cls.min_agents:
+        raise ParameterError(f"{cls.name} needs agents >= {cls.min_agents}, got {agents}")
+    fids = [compiled_function(fn) for fn in fns]
+    started = time.perf_counter()
+    total = len(fns) * len(ids)
+    done = 0
+    out = []
+    for fn, fid in zip(fns, fids, strict=True):
+        problem = BenchmarkProblem.build(fn, dim, list(ids), seed, transform)
+        shifted = problem.shifts is not None
+        shift = np.zeros((len(ids), dim)) if problem.shifts is None else problem.shifts
+        best = np.empty(len(ids))
+        position = np.empty((len(ids), dim))
+        curve = np.empty((len(ids), iterations))
+        evaluations = np.empty(len(ids), dtype=np.int64)
+        for k, r in enumerate(ids):
+            f, x, c, e = kernel.run(
+                run_generator(seed, r), fid, shifted, np.ascontiguousarray(shift[k]),
+                np.ascontiguousarray(problem.lower[k]), np.ascontiguousarray(problem.upper[k]),
+                agents, iterations, packed,
+            )
+            best[k], position[k], curve[k], evaluations[k] = f, x, c, e
+            done += 1
+            if on_iteration is not None:
+                for _ in range(iterations * done // total - iterations * (done - 1) // total):
+                    on_iteration(None)
+        out.append({
+            "best_fitness": best, "best_position": position, "curve": curve,
+            "evaluations": evaluations, "shifts": problem.shifts, "params": dict(resolved),
+            "tolerance": kernel.tolerance,
+        })
+    seconds = time.perf_counter() - started
+    for fields in out:
+        fields["seconds"] = seconds / len(fns)
+    return out

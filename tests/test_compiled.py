@@ -1,0 +1,172 @@
+"""The numba backend against the numpy reference (swarmpath.optimizers.compiled).
+
+Every algorithm of the optimizer registry either has a kernel, which must give the reference's
+numbers run for run (to the last bit, or within the tolerance it declares and records), or
+refuses ``backend="numba"`` with an error naming the algorithm.
+"""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+from itertools import product
+
+import numpy as np
+import pytest
+
+from swarmpath.functions import get_function, list_functions
+from swarmpath.optimizers import (
+    ParameterError,
+    get_optimizer,
+    list_optimizers,
+    minimize,
+    minimize_many,
+)
+from swarmpath.optimizers.api import BACKENDS
+from swarmpath.optimizers.compiled import find_kernel, kernel_names
+from swarmpath.optimizers.compiled.functions import FUNCTION_IDS, evaluate
+from swarmpath.optimizers.compiled.streams import (
+    normal_into,
+    open_stream,
+    random_into,
+)
+from swarmpath.optimizers.problem import BenchmarkProblem
+from swarmpath.optimizers.streams import RunStreams, run_generator
+
+FIELDS = ("best_fitness", "best_position", "curve", "evaluations", "shifts")
+WITH_KERNEL = [a for a in list_optimizers() if find_kernel(a) is not None]
+WITHOUT_KERNEL = [a for a in list_optimizers() if find_kernel(a) is None]
+
+
+def assert_same(ref, fast, tolerance):
+    for field in FIELDS:
+        a, b = getattr(ref, field), getattr(fast, field)
+        if a is None or tolerance == 0.0 or field == "evaluations":
+            assert (a is None and b is None) or np.array_equal(a, b), (ref.function, field)
+        else:
+            np.testing.assert_allclose(b, a, rtol=tolerance, atol=0, err_msg=field)
+
+
+def test_kernel_names_come_from_the_optimizer_registry():
+    assert kernel_names() == WITH_KERNEL
+    assert {"PSO", "GWO"} <= set(kernel_names())
+
+
+def test_stream_emulation_draws_the_reference_numbers():
+    sizes = [("r", 900), ("n", 300), ("r", 1800), ("n", 5000), ("r", 7000), ("n", 9000),
+             ("r", 9100), ("r", 5), ("n", 100)] * 3
+    for seed, run in [(1, 0), (7, 3)]:
+        ref = RunStreams.for_runs(seed, [run + 1, run])
+        stream = open_stream(run_generator(seed, run), 9100)
+        for kind, n in sizes:
+            expected = (ref.random if kind == "r" else ref.normal)(n)[1]
+            got = np.empty(n)
+            (random_into if kind == "r" else normal_into)(stream, got)
+            assert np.array_equal(expected, got), (kind, n)
+
+
+@pytest.mark.parametrize("name", list_functions())
+def test_compiled_functions_equal_the_reference_bit_for_bit(name):
+    fn = get_function(name)
+    rng = np.random.default_rng(5)
+    for dim, transform in product((2, 7, 9, 16, 30, 33), ("none", "shift")):
+        problem = BenchmarkProblem.build(fn, dim, [0, 1], 4, transform)
+        X = rng.uniform(fn.lower, fn.upper, (2, 20, dim))
+        X[:, :3] = np.round(X[:, :3])  # integral points: exact zeros of the trigonometry
+        ref = problem.objective(X, RunStreams.for_runs(9, [0, 1]))
+        ref = np.where(np.isnan(ref), np.inf, ref)
+        for r in range(2):
+            F = np.empty(20)
+            shifted = problem.shifts is not None
+            shift = problem.shifts[r] if shifted else np.zeros(dim)
+            evaluate(open_stream(run_generator(9, r), 20), FUNCTION_IDS[name], shifted, shift,
+                     problem.lower[r], problem.upper[r], np.ascontiguousarray(X[r]), F,
+                     np.ones(20, dtype=bool), np.empty((4, dim)))
+            assert np.array_equal(F, ref[r]), (dim, transform)
+
+
+def _settings(algo):
+    """The default parameters, then each value of each choice parameter."""
+    cls = get_optimizer(algo)
+    yield {}
+    for key, values in cls.choices.items():
+        for value in values:
+            if value != cls.defaults[key]:
+                yield {key: value}
+
+
+@pytest.mark.parametrize("algo", WITH_KERNEL)
+def test_kernel_equals_the_reference(algo):
+    tolerance = find_kernel(algo).tolerance
+    functions = list_functions()
+    for k, params in enumerate(_settings(algo)):
+        for dim, transform in ((3, "none"), (9, "shift")):
+            kw = dict(dim=dim, agents=6, iterations=12, seed=3 + k, params=params,
+                      transform=transform, run_ids=[2, 0])
+            ref = minimize_many(algo, functions, **kw)
+            fast = minimize_many(algo, functions, backend="numba", **kw)
+            for a, b in zip(ref, fast, strict=True):
+                assert (b.backend, b.tolerance, a.backend) == ("numba", tolerance, "numpy")
+                assert b.params == a.params and b.function == a.function
+                assert_same(a, b, tolerance)
+
+
+@pytest.mark.parametrize("algo", WITH_KERNEL)
+def test_kernel_runs_do_not_depend_on_the_batch(algo):
+    kw = dict(dim=5, agents=7, iterations=10, seed=11, transform="shift")
+    whole = minimize(algo, "F7", run_ids=[0, 1, 2, 3, 4], backend="numba", **kw)
+    assert whole.backend == "numba"
+    ref = minimize(algo, "F7", run_ids=[0, 1, 2, 3, 4], chunk_elements=2 * 7 * 5, **kw)
+    for ids in ([3], [4, 0, 2], [1, 3]):
+        part = minimize(algo, "F7", run_ids=ids, backend="numba", **kw)
+        for i, r in enumerate(ids):
+            for field in FIELDS:
+                assert np.array_equal(getattr(part, field)[i], getattr(whole, field)[r]), field
+    assert_same(ref, whole, find_kernel(algo).tolerance)
+
+
+@pytest.mark.parametrize("algo", WITHOUT_KERNEL)
+def test_algorithms_without_a_kernel_refuse_numba(algo):
+    with pytest.raises(ParameterError, match=rf"algorithm '{algo}' has no numba kernel"):
+        minimize(algo, "F1", dim=2, agents=5, iterations=2, runs=1, backend="numba")
+
+
+def test_what_has_no_kernel_is_refused_by_name():
+    algo = WITH_KERNEL[0]
+    kw = dict(dim=3, agents=5, iterations=2, runs=1)
+    with pytest.raises(ParameterError, match="backend must be one of numpy, numba"):
+        minimize(algo, "F1", backend="cuda", **kw)
+    for transform in ("rotate", "shift+rotate"):
+        with pytest.raises(ParameterError, match=re.escape(f"transform '{transform}'")):
+            minimize(algo, "F1", transform=transform, backend="numba", **kw)
+    hand_made = get_function("F1").__class__(name="F1", kernel=lambda x: x[..., 0], lower=-1,
+                                            upper=1, optimum_coordinate=0.0)
+    with pytest.raises(ParameterError, match="function 'F1' has no numba kernel"):
+        minimize(algo, hand_made, backend="numba", **kw)
+    with pytest.raises(ParameterError, match="agents"):
+        minimize(algo, "F1", dim=3, agents=0, iterations=2, runs=1, backend="numba")
+
+
+def test_missing_numba_is_a_parameter_error(monkeypatch):
+    monkeypatch.setitem(sys.modules, "swarmpath.optimizers.compiled.run", None)
+    with pytest.raises(ParameterError, match="backend 'numba' needs numba"):
+        minimize(WITH_KERNEL[0], "F1", dim=2, agents=5, iterations=2, runs=1, backend="numba")
+
+
+def test_progress_hook_is_called_once_per_iteration_in_all():
+    calls = []
+    minimize_many(WITH_KERNEL[0], ["F1", "F9"], dim=2, agents=4, iterations=7, runs=3,
+                  backend="numba", on_iteration=calls.append)
+    assert calls == [None] * 7
+
+
+def test_the_numpy_backend_never_imports_numba():
+    code = ("import sys; from swarmpath.optimizers import minimize; "
+            "[minimize(a, 'F10', dim=2, agents=4, iterations=2, runs=1) for a in "
+            f"{list_optimizers()!r}]; print('numba' in sys.modules)")
+    path = ":".join(p for p in sys.path if p)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, env={"PYTHONPATH": path})
+    assert out.stdout.strip() == "False"
+    assert "numpy" in BACKENDS
