@@ -167,6 +167,15 @@ class Farm:
                 out[name.removeprefix("swarmpath_")] = float(value)
         return out
 
+    def sim_cpu(self) -> float:
+        """CPU seconds of the simulator processes so far (to tell when they, not the
+        coordinator, are the limit)."""
+        total = 0.0
+        for proc, _ in self.sims:
+            with contextlib.suppress(OSError):
+                total += proc_cpu_rss(proc.pid)[0]
+        return total
+
     def stop_sims(self) -> list[dict[str, Any]]:
         for proc, _ in self.sims:
             if proc.poll() is None:
@@ -219,6 +228,7 @@ def run(args: argparse.Namespace, data: Path) -> dict[str, Any]:
         store0 = store_bytes(data / "store")
         load0 = os.getloadavg()[0]
         cpu0, rss0 = proc_cpu_rss(pid)
+        sim0 = farm.sim_cpu()
         t0 = time.monotonic()
         r = farm.client.post("/jobs", json=spec)
         r.raise_for_status()
@@ -238,6 +248,7 @@ def run(args: argparse.Namespace, data: Path) -> dict[str, Any]:
                 break
             time.sleep(0.5)
         cpu1, rss1 = proc_cpu_rss(pid)
+        sim1 = farm.sim_cpu()
         load1 = os.getloadavg()[0]
         metrics = farm.metrics()
         table = farm.client.get("/workers").json()
@@ -257,6 +268,7 @@ def run(args: argparse.Namespace, data: Path) -> dict[str, Any]:
         "seconds": round(span, 3), "runs_per_s": round(done / span, 1) if span > 0 else None,
         "coordinator_cpu_s": round(cpu1 - cpu0, 2),
         "cpu_ms_per_run": round((cpu1 - cpu0) * 1e3 / max(1, done), 4),
+        "simulator_cpu_s": round(sim1 - sim0, 2),
         "ack_ms_p50": round(percentile(ack, 50), 2), "ack_ms_p99": round(percentile(ack, 99), 2),
         "lease_rtt_ms_p50": round(percentile(rtt, 50), 2),
         "lease_rtt_ms_p99": round(percentile(rtt, 99), 2),
@@ -274,13 +286,13 @@ def run(args: argparse.Namespace, data: Path) -> dict[str, Any]:
         "metrics": {k: metrics.get(k) for k in (
             "results_accepted_total", "results_duplicate_total", "results_stale_total",
             "messages_unproven_total", "messages_overload_total", "leases_total",
-            "lease_requeues_total", "workers_refused_total")},
+            "lease_requeues_total", "workers_refused_total", "lease_requests_busy_total")},
         "load": [round(load0, 2), round(load1, 2)],
     }
 
 
 def markdown(res: dict[str, Any]) -> str:
-    head = ("| K | slots | runs | s | runs/s | coord CPU ms/run | ack p50/p99 ms | "
+    head = ("| K | slots | runs | s | runs/s | coord CPU ms/run | sim CPU s | ack p50/p99 ms | "
             "lease RTT p50/p99 ms | store B/run | MCAP B/run | RSS MB start/max/end | "
             "alive | runs/worker min/med/max (none) | load |")
     sep = "|" + "---|" * (head.count("|") - 1)
@@ -288,6 +300,7 @@ def markdown(res: dict[str, Any]) -> str:
     w = r["runs_per_worker"]
     row = (f"| {r['workers']} | {r['slots']} | {r['runs_finished']}/{r['runs_total']} | "
            f"{r['seconds']} | {r['runs_per_s']} | {r['cpu_ms_per_run']} | "
+           f"{r['simulator_cpu_s']} | "
            f"{r['ack_ms_p50']}/{r['ack_ms_p99']} | {r['lease_rtt_ms_p50']}/"
            f"{r['lease_rtt_ms_p99']} | {r['store_bytes_per_run']} | {r['mcap_bytes_per_run']} | "
            f"{r['rss_mb']['start']}/{r['rss_mb']['max']}/{r['rss_mb']['end']} | "

@@ -11,6 +11,7 @@ from __future__ import annotations
 import logging
 import queue
 import threading
+import time
 from collections.abc import Mapping
 from typing import Any
 
@@ -35,6 +36,17 @@ class ZenohBridge:
     MAX_QUERIES = 1024
     MAX_EVENTS = 100_000
     MAX_EVENT_BYTES = 256_000_000
+    #: Back-pressure: while the result batches waiting to be stored would take more than
+    #: BUSY_SECONDS to handle at the rate the events thread has been handling them (bounded by
+    #: BUSY_MIN_BYTES and BUSY_MAX_BYTES), lease requests are answered ``no_work`` ("busy", ask
+    #: again after BUSY_RETRY s): the workers stop adding work until the backlog drains. Without
+    #: it a farm faster than the coordinator fills the queue to MAX_EVENT_BYTES: acks come tens of
+    #: seconds late (so results are re-sent), progress waits behind results until leases expire
+    #: and are requeued, and input is dropped (scripts/bench/farm.py, docs/scale.md).
+    BUSY_SECONDS = 1.0
+    BUSY_MIN_BYTES = 1_000_000
+    BUSY_MAX_BYTES = 32_000_000
+    BUSY_RETRY = 1.0
     #: scenario queries waiting for their thread at most, and the canonical JSON kept for them
     MAX_SCENARIO_QUERIES = 64
     SCENARIO_CACHE_BYTES = 128 * 1024 * 1024
@@ -51,6 +63,7 @@ class ZenohBridge:
         self._events: queue.SimpleQueue[Any] = queue.SimpleQueue()
         self._queued = [0, 0]  # events and their payload bytes waiting in _events
         self._queued_lock = threading.Lock()
+        self._drain_rate = 0.0  # bytes/s the events thread handles results at (moving average)
         self._threads: list[threading.Thread] = []
         self._closed = False
 
@@ -133,6 +146,16 @@ class ZenohBridge:
                 self._queued[1] -= len(item[2])
         return item
 
+    def busy_bytes(self) -> float:
+        """The backlog (bytes) beyond which lease requests are answered busy."""
+        return min(self.BUSY_MAX_BYTES, max(self.BUSY_MIN_BYTES,
+                                            self._drain_rate * self.BUSY_SECONDS))
+
+    def backlog(self) -> int:
+        """Bytes of result and progress messages waiting for the events thread."""
+        with self._queued_lock:
+            return self._queued[1]
+
     def _on_liveliness(self, sample: Any) -> None:
         try:
             worker = Keys.last_chunk(str(sample.key_expr))
@@ -152,8 +175,13 @@ class ZenohBridge:
                 return
             try:
                 payload = query.payload.to_bytes() if query.payload is not None else b""
+                busy = self.backlog()
                 if len(payload) > MAX_BODY_BYTES:
                     reply = self.core._no_work("lease request too large", 5.0)
+                elif busy > self.busy_bytes():
+                    self.core.stats["busy"] += 1
+                    reply = self.core._no_work(
+                        f"busy: {busy / 1e6:.0f} MB of results waiting", self.BUSY_RETRY)
                 else:
                     reply = self.core.handle_lease_request(payload)
                 query.reply(query.key_expr, reply,
@@ -218,7 +246,10 @@ class ZenohBridge:
                             break
                         group.append((nxt[1], nxt[2]))
                         size += len(nxt[2])
+                    started = time.perf_counter()
                     self.core.handle_result_batches(group)
+                    rate = size / max(time.perf_counter() - started, 1e-6)
+                    self._drain_rate += 0.2 * (rate - self._drain_rate)
                 elif kind == "progress":
                     self.core.handle_progress(key, payload)
                 elif kind == "gone" and not self.core.is_alive(key):  # not back meanwhile

@@ -56,6 +56,9 @@ def metrics_text(core: Coordinator, now: float | None = None) -> str:
     metric("swarmpath_messages_overload_total", "counter",
            "Lease queries and result/progress messages dropped because the coordinator's input "
            "queues were full (since this process started).", core.stats["overload"])
+    metric("swarmpath_lease_requests_busy_total", "counter",
+           "Lease requests answered no_work because results waited to be stored beyond the "
+           "back-pressure bound (since this process started).", core.stats["busy"])
     metric("swarmpath_messages_malformed_total", "counter",
            "Malformed messages dropped since this process started.", core.stats["malformed"])
     return "\n".join(lines) + "\n"
