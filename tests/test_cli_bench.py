@@ -248,6 +248,8 @@ BAD_INPUT = [
     (["--no-such-option"], "--no-such-option"),
     (["--jobs", "-1"], "--jobs"),
     (["-j", "257"], "--jobs"),
+    (["--backend", "cuda"], "--backend"),
+    (["--backend", "numba", "--transform", "rotate"], "--backend"),
 ]
 
 

@@ -170,3 +170,32 @@ def test_the_numpy_backend_never_imports_numba():
                          check=True, env={"PYTHONPATH": path})
     assert out.stdout.strip() == "False"
     assert "numpy" in BACKENDS
+
+
+def test_bench_with_the_numba_backend_gives_the_reference_tables_numbers():
+    from swarmpath.cli import bench
+
+    kw = dict(runs=3, agents=5, iterations=6, seed=2, transform="shift")
+    cells = {}
+    for backend in BACKENDS:
+        spec = bench.make_spec(",".join(WITH_KERNEL), "F1,F7,F8", "3", backend=backend, **kw)
+        assert spec.settings()["backend"] == backend
+        cells[backend] = bench.run_bench(spec, jobs=1)
+    for ref, fast in zip(cells["numpy"], cells["numba"], strict=True):
+        assert (ref.best_fitness, ref.curves) == (fast.best_fitness, fast.curves)
+
+
+def test_reproduce_puts_the_backend_in_the_setting():
+    from swarmpath import reference
+    from swarmpath.cli import reproduce
+    from swarmpath.cli.core import InputError
+
+    table = next(t for t in map(reference.load, reference.TABLES)
+                 if isinstance(t, reference.BenchmarkTable))
+    assert "backend" not in reproduce.study_setting(table, 2, 1)
+    if all(find_kernel(a) is not None for a in table.algorithms):
+        assert reproduce.study_setting(table, 2, 1, "numba")["backend"] == "numba"
+    else:
+        with pytest.raises(InputError, match="has no numba kernel"):
+            reproduce.study_setting(table, 2, 1, "numba")
+    assert "--backend numba" in reproduce.command_line(table.name, 2, 1, "table", "numba")

@@ -356,6 +356,14 @@ def test_transform_reaches_every_cell(transform):
     assert {c.transform for c in p.expand_cells(s)} == {transform}
 
 
+def test_backend_reaches_every_cell_and_what_has_no_kernel_names_the_field():
+    s = p.parse_job_spec(spec(backend="numba", algorithms=["GWO", "PSO"]))
+    assert {c.backend for c in p.expand_cells(s)} == {"numba"}
+    assert {c.backend for c in p.expand_cells(p.parse_job_spec(spec()))} == {"numpy"}
+    fails_on(spec(backend="gpu"), "backend")
+    fails_on(spec(backend="numba", transform="shift+rotate"), "backend")
+
+
 def test_shifted_is_the_alias_of_transform_shift_and_contradictions_name_the_field():
     s = p.parse_job_spec(spec(shifted=True))
     assert s.transform == "shift" and all(c.transform == "shift" for c in p.expand_cells(s))

@@ -45,6 +45,8 @@ def test_list_names_exactly_the_reproducible_tables():
     (["icoot-table2", "--seed", "-1"], "--seed"),
     (["icoot-table2", "--jobs", "-1"], "--jobs"),
     (["icoot-table2", "--from", "x.json"], "--from"),
+    (["icoot-table2", "--backend", "cuda"], "--backend"),
+    (["mfb-maps", "--backend", "numba"], "--backend"),
 ])
 def test_bad_input_is_one_line_naming_the_field(args, field):
     res = invoke(*args)

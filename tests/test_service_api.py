@@ -13,6 +13,7 @@ from fastapi.testclient import TestClient
 from mcap.reader import make_reader
 
 from swarmpath.optimizers import minimize
+from swarmpath.optimizers.api import BACKENDS
 from swarmpath.service.capability import (
     drop_ok,
     drop_proof,
@@ -148,6 +149,8 @@ def test_submit_status_list_and_404(client):
         ({"kind": "nope"}, "kind"),
         ({"extra": 1}, "extra"),
         ({"reference": "NOPE"}, "reference"),
+        ({"backend": "cuda"}, "backend"),
+        ({"backend": "numba", "transform": "rotate"}, "backend"),
     ],
 )
 def test_malformed_jobs_are_422_naming_the_field(client, change, field):
@@ -422,8 +425,10 @@ def make_lease(spec, runs, seed=4) -> Lease:
                  lease_seconds=30.0, heartbeat_seconds=10.0, capability=CAP)
 
 
-def test_execute_lease_equals_minimize_and_splits_batches(monkeypatch):
-    spec = BenchmarkCell(algorithm="GWO", function="F9", dim=4, agents=6, iterations=10)
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_execute_lease_equals_minimize_and_splits_batches(monkeypatch, backend):
+    spec = BenchmarkCell(algorithm="GWO", function="F9", dim=4, agents=6, iterations=10,
+                         backend=backend)
     import swarmpath.service.worker.execution as w
 
     monkeypatch.setattr(w, "BATCH_ELEMENTS", 6 * 4 * 2)  # batches of two runs

@@ -29,6 +29,7 @@ from swarmpath.cli.core import InputError, app, parse_params_option, plot_dir, r
 from swarmpath.cli.study_options import (
     AgentsOpt,
     AlgorithmsOpt,
+    BackendOpt,
     DimsOpt,
     FunctionsOpt,
     IterationsOpt,
@@ -36,7 +37,13 @@ from swarmpath.cli.study_options import (
 )
 from swarmpath.functions import expand_function_names, get_function
 from swarmpath.optimizers import ParameterError, get_optimizer, list_optimizers, minimize_many
-from swarmpath.optimizers.api import MAX_AGENTS, MAX_DIM, MAX_ITERATIONS, resolve_transform
+from swarmpath.optimizers.api import (
+    MAX_AGENTS,
+    MAX_DIM,
+    MAX_ITERATIONS,
+    check_backend,
+    resolve_transform,
+)
 
 MAX_RUNS = 10_000
 #: Rough CPU seconds per population element and iteration (23 ms per run of 30 x 30 x 500).
@@ -62,6 +69,8 @@ class BenchSpec:
     reference: str | None = None
     #: none, shift, rotate or shift+rotate (swarmpath.functions.transforms)
     transform: str = "none"
+    #: numpy (the reference) or numba (swarmpath.optimizers.api.BACKENDS)
+    backend: str = "numpy"
 
     def cells(self) -> list[tuple[str, int, str]]:
         """(function, dim, algorithm) in table order."""
@@ -133,6 +142,7 @@ def make_spec(
     params: str | None = None,
     reference: str | None = None,
     transform: str | None = None,
+    backend: str = "numpy",
 ) -> BenchSpec:
     """Validate the command's options; raises :class:`InputError` naming the bad one."""
     kind = resolve_transform_option(shifted, transform)
@@ -160,6 +170,11 @@ def make_spec(
                 get_function(f).evaluate(np.zeros((1, d)))
             except ValueError as exc:
                 raise InputError("--dims", f"{d}: {exc}") from None
+    checked = parse_params(params, algos)
+    try:
+        check_backend(backend, algos, kind, checked)
+    except ParameterError as exc:
+        raise InputError("--backend", str(exc)) from None
     return BenchSpec(
         algorithms=algos,
         functions=fns,
@@ -169,9 +184,10 @@ def make_spec(
         iterations=iterations,
         seed=seed,
         shifted="shift" in kind,
-        params=parse_params(params, algos),
+        params=checked,
         reference=ref,
         transform=kind,
+        backend=backend,
     )
 
 
@@ -267,6 +283,7 @@ def _compute(job: tuple[BenchSpec, Task], report_rows: Callable[[int], None]) ->
         task.algorithm, list(task.functions), dim=task.dim, agents=spec.agents,
         iterations=spec.iterations, seed=spec.seed, params=spec.params.get(task.algorithm),
         transform=spec.transform, run_ids=list(task.run_ids), on_iteration=hook,
+        backend=spec.backend,
     )
 
 
@@ -310,9 +327,10 @@ def run_cell(
 
 def caption(spec: BenchSpec, seconds: float) -> str:
     moved = "" if spec.transform == "none" else f", transform {spec.transform}"
+    backend = "" if spec.backend == "numpy" else f", backend {spec.backend}"
     return (
         f"{spec.runs} runs, {spec.agents} agents, {spec.iterations} iterations, seed {spec.seed}"
-        f"{moved}; {report.BEST_MARK} best avg; {seconds:.1f} s"
+        f"{moved}{backend}; {report.BEST_MARK} best avg; {seconds:.1f} s"
     )
 
 
@@ -400,11 +418,12 @@ def bench(
                      "fitness per function and dimension, a critical-difference diagram per "
                      "dimension."),
     ] = None,
+    backend: BackendOpt = "numpy",
 ) -> None:
     """Run optimizers on benchmark functions; print min/max/avg/std per function and dimension,
     with Wilcoxon rank-sum markers against a reference and Friedman mean ranks."""
     spec = make_spec(algorithms, functions, dims, runs, agents, iterations, seed, shifted, params,
-                     reference, transform)
+                     reference, transform, backend)
     check_range("--jobs", jobs, 0, parallel.MAX_JOBS)
     if plot is not None:
         plot = plot_dir(plot, "--plot")

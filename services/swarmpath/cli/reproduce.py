@@ -23,6 +23,7 @@ from rich.console import Console
 from swarmpath import __version__, reference, report, reproduction
 from swarmpath.cli import parallel
 from swarmpath.cli.core import InputError, app
+from swarmpath.cli.study_options import BackendOpt
 
 FORMATS = ("table", "markdown", "csv")
 
@@ -42,8 +43,10 @@ def resolve_tables(name: str | None) -> list[str]:
     return list(dict.fromkeys(names))
 
 
-def study_setting(table: reference.Table, runs: int | None, seed: int) -> dict[str, Any]:
-    """The study run for ``table``: the paper's setting, runs lowered by ``--runs``."""
+def study_setting(table: reference.Table, runs: int | None, seed: int,
+                  backend: str = "numpy") -> dict[str, Any]:
+    """The study run for ``table``: the paper's setting, runs lowered by ``--runs``; a backend
+    other than the reference (numpy) is part of the setting."""
     paper_runs = int(table.setting["runs"])
     if runs is not None and not 1 <= runs <= paper_runs:
         raise InputError("--runs", f"{runs} is not in [1, {paper_runs}] (the paper's count)")
@@ -51,12 +54,24 @@ def study_setting(table: reference.Table, runs: int | None, seed: int) -> dict[s
         raise InputError("--seed", f"{seed} is negative")
     n = paper_runs if runs is None else runs
     if isinstance(table, reference.BenchmarkTable):
-        return {
+        setting = {
             "kind": "benchmark", "algorithms": list(table.algorithms),
             "functions": list(table.functions), "dims": [table.dim], "runs": n,
             "agents": int(table.setting["agents"]),
             "iterations": int(table.setting["iterations"]), "seed": seed,
         }
+        if backend != "numpy":
+            from swarmpath.optimizers import ParameterError
+            from swarmpath.optimizers.api import check_backend
+
+            try:
+                check_backend(backend, setting["algorithms"])
+            except ParameterError as exc:
+                raise InputError("--backend", f"{table.name}: {exc}") from None
+            setting["backend"] = backend
+        return setting
+    if backend != "numpy":
+        raise InputError("--backend", f"{table.name} is a map table: planners run on numpy only")
     return {"kind": "map", "planners": list(table.planners), "maps": list(table.maps),
             "runs": n, "seed": seed}
 
@@ -69,6 +84,7 @@ def run_benchmark_local(setting: dict[str, Any], jobs: int) -> list[report.Cell]
         ",".join(setting["algorithms"]), ",".join(setting["functions"]),
         ",".join(str(d) for d in setting["dims"]), runs=setting["runs"],
         agents=setting["agents"], iterations=setting["iterations"], seed=setting["seed"],
+        backend=setting.get("backend", "numpy"),
     )
     stderr = Console(stderr=True)
     return bench._run_with_progress(spec, stderr, jobs or bench.auto_jobs(spec))
@@ -127,10 +143,11 @@ Result = tuple[reference.Table, dict[str, Any], list[reproduction.Row], dict[str
                dict[str, str | None]]
 
 
-def reproduce_table(name: str, runs: int | None, seed: int, jobs: int, url: str | None) -> Result:
+def reproduce_table(name: str, runs: int | None, seed: int, jobs: int, url: str | None,
+                    backend: str = "numpy") -> Result:
     """Run one table's study; returns (table, setting, rows, statistics json, markers)."""
     table = reference.load(name)
-    setting = study_setting(table, runs, seed)
+    setting = study_setting(table, runs, seed, backend)
     started = time.perf_counter()
     measured: list[Any]
     if isinstance(table, reference.BenchmarkTable):
@@ -198,12 +215,14 @@ def from_document(doc: dict[str, Any]) -> Result:
     return judge(table, dict(doc["setting"]), measured)
 
 
-def command_line(name: str, runs: int | None, seed: int, fmt: str) -> str:
+def command_line(name: str, runs: int | None, seed: int, fmt: str, backend: str = "numpy") -> str:
     parts = ["swarmpath", "reproduce", name]
     if runs is not None:
         parts += ["--runs", str(runs)]
     if seed != 1:
         parts += ["--seed", str(seed)]
+    if backend != "numpy":
+        parts += ["--backend", backend]
     if fmt != "table":
         parts += ["--format", fmt]
     return shlex.join(parts)
@@ -239,6 +258,7 @@ def reproduce(
         typer.Option("--from", help="Judge the runs of an earlier --json output again "
                                     "(no study is run; reasons as they are now)."),
     ] = None,
+    backend: BackendOpt = "numpy",
 ) -> None:
     """Run a seed paper's table at its setting; print published beside measured, with verdicts."""
     from swarmpath.cli import reproduce_output as output
@@ -252,8 +272,10 @@ def reproduce(
     if not 0 <= jobs <= parallel.MAX_JOBS:
         raise InputError("--jobs", f"{jobs} is not in [0, {parallel.MAX_JOBS}]")
     results: list[Result] = []
-    if from_ is not None and (table is not None or runs is not None or url is not None):
-        raise InputError("--from", "judges saved runs: give no TABLE, --runs or --url with it")
+    if from_ is not None and (table is not None or runs is not None or url is not None
+                              or backend != "numpy"):
+        raise InputError("--from", "judges saved runs: give no TABLE, --runs, --url or "
+                                   "--backend with it")
     if from_ is not None:
         try:
             loaded = json.loads(from_.read_text(encoding="utf-8"))
@@ -270,7 +292,7 @@ def reproduce(
     else:
         names = resolve_tables(table)
         for name in names:  # validate every table's options before running anything
-            study_setting(reference.load(name), runs, seed)
+            study_setting(reference.load(name), runs, seed, backend)
     if fmt == "markdown" and not as_json:
         whole = table if table is not None else (
             "all" if names == list(reference.TABLES) else ",".join(names))
@@ -279,25 +301,26 @@ def reproduce(
             first_runs = int(results[0][1]["runs"])
             seed = int(results[0][1]["seed"])
         sys.stdout.write(output.markdown_header(
-            command_line(whole, first_runs, seed, fmt), __version__,
+            command_line(whole, first_runs, seed, fmt, backend), __version__,
             None if from_ is None else from_.name))
     docs = []
     for i, name in enumerate(names):
         tab, setting, rows, statistics, markers = (
-            results[i] if results else reproduce_table(name, runs, seed, jobs, url))
+            results[i] if results else reproduce_table(name, runs, seed, jobs, url, backend))
         if results:
             runs, seed = int(setting["runs"]), int(setting["seed"])
+            backend = str(setting.get("backend", "numpy"))
         doc = reproduction.document(tab, setting, rows, statistics)
         doc["version"] = __version__
         docs.append(doc)
         if out is not None:
             output.write_outputs(out, tab, setting, rows, markers,
-                                 command_line(name, runs, seed, "markdown"))
+                                 command_line(name, runs, seed, "markdown", backend))
         if as_json:
             continue
         if fmt == "markdown":
             sys.stdout.write(output.markdown(tab, setting, rows, markers,
-                                             command_line(name, runs, seed, fmt)))
+                                             command_line(name, runs, seed, fmt, backend)))
         elif fmt == "csv":
             sys.stdout.write(output.csv_text(tab, rows, markers))
         else:

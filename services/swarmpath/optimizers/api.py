@@ -223,6 +223,28 @@ def minimize_many(
     return results
 
 
+def check_backend(
+    backend: str,
+    algorithms: Sequence[str],
+    transform: str = "none",
+    params: Mapping[str, Mapping[str, Any]] | None = None,
+) -> None:
+    """ParameterError unless every algorithm runs on ``backend`` with ``transform`` and its
+    ``params`` (per algorithm): what ``minimize_many`` would refuse, checked before a study."""
+    if backend not in BACKENDS:
+        raise ParameterError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
+    if backend == "numpy":
+        return
+    try:
+        from swarmpath.optimizers.compiled.run import check_study
+    except ImportError as exc:
+        raise ParameterError(
+            f"backend 'numba' needs numba (pip install 'swarmpath[fast]'): {exc}"
+        ) from None
+    for algorithm in algorithms:
+        check_study(algorithm, (params or {}).get(algorithm), transform)
+
+
 def _minimize_compiled(
     algorithm: str,
     fns: list[BenchmarkFunction],

@@ -162,6 +162,25 @@ class BenchmarkJobSpec(Model):
     def _reference_of_members(cls, v: str | None, info: ValidationInfo) -> str | None:
         return _reference(v, info.data.get("algorithms"))
 
+    backend: str = Field(
+        default="numpy",
+        description="numpy (the reference) or numba (compiled kernels: the reference's numbers "
+        "run for run, within each kernel's stated tolerance)",
+    )
+
+    @field_validator("backend")
+    @classmethod
+    def _supported_backend(cls, v: str, info: ValidationInfo) -> str:
+        from swarmpath.optimizers import ParameterError
+        from swarmpath.optimizers.api import check_backend
+
+        try:
+            check_backend(v, info.data.get("algorithms") or (),
+                          info.data.get("transform") or "none", info.data.get("params"))
+        except ParameterError as exc:
+            raise ValueError(str(exc)) from None
+        return v
+
 
 def _transform(v: str, shifted: bool) -> str:
     """A registered transform; ``shifted`` (the former flag) means ``shift`` and must agree."""
@@ -359,11 +378,21 @@ class BenchmarkCell(Model):
     shifted: bool = False
     params: dict[str, ParamValue] = Field(default_factory=dict)
     transform: str = Field(default="none", validate_default=True)
+    backend: str = Field(default="numpy", description="numpy or numba (optimizers.api.BACKENDS)")
 
     @field_validator("transform")
     @classmethod
     def _known_transform(cls, v: str, info: ValidationInfo) -> str:
         return _transform(v, bool(info.data.get("shifted")))
+
+    @field_validator("backend")
+    @classmethod
+    def _known_backend(cls, v: str) -> str:
+        from swarmpath.optimizers.api import BACKENDS
+
+        if v not in BACKENDS:
+            raise ValueError(f"must be one of {', '.join(BACKENDS)}, got {v!r}")
+        return v
 
     @property
     def key(self) -> str:
@@ -412,6 +441,7 @@ def expand_cells(spec: BenchmarkJobSpec | MapJobSpec) -> list[BenchmarkCell | Ma
                 shifted=spec.shifted,
                 params=dict(spec.params.get(a, {})),
                 transform=spec.transform,
+                backend=spec.backend,
             )
             for a in spec.algorithms
             for f in spec.functions

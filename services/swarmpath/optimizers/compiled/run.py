@@ -39,6 +39,17 @@ def kernel_for(algorithm: str, params: Mapping[str, Any] | None, transform: str)
     return kernel, resolved, np.ascontiguousarray(kernel.pack(resolved), dtype=np.float64)
 
 
+def check_study(algorithm: str, params: Mapping[str, Any] | None, transform: str) -> None:
+    """ParameterError if ``minimize_compiled`` would refuse this algorithm, transform or
+    parameters (rotation, no kernel, an unsupported parameter value)."""
+    if rotates(transform):
+        raise ParameterError(
+            f"transform {transform!r}: the numba backend does not rotate (numpy's matmul sums "
+            "in BLAS order); use backend='numpy'"
+        )
+    kernel_for(algorithm, params, transform)
+
+
 def compiled_function(fn: BenchmarkFunction) -> int:
     """The compiled id of a registered function (ParameterError naming ``function`` if the
     object is not one of the registry's, e.g. a hand-made kernel)."""
@@ -67,11 +78,7 @@ def minimize_compiled(
     ``iterations`` times in all, spread over the runs as they finish, with ``None``.
     """
     cls = get_optimizer(algorithm)
-    if rotates(transform):
-        raise ParameterError(
-            f"transform {transform!r}: the numba backend does not rotate (numpy's matmul sums "
-            "in BLAS order); use backend='numpy'"
-        )
+    check_study(cls.name, params, transform)
     kernel, resolved, packed = kernel_for(cls.name, params, transform)
     if agents < cls.min_agents:
         raise ParameterError(f"{cls.name} needs agents >= {cls.min_agents}, got {agents}")

@@ -7,7 +7,7 @@ are enums read from the registries (so generated clients and fuzzers build valid
 * 401 on the operations that need the bearer token (when one is configured);
 * enums: ``algorithms`` (optimizer registry), ``functions`` (function registry; ranges such as
   ``F1-F13`` are accepted too), ``planners`` (planner registry), ``maps`` (preset maps, or an
-  inline scenario object), ``transform``; the name lists say unique items.
+  inline scenario object), ``transform``, ``backend``; the name lists say unique items.
 """
 
 from __future__ import annotations
@@ -29,9 +29,10 @@ def _registry_names() -> dict[str, list[str]]:
     from swarmpath.functions import list_functions
     from swarmpath.functions.transforms import TRANSFORMS
     from swarmpath.optimizers import list_optimizers
+    from swarmpath.optimizers.api import BACKENDS
 
     names = {"algorithms": list(list_optimizers()), "functions": list(list_functions()),
-             "transform": list(TRANSFORMS)}
+             "transform": list(TRANSFORMS), "backend": list(BACKENDS)}
     try:
         from swarmpath.planners import list_planners
         from swarmpath.world.presets import list_maps
@@ -50,7 +51,7 @@ def _add_enums(schemas: dict[str, Any], names: dict[str, list[str]]) -> None:
             prop = props.get(field)
             if prop is None:
                 continue
-            if field == "transform":
+            if field in ("transform", "backend"):
                 prop["enum"] = values
                 continue
             prop["uniqueItems"] = True

@@ -177,8 +177,8 @@ class JobRecorder:
         identity = {"algorithm": spec["algorithm"], "function": spec["function"],
                     "dim": int(spec["dim"])}
         ns = _ns(record["created"])
-        self._put("/results", "swarmpath.BenchmarkRunResult", ns,
-                  self._result_message(record, identity))
+        self._put("/results", "swarmpath.BenchmarkRunResult", ns, self._result_message(
+            record, {**identity, "backend": spec.get("backend") or "numpy"}))
         curve = record.get("curve")
         if curve is not None and len(curve):
             self._put("/curves", "swarmpath.ConvergenceCurve", ns, pydantic_core.to_json({

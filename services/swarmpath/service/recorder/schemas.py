@@ -31,6 +31,7 @@ BENCHMARK_RESULT_SCHEMA: dict[str, Any] = {
         "algorithm": {"type": "string"},
         "function": {"type": "string"},
         "dim": {"type": "integer"},
+        "backend": {"type": "string", "description": "numpy (the reference) or numba"},
         **_OUTCOME,
         "best_fitness": {"type": "number"},
         "evaluations": {"type": "integer"},

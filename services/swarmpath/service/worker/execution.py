@@ -106,6 +106,7 @@ def _benchmark(
                 spec.algorithm, spec.function, dim=spec.dim, agents=spec.agents,
                 iterations=spec.iterations, seed=lease.seed, params=spec.params,
                 transform=spec.transform, run_ids=batch, on_iteration=hook,
+                backend=spec.backend,
             )
         except Cancelled:
             raise
