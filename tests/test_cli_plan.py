@@ -214,3 +214,19 @@ def test_bad_scenario_file_names_the_field(tmp_path):
     assert result.exit_code == 2
     line = result.stderr.strip()
     assert "--maps" in line and "radius" in line and "\n" not in line
+
+
+def test_plan_of_one_planner_leaves_scipy_stats_unloaded():
+    """Start-up: the statistical tests (scipy.stats, the largest import) load only when there
+    is a second planner to compare with; one planner's table needs none."""
+    import subprocess
+    import sys
+
+    code = ("import sys\n"
+            "from swarmpath.cli import main\n"
+            "sys.argv = ['swarmpath', 'plan', '-p', 'MFB', '--runs', '1']\n"
+            "try:\n    main()\nexcept SystemExit as exc:\n    assert not exc.code, exc.code\n"
+            "print('scipy.stats' in sys.modules, 'swarmpath.compare' in sys.modules)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=300, check=True)
+    assert out.stdout.strip().splitlines()[-1] == "False False"

@@ -46,7 +46,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import stats
 
-from swarmpath.stats import ALPHA
+from swarmpath.stats import ALPHA, resolve_reference
 
 __all__ = [
     "ALPHA", "BETTER", "MARKERS", "SAME", "WORSE", "Comparison", "Friedman", "PairTest",
@@ -58,22 +58,6 @@ BETTER, SAME, WORSE = "+", "=", "-"
 MARKERS = (BETTER, SAME, WORSE)
 #: A cell or block key: (function, dim), a map name, ...
 K = TypeVar("K", bound=Hashable)
-
-
-def resolve_reference(algorithms: Sequence[str], reference: str | None = None) -> str:
-    """The reference among ``algorithms``: ``reference`` (exact name, else case-insensitive) or,
-    when None, the last one. Raises ValueError naming the valid choices."""
-    if not algorithms:
-        raise ValueError("no algorithms to compare")
-    if reference is None:
-        return algorithms[-1]
-    if reference in algorithms:
-        return reference
-    by_lower = {a.lower(): a for a in algorithms}
-    if reference.lower() in by_lower:
-        return by_lower[reference.lower()]
-    names = ", ".join(algorithms)
-    raise ValueError(f"{reference!r} is not one of the compared algorithms ({names})")
 
 
 def holm(pvalues: ArrayLike) -> np.ndarray:

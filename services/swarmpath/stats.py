@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import bisect
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike
 #: which only name it do not load scipy.stats.
 ALPHA = 0.05
 
-__all__ = ["describe", "rank"]
+__all__ = ["describe", "rank", "resolve_reference"]
 
 
 def describe(values: ArrayLike) -> dict[str, float]:
@@ -69,3 +69,19 @@ def rank(avgs: Mapping[str, float]) -> dict[str, int]:
         else:
             out[key] = 1 + bisect.bisect_left(ordered, v)  # how many are strictly lower
     return out
+
+
+def resolve_reference(algorithms: Sequence[str], reference: str | None = None) -> str:
+    """The reference among ``algorithms``: ``reference`` (exact name, else case-insensitive) or,
+    when None, the last one. Raises ValueError naming the valid choices."""
+    if not algorithms:
+        raise ValueError("no algorithms to compare")
+    if reference is None:
+        return algorithms[-1]
+    if reference in algorithms:
+        return reference
+    by_lower = {a.lower(): a for a in algorithms}
+    if reference.lower() in by_lower:
+        return by_lower[reference.lower()]
+    names = ", ".join(algorithms)
+    raise ValueError(f"{reference!r} is not one of the compared algorithms ({names})")

@@ -106,7 +106,7 @@ def make_spec(planners: str, maps: str, runs: int = 10, seed: int = 1,
               optimum_budget: float | None = DEFAULT_BUDGET,
               note: Callable[[str], None] | None = None) -> PlanSpec:
     """Validate the command's options; raises :class:`InputError` naming the bad one."""
-    from swarmpath.compare import resolve_reference
+    from swarmpath.stats import resolve_reference
 
     names = resolve_planners(planners)
     try:

@@ -77,10 +77,21 @@ def point_hit_distance(C: Array, hits: Array) -> tuple[Array, NDArray[np.int64]]
     if len(hits) == 0:
         return np.full(C.shape[:-1], np.inf), np.zeros(C.shape[:-1], dtype=np.int64)
     flat = C.reshape(-1, 2)
-    d2 = (flat[:, None, 0] - hits[:, 0]) ** 2 + (flat[:, None, 1] - hits[:, 1]) ** 2
+    d2 = _point_d2(flat, hits)
     idx = np.argmin(d2, axis=1)
     best = np.sqrt(d2[np.arange(len(flat)), idx])
     return best.reshape(C.shape[:-1]), idx.reshape(C.shape[:-1])
+
+
+def _point_d2(flat: Array, hits: Array) -> Array:
+    """(n, h) squared distances (c_x - q_x)^2 + (c_y - q_y)^2, in place (same roundings as
+    the plain expression)."""
+    d2 = np.subtract.outer(flat[:, 0], hits[:, 0])
+    d2 *= d2
+    dy = np.subtract.outer(flat[:, 1], hits[:, 1])
+    dy *= dy
+    d2 += dy
+    return d2
 
 
 def segment_hit_distance(p: Array, C: Array, hits: Array) -> tuple[Array, NDArray[np.int64]]:
@@ -92,18 +103,32 @@ def segment_hit_distance(p: Array, C: Array, hits: Array) -> tuple[Array, NDArra
     if len(hits) == 0:
         return np.full(C.shape[:-1], np.inf), np.zeros(C.shape[:-1], dtype=np.int64)
     flat = C.reshape(-1, 2)
-    ux, uy = flat[:, 0] - p[0], flat[:, 1] - p[1]  # (n,)
-    wx, wy = hits[:, 0] - p[0], hits[:, 1] - p[1]  # (h,)
-    ux, uy = ux[:, None], uy[:, None]
-    t = ux * wx + uy * wy
-    t /= ux * ux + uy * uy + 1e-300  # a zero-length segment has t = 0 / tiny = 0
-    np.clip(t, 0.0, 1.0, out=t)
-    dx = wx - t * ux
-    dy = wy - t * uy
-    d2 = dx * dx + dy * dy
+    d2 = _segment_d2(p, flat, hits[:, 0] - p[0], hits[:, 1] - p[1])
     idx = np.argmin(d2, axis=1)
     best = np.sqrt(d2[np.arange(len(flat)), idx])
     return best.reshape(C.shape[:-1]), idx.reshape(C.shape[:-1])
+
+
+def _segment_d2(p: Array, flat: Array, wx: Array, wy: Array) -> Array:
+    """(n, h) squared distances from the hits (``wx``, ``wy``: relative to p, shaped (h,) or
+    (n, h)) to the segments p -> c, in place with the roundings of
+
+        t = clip((u . w) / (u . u + 1e-300), 0, 1);  d = w - t u;  d2 = d_x^2 + d_y^2
+    """
+    ux = (flat[:, 0] - p[0])[:, None]
+    uy = (flat[:, 1] - p[1])[:, None]
+    t = ux * wx
+    t += uy * wy
+    t /= ux * ux + uy * uy + 1e-300  # a zero-length segment has t = 0 / tiny = 0
+    np.clip(t, 0.0, 1.0, out=t)
+    dy = t * uy
+    t *= ux
+    np.subtract(wx, t, out=t)
+    t *= t
+    np.subtract(wy, dy, out=dy)
+    dy *= dy
+    t += dy
+    return t
 
 
 def _clip(C: Array, ctx: StepContext) -> Array:

@@ -151,7 +151,11 @@ def _slot_main(conn: Any, cancel: Any, done: Any, current: Any, parent: int) -> 
     # (numpy is not imported yet in this fresh process; an explicit setting wins).
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(var, "1")
-    import swarmpath.optimizers  # noqa: F401  (pay the import before the first lease)
+    # Pay the imports before the first lease: the optimizers, and the planners with the scipy
+    # modules they use (sparse, spatial; ~0.5 s of CPU that a map lease of short runs would
+    # otherwise spend at its start, in every slot).
+    import swarmpath.optimizers
+    import swarmpath.planners  # noqa: F401
 
     def progress(n: int) -> None:
         done.value = n
