@@ -32,6 +32,7 @@ import math
 from typing import ClassVar
 
 import numpy as np
+from numpy.typing import NDArray
 
 from swarmpath.optimizers.base import Optimizer
 from swarmpath.optimizers.registry import register
@@ -53,22 +54,29 @@ class SSA(Optimizer):
         """Eq (3.2): the exploration/exploitation coefficient at iteration t of T."""
         return 2.0 * math.exp(-((4.0 * t / T) ** 2))
 
-    def _initialize(self) -> None:
-        self.n_leaders = self.N // 2 if self.p["leaders"] == "half" else 1
-        self.X = self.random_population()
-        self.evaluate(self.X)
-        NL, k = self.n_leaders, self.N - self.n_leaders
-        lower, upper = self.full_bounds(NL)
-        self._span = upper - lower  # (R, NL, d), contiguous
-        self._lower = lower
-        # Followers (eq 3.4), y_0 = the last (moved) leader, y_i = (y_{i-1} + x_i) / 2: in closed
-        # form y_i = 2^-i y_0 + sum_{j=1..i} 2^-(i-j+1) x_j, a (k+1, k+1) lower-triangular matrix
-        # of powers of two applied to [leader, followers] (one small matrix product per run).
+    @staticmethod
+    def chain(k: int) -> NDArray[np.float64]:
+        """The followers' sweep (eq 3.4) as a (k, k + 1) matrix applied to [leader, followers].
+
+        y_0 = the last (moved) leader, y_i = (y_{i-1} + x_i) / 2: in closed form
+        y_i = 2^-i y_0 + sum_{j=1..i} 2^-(i-j+1) x_j, a lower-triangular matrix of powers of two
+        (one small matrix product per run); the leader's own row is left out.
+        """
         i = np.arange(k + 1)
         gap = i[:, None] - i[None, :]
         chain = np.where(gap >= 0, 0.5 ** (gap + 1.0), 0.0)
         chain[:, 0] *= 2.0
-        self._chain = chain[1:]  # the leader row is not needed: (k, k + 1)
+        return np.ascontiguousarray(chain[1:])
+
+    def _initialize(self) -> None:
+        self.n_leaders = self.N // 2 if self.p["leaders"] == "half" else 1
+        self.X = self.random_population()
+        self.evaluate(self.X)
+        NL = self.n_leaders
+        lower, upper = self.full_bounds(NL)
+        self._span = upper - lower  # (R, NL, d), contiguous
+        self._lower = lower
+        self._chain = self.chain(self.N - NL)
 
     def _iterate(self) -> None:
         NL, X = self.n_leaders, self.X

@@ -8,16 +8,15 @@ Levy draw of agents x dim per bounded trial, and F7's noise (agents uniforms per
 untried points included). Untried trial points are not evaluated here (the reference evaluates
 and masks them); they are neither counted nor eligible as best in either.
 
-|v|^(2/3) is cbrt(v^2) through numpy's own float64 cbrt loop (:func:`numpy_cbrt`): numpy picks
-its cbrt at run time by CPU (AVX-512 machines get a SIMD version that differs from the C
-library's in the last bit for about half of the arguments), and one last bit in a Levy step is
-enough to turn a greedy comparison later in the run. Calling that very loop keeps the kernel
-bitwise equal to the reference on any machine.
+|v|^(2/3) is cbrt(v^2) through numpy's own float64 cbrt loop
+(:mod:`~swarmpath.optimizers.compiled.ufuncs`): numpy picks its cbrt at run time by CPU (on an
+AVX-512 machine a SIMD version that differs from the C library's in the last bit for about half
+of the arguments), and one last bit in a Levy step is enough to turn a greedy comparison later
+in the run. Calling that very loop keeps the kernel bitwise equal to the reference.
 """
 
 from __future__ import annotations
 
-import ctypes
 from collections.abc import Mapping
 
 import numpy as np
@@ -26,52 +25,10 @@ from numba import njit
 from swarmpath.optimizers.compiled.functions import evaluate
 from swarmpath.optimizers.compiled.registry import Kernel, register_kernel
 from swarmpath.optimizers.compiled.streams import NORMAL, RANDOM, open_stream, take
+from swarmpath.optimizers.compiled.ufuncs import CBRT, unary
 from swarmpath.optimizers.fdo import _LEVY_SCALE as LEVY_SCALE
 from swarmpath.optimizers.fdo import FDO
 from swarmpath.registry import ParamValue
-
-# PyUFuncObject (numpy/ufuncobject.h, public C API): PyObject_HEAD, int nin, nout, nargs,
-# identity; PyUFuncGenericFunction *functions; void **data; int ntypes, reserved1;
-# const char *name; char *types.
-_UFUNC_FUNCTIONS = 32
-_UFUNC_DATA = 40
-_UFUNC_NTYPES = 48
-_UFUNC_NAME = 56
-_UFUNC_TYPES = 64
-
-_P = ctypes.c_void_p
-LoopType = ctypes.CFUNCTYPE(None, _P, _P, _P, _P)  # args, dimensions, steps, data
-
-
-def _ufunc_loop(ufunc: np.ufunc, name: str, types: str) -> tuple[ctypes._CFuncPtr, int]:
-    """(inner loop, its data pointer) that numpy runs for ``ufunc`` on dtype chars ``types``."""
-    base = id(ufunc)
-    if ctypes.string_at(ctypes.c_void_p.from_address(base + _UFUNC_NAME).value) != name.encode():
-        raise RuntimeError(f"numpy's ufunc layout is not the expected one ({name})")
-    ntypes = ctypes.c_int.from_address(base + _UFUNC_NTYPES).value
-    table = ctypes.string_at(ctypes.c_void_p.from_address(base + _UFUNC_TYPES).value, 2 * ntypes)
-    codes = bytes(np.dtype(c).num for c in types)
-    for i in range(ntypes):
-        if table[2 * i : 2 * i + 2] == codes:
-            functions = ctypes.c_void_p.from_address(base + _UFUNC_FUNCTIONS).value
-            data = ctypes.c_void_p.from_address(base + _UFUNC_DATA).value
-            loop = ctypes.c_void_p.from_address(functions + 8 * i).value
-            return LoopType(loop), ctypes.c_void_p.from_address(data + 8 * i).value or 0
-    raise RuntimeError(f"numpy's {name} has no {types} loop")
-
-
-CBRT, CBRT_DATA = _ufunc_loop(np.cbrt, "cbrt", "dd")
-
-
-@njit(cache=True)
-def numpy_cbrt(loop, data, x, call):  # type: ignore[no-untyped-def]
-    """x = np.cbrt(x) in place (contiguous float64) with numpy's loop; ``call``: int64 (5,)."""
-    call[0] = x.ctypes.data
-    call[1] = x.ctypes.data
-    call[2] = x.size
-    call[3] = 8
-    call[4] = 8
-    loop(call.ctypes.data, call[2:].ctypes.data, call[3:].ctypes.data, data)
 
 
 @njit(cache=True, error_model="numpy")
@@ -86,7 +43,7 @@ def levy(stream, m, d, cbrt, data, call, L, S):  # type: ignore[no-untyped-def]
     for k in range(n):
         v = z[start + n + k]
         flat[k] = v * v
-    numpy_cbrt(cbrt, data, flat, call)
+    unary(cbrt, data, flat, call)
     for k in range(n):
         flat[k] = z[start + k] / flat[k]
         flat[k] *= LEVY_SCALE
@@ -167,8 +124,7 @@ def run(rng, fid, shifted, shift, lower, upper, agents, iterations, params):  # 
     """One FDO run (the package's kernel signature): (best value, best point, curve,
     evaluations). numpy's cbrt loop is an argument of the compiled loop: a global function
     pointer would keep numba from caching it."""
-    return _run(rng, fid, shifted, shift, lower, upper, agents, iterations, params, CBRT,
-                CBRT_DATA)
+    return _run(rng, fid, shifted, shift, lower, upper, agents, iterations, params, *CBRT)
 
 
 @njit(cache=True)

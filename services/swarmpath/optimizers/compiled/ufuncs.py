@@ -1,0 +1,97 @@
+"""numpy's own inner loops, called from compiled code: the same numbers as numpy, by construction.
+
+numpy picks several of its float64 loops at run time by CPU, and they are not the C library's:
+on this machine (AVX-512) ``np.cbrt`` differs from libm's cbrt in the last bit for about half of
+the arguments, and ``np.matmul`` sums through OpenBLAS, whose kernels add a row's products in
+an order that depends on the shape (index order at 30 x 30, another order for the last columns
+when the number of columns is 1-4 past a multiple of 8). Compiled code that must give the
+reference's numbers bit for bit calls numpy's loop itself: :func:`numpy_loop` reads it from the
+ufunc object (``PyUFuncObject`` of numpy's public C API: ``functions``, ``data``, ``ntypes``,
+``types``), and :func:`unary` and :func:`matmul` call it with numpy's loop convention
+(``args``, ``dimensions``, ``steps``, ``data``). The loop is passed to compiled functions as an
+argument (a ctypes function): as a global it would keep numba from caching them.
+"""
+
+from __future__ import annotations
+
+import ctypes
+
+import numpy as np
+from numba import njit
+
+# PyUFuncObject (numpy/ufuncobject.h): PyObject_HEAD (16 bytes), int nin, nout, nargs,
+# identity; PyUFuncGenericFunction *functions; void **data; int ntypes, reserved1;
+# const char *name; char *types.
+_FUNCTIONS = 32
+_DATA = 40
+_NTYPES = 48
+_NAME = 56
+_TYPES = 64
+
+_P = ctypes.c_void_p
+#: numpy's loop type: void loop(char **args, npy_intp *dimensions, npy_intp *steps, void *data)
+LoopType = ctypes.CFUNCTYPE(None, _P, _P, _P, _P)
+Loop = tuple[ctypes._CFuncPtr, int]
+
+
+def _pointer(address: int) -> int:
+    return ctypes.c_void_p.from_address(address).value or 0
+
+
+def numpy_loop(ufunc: np.ufunc, types: str) -> Loop:
+    """(loop, data) numpy runs for ``ufunc`` on the dtype characters ``types`` ('dd', 'ddd').
+
+    RuntimeError if the object does not have the expected layout or has no such loop.
+    """
+    base = id(ufunc)
+    if ctypes.string_at(_pointer(base + _NAME)) != ufunc.__name__.encode():
+        raise RuntimeError(f"numpy's ufunc layout is not the expected one ({ufunc.__name__})")
+    nargs = ufunc.nargs
+    ntypes = ctypes.c_int.from_address(base + _NTYPES).value
+    if len(types) != nargs or ntypes != len(ufunc.types):
+        raise RuntimeError(f"numpy's ufunc layout is not the expected one ({ufunc.__name__})")
+    table = ctypes.string_at(_pointer(base + _TYPES), nargs * ntypes)
+    codes = bytes(np.dtype(c).num for c in types)
+    for i in range(ntypes):
+        if table[nargs * i : nargs * (i + 1)] == codes:
+            loop = _pointer(_pointer(base + _FUNCTIONS) + 8 * i)
+            return LoopType(loop), _pointer(_pointer(base + _DATA) + 8 * i)
+    raise RuntimeError(f"numpy's {ufunc.__name__} has no {types} loop")
+
+
+CBRT = numpy_loop(np.cbrt, "dd")
+MATMUL = numpy_loop(np.matmul, "ddd")
+
+
+@njit(cache=True)
+def unary(loop, data, x, call):  # type: ignore[no-untyped-def]
+    """x = ufunc(x) in place for a contiguous float64 x; ``call`` is int64 scratch (5,)."""
+    call[0] = x.ctypes.data
+    call[1] = x.ctypes.data
+    call[2] = x.size
+    call[3] = 8
+    call[4] = 8
+    loop(call.ctypes.data, call[2:].ctypes.data, call[3:].ctypes.data, data)
+
+
+@njit(cache=True)
+def matmul(loop, data, A, B, C, call):  # type: ignore[no-untyped-def]
+    """C = A @ B (float64 matrices, any strides) with numpy's matmul loop, as one item of
+    ``np.matmul``'s outer loop; ``call`` is int64 scratch (16,)."""
+    call[0] = A.ctypes.data
+    call[1] = B.ctypes.data
+    call[2] = C.ctypes.data
+    call[3] = 1  # outer loop length, then the core dimensions n, k, m
+    call[4] = A.shape[0]
+    call[5] = A.shape[1]
+    call[6] = B.shape[1]
+    call[7] = 0  # outer steps
+    call[8] = 0
+    call[9] = 0
+    call[10] = A.strides[0]
+    call[11] = A.strides[1]
+    call[12] = B.strides[0]
+    call[13] = B.strides[1]
+    call[14] = C.strides[0]
+    call[15] = C.strides[1]
+    loop(call.ctypes.data, call[3:].ctypes.data, call[7:].ctypes.data, data)
