@@ -32,7 +32,7 @@ from swarmpath.registry import ParamValue
 
 
 @njit(cache=True, error_model="numpy")
-def levy(stream, m, d, cbrt, data, call, L, S):  # type: ignore[no-untyped-def]
+def levy(stream, m, d, cbrt, data, call, L, S):
     """L[:m] = Levy steps of m x d from one two-part normal draw (u, v): (u / cbrt(v^2)) *
     scale, the reference's ``_levy``; with S of size > 0 also S = copysign(L, v) (its
     ``_levy_pair``). L and S are contiguous."""
@@ -54,7 +54,7 @@ def levy(stream, m, d, cbrt, data, call, L, S):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def bound(stream, C, lower, upper, author, cbrt, data, call, scratch, none):  # type: ignore[no-untyped-def]
+def bound(stream, C, lower, upper, author, cbrt, data, call, scratch, none):
     """The reference's ``_bound`` in place: the author's rule (a fresh Levy draw) if asked,
     then clip."""
     N, d = C.shape
@@ -76,7 +76,7 @@ def bound(stream, C, lower, upper, author, cbrt, data, call, scratch, none):  # 
 
 
 @njit(cache=True)
-def record(X, F, mask, best, best_x):  # type: ignore[no-untyped-def]
+def record(X, F, mask, best, best_x):
     """The best point ever evaluated (strict <, first index); returns the points counted."""
     k = -1
     n = 0
@@ -92,7 +92,7 @@ def record(X, F, mask, best, best_x):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, error_model="numpy")
-def weights(F, b, wf, threshold, fw, walk, plain):  # type: ignore[no-untyped-def]
+def weights(F, b, wf, threshold, fw, walk, plain):
     """fw (eq 2 with the reference's edge cases) and its two special branches, per bee."""
     fb = F[b]
     for i in range(F.size):
@@ -120,7 +120,7 @@ def pack(p: Mapping[str, ParamValue]) -> np.ndarray:
     ])
 
 
-def run(rng, fid, shifted, shift, lower, upper, agents, iterations, params):  # type: ignore[no-untyped-def]
+def run(rng, fid, shifted, shift, lower, upper, agents, iterations, params):
     """One FDO run (the package's kernel signature): (best value, best point, curve,
     evaluations). numpy's cbrt loop is an argument of the compiled loop: a global function
     pointer would keep numba from caching it."""
@@ -128,7 +128,7 @@ def run(rng, fid, shifted, shift, lower, upper, agents, iterations, params):  # 
 
 
 @njit(cache=True)
-def _run(rng, fid, shifted, shift, lower, upper, agents, iterations, params, cbrt, data):  # type: ignore[no-untyped-def]
+def _run(rng, fid, shifted, shift, lower, upper, agents, iterations, params, cbrt, data):
     N, d, T = agents, lower.size, iterations
     wf = params[0]
     threshold = params[1] == 0.0

@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from swarmpath.registry import ParamValue
 
-_MODULES: tuple[str, ...] = ("pso", "gwo")
+_MODULES: tuple[str, ...] = ("pso", "gwo", "ssa", "fdo")
 _KERNELS: dict[str, Kernel] = {}
 _loaded = False
 

@@ -47,7 +47,7 @@ def _tables(agents: int, leaders: int, iterations: int) -> tuple[np.ndarray, np.
     return c1, chain
 
 
-def run(rng, fid, shifted, shift, lower, upper, agents, iterations, params):  # type: ignore[no-untyped-def]
+def run(rng, fid, shifted, shift, lower, upper, agents, iterations, params):
     """One SSA run (the package's kernel signature): (best value, best point, curve,
     evaluations)."""
     leaders = agents // 2 if params[0] == 0.0 else 1
@@ -56,7 +56,7 @@ def run(rng, fid, shifted, shift, lower, upper, agents, iterations, params):  # 
 
 
 @njit(cache=True)
-def move(stream, X, lower, upper, food, c1, n_leaders, chain, loop, data, out, call):  # type: ignore[no-untyped-def]
+def move(stream, X, lower, upper, food, c1, n_leaders, chain, loop, data, out, call):
     """One SSA move of the population X (agents, dim) in place, clipped (not evaluated).
 
     ``food`` is the best point ever evaluated, ``c1`` eq 3.2 at this iteration, ``out``
@@ -88,7 +88,7 @@ def move(stream, X, lower, upper, food, c1, n_leaders, chain, loop, data, out, c
 
 
 @njit(cache=True)
-def record(X, F, best, best_x):  # type: ignore[no-untyped-def]
+def record(X, F, best, best_x):
     """The best point ever evaluated (strict <, first index), as ``Optimizer.evaluate``."""
     k = -1
     for i in range(F.size):
@@ -100,7 +100,7 @@ def record(X, F, best, best_x):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def _run(rng, fid, shifted, shift, lower, upper, N, n_leaders, c1, chain, loop, data):  # type: ignore[no-untyped-def]
+def _run(rng, fid, shifted, shift, lower, upper, N, n_leaders, c1, chain, loop, data):
     d, T = lower.size, c1.size
     stream = open_stream(rng, max(2 * n_leaders * d, N * d, N))
     X = np.empty((N, d))

@@ -15,6 +15,7 @@ argument (a ctypes function): as a global it would keep numba from caching them.
 from __future__ import annotations
 
 import ctypes
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -31,7 +32,7 @@ _TYPES = 64
 _P = ctypes.c_void_p
 #: numpy's loop type: void loop(char **args, npy_intp *dimensions, npy_intp *steps, void *data)
 LoopType = ctypes.CFUNCTYPE(None, _P, _P, _P, _P)
-Loop = tuple[ctypes._CFuncPtr, int]
+Loop = tuple[Any, int]  # (ctypes function, data pointer)
 
 
 def _pointer(address: int) -> int:
@@ -47,8 +48,10 @@ def numpy_loop(ufunc: np.ufunc, types: str) -> Loop:
     if ctypes.string_at(_pointer(base + _NAME)) != ufunc.__name__.encode():
         raise RuntimeError(f"numpy's ufunc layout is not the expected one ({ufunc.__name__})")
     nargs = ufunc.nargs
+    if len(types) != nargs:
+        raise RuntimeError(f"{ufunc.__name__} takes {nargs} types, got {types!r}")
     ntypes = ctypes.c_int.from_address(base + _NTYPES).value
-    if len(types) != nargs or ntypes != len(ufunc.types):
+    if ntypes != len(ufunc.types):
         raise RuntimeError(f"numpy's ufunc layout is not the expected one ({ufunc.__name__})")
     table = ctypes.string_at(_pointer(base + _TYPES), nargs * ntypes)
     codes = bytes(np.dtype(c).num for c in types)
@@ -64,7 +67,7 @@ MATMUL = numpy_loop(np.matmul, "ddd")
 
 
 @njit(cache=True)
-def unary(loop, data, x, call):  # type: ignore[no-untyped-def]
+def unary(loop, data, x, call):
     """x = ufunc(x) in place for a contiguous float64 x; ``call`` is int64 scratch (5,)."""
     call[0] = x.ctypes.data
     call[1] = x.ctypes.data
@@ -75,7 +78,7 @@ def unary(loop, data, x, call):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def matmul(loop, data, A, B, C, call):  # type: ignore[no-untyped-def]
+def matmul(loop, data, A, B, C, call):
     """C = A @ B (float64 matrices, any strides) with numpy's matmul loop, as one item of
     ``np.matmul``'s outer loop; ``call`` is int64 scratch (16,)."""
     call[0] = A.ctypes.data
