@@ -200,6 +200,34 @@ def test_stacked_functions_give_each_functions_own_runs(algo, shifted, monkeypat
             assert np.array_equal(getattr(one, field), getattr(unsplit, field)), field
 
 
+def test_stacked_functions_with_their_own_runs(algo, monkeypatch):
+    """``function_runs`` (a worker stacking leases of several cells): each entry gives the runs
+    of ``minimize`` with its own run ids, a function named twice included."""
+    import swarmpath.optimizers.api as api
+    from swarmpath.optimizers import minimize_many
+
+    functions = ["F1", "F9", "F7", "F1", "F12"]
+    runs = [[3, 0], [5], [1, 2, 7], [6, 9], [0, 4, 8]]
+    kw = dict(dim=4, agents=10, iterations=8, seed=3, transform="shift")
+    monkeypatch.setattr(api, "CHUNK_ELEMENTS", 4 * 10 * 4)  # chunks of four rows: mixed blocks
+    stacked = minimize_many(algo, functions, function_runs=runs, **kw)
+    assert sum(r.seconds for r in stacked) > 0
+    for f, ids, many in zip(functions, runs, stacked, strict=True):
+        one = minimize(algo, f, run_ids=ids, **kw)
+        assert many.function == f and many.run_ids == ids
+        for field in ("curve", "best_fitness", "best_position", "evaluations", "shifts"):
+            assert np.array_equal(getattr(one, field), getattr(many, field)), field
+
+
+def test_function_runs_must_match_the_functions():
+    from swarmpath.optimizers import minimize_many
+
+    with pytest.raises(ParameterError, match="function_runs"):
+        minimize_many("PSO", ["F1", "F2"], dim=2, agents=5, iterations=2, function_runs=[[0]])
+    with pytest.raises(ParameterError, match="runs"):
+        minimize_many("PSO", ["F1"], dim=2, agents=5, iterations=2, function_runs=[[]])
+
+
 @pytest.mark.parametrize("bad", [-1, 1.5, True, "10"])
 def test_bad_chunk_elements_is_named(bad):
     with pytest.raises(ParameterError, match="chunk_elements"):

@@ -127,6 +127,8 @@ def minimize_many(
     chunk_elements: int | None = None,
     transform: str | None = None,
     backend: str = "numpy",
+    *,
+    function_runs: Sequence[Sequence[int]] | None = None,
 ) -> list[Result]:
     """``minimize`` for several functions at once: one :class:`Result` per function, in order.
 
@@ -147,6 +149,11 @@ def minimize_many(
     algorithm, transform, function or parameter without a kernel is a ParameterError naming it,
     never a fallback. ``on_iteration`` is then called ``iterations`` times in all as runs finish,
     with ``None``; ``chunk_elements`` does not apply.
+
+    ``function_runs``: the run ids of each function (one list per entry of ``functions``, which
+    may then name a function more than once), instead of the same ``runs``/``run_ids`` for all;
+    a service worker stacks the leases of several cells this way. Each result's runs are still
+    those of ``minimize(algorithm, function, ..., run_ids=its runs)``, number for number.
     """
     if backend not in BACKENDS:
         raise ParameterError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
@@ -155,8 +162,15 @@ def minimize_many(
     if not fns:
         raise ParameterError("functions must name at least one function")
     _check_sizes(dim, agents, iterations)
-    ids = list(range(runs)) if run_ids is None else [int(r) for r in run_ids]
-    if not ids:
+    if function_runs is None:
+        ids = list(range(runs)) if run_ids is None else [int(r) for r in run_ids]
+        cell_ids = [ids] * len(fns)
+    else:
+        cell_ids = [[int(r) for r in rs] for rs in function_runs]
+        if len(cell_ids) != len(fns):
+            raise ParameterError(f"function_runs must have one list per function ({len(fns)}), "
+                                 f"got {len(cell_ids)}")
+    if not all(cell_ids):
         raise ParameterError("runs must be >= 1")
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise ParameterError(f"seed must be a non-negative integer, got {seed!r}")
@@ -164,16 +178,23 @@ def minimize_many(
     if isinstance(elements, bool) or not isinstance(elements, int | np.integer) or elements < 0:
         raise ParameterError(f"chunk_elements must be an integer >= 0, got {elements!r}")
     cls = get_optimizer(algorithm)
-    if backend == "numba":
-        return _minimize_compiled(
-            cls.name, fns, dim, agents, iterations, ids, int(seed), params, kind, on_iteration
-        )
+    if backend == "numba":  # run by run: one call per distinct run list, progress spread
+        if all(ids == cell_ids[0] for ids in cell_ids):
+            groups = [(fns, cell_ids[0])]
+        else:
+            groups = [([fn], ids) for fn, ids in zip(fns, cell_ids, strict=True)]
+        hook = _spread(on_iteration, iterations, iterations * len(groups))
+        return [
+            res for group, ids in groups for res in _minimize_compiled(
+                cls.name, group, dim, agents, iterations, ids, int(seed), params, kind, hook)
+        ]
     started = time.perf_counter()
     # Large batches run as chunks of about ``elements`` coordinates per population array,
     # stepped in turn every iteration: the arrays of a step stay in the CPU caches. Runs are
     # independent and each has its own streams, so chunking changes no number.
-    size = max(1, elements // (agents * dim)) if elements else len(ids) * len(fns)
-    chunks = _chunk_rows(fns, ids, size)
+    total = sum(len(ids) for ids in cell_ids)
+    size = max(1, elements // (agents * dim)) if elements else total
+    chunks = _chunk_rows(fns, cell_ids, size)
     problems = [_chunk_problem(chunk, dim, int(seed), kind) for chunk in chunks]
     opts = [
         cls(pr, agents, iterations, RunStreams.for_runs(int(seed), [r for _, r in c]), params)
@@ -197,10 +218,10 @@ def minimize_many(
     shifts = None
     if all(part.shifts is not None for pr in problems for part in _parts(pr)):
         shifts = np.concatenate([part.shifts for pr in problems for part in _parts(pr)])
-    n = len(ids)
+    offsets = np.cumsum([0] + [len(ids) for ids in cell_ids])
     results = []
-    for k, fn in enumerate(fns):
-        rows = slice(k * n, (k + 1) * n)  # rows are function-major, as the chunks keep them
+    for k, (fn, ids) in enumerate(zip(fns, cell_ids, strict=True)):
+        rows = slice(int(offsets[k]), int(offsets[k + 1]))  # function-major, as the chunks keep
         results.append(
             Result(
                 algorithm=cls.name,
@@ -214,7 +235,7 @@ def minimize_many(
                 best_position=position[rows].copy(),
                 curve=curve[rows].copy(),
                 evaluations=evaluations[rows].copy(),
-                seconds=seconds / len(fns),
+                seconds=seconds * len(ids) / total,
                 shifts=None if shifts is None else shifts[rows].copy(),
                 params=dict(opts[0].p),
                 transform=kind,
@@ -274,15 +295,34 @@ def _minimize_compiled(
     ]
 
 
+def _spread(
+    on_iteration: Callable[[Optimizer | None], None] | None, iterations: int, calls: int
+) -> Callable[[Optimizer | None], None] | None:
+    """A hook that, called ``calls`` times, calls ``on_iteration`` ``iterations`` times."""
+    if on_iteration is None or calls == iterations:
+        return on_iteration
+    count = 0
+
+    def hook(optimizer: Optimizer | None) -> None:
+        nonlocal count
+        count += 1
+        for _ in range(iterations * count // calls - iterations * (count - 1) // calls):
+            on_iteration(optimizer)
+
+    return hook
+
+
 Row = tuple[BenchmarkFunction, int]
 
 
-def _chunk_rows(fns: list[BenchmarkFunction], ids: list[int], size: int) -> list[list[Row]]:
+def _chunk_rows(
+    fns: list[BenchmarkFunction], cell_ids: list[list[int]], size: int
+) -> list[list[Row]]:
     """(function, run) rows, function-major, cut into chunks of at most ``size`` rows; a noisy
     function's rows never share a chunk with another function's."""
     chunks: list[list[Row]] = []
     current: list[Row] = []
-    for fn in fns:
+    for fn, ids in zip(fns, cell_ids, strict=True):
         if fn.noisy and current:
             chunks.append(current)
             current = []

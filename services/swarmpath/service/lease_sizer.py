@@ -14,8 +14,13 @@ class LeaseSizer:
     """How many runs of a cell make about ``target_seconds`` of work.
 
     The cost of a run is learned from the results (``RunResult.seconds``, the run's share of its
-    vectorized batch), per cell spec, as an exponential moving average; before the first result a
-    rough prior is used (benchmark: from agents x iterations x dim; map: 5 s, i.e. one run).
+    vectorized batch), per cell spec, as an exponential moving average; a cell without a result
+    yet takes the average of its *family* (the benchmark cells that differ only in the function:
+    the ones a worker stacks into one batch, see :mod:`swarmpath.service.worker.stacking`), and
+    before any result of the family a rough prior is used (benchmark: from agents x iterations x
+    dim; map: 5 s, i.e. one run). Without the family's average every cell of a study with few
+    runs per cell would be leased at the prior, which is many times the real cost at the ICOOT
+    paper's Table 2 setting, and bundles would hold one or two cells: nothing to stack.
     Benchmark leases get at least ``min_runs`` runs: runs of one cell are computed vectorized and a
     batch of one is several times slower per run than a batch of 30.
 
@@ -39,6 +44,12 @@ class LeaseSizer:
     def cost_key(spec: BenchmarkCell | MapCell) -> str:
         return spec.model_dump_json()
 
+    @staticmethod
+    def family_key(spec: BenchmarkCell | MapCell) -> str | None:
+        if not isinstance(spec, BenchmarkCell):
+            return None
+        return "family:" + spec.model_dump_json(exclude={"function"})
+
     @classmethod
     def prior(cls, spec: BenchmarkCell | MapCell) -> float:
         if isinstance(spec, BenchmarkCell):
@@ -46,8 +57,11 @@ class LeaseSizer:
         return cls.MAP_PRIOR_SECONDS
 
     def estimate(self, spec: BenchmarkCell | MapCell) -> float:
+        family = self.family_key(spec)
         with self._lock:
             est = self._estimates.get(self.cost_key(spec))
+            if est is None and family is not None:
+                est = self._estimates.get(family)
         return self.prior(spec) if est is None else est
 
     def runs_for(
@@ -73,10 +87,14 @@ class LeaseSizer:
     def observe(self, spec: BenchmarkCell | MapCell, seconds_per_run: float) -> None:
         if not (seconds_per_run > 0 and math.isfinite(seconds_per_run)):
             return
-        key = self.cost_key(spec)
+        keys = [self.cost_key(spec), self.family_key(spec)]
         with self._lock:
-            old = self._estimates.get(key)
-            self._estimates[key] = (
-                seconds_per_run if old is None else old + self.alpha * (seconds_per_run - old)
-            )
+            for key in keys:
+                if key is None:
+                    continue
+                old = self._estimates.get(key)
+                self._estimates[key] = (
+                    seconds_per_run if old is None
+                    else old + self.alpha * (seconds_per_run - old)
+                )
 

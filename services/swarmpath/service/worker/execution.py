@@ -2,7 +2,9 @@
 ``minimize(..., run_ids=lease.runs)`` (split into memory-bounded batches, as ``swarmpath bench``
 does; runs are independent so the numbers are the same), a map lease one
 ``Episode(scenario, planner, seed, run, params)`` per run. A run that raises is a ``failed`` result
-(not retried); cancellation is checked every iteration/step."""
+(not retried); cancellation is checked every iteration/step. Slots run the benchmark leases of a
+bundle that differ only in their function as one batch (:mod:`.stacking`), with the same numbers
+and the same per-lease results as here."""
 
 from __future__ import annotations
 
@@ -103,10 +105,8 @@ def _benchmark(
         started = time.perf_counter()
         try:
             res = minimize(
-                spec.algorithm, spec.function, dim=spec.dim, agents=spec.agents,
-                iterations=spec.iterations, seed=lease.seed, params=spec.params,
-                transform=spec.transform, run_ids=batch, on_iteration=hook,
-                backend=spec.backend,
+                spec.algorithm, spec.function, run_ids=batch, on_iteration=hook,
+                **minimize_options(lease, spec),
             )
         except Cancelled:
             raise
@@ -117,16 +117,32 @@ def _benchmark(
                         failure.splitlines()[-1] if failure else "")
             out += [_result(lease, r, seconds, status="failed", failure=failure) for r in batch]
             continue
-        share = res.seconds / len(batch)
-        for i, r in enumerate(batch):
-            out.append(_result(
-                lease, r, share,
-                metrics={"best_fitness": float(res.best_fitness[i]),
-                         "evaluations": int(res.evaluations[i])},
-                curve=res.curve[i].tolist(),  # float64 -> float, exact (and 20x faster
-                best_position=res.best_position[i].tolist(),  # than a Python loop)
-            ))
+        out += ok_results(lease, res)
     return out
+
+
+def minimize_options(lease: Lease, spec: BenchmarkCell) -> dict[str, Any]:
+    """The arguments of ``minimize`` a benchmark lease fixes besides the function and runs (the
+    same for a lease run alone and for a stack of leases, see :mod:`.stacking`)."""
+    return {"dim": spec.dim, "agents": spec.agents, "iterations": spec.iterations,
+            "seed": lease.seed, "params": spec.params, "transform": spec.transform,
+            "backend": spec.backend}
+
+
+def ok_results(lease: Lease, res: Any) -> list[RunResult]:
+    """The results of ``res`` (a ``minimize`` Result of the lease's cell; its runs, in its
+    order), each charged an equal share of its seconds."""
+    share = res.seconds / len(res.run_ids)
+    return [
+        _result(
+            lease, r, share,
+            metrics={"best_fitness": float(res.best_fitness[i]),
+                     "evaluations": int(res.evaluations[i])},
+            curve=res.curve[i].tolist(),  # float64 -> float, exact (and 20x faster
+            best_position=res.best_position[i].tolist(),  # than a Python loop)
+        )
+        for i, r in enumerate(res.run_ids)
+    ]
 
 
 def load_scenario(spec: MapCell) -> Any:

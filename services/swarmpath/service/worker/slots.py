@@ -22,6 +22,7 @@ from swarmpath.service.protocol import (
     encode,
 )
 from swarmpath.service.worker.execution import Cancelled, _failure_text, execute_lease
+from swarmpath.service.worker.stacking import stacked_outcomes
 
 log = logging.getLogger("swarmpath.worker")
 
@@ -36,9 +37,11 @@ Outcomes = list[tuple[Lease, Any]]
 
 
 class Slot:
-    """Executes one group of leases at a time, one lease after the other (a group is the leases
-    of one LeaseBundle, or a single lease); ``on_done(slot, outcomes)`` is called once per group
-    from a thread of the slot. Each lease of a group can be cancelled on its own."""
+    """Executes one group of leases at a time (a group is the leases of one LeaseBundle, or a
+    single lease), stack after stack (:mod:`.stacking`: benchmark leases differing only in their
+    function run as one batch, any other lease alone); ``on_done(slot, outcomes)`` is called
+    once per group from a thread of the slot. Each lease of a group can be cancelled on its
+    own."""
 
     def __init__(self, index: int, on_done: Callable[[Slot, Outcomes], None]):
         self.index = index
@@ -73,14 +76,14 @@ class ThreadSlot(Slot):
     def __init__(self, index: int, on_done: Callable[[Slot, Outcomes], None]):
         super().__init__(index, on_done)
         self._cancel: list[threading.Event] = []
-        self._current = -1
+        self._running: set[int] = set()  # positions of the leases of the stack running
         self._done = 0
         self._thread: threading.Thread | None = None
 
     def submit(self, leases: Sequence[Lease]) -> None:
         group = list(leases)
         self._cancel = [threading.Event() for _ in group]
-        self._current, self._done = -1, 0
+        self._running, self._done = set(), 0
         self.leases = group
         self._thread = threading.Thread(
             target=self._run, args=(group, self._cancel), name=f"slot-{self.index}", daemon=True)
@@ -90,29 +93,22 @@ class ThreadSlot(Slot):
         def progress(n: int) -> None:
             self._done = n
 
-        outcomes: Outcomes = []
-        for i, lease in enumerate(group):
-            self._current, self._done = i, 0
-            try:
-                outcome: Any = execute_lease(lease, flags[i].is_set, progress)
-            except Cancelled as exc:
-                outcome = exc
-            except Exception as exc:  # pragma: no cover - execute_lease reports run failures
-                outcome = exc
-            outcomes.append((lease, outcome))
+        def on_stack(stack: list[int]) -> None:
+            self._done = 0
+            self._running = set(stack)
+
+        got = dict(stacked_outcomes(group, [flag.is_set for flag in flags], on_stack, progress))
+        self._running = set()
         self.leases = []
-        self.on_done(self, outcomes)
+        self.on_done(self, [(lease, got[i]) for i, lease in enumerate(group)])
 
     def cancel(self, lease_id: str | None = None) -> None:
         for i in self._position(lease_id):
             self._cancel[i].set()
 
     def iteration(self, lease_id: str | None = None) -> int:
-        current = self._current
-        if 0 <= current < len(self.leases) and (
-                lease_id is None or self.leases[current].lease_id == lease_id):
-            return self._done
-        return 0
+        running = self._running
+        return self._done if any(i in running for i in self._position(lease_id)) else 0
 
     def close(self, timeout: float = 5.0) -> None:
         for flag in self._cancel:
@@ -134,7 +130,7 @@ def warm_up() -> None:
         log.debug("warm-up run failed", exc_info=True)
 
 
-def _slot_main(conn: Any, cancel: Any, done: Any, current: Any, parent: int) -> None:
+def _slot_main(conn: Any, cancel: Any, done: Any, running: Any, parent: int) -> None:
     """A slot's child process: groups of leases in, one reply per lease out, until told to stop
     or orphaned."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's business
@@ -179,20 +175,23 @@ def _slot_main(conn: Any, cancel: Any, done: Any, current: Any, parent: int) -> 
         except Exception as exc:  # pragma: no cover - the parent encoded it
             conn.send(("error", -1, _failure_text(exc)))
             continue
-        for i, lease in enumerate(bundle.leases):
-            current.value, done.value = i, 0
-            try:
-                reply: tuple[Any, ...] = (
-                    "done", i, execute_lease(lease, lambda i=i: bool(cancel[i]), progress))
-            except Cancelled:
-                reply = ("cancelled", i)
-            except Exception as exc:  # reported to the parent
-                reply = ("error", i, _failure_text(exc))
+        def on_stack(stack: list[int]) -> None:
+            done.value = 0
+            for j in range(MAX_BUNDLE_LEASES):
+                running[j] = 1 if j in stack else 0
+
+        flags = [lambda i=i: bool(cancel[i]) for i in range(len(bundle.leases))]
+        for i, outcome in stacked_outcomes(bundle.leases, flags, on_stack, progress):
+            reply: tuple[Any, ...] = (
+                ("cancelled", i) if isinstance(outcome, Cancelled) else
+                ("error", i, _failure_text(outcome)) if isinstance(outcome, BaseException) else
+                ("done", i, outcome))
             try:
                 conn.send(reply)
             except (EOFError, OSError):
                 return
-        current.value = -1
+        for j in range(MAX_BUNDLE_LEASES):
+            running[j] = 0
 
 
 class ProcessSlot(Slot):
@@ -206,7 +205,7 @@ class ProcessSlot(Slot):
         self._ctx = multiprocessing.get_context("spawn")
         self._cancel = self._ctx.Array("b", MAX_BUNDLE_LEASES, lock=False)
         self._done = self._ctx.Value("q", 0, lock=False)
-        self._current = self._ctx.Value("i", -1, lock=False)
+        self._running = self._ctx.Array("b", MAX_BUNDLE_LEASES, lock=False)
         self._proc: Any = None
         self._conn: Any = None
         self._waiter: threading.Thread | None = None
@@ -240,7 +239,7 @@ class ProcessSlot(Slot):
         parent_conn, child_conn = self._ctx.Pipe()
         self._proc = self._ctx.Process(
             target=_slot_main,
-            args=(child_conn, self._cancel, self._done, self._current, os.getpid()),
+            args=(child_conn, self._cancel, self._done, self._running, os.getpid()),
             name=f"swarmpath-slot-{self.index}", daemon=True,
         )
         self._proc.start()
@@ -255,7 +254,8 @@ class ProcessSlot(Slot):
         group = list(leases)[:MAX_BUNDLE_LEASES]
         for i in range(MAX_BUNDLE_LEASES):
             self._cancel[i] = 0
-        self._done.value, self._current.value = 0, -1
+            self._running[i] = 0
+        self._done.value = 0
         self.leases = group
         self._conn.send(encode(LeaseBundle(leases=group)))
         self._waiter = threading.Thread(
@@ -302,9 +302,7 @@ class ProcessSlot(Slot):
             self._cancel[i] = 1
 
     def iteration(self, lease_id: str | None = None) -> int:
-        current, leases = int(self._current.value), self.leases
-        if 0 <= current < len(leases) and (
-                lease_id is None or leases[current].lease_id == lease_id):
+        if any(self._running[i] for i in self._position(lease_id)):
             return int(self._done.value)
         return 0
 
