@@ -208,3 +208,15 @@ def test_a_cell_without_results_takes_its_familys_cost():
     sizer.observe(f2, 0.02)
     assert sizer.estimate(f2) == 0.02 and sizer.estimate(f1) == 0.01
     assert sizer.estimate(fn(f1, "F3")) == pytest.approx(0.013)  # the family's moving average
+
+
+def test_no_stacking_runs_every_lease_alone():
+    group = [lease(PSO, [0], "a"), lease(fn(PSO, "F9"), [1], "b")]
+    for stacking, stacks in ((True, [[0, 1]]), (False, [[0], [1]])):
+        seen: list[list[int]] = []
+        got = dict(stacked_outcomes(group, [lambda: False] * 2, seen.append, stacking=stacking))
+        assert seen == stacks
+        for i, one in enumerate(group):
+            direct = minimize("PSO", one.spec.function, 3, 6, 12, seed=4, run_ids=one.runs)
+            assert [r.metrics["best_fitness"] for r in decoded(got[i])] == \
+                direct.best_fitness.tolist()

@@ -3,6 +3,7 @@
 
     .venv/bin/python scripts/bench/service.py [--dispatch-runs 2000] [--table2-runs 30]
                                               [--big-table2 RUNS | --full-table2] [--skip ...]
+                                              [--stacking RUNS]
 
 Each measurement starts its own ``swarmpath up --workers N`` (coordinator + N local workers, one
 slot each) on free loopback ports with a fresh data directory, submits one job through the REST
@@ -29,6 +30,11 @@ Part (c), only when asked: ``--big-table2 RUNS`` runs Table 2 at RUNS runs per c
 workers and extrapolates linearly to 1000 runs per cell; ``--full-table2`` runs the paper's own
 scale (78 cells x 1000 runs; target < 15 min).
 
+Part (d), only when asked: ``--stacking RUNS`` runs Table 2 at RUNS runs per cell with two
+workers twice, with their default stacking (a bundle's leases that differ only in the function
+run as one batch) and with ``--no-stacking`` (every lease alone), and prints the slots' CPU
+milliseconds per run side by side.
+
 Markdown goes to stdout, progress to stderr.
 """
 
@@ -44,6 +50,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -103,7 +110,7 @@ def free_port() -> int:
 class Up:
     """``swarmpath up --workers N`` on free loopback ports, stopped on exit."""
 
-    def __init__(self, workers: int, tmp: Path):
+    def __init__(self, workers: int, tmp: Path, extra: Sequence[str] = ()):
         self.workers = workers
         http, zport = free_port(), free_port()
         self.url = f"http://127.0.0.1:{http}"
@@ -112,7 +119,7 @@ class Up:
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "swarmpath.cli", "up", "--workers", str(workers), "--slots", "1",
              "--http", f"127.0.0.1:{http}", "--zenoh", f"tcp/127.0.0.1:{zport}",
-             "--data", str(data), "--log-level", LOG_LEVEL],
+             "--data", str(data), "--log-level", LOG_LEVEL, *extra],
             stdout=self.log, stderr=self.log, env=ENV, start_new_session=True)
         self.http = httpx.Client(base_url=self.url, timeout=30.0)
 
@@ -199,8 +206,9 @@ def elapsed(status: dict[str, Any]) -> float:
     return float(status["finished"]) - float(status["started"])
 
 
-def run(tmp: Path, workers: int, spec: dict[str, Any], what: str) -> dict[str, Any]:
-    with Up(workers, tmp) as up:
+def run(tmp: Path, workers: int, spec: dict[str, Any], what: str,
+        extra: Sequence[str] = ()) -> dict[str, Any]:
+    with Up(workers, tmp, extra) as up:
         note(f"{what}: {workers} worker(s) ...")
         status = up.run_job(spec, timeout=86400)
     note(f"  {elapsed(status):.2f} s, load {status['load'][0]:.2f} -> {status['load'][1]:.2f}")
@@ -242,6 +250,9 @@ def main(argv: list[str] | None = None) -> int:
                     help="also the paper's scale: 1000 runs per cell with two workers (long)")
     ap.add_argument("--skip", default="", help="comma list of parts to leave out: "
                     "dispatch, leases, table2")
+    ap.add_argument("--stacking", type=int, default=0, metavar="RUNS",
+                    help="also Table 2 at RUNS runs per cell with two workers, stacked and "
+                         "--no-stacking: the slots' CPU per run side by side")
     ap.add_argument("--log-level", default="warning", help="of the swarmpath up processes")
     args = ap.parse_args(argv)
     skip = set(filter(None, args.skip.split(",")))
@@ -282,6 +293,18 @@ def main(argv: list[str] | None = None) -> int:
                 f"({cores[2] / max(cores[1], 1e-9):.2f}x). On an otherwise idle machine (each "
                 f"slot on a full core) the same CPU would give "
                 f"{slots[1] / (slots[2] / 2):.2f}x.")
+        if args.stacking:
+            cpu: dict[str, float] = {}
+            for label, extra in (("stacked", ()), ("unstacked", ("--no-stacking",))):
+                st = run(tmp, 2, table2_spec(args.stacking),
+                         f"table2 at {args.stacking} runs/cell, {label}", extra)
+                rows.append(row(f"Table 2 at {args.stacking} runs/cell, {label} "
+                                f"(`up {' '.join(extra) or '--stacking'}`)", 2, st))
+                cpu[label] = 1000 * st["cpu"]["slots"] / st["runs_total"]
+            notes.append(
+                f"Slot CPU per run at {args.stacking} runs per cell, two workers: stacked "
+                f"**{cpu['stacked']:.1f} ms**, unstacked **{cpu['unstacked']:.1f} ms** "
+                f"({cpu['unstacked'] / max(cpu['stacked'], 1e-9):.2f}x).")
         big = 1000 if args.full_table2 else args.big_table2
         if big:
             st = run(tmp, 2, table2_spec(big), f"table2 at {big} runs/cell")

@@ -127,6 +127,10 @@ LeaseOpt = Annotated[
     float, typer.Option("--lease-seconds", help="Requeue a lease after this long without news.")
 ]
 ShmOpt = Annotated[bool, typer.Option("--shm", help="Enable Zenoh shared memory (off by default).")]
+StackingOpt = Annotated[
+    bool, typer.Option("--stacking/--no-stacking",
+                       help="Run a bundle's leases that differ only in the function as one batch.")
+]
 ZConfOpt = Annotated[
     Path | None, typer.Option("--zenoh-config", help="JSON file of extra Zenoh settings.")
 ]
@@ -192,6 +196,7 @@ def worker(
         int, typer.Option("--prefetch",
                           help="Bundles pulled ahead of free slots (0: pull only when idle).")
     ] = 1,
+    stacking: StackingOpt = True,
     exit_with_parent: Annotated[int | None, typer.Option(hidden=True)] = None,
     shm: ShmOpt = False,
     zenoh_config: ZConfOpt = None,
@@ -224,6 +229,7 @@ def worker(
         executor="thread" if threads else "process", user=user, password=password, shm=shm,
         zenoh_extra=_extra(zenoh_config, "--zenoh-config"), grace_seconds=grace,
         exit_with_parent=exit_with_parent, max_leases=max_leases, prefetch=prefetch,
+        stacking=stacking,
     )
     _logging(log_level)
     raise typer.Exit(run_worker(settings))
@@ -233,8 +239,9 @@ class LocalWorkers:
     """The worker subprocesses of ``swarmpath up`` (fork+exec'd, so nothing of Zenoh is shared)."""
 
     def __init__(self, n: int, connect: str, prefix: str, slots: int, log_level: str,
-                 login: tuple[str, str] | None = None):
+                 login: tuple[str, str] | None = None, stacking: bool = True):
         self.n, self.connect, self.prefix, self.slots = n, connect, prefix, slots
+        self.stacking = stacking
         self.log_level = log_level
         self.login = login  # (user, password), handed over in the environment, never in argv
         self.procs: list[subprocess.Popen[bytes]] = []
@@ -246,6 +253,7 @@ class LocalWorkers:
                 "--prefix", self.prefix, "--slots", str(self.slots),
                 "--exit-with-parent", str(os.getpid()), "--log-level", self.log_level,
                 "--id", f"{_host()}-{os.getpid()}-w{i}",
+                *([] if self.stacking else ["--no-stacking"]),
             ]
             env = dict(os.environ)
             if self.login is not None:
@@ -314,6 +322,7 @@ def up(
                      help="user:password lines of remote worker logins, admitted besides the "
                           "local workers' own random login."),
     ] = None,
+    stacking: StackingOpt = True,
     log_level: LogOpt = "info",
 ) -> None:
     """Start the coordinator and N local workers; Ctrl-C (or SIGTERM) stops everything.
@@ -340,7 +349,7 @@ def up(
     from swarmpath.service.coordinator import create_app
 
     local = LocalWorkers(n, _connectable(settings.zenoh_listen[0]), prefix, slots, log_level,
-                         login)
+                         login, stacking)
     typer.echo(f"swarmpath up: http://{http}  zenoh {zenoh}  data {data}", err=True)
     _serve(create_app(settings, on_started=local.start, on_stopping=local.stop), http, log_level)
 

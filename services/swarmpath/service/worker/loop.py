@@ -122,7 +122,7 @@ class Worker(Reporting):
         """Slot ``index`` of this worker (the settings' executor; a subclass may run leases
         elsewhere, e.g. scripts/bench/farm.py's simulated slots)."""
         slot_cls = ProcessSlot if self.settings.executor == "process" else ThreadSlot
-        return slot_cls(index, self._on_slot_done)
+        return slot_cls(index, self._on_slot_done, self.settings.stacking)
 
     def _slot_ready(self) -> None:
         with self._wake:

@@ -31,6 +31,7 @@ class WorkerSettings:
     max_runs: int = 1000  # per lease request; the coordinator sizes leases below this
     max_leases: int = 32  # per lease request: small leases come as bundles of up to this many
     prefetch: int = 1  # bundles held beyond the slots: the next one is at hand when a slot frees
+    stacking: bool = True  # a bundle's leases differing only in the function run as one batch
     executor: Literal["process", "thread"] = "process"
     user: str | None = None
     password: str | None = None

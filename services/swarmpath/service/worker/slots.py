@@ -43,9 +43,11 @@ class Slot:
     once per group from a thread of the slot. Each lease of a group can be cancelled on its
     own."""
 
-    def __init__(self, index: int, on_done: Callable[[Slot, Outcomes], None]):
+    def __init__(self, index: int, on_done: Callable[[Slot, Outcomes], None],
+                 stacking: bool = True):
         self.index = index
         self.on_done = on_done
+        self.stacking = stacking
         self.leases: list[Lease] = []
 
     @property
@@ -73,8 +75,9 @@ class Slot:
 class ThreadSlot(Slot):
     """Leases run in a thread of the worker process (shares the GIL: for tests and debugging)."""
 
-    def __init__(self, index: int, on_done: Callable[[Slot, Outcomes], None]):
-        super().__init__(index, on_done)
+    def __init__(self, index: int, on_done: Callable[[Slot, Outcomes], None],
+                 stacking: bool = True):
+        super().__init__(index, on_done, stacking)
         self._cancel: list[threading.Event] = []
         self._running: set[int] = set()  # positions of the leases of the stack running
         self._done = 0
@@ -97,7 +100,8 @@ class ThreadSlot(Slot):
             self._done = 0
             self._running = set(stack)
 
-        got = dict(stacked_outcomes(group, [flag.is_set for flag in flags], on_stack, progress))
+        got = dict(stacked_outcomes(group, [flag.is_set for flag in flags], on_stack, progress,
+                                    self.stacking))
         self._running = set()
         self.leases = []
         self.on_done(self, [(lease, got[i]) for i, lease in enumerate(group)])
@@ -130,7 +134,9 @@ def warm_up() -> None:
         log.debug("warm-up run failed", exc_info=True)
 
 
-def _slot_main(conn: Any, cancel: Any, done: Any, running: Any, parent: int) -> None:
+def _slot_main(
+    conn: Any, cancel: Any, done: Any, running: Any, parent: int, stacking: bool = True
+) -> None:
     """A slot's child process: groups of leases in, one reply per lease out, until told to stop
     or orphaned."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's business
@@ -181,7 +187,7 @@ def _slot_main(conn: Any, cancel: Any, done: Any, running: Any, parent: int) -> 
                 running[j] = 1 if j in stack else 0
 
         flags = [lambda i=i: bool(cancel[i]) for i in range(len(bundle.leases))]
-        for i, outcome in stacked_outcomes(bundle.leases, flags, on_stack, progress):
+        for i, outcome in stacked_outcomes(bundle.leases, flags, on_stack, progress, stacking):
             reply: tuple[Any, ...] = (
                 ("cancelled", i) if isinstance(outcome, Cancelled) else
                 ("error", i, _failure_text(outcome)) if isinstance(outcome, BaseException) else
@@ -198,8 +204,9 @@ class ProcessSlot(Slot):
     """Leases run in a spawned child process (true parallelism; killed and respawned if it
     dies). The child is started with the multiprocessing *spawn* method, never forked."""
 
-    def __init__(self, index: int, on_done: Callable[[Slot, Outcomes], None]):
-        super().__init__(index, on_done)
+    def __init__(self, index: int, on_done: Callable[[Slot, Outcomes], None],
+                 stacking: bool = True):
+        super().__init__(index, on_done, stacking)
         import multiprocessing
 
         self._ctx = multiprocessing.get_context("spawn")
@@ -239,7 +246,8 @@ class ProcessSlot(Slot):
         parent_conn, child_conn = self._ctx.Pipe()
         self._proc = self._ctx.Process(
             target=_slot_main,
-            args=(child_conn, self._cancel, self._done, self._running, os.getpid()),
+            args=(child_conn, self._cancel, self._done, self._running, os.getpid(),
+                  self.stacking),
             name=f"swarmpath-slot-{self.index}", daemon=True,
         )
         self._proc.start()
