@@ -161,6 +161,21 @@ def test_progress_hook_is_called_once_per_iteration_in_all():
     assert calls == [None] * 7
 
 
+@pytest.mark.parametrize("algo", WITH_KERNEL)
+def test_function_runs_with_numba_give_each_functions_own_runs(algo):
+    """A worker's stack of leases (``function_runs``) on the numba backend: each function's
+    runs as ``minimize`` alone, and progress still ``iterations`` calls in all."""
+    kw = dict(dim=3, agents=6, iterations=9, seed=2, backend="numba")
+    functions, runs = ["F1", "F7", "F1"], [[4, 1], [0], [2, 3, 5]]
+    calls: list[object] = []
+    stacked = minimize_many(algo, functions, function_runs=runs, on_iteration=calls.append, **kw)
+    assert calls == [None] * 9
+    for f, ids, got in zip(functions, runs, stacked, strict=True):
+        alone = minimize(algo, f, run_ids=ids, **kw)
+        assert got.run_ids == ids and got.backend == "numba"
+        assert_same(alone, got, 0.0)
+
+
 def test_the_numpy_backend_never_imports_numba():
     code = ("import sys; from swarmpath.optimizers import minimize; "
             "[minimize(a, 'F10', dim=2, agents=4, iterations=2, runs=1) for a in "
