@@ -59,8 +59,9 @@ def test_leases_differing_only_in_the_function_share_a_stack():
         lease(fn(PSO, "F3", transform="shift"), [0], "i"),  # another transform
         lease(MapCell(planner="MFB", map="mfb-static"), [0], "m"),  # a map lease runs alone
         lease(fn(PSO, "F1", algorithm="GWO"), [1], "k"),
+        lease(fn(PSO, "F3", backend="numba"), [0], "n"),  # another backend
     ]
-    assert plan_stacks(group) == [[0, 1, 3], [2, 10], [4], [5], [6], [7], [8], [9]]
+    assert plan_stacks(group) == [[0, 1, 3], [2, 10], [4], [5], [6], [7], [8], [9], [11]]
     # a stack holds at most `limit` coordinates per population (runs x agents x dim)
     assert plan_stacks(group[:2] + group[3:4], limit=4 * 6 * 3) == [[0, 1], [2]]
     assert plan_stacks([lease(PSO, list(range(5)), "big")], limit=4 * 6 * 3) == [[0]]
