@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from swarmpath.registry import ParamValue
 
-_MODULES: tuple[str, ...] = ("pso", "gwo", "ssa", "fdo")
+_MODULES: tuple[str, ...] = ("pso", "gwo", "ssa", "fdo", "coot")
 _KERNELS: dict[str, Kernel] = {}
 _loaded = False
 
@@ -30,7 +30,9 @@ class Kernel:
     ``ParameterError`` naming a parameter or value the kernel does not implement.
     ``transforms``: the transforms the kernel supports. ``tolerance``: the largest relative
     difference from the numpy reference the kernel allows (0.0: equal to the last bit); it is
-    recorded in every result the kernel computes.
+    recorded in every result the kernel computes. ``check``: optional checks of the resolved
+    parameters against the number of agents that the reference makes when it is built (e.g. COOT's
+    leaders must leave a coot); it raises ``ParameterError`` naming the parameter.
     """
 
     algorithm: str
@@ -38,6 +40,7 @@ class Kernel:
     pack: Callable[[Mapping[str, ParamValue]], NDArray[np.float64]]
     transforms: tuple[str, ...] = ("none", "shift")
     tolerance: float = 0.0
+    check: Callable[[Mapping[str, ParamValue], int], None] | None = None
 
 
 def register_kernel(kernel: Kernel) -> Kernel:

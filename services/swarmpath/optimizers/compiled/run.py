@@ -82,6 +82,8 @@ def minimize_compiled(
     kernel, resolved, packed = kernel_for(cls.name, params, transform)
     if agents < cls.min_agents:
         raise ParameterError(f"{cls.name} needs agents >= {cls.min_agents}, got {agents}")
+    if kernel.check is not None:
+        kernel.check(resolved, agents)
     fids = [compiled_function(fn) for fn in fns]
     started = time.perf_counter()
     total = len(fns) * len(ids)
