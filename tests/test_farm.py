@@ -26,7 +26,8 @@ def farm(tmp: Path, *args: str, timeout: float = 120.0) -> tuple[int, dict]:
         env={"PYTHONPATH": str(ROOT / "services"), "PATH": "/usr/bin:/bin"},
     )
     assert out.is_file(), proc.stderr[-3000:]
-    return proc.returncode, json.loads(out.read_text())
+    (res,) = json.loads(out.read_text())
+    return proc.returncode, res
 
 
 def test_simulated_workers_complete_a_job_exactly_once(tmp_path):
@@ -39,7 +40,7 @@ def test_simulated_workers_complete_a_job_exactly_once(tmp_path):
     assert m["results_accepted_total"] == 180
     assert m["messages_unproven_total"] == 0 and m["results_stale_total"] == 0
     assert res["alive_seen"] == 3
-    store = Store(tmp_path / "data" / "store")
+    store = Store(tmp_path / "data" / "this-k3" / "store")
     try:
         runs = list(store.iter_runs(res["job"]))
     finally:
@@ -49,10 +50,11 @@ def test_simulated_workers_complete_a_job_exactly_once(tmp_path):
                and r["worker"].startswith("sim") for r in runs)
     # runs of one template differ (each run's numbers are its own), as real runs do
     assert len({r["curve"][-1] for r in runs}) == 180
-    db = sqlite3.connect(tmp_path / "data" / "store" / "swarmpath.sqlite3")
+    db = sqlite3.connect(tmp_path / "data" / "this-k3" / "store" / "swarmpath.sqlite3")
     assert db.execute("SELECT COUNT(*) FROM results").fetchone()[0] == 180
     db.close()
-    with open(tmp_path / "data" / "store" / "mcap" / f"{res['job']}.mcap", "rb") as f:
+    mcap = tmp_path / "data" / "this-k3" / "store" / "mcap" / f"{res['job']}.mcap"
+    with open(mcap, "rb") as f:
         ids = [json.loads(msg.data)["run_id"]
                for _s, channel, msg in make_reader(f).iter_messages()
                if channel.topic == "/results"]

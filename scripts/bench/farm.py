@@ -46,8 +46,13 @@ from typing import Any
 import httpx
 
 ROOT = Path(__file__).resolve().parents[2]
-HERE = Path(__file__).resolve().parent
-ENV = {**os.environ, "PYTHONPATH": str(ROOT / "services"), "PYTHONUNBUFFERED": "1"}
+
+
+def tree_env(root: Path) -> dict[str, str]:
+    """The environment that runs the coordinator and the simulator of checkout ``root``."""
+    env = {**os.environ, "PYTHONPATH": str(root / "services"), "PYTHONUNBUFFERED": "1"}
+    env.pop("SWARMPATH_TOKEN", None)
+    return env
 CLK_TCK = os.sysconf("SC_CLK_TCK")
 PAGE = os.sysconf("SC_PAGE_SIZE")
 
@@ -93,9 +98,10 @@ def job_spec(args: argparse.Namespace) -> dict[str, Any]:
 class Farm:
     """The coordinator and the simulator processes (started in __enter__, stopped in __exit__)."""
 
-    def __init__(self, args: argparse.Namespace, data: Path):
+    def __init__(self, args: argparse.Namespace, data: Path, root: Path = ROOT):
         self.args = args
         self.data = data
+        self.root = root
         self.token = secrets.token_urlsafe(24)
         self.login = ("farm", secrets.token_urlsafe(24))
         self.http_port, self.zenoh_port = free_port(), free_port()
@@ -124,16 +130,16 @@ class Farm:
              "--zenoh", f"tcp/127.0.0.1:{self.zenoh_port}", "--data", str(self.data / "store"),
              "--auth-dictionary", str(users), "--lease-seconds", str(a.lease_seconds),
              "--log-level", a.log_level],
-            stdout=self.log, stderr=self.log, env={**ENV, "SWARMPATH_TOKEN": self.token},
-            start_new_session=True)
+            stdout=self.log, stderr=self.log, start_new_session=True,
+            env={**tree_env(self.root), "SWARMPATH_TOKEN": self.token})
         self.wait(lambda: self.client.get("/healthz").status_code == 200, 60, "coordinator")
         procs = max(1, min(a.procs, a.workers))
-        env = {**ENV, "SWARMPATH_ZENOH_USER": self.login[0],
+        env = {**tree_env(self.root), "SWARMPATH_ZENOH_USER": self.login[0],
                "SWARMPATH_ZENOH_PASSWORD": self.login[1]}
         for p in range(procs):
             count = a.workers // procs + (1 if p < a.workers % procs else 0)
             stats = self.data / f"sim-{p}.json"
-            cmd = [sys.executable, str(HERE / "farm_workers.py"),
+            cmd = [sys.executable, str(self.root / "scripts" / "bench" / "farm_workers.py"),
                    "--connect", f"tcp/127.0.0.1:{self.zenoh_port}", "--count", str(count),
                    "--id-prefix", f"sim{p}", "--slots", str(a.slots), "--run-ms", str(a.run_ms),
                    "--max-runs", str(a.runs_per_lease), "--max-leases", str(a.max_leases),
@@ -217,9 +223,12 @@ def store_bytes(store: Path) -> int:
     return sum(p.stat().st_size for p in store.glob("swarmpath.sqlite3*") if p.is_file())
 
 
-def run(args: argparse.Namespace, data: Path) -> dict[str, Any]:
+def run(args: argparse.Namespace, data: Path, root: Path = ROOT) -> dict[str, Any]:
+    """One measurement: a coordinator and ``args.workers`` simulated workers of checkout
+    ``root``, one job, everything under ``data``."""
+    data.mkdir(parents=True, exist_ok=True)
     spec = job_spec(args)
-    with Farm(args, data) as farm:
+    with Farm(args, data, root) as farm:
         assert farm.coordinator is not None
         pid = farm.coordinator.pid
         farm.wait(lambda: farm.alive() >= args.workers, 60 + args.workers * 0.2,
@@ -291,27 +300,40 @@ def run(args: argparse.Namespace, data: Path) -> dict[str, Any]:
     }
 
 
-def markdown(res: dict[str, Any]) -> str:
-    head = ("| K | slots | runs | s | runs/s | coord CPU ms/run | sim CPU s | ack p50/p99 ms | "
-            "lease RTT p50/p99 ms | store B/run | MCAP B/run | RSS MB start/max/end | "
-            "alive | runs/worker min/med/max (none) | load |")
-    sep = "|" + "---|" * (head.count("|") - 1)
-    r = res
-    w = r["runs_per_worker"]
-    row = (f"| {r['workers']} | {r['slots']} | {r['runs_finished']}/{r['runs_total']} | "
-           f"{r['seconds']} | {r['runs_per_s']} | {r['cpu_ms_per_run']} | "
-           f"{r['simulator_cpu_s']} | "
-           f"{r['ack_ms_p50']}/{r['ack_ms_p99']} | {r['lease_rtt_ms_p50']}/"
-           f"{r['lease_rtt_ms_p99']} | {r['store_bytes_per_run']} | {r['mcap_bytes_per_run']} | "
-           f"{r['rss_mb']['start']}/{r['rss_mb']['max']}/{r['rss_mb']['end']} | "
-           f"{r['alive_seen']} | {w['min']}/{w['median']}/{w['max']} ({w['none']}) | "
-           f"{r['load'][0]}-{r['load'][1]} |")
-    return "\n".join([head, sep, row])
+def markdown(results: list[dict[str, Any]]) -> str:
+    head = ("| tree | K | slots | runs | s | runs/s | coord CPU ms/run | sim CPU s | "
+            "ack p50/p99 ms | lease RTT p50/p99 ms | store B/run | MCAP B/run | "
+            "RSS MB start/max/end | alive | runs/worker min/med/max (none) | load |")
+    lines = [head, "|" + "---|" * (head.count("|") - 1)]
+    for r in results:
+        w = r["runs_per_worker"]
+        lines.append(
+            f"| {r['tree']} | {r['workers']} | {r['slots']} | "
+            f"{r['runs_finished']}/{r['runs_total']} | {r['seconds']} | {r['runs_per_s']} | "
+            f"{r['cpu_ms_per_run']} | {r['simulator_cpu_s']} | "
+            f"{r['ack_ms_p50']}/{r['ack_ms_p99']} | {r['lease_rtt_ms_p50']}/"
+            f"{r['lease_rtt_ms_p99']} | {r['store_bytes_per_run']} | {r['mcap_bytes_per_run']} "
+            f"| {r['rss_mb']['start']}/{r['rss_mb']['max']}/{r['rss_mb']['end']} | "
+            f"{r['alive_seen']} | {w['min']}/{w['median']}/{w['max']} ({w['none']}) | "
+            f"{r['load'][0]}-{r['load'][1]} |")
+    base = {r["workers"]: r for r in results if r["tree"] == "baseline"}
+    for r in results:
+        b = base.get(r["workers"])
+        if r["tree"] == "this" and b is not None and b["runs_per_s"] and r["cpu_ms_per_run"]:
+            speed = r["runs_per_s"] / b["runs_per_s"]
+            cpu = b["cpu_ms_per_run"] / r["cpu_ms_per_run"]
+            lines.append(f"\nK = {r['workers']}: runs/s x{speed:.2f}, coordinator CPU per run "
+                         f"/ {cpu:.2f} (this tree against the baseline)")
+    return "\n".join(lines)
 
 
 def parse(argv: list[str] | None = None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--workers", "-k", type=int, default=2, help="simulated workers (K)")
+    ap.add_argument("--workers", "-k", default="2",
+                    help="simulated workers K; a comma list (2,20,200) measures each in turn")
+    ap.add_argument("--baseline", type=Path,
+                    help="also measure this checkout (e.g. `git archive` of main before a change, "
+                    "extracted) alternately with this one, and print the ratios")
     ap.add_argument("--slots", type=int, default=1, help="slots per simulated worker")
     ap.add_argument("--procs", type=int, default=2, help="simulator processes holding them")
     ap.add_argument("--runs", type=int, default=2000, help="runs per cell")
@@ -334,24 +356,38 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
     ap.add_argument("--data", type=Path, help="keep the data directory here (default: temp)")
     ap.add_argument("--log-level", default="warning")
     args = ap.parse_args(argv)
-    if args.workers < 1 or args.slots < 1 or args.runs < 1 or not 1 <= args.cells <= 13 * 50:
+    try:
+        args.worker_counts = [int(k) for k in str(args.workers).split(",")]
+    except ValueError:
+        ap.error(f"--workers: {args.workers!r} is not a comma list of integers")
+    if args.baseline is not None and not (
+            args.baseline / "scripts" / "bench" / "farm_workers.py").is_file():
+        ap.error(f"--baseline: {args.baseline} has no scripts/bench/farm_workers.py")
+    if min(args.worker_counts) < 1 or args.slots < 1 or args.runs < 1 or args.cells < 1:
         ap.error("--workers, --slots, --runs and --cells must be positive")
     return args
 
 
 def main(argv: list[str] | None = None) -> int:
     args = parse(argv)
+    results: list[dict[str, Any]] = []
+    trees = [("this", ROOT)] + ([("baseline", args.baseline)] if args.baseline else [])
     with contextlib.ExitStack() as stack:
         if args.data is None:
             data = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="farm-")))
         else:
             data = args.data
-            data.mkdir(parents=True, exist_ok=True)
-        res = run(args, data)
-    if args.json:
-        args.json.write_text(json.dumps(res, indent=1))
-    print(markdown(res))
-    return 0 if res["state"] == "done" else 1
+        for k in args.worker_counts:
+            for label, root in trees:
+                note(f"farm: {label} tree, K = {k}")
+                res = run(argparse.Namespace(**{**vars(args), "workers": k}),
+                          data / f"{label}-k{k}", root.resolve())
+                res["tree"] = label
+                results.append(res)
+                if args.json:
+                    args.json.write_text(json.dumps(results, indent=1))
+    print(markdown(results))
+    return 0 if all(r["state"] == "done" for r in results) else 1
 
 
 if __name__ == "__main__":
