@@ -10,10 +10,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from numba import njit
 
 from swarmpath.optimizers import ParameterError, minimize, minimize_many
-from swarmpath.optimizers.compiled.power import power
 from swarmpath.optimizers.compiled.registry import find_kernel
+from swarmpath.optimizers.compiled.ufuncs import POWER, power
 
 FAMILY = ("COOT", "mCOOT", "ICOOT")
 FIELDS = ("best_fitness", "best_position", "curve", "evaluations", "shifts")
@@ -97,9 +98,19 @@ def test_leaders_must_leave_a_coot(algo):
                  backend="numba")
 
 
+@njit
+def _powers(loop, data, x, e):
+    call = np.zeros(10, dtype=np.int64)
+    out = np.empty_like(x)
+    for i in range(x.size):
+        out[i] = power(loop, data, x[i], e, call)
+    return out
+
+
 def test_power_is_numpys():
+    # on AVX-512 numpy's power is SVML's, which differs from the C library's pow in the last
+    # bit for about 5% of these arguments
     rng = np.random.default_rng(0)
     x = np.concatenate([1.0 + rng.random(20_000) * 60.0, rng.random(2_000) * 1e-3, [1.0, 2.0]])
     for e in (2.0, -2.0, -1.0, 0.5, 1.0, 1.5, -30.0, 30.0, 0.0):
-        expected = x**e
-        assert np.array_equal([power(v, e) for v in x], expected), e
+        assert np.array_equal(_powers(*POWER, x, e), x**e), e

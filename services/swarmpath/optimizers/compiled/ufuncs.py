@@ -98,3 +98,27 @@ def matmul(loop, data, A, B, C, call):
     call[14] = C.strides[0]
     call[15] = C.strides[1]
     loop(call.ctypes.data, call[3:].ctypes.data, call[7:].ctypes.data, data)
+
+
+POWER = numpy_loop(np.power, "ddd")
+
+
+@njit(cache=True)
+def power(loop, data, x, e, call):
+    """``x ** e`` for float64 numbers as numpy computes an array to a scalar power (the
+    exponent's stride 0: numpy's loop takes its x * x, 1 / x, sqrt(x) shortcuts for e = 2, -1,
+    0.5, and otherwise, on AVX-512, SVML's pow, not the C library's); ``call`` is int64
+    scratch (10,), its last three entries the operands and the result."""
+    values = call[7:].view(np.float64)
+    values[0] = x
+    values[1] = e
+    base = values.ctypes.data
+    call[0] = base
+    call[1] = base + 8
+    call[2] = base + 16
+    call[3] = 1  # one element, the exponent a broadcast scalar
+    call[4] = 8
+    call[5] = 0
+    call[6] = 8
+    loop(call.ctypes.data, call[3:].ctypes.data, call[4:].ctypes.data, data)
+    return values[2]
