@@ -3,7 +3,12 @@
 (``swarmpath up --workers 2`` on free loopback ports, ``--url``).
 
     .venv/bin/python scripts/bench/reproduce.py [--table icoot-table2] [--runs 1000]
-                                                [--skip local|service]
+                                                [--skip local|service] [--backend numba]
+                                                [--no-stacking]
+
+``--backend`` is passed to ``swarmpath reproduce`` (both ways); the service's workers stack the
+leases of a bundle that differ only in the function (docs/service.md, Stacking) unless
+``--no-stacking`` is given, which is passed to ``swarmpath up``.
 
 Each row: the command, its wall time (the whole command: the study, the verdicts, the output),
 the 1-minute load average before and after, and whether both ways gave the same runs (they must:
@@ -63,13 +68,14 @@ def wait_http(url: str, timeout: float = 60.0) -> None:
     raise RuntimeError(f"coordinator at {url} did not answer within {timeout} s")
 
 
-def service_run(args: list[str]) -> tuple[float, dict, float, float]:
+def service_run(args: list[str], up_extra: list[str]) -> tuple[float, dict, float, float]:
     http, zenoh = free_port(), free_port()
     url = f"http://127.0.0.1:{http}"
     with tempfile.TemporaryDirectory() as data:
         proc = subprocess.Popen(
             [*CLI, "up", "--workers", "2", "--http", f"127.0.0.1:{http}",
-             "--zenoh", f"tcp/127.0.0.1:{zenoh}", "--data", data, "--log-level", "warning"],
+             "--zenoh", f"tcp/127.0.0.1:{zenoh}", "--data", data, "--log-level", "warning",
+             *up_extra],
             env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
             start_new_session=True,
         )
@@ -90,8 +96,15 @@ def main() -> None:
     ap.add_argument("--table", default="icoot-table2")
     ap.add_argument("--runs", type=int, default=1000)
     ap.add_argument("--skip", choices=["local", "service"], action="append", default=[])
+    ap.add_argument("--backend", default=None, help="passed to swarmpath reproduce")
+    ap.add_argument("--no-stacking", action="store_true",
+                    help="the service's workers run every lease alone (swarmpath up "
+                         "--no-stacking)")
     opts = ap.parse_args()
     base = ["reproduce", opts.table, "--runs", str(opts.runs), "--json"]
+    if opts.backend:
+        base += ["--backend", opts.backend]
+    up_extra = ["--no-stacking"] if opts.no_stacking else []
     rows, docs = [], []
     if "local" not in opts.skip:
         print("local -j 2 ...", file=sys.stderr)
@@ -100,8 +113,9 @@ def main() -> None:
         docs.append(doc)
     if "service" not in opts.skip:
         print("service, 2 workers ...", file=sys.stderr)
-        seconds, doc, before, after = service_run(base)
-        rows.append((f"swarmpath {' '.join(base)} --url URL (swarmpath up --workers 2)",
+        seconds, doc, before, after = service_run(base, up_extra)
+        up = " ".join(["swarmpath up --workers 2", *up_extra])
+        rows.append((f"swarmpath {' '.join(base)} --url URL ({up})",
                      seconds, before, after))
         docs.append(doc)
     print("| command | wall s | load before / after |")

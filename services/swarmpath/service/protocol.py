@@ -250,8 +250,10 @@ class NoWork(Model):
 class LeaseBundle(Model):
     """Reply to a LeaseRequest with ``max_leases`` > 1: one or more leases (of any cells and jobs)
     that together make about the coordinator's target of work. Each lease is independent (own
-    id, deadline, heartbeats, results); a worker may run them one after the other in one slot
-    and report their results in one ResultBatch."""
+    id, deadline, heartbeats, results); a worker may run them one after the other in one slot,
+    or together where that gives the same numbers (the Python worker stacks the benchmark leases
+    that differ only in their function into one batch), and report their results in one
+    ResultBatch."""
 
     kind: Literal["leases"] = "leases"
     leases: list[Lease] = Field(min_length=1, max_length=MAX_BUNDLE_LEASES)
