@@ -398,3 +398,28 @@ def test_sigkill_the_coordinator_mid_job_and_restart(service):
     direct = minimize("ICOOT", "F9", 10, 20, 800, runs=16, seed=9).best_fitness.tolist()
     assert [r["best_fitness"] for r in runs if r["cell"] == "ICOOT/F9/10"] == direct
     assert "restart" in service.log("coordinator")
+
+
+def test_stacked_leases_through_the_service_equal_minimize_run_by_run(service):
+    """Cells of one algorithm with few runs come bundled and run stacked in a slot process (one
+    batch: runs of different leases are charged the same share of the batch's seconds); every
+    run equals ``minimize`` alone."""
+    import math
+
+    from swarmpath.functions import list_functions
+
+    functions = list_functions()
+    spec = {"kind": "benchmark", "algorithms": ["PSO"], "functions": functions, "dims": [5],
+            "runs": 8, "agents": 10, "iterations": 40, "seed": 21}
+    job = service.submit(spec)
+    assert service.wait_done(job, 120)["state"] == "done"
+    runs = service.runs(job)
+    for f in functions:
+        direct = minimize("PSO", f, 5, 10, 40, runs=8, seed=21)
+        got = [r for r in runs if r["function"] == f]
+        assert [r["best_fitness"] for r in got] == direct.best_fitness.tolist()
+        assert [r["evaluations"] for r in got] == direct.evaluations.tolist()
+    assert any(a["lease_id"] != b["lease_id"] and a["worker"] == b["worker"]
+               and math.isclose(a["seconds"], b["seconds"], rel_tol=1e-9)
+               for a in runs for b in runs), "no two leases ran in one batch"
+    check_complete(service, job, 8 * len(functions))
