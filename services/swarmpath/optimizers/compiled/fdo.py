@@ -25,7 +25,7 @@ from numba import njit
 from swarmpath.optimizers.compiled.functions import evaluate
 from swarmpath.optimizers.compiled.registry import Kernel, register_kernel
 from swarmpath.optimizers.compiled.streams import NORMAL, RANDOM, open_stream, take
-from swarmpath.optimizers.compiled.ufuncs import CBRT, unary
+from swarmpath.optimizers.compiled.ufuncs import CBRT, unary, with_objective
 from swarmpath.optimizers.fdo import _LEVY_SCALE as LEVY_SCALE
 from swarmpath.optimizers.fdo import FDO
 from swarmpath.registry import ParamValue
@@ -121,10 +121,17 @@ def pack(p: Mapping[str, ParamValue]) -> np.ndarray:
 
 
 def run(rng, fid, shifted, shift, lower, upper, agents, iterations, params):
-    """One FDO run (the package's kernel signature): (best value, best point, curve,
-    evaluations). numpy's cbrt loop is an argument of the compiled loop: a global function
-    pointer would keep numba from caching it."""
+    """One FDO run (the package's kernel signature). A Python shim: numpy's cbrt loop is an
+    argument of the compiled loop (a global function pointer would keep numba from caching
+    it)."""
     return _run(rng, fid, shifted, shift, lower, upper, agents, iterations, params, *CBRT)
+
+
+def loop(evaluate, rng, fid, shifted, shift, lower, upper, agents, iterations, params):
+    """``run`` with the objective ``evaluate`` (``functions.evaluate``'s signature), for
+    ``scripts/bench/kernels.py``'s fused loop (compiled per objective, not cached)."""
+    return with_objective(_run, evaluate)(rng, fid, shifted, shift, lower, upper, agents,
+                                          iterations, params, *CBRT)
 
 
 @njit(cache=True)

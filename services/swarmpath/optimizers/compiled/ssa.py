@@ -26,7 +26,7 @@ from numba import njit
 from swarmpath.optimizers.compiled.functions import evaluate
 from swarmpath.optimizers.compiled.registry import Kernel, register_kernel
 from swarmpath.optimizers.compiled.streams import RANDOM, open_stream, take
-from swarmpath.optimizers.compiled.ufuncs import MATMUL, matmul
+from swarmpath.optimizers.compiled.ufuncs import MATMUL, matmul, with_objective
 from swarmpath.optimizers.ssa import SSA
 from swarmpath.registry import ParamValue
 
@@ -48,15 +48,28 @@ def _tables(agents: int, leaders: int, iterations: int) -> tuple[np.ndarray, np.
 
 
 def run(rng, fid, shifted, shift, lower, upper, agents, iterations, params):
-    """One SSA run (the package's kernel signature): (best value, best point, curve,
-    evaluations)."""
-    leaders = agents // 2 if params[0] == 0.0 else 1
-    c1, chain = _tables(agents, leaders, iterations)
+    """One SSA run (the package's kernel signature). A Python shim: the tables and numpy's
+    matmul loop are arguments of the compiled loop (a global function pointer would keep numba
+    from caching it)."""
+    leaders, c1, chain = _setting(agents, iterations, params)
     return _run(rng, fid, shifted, shift, lower, upper, agents, leaders, c1, chain, *MATMUL)
 
 
+def loop(evaluate, rng, fid, shifted, shift, lower, upper, agents, iterations, params):
+    """``run`` with the objective ``evaluate`` (``functions.evaluate``'s signature), for
+    ``scripts/bench/kernels.py``'s fused loop (compiled per objective, not cached)."""
+    leaders, c1, chain = _setting(agents, iterations, params)
+    return with_objective(_run, evaluate)(rng, fid, shifted, shift, lower, upper, agents,
+                                          leaders, c1, chain, *MATMUL)
+
+
+def _setting(agents, iterations, params):
+    leaders = agents // 2 if params[0] == 0.0 else 1
+    return (leaders, *_tables(agents, leaders, iterations))
+
+
 @njit(cache=True)
-def move(stream, X, lower, upper, food, c1, n_leaders, chain, loop, data, out, call):
+def move(stream, X, lower, upper, food, c1, n_leaders, chain, mm, data, out, call):
     """One SSA move of the population X (agents, dim) in place, clipped (not evaluated).
 
     ``food`` is the best point ever evaluated, ``c1`` eq 3.2 at this iteration, ``out``
@@ -75,7 +88,7 @@ def move(stream, X, lower, upper, food, c1, n_leaders, chain, loop, data, out, c
                 lead = -lead
             X[i, j] = lead + food[j]
     # followers: the chain starts at the last leader, moved and not clipped
-    matmul(loop, data, chain, X[n_leaders - 1 :], out, call)
+    matmul(mm, data, chain, X[n_leaders - 1 :], out, call)
     X[n_leaders:] = out
     for i in range(N):
         for j in range(d):
@@ -100,7 +113,7 @@ def record(X, F, best, best_x):
 
 
 @njit(cache=True)
-def _run(rng, fid, shifted, shift, lower, upper, N, n_leaders, c1, chain, loop, data):
+def _run(rng, fid, shifted, shift, lower, upper, N, n_leaders, c1, chain, mm, data):
     d, T = lower.size, c1.size
     stream = open_stream(rng, max(2 * n_leaders * d, N * d, N))
     X = np.empty((N, d))
@@ -120,7 +133,7 @@ def _run(rng, fid, shifted, shift, lower, upper, N, n_leaders, c1, chain, loop, 
     evaluate(stream, fid, shifted, shift, lower, upper, X, F, everyone, work)
     record(X, F, best, best_x)
     for t in range(T):
-        move(stream, X, lower, upper, best_x, c1[t], n_leaders, chain, loop, data, out, call)
+        move(stream, X, lower, upper, best_x, c1[t], n_leaders, chain, mm, data, out, call)
         evaluate(stream, fid, shifted, shift, lower, upper, X, F, everyone, work)
         record(X, F, best, best_x)
         curve[t] = best[0]

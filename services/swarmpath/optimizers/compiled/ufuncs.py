@@ -15,6 +15,7 @@ argument (a ctypes function): as a global it would keep numba from caching them.
 from __future__ import annotations
 
 import ctypes
+import types
 from typing import Any
 
 import numpy as np
@@ -122,3 +123,18 @@ def power(loop, data, x, e, call):
     call[6] = 8
     loop(call.ctypes.data, call[3:].ctypes.data, call[4:].ctypes.data, data)
     return values[2]
+
+
+_FUSED: dict[tuple[Any, Any], Any] = {}
+
+
+def with_objective(kernel: Any, evaluate: Any) -> Any:
+    """The @njit ``kernel`` compiled again with its global ``evaluate`` bound to ``evaluate``
+    (not cached): the benchmark's fused loop. A kernel whose objective is a function argument
+    instead could not be cached together with numpy's loops (numba: "dynamic globals")."""
+    key = (kernel, evaluate)
+    if key not in _FUSED:
+        source = kernel.py_func
+        scope = dict(source.__globals__, evaluate=evaluate)
+        _FUSED[key] = njit(types.FunctionType(source.__code__, scope, source.__name__))
+    return _FUSED[key]
