@@ -46,6 +46,12 @@ Rules for kernel authors:
    the reference over its functions, dimensions, seeds, run ids and batch splits, and checks
    that every algorithm without a kernel refuses ``backend="numba"``.
 6. ``cache=True`` on every @njit (workers compile once); loops over runs stay in Python.
+7. Call the objective through the module-level name ``evaluate`` (``from
+   swarmpath.optimizers.compiled.functions import evaluate``): ``scripts/bench/kernels.py``
+   compiles a copy of ``run`` with that name bound to an evaluate whose function is fixed at
+   compile time (the fused loop of issue 14's target). Do not pass functions as arguments or
+   use ``objmode`` in a kernel (either makes it uncachable or slow; ``functions.numpy_exp``
+   is the one exception, isolated in its own small function).
 """
 
 from swarmpath.optimizers.compiled.registry import (
