@@ -31,7 +31,7 @@ from swarmpath.optimizers.base import ParameterError
 from swarmpath.optimizers.compiled.functions import cospi, dot, evaluate
 from swarmpath.optimizers.compiled.registry import Kernel, register_kernel
 from swarmpath.optimizers.compiled.streams import RANDOM, open_stream, take
-from swarmpath.optimizers.compiled.ufuncs import POWER, power
+from swarmpath.optimizers.compiled.ufuncs import power, with_objective
 from swarmpath.registry import ParamValue
 
 COOT, MCOOT, ICOOT = 0, 1, 2
@@ -111,7 +111,7 @@ def _smallest(keys, m, out):
 
 
 @njit(cache=True)
-def _swarm_terms(CP, nc, cells, p, omega, rest_min, pow_loop, pow_data, call):
+def _swarm_terms(CP, nc, cells, p, omega, rest_min, call):
     """ICOOT's (D, 1 - 1/|alpha|) of the coots CP[:nc] (``ICOOT.swarm_terms``)."""
     d = CP.shape[1]
     widest = -np.inf
@@ -135,9 +135,9 @@ def _swarm_terms(CP, nc, cells, p, omega, rest_min, pow_loop, pow_data, call):
                 second = CP[i, j]
         rest_min[j] = (second - lo) / cells[j]
     r = 0.5 * widest + 1.0
-    density = power(pow_loop, pow_data, r, -p, call)
+    density = power(r, -p, call)
     beta2 = math.sqrt(dot(rest_min, rest_min, d)) if nc >= 2 else 0.0
-    alpha = omega * power(pow_loop, pow_data, r, p, call) * beta2 - nc
+    alpha = omega * power(r, p, call) * beta2 - nc
     free = 1.0 - 1.0 / max(abs(alpha), 1.0)
     return density, free
 
@@ -149,13 +149,15 @@ def _take(stream, size, u, at):
     u[at : at + size] = stream[1][RANDOM][o : o + size]
 
 
-def run(rng, fid, shifted, shift, lb, ub, N, T, params):
-    """One run (the package's kernel signature); numpy's power loop goes in as an argument."""
-    return _run(rng, fid, shifted, shift, lb, ub, N, T, params, *POWER)
+def loop(evaluate_, rng, fid, shifted, shift, lb, ub, N, T, params):
+    """``run`` with the objective ``evaluate_`` (``functions.evaluate``'s signature), for
+    ``scripts/bench/kernels.py``'s fused loop (compiled per objective, not cached)."""
+    return with_objective(run, evaluate_)(rng, fid, shifted, shift, lb, ub, N, T, params)
 
 
 @njit(cache=True)
-def _run(rng, fid, shifted, shift, lb, ub, N, T, params, pow_loop, pow_data):
+def run(rng, fid, shifted, shift, lb, ub, N, T, params):
+    """One run (the package's kernel signature)."""
     d = lb.size
     variant, randoms = int(params[0]), int(params[3])
     nl = int(params[1])
@@ -264,7 +266,7 @@ def _run(rng, fid, shifted, shift, lb, ub, N, T, params, pow_loop, pow_data):
             _take(stream, nl, u, o_extra + nc)
         if use_acc:
             density, free = _swarm_terms(
-                CP, nc, cells, power_, omega, rest_min, pow_loop, pow_data, call
+                CP, nc, cells, power_, omega, rest_min, call
             )
             s = (1.0 - density) + free
             for i in range(nc):

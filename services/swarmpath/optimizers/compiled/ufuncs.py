@@ -9,7 +9,9 @@ reference's numbers bit for bit calls numpy's loop itself: :func:`numpy_loop` re
 ufunc object (``PyUFuncObject`` of numpy's public C API: ``functions``, ``data``, ``ntypes``,
 ``types``), and :func:`unary` and :func:`matmul` call it with numpy's loop convention
 (``args``, ``dimensions``, ``steps``, ``data``). The loop is passed to compiled functions as an
-argument (a ctypes function): as a global it would keep numba from caching them.
+argument (a ctypes function): as a global it would keep numba from caching them. :func:`link`
+instead binds a loop to a symbol name that compiled code calls like a C function (:func:`power`):
+cacheable, and no argument to thread through a kernel.
 """
 
 from __future__ import annotations
@@ -18,8 +20,13 @@ import ctypes
 import types
 from typing import Any
 
+import llvmlite.binding as llvm
 import numpy as np
+from llvmlite import ir
 from numba import njit
+from numba import types as nbtypes
+from numba.core import cgutils
+from numba.extending import intrinsic
 
 # PyUFuncObject (numpy/ufuncobject.h): PyObject_HEAD (16 bytes), int nin, nout, nargs,
 # identity; PyUFuncGenericFunction *functions; void **data; int ntypes, reserved1;
@@ -101,11 +108,38 @@ def matmul(loop, data, A, B, C, call):
     loop(call.ctypes.data, call[3:].ctypes.data, call[7:].ctypes.data, data)
 
 
-POWER = numpy_loop(np.power, "ddd")
+def link(symbol: str, ufunc: np.ufunc, types: str) -> None:
+    """Make numpy's loop for ``ufunc`` on ``types`` callable from compiled code by the name
+    ``symbol`` (see :func:`power`). A call by name, unlike a function pointer argument, keeps
+    the callers cacheable; the name is bound again in every process, at import."""
+    loop, data = numpy_loop(ufunc, types)
+    if data:
+        raise RuntimeError(f"numpy's {ufunc.__name__} loop needs its data pointer")
+    llvm.add_symbol(symbol, ctypes.cast(loop, ctypes.c_void_p).value)
+
+
+_POWER = "swarmpath_numpy_power_ddd"
+link(_POWER, np.power, "ddd")
+
+
+@intrinsic
+def _call_power(typingctx, args, dimensions, steps):
+    """numpy's power loop(args, dimensions, steps, NULL), the three arrays given by address."""
+    signature = nbtypes.void(nbtypes.int64, nbtypes.int64, nbtypes.int64)
+
+    def codegen(context, builder, sig, values):
+        pointer = ir.IntType(8).as_pointer()
+        fnty = ir.FunctionType(ir.VoidType(), [pointer] * 4)
+        fn = cgutils.get_or_insert_function(builder.module, fnty, _POWER)
+        operands = [builder.inttoptr(v, pointer) for v in values]
+        builder.call(fn, [*operands, ir.Constant(pointer, None)])
+        return context.get_dummy_value()
+
+    return signature, codegen
 
 
 @njit(cache=True)
-def power(loop, data, x, e, call):
+def power(x, e, call):
     """``x ** e`` for float64 numbers as numpy computes an array to a scalar power (the
     exponent's stride 0: numpy's loop takes its x * x, 1 / x, sqrt(x) shortcuts for e = 2, -1,
     0.5, and otherwise, on AVX-512, SVML's pow, not the C library's); ``call`` is int64
@@ -121,7 +155,7 @@ def power(loop, data, x, e, call):
     call[4] = 8
     call[5] = 0
     call[6] = 8
-    loop(call.ctypes.data, call[3:].ctypes.data, call[4:].ctypes.data, data)
+    _call_power(call.ctypes.data, call[3:].ctypes.data, call[4:].ctypes.data)  # type: ignore[call-arg]
     return values[2]
 
 
