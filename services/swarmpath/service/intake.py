@@ -14,9 +14,11 @@ from pathlib import Path
 from typing import Any
 
 from swarmpath.service.capability import drop_proof, result_ok
+from swarmpath.service.incoming import Incoming
 from swarmpath.service.lease_sizer import LeaseSizer
 from swarmpath.service.protocol import (
     Ack,
+    AckStatus,
     BenchmarkCell,
     Keys,
     LeaseDrop,
@@ -78,7 +80,7 @@ class ResultIntake:
             self._jobs[job_id] = info
         return info
 
-    def _record(self, job_id: str, results: list[RunResult], now: float) -> None:
+    def _record(self, job_id: str, results: list[Incoming], now: float) -> None:
         """Write accepted results to the job's MCAP (the store has them already)."""
         info = self._job_info(job_id)
         if info is None:
@@ -96,16 +98,51 @@ class ResultIntake:
                     "lease_id": r.lease_id, "status": r.status, "failure": r.failure,
                     "seconds": r.seconds, "metrics": r.metrics, "created": now,
                 }
-                for name in ("curve", "best_position", "path"):
-                    value = getattr(r, name)
-                    if value is not None:
-                        record[name] = value
+                record.update(r.series())
                 self.recorders.add(job_id, record)
 
     def handle_results(self, key: str, payload: bytes, now: float | None = None) -> Ack | None:
         """A ResultBatch on ``results/<job>``: store (one transaction), record, acknowledge.
         Malformed batches are logged and dropped (None)."""
         return self.handle_result_batches([(key, payload)], now)[0]
+
+    def _decode_batch(self, key: str, payload: bytes) -> tuple[str, list[Incoming]] | None:
+        """A result message as (worker, its results); a result is proven (``capability`` set)
+        when it names this message's job and worker and its proof holds. None: malformed."""
+        job_id = Keys.last_chunk(key)
+        try:
+            batch = decode(ResultBatch, payload)
+        except Exception as exc:
+            self.stats["malformed"] += 1
+            log.warning("dropped a malformed result batch on %s: %s", key, _short(exc))
+            return None
+        entries: list[Incoming] = []
+        foreign = unproven = 0
+        for r in batch.results:
+            if r.job_id != job_id or r.worker != batch.worker:
+                foreign += 1
+                entries.append(_unproven(r))
+                continue
+            cap = self._capability(r.lease_id)
+            # no valid proof, no store round trip (a flood of forged results costs no fsync)
+            if cap is not None and result_ok(cap, r):
+                entries.append(Incoming.from_result(r, cap))
+            else:
+                unproven += 1
+                entries.append(_unproven(r))
+        if foreign:
+            log.warning("%d results of %s name another job or worker than their batch: "
+                        "stale", foreign, batch.worker)
+        self._count_unproven(unproven)
+        return batch.worker, entries
+
+    def _count_unproven(self, n: int) -> None:
+        if n:
+            self.stats["unproven"] += n
+            self.stats["unproven_results"] += n
+            if self.stats["unproven_results"] == n:
+                log.warning("results without a valid proof of their lease's capability "
+                            "(counted in swarmpath_messages_unproven_total): stale")
 
     def handle_result_batches(
         self, messages: Sequence[tuple[str, bytes]], now: float | None = None
@@ -114,62 +151,41 @@ class ResultIntake:
         of them are stored in one transaction (one fsync), then each batch is recorded and
         acknowledged to its worker. Returns each message's Ack (None: malformed, dropped)."""
         now = time.time() if now is None else now
-        batches: list[tuple[str, ResultBatch, list[RunResult]] | None] = []
-        for key, payload in messages:
-            job_id = Keys.last_chunk(key)
-            try:
-                batch = decode(ResultBatch, payload)
-            except Exception as exc:
-                self.stats["malformed"] += 1
-                log.warning("dropped a malformed result batch on %s: %s", key, _short(exc))
-                batches.append(None)
-                continue
-            self._seen(batch.worker, now)
-            valid = [r for r in batch.results if r.job_id == job_id and r.worker == batch.worker]
-            if len(valid) < len(batch.results):
-                log.warning("%d results of %s name another job or worker than their batch: "
-                            "stale", len(batch.results) - len(valid), batch.worker)
-            # no valid proof, no store round trip (a flood of forged results costs no fsync)
-            proven = [r for r in valid if result_ok(self._capability(r.lease_id), r)]
-            if len(proven) < len(valid):
-                self.stats["unproven"] += len(valid) - len(proven)
-                self.stats["unproven_results"] += len(valid) - len(proven)
-                if self.stats["unproven_results"] == len(valid) - len(proven):
-                    log.warning("results without a valid proof of their lease's capability "
-                                "(counted in swarmpath_messages_unproven_total): stale")
-            batches.append((job_id, batch, proven))
-        by_id: dict[int, str] = {}
-        todo: list[RunResult] = []
+        batches = [self._decode_batch(key, payload) for key, payload in messages]
+        status: dict[int, AckStatus] = {}
+        todo: list[Incoming] = []
         with self._lock:  # re-sent copies of results stored moments ago: no store round trip
             for item in batches:
-                for r in item[2] if item is not None else ():
+                if item is None:
+                    continue
+                self._seen(item[0], now)
+                for r in item[1]:
+                    if r.capability is None:
+                        continue
                     owner, cap, runs = self._settled.get(r.lease_id, ("", "", ()))
-                    if owner == r.worker and r.run in runs and result_ok(cap, r):
-                        by_id[id(r)] = "duplicate"
+                    if owner == r.worker and r.run in runs and cap == r.capability:
+                        status[id(r)] = "duplicate"
                         self.stats["duplicates_fast"] += 1
                     else:
                         todo.append(r)
         statuses = self.store.accept_results(todo, now) if todo else []
-        by_id.update((id(r), s) for r, s in zip(todo, statuses, strict=True))
-        with self._lock:
-            fresh = {r.lease_id for r, s in zip(todo, statuses, strict=True)
-                     if s != "stale" and r.lease_id not in self._settled}
-        caps = {lease_id: self._capability(lease_id) or "" for lease_id in fresh}
+        accepted: dict[str, list[Incoming]] = {}
         with self._lock:
             for r, s in zip(todo, statuses, strict=True):
-                if s != "stale":  # the lease exists, is r.worker's and r proved its capability
-                    entry = self._settled.get(r.lease_id)
-                    if entry is None:
-                        entry = self._settled[r.lease_id] = (r.worker, caps.get(r.lease_id, ""),
-                                                             set())
-                    entry[2].add(r.run)
+                status[id(r)] = s
+                if s == "stale":
+                    continue
+                # the lease exists, is r.worker's and r proved its capability
+                entry = self._settled.get(r.lease_id)
+                if entry is None:
+                    entry = self._settled[r.lease_id] = (r.worker, r.capability or "", set())
+                else:
                     self._settled.move_to_end(r.lease_id)
+                entry[2].add(r.run)
+                if s == "accepted":
+                    accepted.setdefault(r.job_id, []).append(r)
             while len(self._settled) > SETTLED_LEASES:
                 self._settled.popitem(last=False)
-        accepted: dict[str, list[RunResult]] = {}
-        for r in todo:
-            if by_id[id(r)] == "accepted":
-                accepted.setdefault(r.job_id, []).append(r)
         for job_id, results in accepted.items():
             self._after_accept(job_id, results, now)
         acks: list[Ack | None] = []
@@ -177,16 +193,17 @@ class ResultIntake:
             if item is None:
                 acks.append(None)
                 continue
-            _job_id, batch, _valid = item
-            ack = Ack(
-                worker=batch.worker,
+            worker, entries = item
+            ack = Ack.model_construct(
+                worker=worker,
                 results=[
-                    RunAck(lease_id=r.lease_id, job_id=r.job_id, cell=r.cell, run=r.run,
-                           status=by_id.get(id(r), "stale"))  # type: ignore[arg-type]
-                    for r in batch.results
+                    RunAck.model_construct(lease_id=r.lease_id, job_id=r.job_id, cell=r.cell,
+                                           run=r.run, status=status.get(id(r), "stale"))
+                    for r in entries
                 ],
+                drop_leases=[],
             )
-            self._send(self.keys.ack(batch.worker), encode(ack))
+            self._send(self.keys.ack(worker), encode(ack))
             acks.append(ack)
         return acks
 
@@ -206,7 +223,7 @@ class ResultIntake:
             while len(self._caps) > CACHED_CAPABILITIES:
                 self._caps.popitem(last=False)
 
-    def _after_accept(self, job_id: str, accepted: list[RunResult], now: float) -> None:
+    def _after_accept(self, job_id: str, accepted: list[Incoming], now: float) -> None:
         """Learn run costs, write the MCAP, finalize the job when it ended."""
         with self._lock:
             self._accepted.append((now, len(accepted)))
@@ -260,6 +277,11 @@ class ResultIntake:
         ack = Ack(worker=msg.worker, drop_leases=[drop])
         self._send(self.keys.ack(msg.worker), encode(ack))
         return ack
+
+
+def _unproven(r: RunResult) -> Incoming:
+    """A result that proved nothing: its identity only (for its ack), never stored."""
+    return Incoming(r.lease_id, r.job_id, r.cell, r.run, r.worker, r.status, None, 0.0, {})
 
 
 def _cell(spec: Mapping[str, Any]) -> BenchmarkCell | MapCell:

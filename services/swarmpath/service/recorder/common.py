@@ -46,16 +46,17 @@ def _clamp(v: float) -> float:
     return -_BIG if v < 0 else _BIG
 
 
-def clamped(values: Any) -> list[float]:
-    """A curve as a list of finite floats (non-finite values clamped, see :func:`_clamp`);
-    vectorized: a 500-value curve costs microseconds, not a Python loop per value."""
+def clamped(values: Any, as_array: bool = False) -> Any:
+    """A curve as a list of finite floats (non-finite values clamped, see :func:`_clamp`), or
+    as a float64 array with ``as_array``; vectorized: a 500-value curve costs microseconds,
+    not a Python loop per value."""
     import numpy as np
 
     arr = np.asarray(values, dtype=float)
     bad = ~np.isfinite(arr)
     if bad.any():
         arr = np.where(bad, np.where(arr < 0, -_BIG, _BIG), arr)
-    return arr.tolist()  # type: ignore[no-any-return]
+    return arr if as_array else arr.tolist()
 
 
 def _json(obj: Any) -> bytes:

@@ -10,7 +10,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, BinaryIO
 
-import pydantic_core
+import numpy as np
+import orjson
 from mcap.writer import CompressionType, IndexType, Writer
 
 from swarmpath.service import foxglove as fg
@@ -44,6 +45,16 @@ from swarmpath.service.recorder.schemas import OWN_SCHEMAS
 LAYOUT_VERSION = 2  # 2: a frame per map (/tf), static occupancy, swarmpath.run metadata
 FLUSH_INTERVAL = 1.0
 CHUNK_SIZE = 1024 * 1024
+
+
+def _fast_json(message: dict[str, Any]) -> bytes:
+    """``message`` as compact JSON, numpy arrays included (orjson; the general encoder for what
+    orjson refuses, e.g. an integer beyond 64 bits)."""
+    try:
+        return orjson.dumps(message, option=orjson.OPT_SERIALIZE_NUMPY)
+    except TypeError:
+        return _json({k: v.tolist() if isinstance(v, np.ndarray) else v
+                      for k, v in message.items()})
 
 
 # --------------------------------------------------------------------------------- recorder
@@ -177,14 +188,17 @@ class JobRecorder:
         identity = {"algorithm": spec["algorithm"], "function": spec["function"],
                     "dim": int(spec["dim"])}
         ns = _ns(record["created"])
-        self._put("/results", "swarmpath.BenchmarkRunResult", ns, self._result_message(
-            record, {**identity, "backend": spec.get("backend") or "numpy"}))
+        self._put("/results", "swarmpath.BenchmarkRunResult", ns, _fast_json(self._result_message(
+            record, {**identity, "backend": spec.get("backend") or "numpy"})))
         curve = record.get("curve")
         if curve is not None and len(curve):
-            self._put("/curves", "swarmpath.ConvergenceCurve", ns, pydantic_core.to_json({
+            # the curve as a float64 array: orjson writes its shortest round-trip decimals
+            # straight from the buffer (the same text as for a list of the same floats)
+            self._put("/curves", "swarmpath.ConvergenceCurve", ns, _fast_json({
                 "job_id": record["job_id"], "run_id": int(record["run_id"]),
                 "cell": record["cell"], "run": int(record["run"]), "seed": int(record["seed"]),
-                **identity, "iterations": len(curve), "best_fitness": clamped(curve),
+                **identity, "iterations": len(curve),
+                "best_fitness": np.ascontiguousarray(clamped(curve, as_array=True)),
             }))
 
     def _map_run(self, record: dict[str, Any]) -> None:

@@ -1,12 +1,18 @@
-"""Results: fencing and storing what workers report."""
+"""Results: fencing and storing what workers report.
+
+A batch is stored in one transaction; inside it, the results of each lease are checked run by
+run against that lease (its worker, its job and cell, its runs, its capability) and the lease,
+cell and job rows are read and updated once per lease, not once per run."""
 
 from __future__ import annotations
 
+import hmac
 import sqlite3
 import time
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 
 from swarmpath.service.capability import result_ok
+from swarmpath.service.incoming import Incoming
 from swarmpath.service.protocol import (
     AckStatus,
     RunResult,
@@ -18,83 +24,127 @@ from swarmpath.service.store.series import encode_series
 class ResultsMixin(StoreBase):
     """Results: fencing and storing what workers report."""
 
-    def accept_result(self, result: RunResult, now: float | None = None) -> AckStatus:
+    def accept_result(self, result: RunResult | Incoming, now: float | None = None) -> AckStatus:
         """Store one result under the fencing rules (module docstring); never double-counts."""
         return self.accept_results([result], now)[0]
 
     def accept_results(
-        self, results: Iterable[RunResult], now: float | None = None
+        self, results: Iterable[RunResult | Incoming], now: float | None = None
     ) -> list[AckStatus]:
-        """Several results in one transaction (one fsync); statuses in input order."""
+        """Several results in one transaction (one fsync); statuses in input order.
+
+        An :class:`Incoming` counts as proven when its ``capability`` (the secret its proof was
+        checked with) is the lease's; a :class:`RunResult` has its proof checked here."""
         now = time.time() if now is None else now
+        items = list(results)
+        out: list[AckStatus] = ["stale"] * len(items)
+        groups: dict[str, list[int]] = {}
+        for i, r in enumerate(items):
+            groups.setdefault(r.lease_id, []).append(i)
         with self._tx() as db:
-            out = [self._accept(db, r, now) for r in results]
-            counts = {s: out.count(s) for s in ("accepted", "duplicate", "stale")}
+            for lease_id, indexes in groups.items():
+                statuses = self._accept_lease(db, lease_id, [items[i] for i in indexes], now)
+                for i, status in zip(indexes, statuses, strict=True):
+                    out[i] = status
             for status, counter in (
                 ("accepted", "results_accepted"), ("duplicate", "duplicates"), ("stale", "stale")
             ):
-                if counts[status]:
-                    self._bump(db, counter, counts[status])
+                n = out.count(status)
+                if n:
+                    self._bump(db, counter, n)
         return out
 
-    def _accept(self, db: sqlite3.Connection, r: RunResult, now: float) -> AckStatus:
-        lease = db.execute("SELECT * FROM leases WHERE lease_id = ?", (r.lease_id,)).fetchone()
-        if lease is None or lease["worker"] != r.worker or not result_ok(lease["capability"], r):
-            return "stale"
+    def _accept_lease(
+        self, db: sqlite3.Connection, lease_id: str, rs: Sequence[RunResult | Incoming],
+        now: float,
+    ) -> list[AckStatus]:
+        """The results of one lease (all with ``lease_id``), fenced run by run."""
+        out: list[AckStatus] = ["stale"] * len(rs)
+        lease = db.execute(
+            "SELECT worker, job_seq, cell_idx, runs, state, capability FROM leases "
+            "WHERE lease_id = ?", (lease_id,)).fetchone()
+        if lease is None or lease["state"] == "cancelled" or not lease["capability"]:
+            return out
         job = db.execute(
-            "SELECT seq, id, kind, state, runs_total FROM jobs WHERE seq = ?", (lease["job_seq"],)
+            "SELECT id, kind, state FROM jobs WHERE seq = ?", (lease["job_seq"],)
         ).fetchone()
-        if job["id"] != r.job_id or job["state"] == "cancelled" or lease["state"] == "cancelled":
-            return "stale"
-        cell = db.execute(
-            "SELECT idx FROM cells WHERE job_seq = ? AND key = ?", (job["seq"], r.cell)
-        ).fetchone()
-        if cell is None or cell["idx"] != lease["cell_idx"]:
-            return "stale"
-        if r.run not in self._runs_of(r.lease_id, lease["runs"]):
-            return "stale"
-        seq, cell_idx = job["seq"], cell["idx"]
-        ok = r.status == "ok"
-        raw = r.metrics.get("best_fitness") if job["kind"] == "benchmark" else None
-        value = float(raw) if isinstance(raw, int | float) and not isinstance(raw, bool) else None
-        series = {"curve": r.curve, "best_position": r.best_position, "path": r.path}
-        cur = db.execute(
-            "INSERT OR IGNORE INTO results (job_seq, cell_idx, run, lease_id, worker, status,"
+        if job["state"] == "cancelled":
+            return out
+        seq, cell_idx, cap = lease["job_seq"], lease["cell_idx"], lease["capability"]
+        key = db.execute(
+            "SELECT key FROM cells WHERE job_seq = ? AND idx = ?", (seq, cell_idx)
+        ).fetchone()["key"]
+        runs = self._runs_of(lease_id, lease["runs"])
+        fresh: dict[int, int] = {}  # run -> index in rs of its first valid result
+        for k, r in enumerate(rs):
+            if (r.worker != lease["worker"] or r.job_id != job["id"] or r.cell != key
+                    or r.run not in runs or not _proven(cap, r)):
+                continue
+            if r.run in fresh:
+                out[k] = "duplicate"
+            else:
+                fresh[r.run] = k
+        if not fresh:
+            return out
+        lo, hi = min(fresh), max(fresh)
+        stored = {row[0] for row in db.execute(
+            "SELECT run FROM results WHERE job_seq = ? AND cell_idx = ? AND run BETWEEN ? AND ?",
+            (seq, cell_idx, lo, hi))}
+        benchmark = job["kind"] == "benchmark"
+        rows = []
+        ok_runs: list[int] = []
+        failed = 0
+        for run, k in fresh.items():
+            if run in stored:
+                out[k] = "duplicate"
+                continue
+            out[k] = "accepted"
+            r = rs[k]
+            ok = r.status == "ok"
+            if ok:
+                ok_runs.append(run)
+            else:
+                failed += 1
+            raw = r.metrics.get("best_fitness") if benchmark else None
+            value = float(raw) if isinstance(raw, int | float) and not isinstance(raw, bool) \
+                else None
+            series = {"curve": r.curve, "best_position": r.best_position, "path": r.path}
+            rows.append((seq, cell_idx, run, lease_id, r.worker, r.status, r.failure, value,
+                         r.seconds, _dumps(r.metrics), encode_series(series), now))
+        if not rows:
+            return out
+        db.executemany(
+            "INSERT INTO results (job_seq, cell_idx, run, lease_id, worker, status,"
             " failure, value, seconds, metrics, series, created)"
-            " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
-            (
-                seq, cell_idx, r.run, r.lease_id, r.worker, r.status, r.failure, value,
-                r.seconds, _dumps(r.metrics),
-                encode_series(series),
-                now,
-            ),
-        )
-        if cur.rowcount == 0:
-            return "duplicate"
-        db.execute(
-            "DELETE FROM requeue WHERE job_seq = ? AND cell_idx = ? AND run = ?",
-            (seq, cell_idx, r.run),
-        )
-        column = "done" if ok else "failed"
-        db.execute(
-            f"UPDATE cells SET {column} = {column} + 1 WHERE job_seq = ? AND idx = ?",
-            (seq, cell_idx),
-        )
-        # every active lease holding this run (its own, or the one it was requeued into)
+            " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)", rows)
+        accepted = {row[2] for row in rows}
+        requeued = [row[0] for row in db.execute(
+            "SELECT run FROM requeue WHERE job_seq = ? AND cell_idx = ? AND run BETWEEN ? AND ?",
+            (seq, cell_idx, lo, hi)) if row[0] in accepted]
+        if requeued:
+            db.executemany(
+                "DELETE FROM requeue WHERE job_seq = ? AND cell_idx = ? AND run = ?",
+                [(seq, cell_idx, run) for run in requeued])
+        done = len(ok_runs)
+        db.execute("UPDATE cells SET done = done + ?, failed = failed + ? "
+                   "WHERE job_seq = ? AND idx = ?", (done, failed, seq, cell_idx))
+        # every active lease holding these runs (their own, or the one they were requeued into)
         for active in db.execute(
             "SELECT lease_id, runs FROM leases WHERE job_seq = ? AND cell_idx = ? "
-            "AND state = 'active'",
-            (seq, cell_idx),
+            "AND state = 'active'", (seq, cell_idx),
         ).fetchall():
-            if r.run in self._runs_of(active["lease_id"], active["runs"]):
+            held = self._runs_of(active["lease_id"], active["runs"])
+            n = len(accepted & held) if len(held) < len(accepted) else \
+                sum(1 for run in accepted if run in held)
+            if n:
                 db.execute(
-                    "UPDATE leases SET pending = pending - 1, "
-                    "state = CASE WHEN pending <= 1 THEN 'done' ELSE state END, "
-                    "ended = CASE WHEN pending <= 1 THEN ? ELSE ended END WHERE lease_id = ?",
-                    (now, active["lease_id"]),
+                    "UPDATE leases SET pending = pending - ?, "
+                    "state = CASE WHEN pending <= ? THEN 'done' ELSE state END, "
+                    "ended = CASE WHEN pending <= ? THEN ? ELSE ended END WHERE lease_id = ?",
+                    (n, n, n, now, active["lease_id"]),
                 )
-        column = "runs_done" if ok else "runs_failed"
-        db.execute(f"UPDATE jobs SET {column} = {column} + 1 WHERE seq = ?", (seq,))
+        db.execute("UPDATE jobs SET runs_done = runs_done + ?, runs_failed = runs_failed + ? "
+                   "WHERE seq = ?", (done, failed, seq))
         row = db.execute(
             "SELECT runs_done, runs_failed, runs_total, state FROM jobs WHERE seq = ?", (seq,)
         ).fetchone()
@@ -110,4 +160,11 @@ class ResultsMixin(StoreBase):
                 "AND state = 'active'",
                 (now, seq),
             )
-        return "accepted"
+        return out
+
+
+def _proven(capability: str, r: RunResult | Incoming) -> bool:
+    """``r`` proved ``capability`` (the lease's secret, never empty here)."""
+    if isinstance(r, Incoming):
+        return r.capability is not None and hmac.compare_digest(r.capability, capability)
+    return result_ok(capability, r)

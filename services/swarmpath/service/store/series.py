@@ -9,41 +9,54 @@ from typing import Any
 
 from swarmpath.service.store.base import _dumps
 
-#: Binary series (see encode_series): this prefix, then zlib of (header length as uint32 LE,
-#: header JSON, the arrays' float64 LE bytes in header order).
-SERIES_MAGIC = b"SPS1"
+#: Binary series (see encode_series): this prefix, then (header length as uint32 LE, header
+#: JSON, the arrays' float64 LE bytes in header order), not compressed: compressing cost more
+#: coordinator CPU than writing the bytes (docs/benchmarks.md, coordinator profile).
+SERIES_MAGIC = b"SPS2"
+#: The earlier form: the same body, zlib-compressed (still read).
+SERIES_MAGIC_ZLIB = b"SPS1"
+_HEADS: dict[tuple[tuple[str, tuple[int, ...]], ...], bytes] = {}  # header bytes by shapes
 
 
 def encode_series(series: dict[str, Any]) -> bytes | None:
     """A run's series (curve, best position, path rows) for the ``results.series`` column: the
-    arrays as float64 bytes, exact and about 10x cheaper to write than JSON text; None if
-    empty. (Rows written before this format hold zlib(JSON); :func:`decode_series` reads both.)"""
+    arrays as float64 bytes, exact and far cheaper to write than JSON text; None if empty.
+    (Rows written before this format hold zlib of it, or zlib(JSON); :func:`decode_series`
+    reads all three.)"""
     import numpy as np
 
-    header: list[list[Any]] = []
+    shapes: list[tuple[str, tuple[int, ...]]] = []
     parts: list[bytes] = []
     for name, value in series.items():
         if value is None:
             continue
         arr = np.asarray(value, dtype="<f8")
-        header.append([name, list(arr.shape)])
+        shapes.append((name, arr.shape))
         parts.append(arr.tobytes())
-    if not header:
+    if not shapes:
         return None
-    head = _dumps(header).encode()
-    body = len(head).to_bytes(4, "little") + head + b"".join(parts)
-    return SERIES_MAGIC + zlib.compress(body, 1)
+    key = tuple(shapes)
+    head = _HEADS.get(key)
+    if head is None:
+        text = _dumps([[name, list(shape)] for name, shape in shapes]).encode()
+        head = len(text).to_bytes(4, "little") + text
+        if len(_HEADS) < 4096:
+            _HEADS[key] = head
+    return SERIES_MAGIC + head + b"".join(parts)
 
 
 def decode_series(blob: bytes | None) -> dict[str, Any]:
     """The series of a ``results.series`` value as lists (curve: floats, path: [x, y, t] rows)."""
     if blob is None:
         return {}
-    if not blob.startswith(SERIES_MAGIC):
+    if blob.startswith(SERIES_MAGIC):
+        body = bytes(blob[len(SERIES_MAGIC):])
+    elif blob.startswith(SERIES_MAGIC_ZLIB):
+        body = zlib.decompress(blob[len(SERIES_MAGIC_ZLIB):])
+    else:
         return dict(json.loads(zlib.decompress(blob)))
     import numpy as np
 
-    body = zlib.decompress(blob[len(SERIES_MAGIC):])
     n = int.from_bytes(body[:4], "little")
     offset = 4 + n
     out: dict[str, Any] = {}

@@ -45,7 +45,7 @@ class _BenchmarkCell:
         self.ok[run] = True
         best = _number(metrics.get("best_fitness"))
         self.best[run] = math.inf if best is None else best
-        if curve:
+        if curve is not None and len(curve):
             stride = int(_number(metrics.get("curve_stride")) or 1)
             err = sample_curve(curve, self.grid, stride) - self.f_star
             self.rows[run] = np.maximum(err, 0.0)
