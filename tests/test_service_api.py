@@ -47,6 +47,7 @@ from swarmpath.service.protocol import (
     decode_work_reply,
     encode,
 )
+from swarmpath.service.result_frame import as_dict, decode_frame, decode_record
 from swarmpath.service.worker import (
     Cancelled,
     ThreadSlot,
@@ -95,6 +96,17 @@ def core(client, app) -> Coordinator:
     core = app.state.core
     core.publish = Wire()
     return core
+
+
+def frame_results(payload: bytes) -> list[dict]:
+    """The results of a result frame as RunResult fields."""
+    return [as_dict(r) for r in decode_frame(payload)[1]]
+
+
+def as_json_result(record: bytes, capability: str) -> RunResult:
+    """A worker's frame record as the JSON RunResult with its proof (the JSON form)."""
+    r = RunResult(**as_dict(decode_record(record)))
+    return r.model_copy(update={"proof": result_proof(capability, r)})
 
 
 def lease_for(core: Coordinator, worker: str = "w1", max_runs: int = 100) -> Lease | NoWork:
@@ -298,7 +310,7 @@ def test_forged_results_and_stolen_lease_ids_are_stale(client, core):
     job = client.post("/jobs", json=SPEC).json()
     core.worker_alive("w1")
     lease = lease_for(core)
-    real = [decode(RunResult, d) for _r, d in execute_lease(lease)]
+    real = [as_json_result(d, lease.capability) for _r, d in execute_lease(lease)]
     key = f"swarmpath/results/{job['id']}"
     forged = [r.model_copy(update={"metrics": {**r.metrics, "best_fitness": -12345.0},
                                    "proof": None}) for r in real]
@@ -314,6 +326,26 @@ def test_forged_results_and_stolen_lease_ids_are_stale(client, core):
               if r["state"] == "done"]
     assert sorted(values) == sorted(r.metrics["best_fitness"] for r in real)
     assert -12345.0 not in values
+
+
+def test_a_result_frame_is_checked_record_by_record(client, core):
+    """One altered record of a frame (a bit of its curve) is stale; the others are accepted
+    and stored with their exact curves."""
+    job = client.post("/jobs", json=SPEC).json()
+    core.worker_alive("w1")
+    lease = lease_for(core)
+    records = [d for _r, d in execute_lease(lease)]
+    altered = bytearray(records[1])
+    altered[-40] ^= 0x01  # inside the last array, before the proof
+    payload = pack_batches("w1", [records[0], bytes(altered), *records[2:]])[0]
+    ack = core.handle_results(f"swarmpath/results/{job['id']}", payload)
+    assert [a.status for a in ack.results] == ["accepted", "stale"] + ["accepted"] * (
+        len(records) - 2)
+    for rec in (records[0], records[-1]):
+        sent = as_dict(decode_record(rec))
+        run = core.store.run(job["id"], lease.cell_index * SPEC["runs"] + sent["run"])
+        assert run["curve"] == sent["curve"] and run["best_fitness"] == sent["metrics"][
+            "best_fitness"]
 
 
 def test_leases_only_to_live_workers_and_requeue_when_gone(client, core):
@@ -435,7 +467,7 @@ def test_execute_lease_equals_minimize_and_splits_batches(monkeypatch, backend):
     assert benchmark_batches([3, 5, 7], 6, 4) == [[3, 5], [7]]
     got = execute_lease(make_lease(spec, [3, 5, 7]))
     direct = minimize("GWO", "F9", 4, 6, 10, seed=4, run_ids=[3, 5, 7])
-    values = [json.loads(d)["metrics"]["best_fitness"] for _r, d in got]
+    values = [as_dict(decode_record(d))["metrics"]["best_fitness"] for _r, d in got]
     assert [r for r, _d in got] == [3, 5, 7]
     assert values == direct.best_fitness.tolist()
 
@@ -443,7 +475,7 @@ def test_execute_lease_equals_minimize_and_splits_batches(monkeypatch, backend):
 def test_execute_lease_failures_and_cancellation():
     spec = BenchmarkCell(algorithm="GWO", function="F1", dim=2, agents=6, iterations=5,
                          params={"nope": 1})
-    results = [json.loads(d) for _r, d in execute_lease(make_lease(spec, [0, 1]))]
+    results = [as_dict(decode_record(d)) for _r, d in execute_lease(make_lease(spec, [0, 1]))]
     assert [r["status"] for r in results] == ["failed", "failed"]
     assert "nope" in results[0]["failure"]
     ok = spec.model_copy(update={"params": {}})
@@ -472,18 +504,21 @@ def test_thread_slot_runs_a_lease():
 
 
 def test_pack_batches_and_fit_result():
-    results = [json.dumps({"i": i, "pad": "x" * 300}).encode() for i in range(10)]
-    batches = pack_batches("w1", results, limit=1000)
-    assert len(batches) > 1 and all(len(b) <= 1000 for b in batches)
-    merged = [r for b in batches for r in json.loads(b)["results"]]
-    assert [r["i"] for r in merged] == list(range(10))
     spec = BenchmarkCell(algorithm="GWO", function="F1", dim=2, agents=6, iterations=5)
-    from swarmpath.service.protocol import RunResult
+    lease = make_lease(spec, list(range(10)))
+    records = [fit_result(RunResult(lease_id="L1", job_id="j1", cell=spec.key, run=i,
+                                    worker="w1", seconds=0.5, curve=[float(i)] * 40),
+                          capability=lease.capability) for i in range(10)]
+    frames = pack_batches("w1", records, limit=2000)
+    assert len(frames) > 1 and all(len(f) <= 2000 for f in frames)
+    merged = [r for f in frames for r in frame_results(f)]
+    assert [r["run"] for r in merged] == list(range(10))
+    assert all(r["curve"] == [float(r["run"])] * 40 for r in merged)
 
     big = RunResult(lease_id="L1", job_id="j1", cell=spec.key, run=0, worker="w1", seconds=1.0,
                     curve=[1.0 / (i + 1) for i in range(50_000)])
     data = fit_result(big, limit=100_000)
-    obj = json.loads(data)
+    obj = as_dict(decode_record(data))
     assert len(data) <= 100_000 and obj["metrics"]["curve_stride"] > 1
     assert obj["curve"][0] == 1.0 and obj["curve"][-1] == 1.0 / 50_000
 
@@ -577,7 +612,7 @@ def test_worker_resends_until_acknowledged():
     w._last_ack = t + 4  # ... (an ack came 1.5 s ago): no resend
     assert w.resend_due(t + 5.5) == 0
     assert w.resend_due(t + 9.5) == 2  # silent for longer than ack_timeout: put again
-    assert len(w._session.puts) == 2 and len(json.loads(w._session.puts[1][1])["results"]) == 2
+    assert len(w._session.puts) == 2 and len(frame_results(w._session.puts[1][1])) == 2
     w._on_ack(run_ack(lease, [1, 2], status="duplicate"))
     assert w._pending == {} and w.resend_due(t + 100) == 0
 
@@ -593,7 +628,7 @@ def test_worker_resends_a_result_overtaken_by_a_later_one():
     w._publish_results(second, execute_lease(second))
     w._on_ack(run_ack(second, [1]))  # the later put was handled: the first one was lost
     assert w.resend_due(_time.monotonic() + 5.1) == 1
-    assert json.loads(w._session.puts[-1][1])["results"][0]["lease_id"] == "L1"
+    assert frame_results(w._session.puts[-1][1])[0]["lease_id"] == "L1"
 
 
 def test_worker_drops_leases_only_on_the_coordinators_word():
@@ -785,8 +820,8 @@ def test_worker_prefetches_and_runs_bundles_in_one_slot():
     assert not w._wants_work() and len(w._queue) == 1
     assert w.heartbeat_due(w._active["L3"].received + 60) == 3  # queued leases renew too
     assert done.wait(60)
-    puts = [json.loads(p) for k, p in w._session.puts if k == "swarmpath/results/j1"]
-    assert [[r["lease_id"] for r in p["results"]] for p in puts] == [["L1", "L2"], ["L3"]]
+    puts = [frame_results(p) for k, p in w._session.puts if k == "swarmpath/results/j1"]
+    assert [[r["lease_id"] for r in p] for p in puts] == [["L1", "L2"], ["L3"]]
     assert w._wants_work() and len(w._pending) == 3
     for slot in w._slots:
         slot.close()

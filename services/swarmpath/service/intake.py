@@ -31,6 +31,7 @@ from swarmpath.service.protocol import (
     encode,
 )
 from swarmpath.service.recorder import Recorders
+from swarmpath.service.result_frame import decode_frame, is_frame, record_ok
 from swarmpath.service.settings import CoordinatorSettings
 from swarmpath.service.store import FINAL_STATES, Store
 from swarmpath.service.util import short as _short
@@ -107,15 +108,50 @@ class ResultIntake:
         return self.handle_result_batches([(key, payload)], now)[0]
 
     def _decode_batch(self, key: str, payload: bytes) -> tuple[str, list[Incoming]] | None:
-        """A result message as (worker, its results); a result is proven (``capability`` set)
-        when it names this message's job and worker and its proof holds. None: malformed."""
-        job_id = Keys.last_chunk(key)
+        """A result message (a result frame, or a JSON ResultBatch) as (worker, its results); a
+        result is proven (``capability`` set) when it names this message's job and worker and
+        its proof holds. None: malformed, dropped."""
         try:
-            batch = decode(ResultBatch, payload)
+            if is_frame(payload):
+                return self._decode_frame(key, payload)
+            return self._decode_json(key, decode(ResultBatch, payload))
         except Exception as exc:
             self.stats["malformed"] += 1
             log.warning("dropped a malformed result batch on %s: %s", key, _short(exc))
             return None
+
+    def _decode_frame(self, key: str, payload: bytes) -> tuple[str, list[Incoming]]:
+        job_id = Keys.last_chunk(key)
+        worker, records = decode_frame(payload)
+        entries: list[Incoming] = []
+        caps: dict[str, str | None] = {}
+        foreign = unproven = 0
+        for rec in records:
+            h = rec.head
+            entry = Incoming(h.lease_id, h.job_id, h.cell, h.run, h.worker, h.status, None, 0.0,
+                             {})
+            entries.append(entry)
+            if h.job_id != job_id or h.worker != worker:
+                foreign += 1
+                continue
+            if h.lease_id not in caps:
+                caps[h.lease_id] = self._capability(h.lease_id)
+            cap = caps[h.lease_id]
+            # no valid proof, no store round trip (a flood of forged results costs no fsync)
+            if cap is None or not record_ok(cap, rec):
+                unproven += 1
+                continue
+            entry.failure, entry.seconds, entry.metrics = h.failure, h.seconds, h.metrics
+            entry.curve = rec.arrays.get("curve")
+            entry.best_position = rec.arrays.get("best_position")
+            entry.path = rec.arrays.get("path")
+            entry.capability = cap
+        self._count_foreign(foreign, worker)
+        self._count_unproven(unproven)
+        return worker, entries
+
+    def _decode_json(self, key: str, batch: ResultBatch) -> tuple[str, list[Incoming]]:
+        job_id = Keys.last_chunk(key)
         entries: list[Incoming] = []
         foreign = unproven = 0
         for r in batch.results:
@@ -124,17 +160,20 @@ class ResultIntake:
                 entries.append(_unproven(r))
                 continue
             cap = self._capability(r.lease_id)
-            # no valid proof, no store round trip (a flood of forged results costs no fsync)
             if cap is not None and result_ok(cap, r):
                 entries.append(Incoming.from_result(r, cap))
             else:
                 unproven += 1
                 entries.append(_unproven(r))
-        if foreign:
-            log.warning("%d results of %s name another job or worker than their batch: "
-                        "stale", foreign, batch.worker)
+        self._count_foreign(foreign, batch.worker)
         self._count_unproven(unproven)
         return batch.worker, entries
+
+    @staticmethod
+    def _count_foreign(n: int, worker: str) -> None:
+        if n:
+            log.warning("%d results of %s name another job or worker than their batch: stale",
+                        n, worker)
 
     def _count_unproven(self, n: int) -> None:
         if n:

@@ -28,7 +28,8 @@ CANCEL_LEASES = 2000  # lease drops in one Cancel message
 INLINE_SCENARIO_BYTES = 16_000
 MAX_SCENARIO_BYTES = 64 * 1024 * 1024  # a fetched scenario (canonical JSON) at most
 
-PROTOCOL_VERSION = 3  # 2: lease capabilities (swarmpath.service.capability); 3: ScenarioRef
+PROTOCOL_VERSION = 4  # 2: lease capabilities (swarmpath.service.capability); 3: ScenarioRef;
+# 4: results travel as binary result frames (swarmpath.service.result_frame)
 DEFAULT_PREFIX = "swarmpath"
 
 # Identifiers that appear inside key expressions: one chunk, none of the reserved characters.

@@ -76,6 +76,7 @@ from swarmpath.service.model import (
     Scalar,
     Secret,
 )
+from swarmpath.service.result_frame import FrameHead, RunResultHead
 from swarmpath.service.spec_checks import (
     INT64,
     FieldProblems,
@@ -112,6 +113,7 @@ __all__ = [
     "Cancel",
     "CellSpec",
     "FieldProblems",
+    "FrameHead",
     "Identifier",
     "JobSpec",
     "JobState",
@@ -136,6 +138,7 @@ __all__ = [
     "RunProgress",
     "RunRequest",
     "RunResult",
+    "RunResultHead",
     "RunState",
     "Scalar",
     "ScenarioRef",
@@ -457,6 +460,8 @@ SCHEMA_MODELS: dict[str, Any] = {
     "run_progress": RunProgress,
     "run_result": RunResult,
     "result_batch": ResultBatch,
+    "result_frame_head": FrameHead,
+    "run_result_head": RunResultHead,
     "ack": Ack,
     "lease_drop": LeaseDrop,
     "cancel": Cancel,

@@ -1,24 +1,25 @@
-"""Results on the wire: one result thinned to fit a message, results packed into batches."""
+"""Results on the wire: one result as a binary record (thinned to fit a message), records packed
+into result frames (:mod:`swarmpath.service.result_frame`, protocol 4)."""
 
 from __future__ import annotations
 
-import json
 import logging
 from collections.abc import Sequence
 from typing import Any
 
-from swarmpath.service.capability import result_proof
+import numpy as np
+
 from swarmpath.service.protocol import (
     MAX_BODY_BYTES,
     RunResult,
-    encode,
 )
+from swarmpath.service.result_frame import RunResultHead, encode_record, pack_frames
 
 log = logging.getLogger("swarmpath.worker")
 
 
-#: Result batches are cut to stay below this many bytes of JSON (the coordinator drops > 1 MB).
-BATCH_BYTES = 512_000
+#: Result frames are cut to stay below this many bytes (the coordinator drops > 1 MB).
+BATCH_BYTES = 900_000
 #: A single result larger than this has its curve (and path) thinned to fit.
 RESULT_BYTES = MAX_BODY_BYTES - 4096
 
@@ -30,9 +31,9 @@ def _scalar(v: Any) -> bool:
 def fit_result(
     result: RunResult, limit: int = RESULT_BYTES, capability: str | None = None
 ) -> bytes:
-    """The encoded result, its curve (and path) thinned to evenly spaced samples, first and last
-    kept, when it would not fit in one message (``metrics.curve_stride`` records the stride);
-    with ``capability`` (the lease's secret) it carries its proof."""
+    """The result as a frame record, its curve (and path) thinned to evenly spaced samples, first
+    and last kept, when it would not fit in one message (``metrics.curve_stride`` records the
+    stride); with ``capability`` (the lease's secret) it carries its proof."""
     data = _encode(result, capability)
     stride = 1
     while len(data) > limit and stride < 1 << 20:
@@ -50,9 +51,16 @@ def fit_result(
 
 
 def _encode(result: RunResult, capability: str | None) -> bytes:
-    if capability:
-        result = result.model_copy(update={"proof": result_proof(capability, result)})
-    return encode(result)
+    head = RunResultHead(
+        lease_id=result.lease_id, job_id=result.job_id, cell=result.cell, run=result.run,
+        worker=result.worker, status=result.status, failure=result.failure,
+        seconds=result.seconds, metrics=result.metrics,
+    )
+    arrays = {"curve": result.curve, "best_position": result.best_position, "path": result.path}
+    if result.path is not None and not result.path:
+        arrays["path"] = np.zeros((0, 3))
+    return encode_record(head, {k: np.asarray(v, dtype="<f8") for k, v in arrays.items()
+                                if v is not None}, capability)
 
 
 def _thin(values: Sequence[Any], stride: int) -> list[Any]:
@@ -63,17 +71,6 @@ def _thin(values: Sequence[Any], stride: int) -> list[Any]:
 
 
 def pack_batches(worker: str, results: Sequence[bytes], limit: int = BATCH_BYTES) -> list[bytes]:
-    """ResultBatch payloads from encoded results, each at most ``limit`` bytes when possible."""
-    head = b'{"worker":' + json.dumps(worker).encode() + b',"results":['
-    out: list[bytes] = []
-    chunk: list[bytes] = []
-    size = len(head) + 2
-    for r in results:
-        if chunk and size + len(r) + 1 > limit:
-            out.append(head + b",".join(chunk) + b"]}")
-            chunk, size = [], len(head) + 2
-        chunk.append(r)
-        size += len(r) + 1
-    if chunk:
-        out.append(head + b",".join(chunk) + b"]}")
-    return out
+    """Result frames from records (:func:`fit_result`), each at most ``limit`` bytes when
+    possible."""
+    return pack_frames(worker, results, limit)
