@@ -98,6 +98,11 @@ def core(client, app) -> Coordinator:
     return core
 
 
+def statuses(ack: Ack | None) -> set[str]:
+    assert ack is not None
+    return {status for _lease, _run, status in ack.statuses()}
+
+
 def frame_results(payload: bytes) -> list[dict]:
     """The results of a result frame as RunResult fields."""
     return [as_dict(r) for r in decode_frame(payload)[1]]
@@ -122,7 +127,7 @@ def work_off(core: Coordinator, worker: str = "w1", max_runs: int = 100) -> int:
         results = execute_lease(lease)
         for payload in pack_batches(worker, [data for _run, data in results]):
             ack = core.handle_results(f"swarmpath/results/{lease.job_id}", payload)
-            assert ack is not None and {r.status for r in ack.results} == {"accepted"}
+            assert ack is not None and statuses(ack) == {"accepted"}
         n += len(results)
     return n
 
@@ -257,13 +262,12 @@ def test_duplicates_stale_and_garbage(client, core, caplog):
     key = f"swarmpath/results/{job['id']}"
     first = core.handle_results(key, payloads[0])
     again = core.handle_results(key, payloads[0])
-    assert {r.status for r in first.results} == {"accepted"}
-    assert {r.status for r in again.results} == {"duplicate"}
+    assert statuses(first) == {"accepted"}
+    assert statuses(again) == {"duplicate"}
     # someone else's lease, or published under another job's key: stale
     forged = payloads[0].replace(b'"worker":"w1"', b'"worker":"w2"')
-    assert {r.status for r in core.handle_results(key, forged).results} == {"stale"}
-    assert {r.status for r in core.handle_results("swarmpath/results/other",
-                                                  payloads[0]).results} == {"stale"}
+    assert statuses(core.handle_results(key, forged)) == {"stale"}
+    assert statuses(core.handle_results("swarmpath/results/other", payloads[0])) == {"stale"}
     with caplog.at_level(logging.WARNING, logger="swarmpath.coordinator"):
         for garbage in (b"", b"\xff\x00", b"{}", b"[1,2]", b'{"worker": "w1", "results": []}',
                         b"x" * 2_000_000):
@@ -318,10 +322,10 @@ def test_forged_results_and_stolen_lease_ids_are_stale(client, core):
     altered = [r.model_copy(update={"metrics": forged[0].metrics}) for r in real]  # proof kept
     for batch in (forged, guessed, altered):
         payload = encode(ResultBatch(worker="w1", results=batch))
-        assert {a.status for a in core.handle_results(key, payload).results} == {"stale"}
+        assert statuses(core.handle_results(key, payload)) == {"stale"}
     assert client.get(f"/jobs/{job['id']}").json()["runs_done"] == 0
     payload = encode(ResultBatch(worker="w1", results=real))
-    assert {a.status for a in core.handle_results(key, payload).results} == {"accepted"}
+    assert statuses(core.handle_results(key, payload)) == {"accepted"}
     values = [r["best_fitness"] for r in client.get(f"/jobs/{job['id']}/runs").json()["items"]
               if r["state"] == "done"]
     assert sorted(values) == sorted(r.metrics["best_fitness"] for r in real)
@@ -339,8 +343,8 @@ def test_a_result_frame_is_checked_record_by_record(client, core):
     altered[-40] ^= 0x01  # inside the last array, before the proof
     payload = pack_batches("w1", [records[0], bytes(altered), *records[2:]])[0]
     ack = core.handle_results(f"swarmpath/results/{job['id']}", payload)
-    assert [a.status for a in ack.results] == ["accepted", "stale"] + ["accepted"] * (
-        len(records) - 2)
+    runs = [as_dict(decode_record(rec))["run"] for rec in records]
+    assert ack.leases[0].accepted == [runs[0], *runs[2:]] and ack.leases[0].stale == [runs[1]]
     for rec in (records[0], records[-1]):
         sent = as_dict(decode_record(rec))
         run = core.store.run(job["id"], lease.cell_index * SPEC["runs"] + sent["run"])
@@ -379,7 +383,7 @@ def test_cancel_publishes_and_finalizes(client, core):
     assert client.get(f"/jobs/{job['id']}/mcap").status_code == 200
     results = pack_batches("w1", [d for _r, d in execute_lease(lease)])
     ack = core.handle_results(f"swarmpath/results/{job['id']}", results[0])
-    assert {r.status for r in ack.results} == {"stale"}
+    assert statuses(ack) == {"stale"}
     assert isinstance(lease_for(core), NoWork)
     assert client.delete(f"/jobs/{job['id']}").json()["state"] == "cancelled"
 
@@ -789,9 +793,9 @@ def test_lease_bundles_and_group_commit(core, client):
     acks = core.handle_result_batches([(key, first), (key, b"garbage"), (key, second),
                                        (key, first)])
     assert acks[1] is None
-    assert [r.status for r in acks[0].results] == ["accepted", "accepted"]
-    assert [r.status for r in acks[2].results] == ["accepted", "accepted"]
-    assert [r.status for r in acks[3].results] == ["duplicate", "duplicate"]
+    assert [s for _lease, _run, s in acks[0].statuses()] == ["accepted", "accepted"]
+    assert [s for _lease, _run, s in acks[2].statuses()] == ["accepted", "accepted"]
+    assert [s for _lease, _run, s in acks[3].statuses()] == ["duplicate", "duplicate"]
     assert client.get(f"/jobs/{job}").json()["state"] == "done"
     assert isinstance(lease_for(core), NoWork)
     single = decode_work_reply(core.handle_lease_request(encode(LeaseRequest(worker="w1"))))

@@ -233,8 +233,8 @@ class SimWorker(Worker):
             ack = None
         if ack is not None:
             with self._lock:
-                for r in ack.results:
-                    entry = self._pending.get((r.lease_id, r.run))
+                for lease_id, run, _status in ack.statuses():
+                    entry = self._pending.get((lease_id, run))
                     if entry is not None and entry.sent:
                         self.ack_ms.append((now - entry.sent) * 1e3)
         super()._on_ack(sample)

@@ -247,7 +247,7 @@ class ZenohBridge:
                         group.append((nxt[1], nxt[2]))
                         size += len(nxt[2])
                     started = time.perf_counter()
-                    self.core.handle_result_batches(group)
+                    self.core.handle_result_batches(group, parse_acks=False)
                     rate = size / max(time.perf_counter() - started, 1e-6)
                     self._drain_rate += 0.2 * (rate - self._drain_rate)
                 elif kind == "progress":

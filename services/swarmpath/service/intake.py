@@ -13,6 +13,8 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+import orjson
+
 from swarmpath.service.capability import drop_proof, result_ok
 from swarmpath.service.incoming import Incoming
 from swarmpath.service.lease_sizer import LeaseSizer
@@ -24,7 +26,6 @@ from swarmpath.service.protocol import (
     LeaseDrop,
     MapCell,
     ResultBatch,
-    RunAck,
     RunProgress,
     RunResult,
     decode,
@@ -184,11 +185,13 @@ class ResultIntake:
                             "(counted in swarmpath_messages_unproven_total): stale")
 
     def handle_result_batches(
-        self, messages: Sequence[tuple[str, bytes]], now: float | None = None
+        self, messages: Sequence[tuple[str, bytes]], now: float | None = None,
+        parse_acks: bool = True,
     ) -> list[Ack | None]:
-        """Several ResultBatch messages (key, payload) at once - group commit: the results of all
-        of them are stored in one transaction (one fsync), then each batch is recorded and
-        acknowledged to its worker. Returns each message's Ack (None: malformed, dropped)."""
+        """Several result messages (key, payload) at once - group commit: the results of all
+        of them are stored in one transaction (one fsync), then each message is recorded and
+        acknowledged to its worker (one Ack, statuses per lease). Returns each message's Ack
+        (None: malformed, dropped; all None when ``parse_acks`` is False: the Ack is only put)."""
         now = time.time() if now is None else now
         batches = [self._decode_batch(key, payload) for key, payload in messages]
         status: dict[int, AckStatus] = {}
@@ -233,17 +236,19 @@ class ResultIntake:
                 acks.append(None)
                 continue
             worker, entries = item
-            ack = Ack.model_construct(
-                worker=worker,
-                results=[
-                    RunAck.model_construct(lease_id=r.lease_id, job_id=r.job_id, cell=r.cell,
-                                           run=r.run, status=status.get(id(r), "stale"))
-                    for r in entries
-                ],
-                drop_leases=[],
-            )
-            self._send(self.keys.ack(worker), encode(ack))
-            acks.append(ack)
+            per_lease: dict[str, dict[str, list[int]]] = {}
+            for r in entries:
+                lease = per_lease.get(r.lease_id)
+                if lease is None:
+                    lease = per_lease[r.lease_id] = {"accepted": [], "duplicate": [], "stale": []}
+                lease[status.get(id(r), "stale")].append(r.run)
+            payload = orjson.dumps({
+                "worker": worker, "results": [],
+                "leases": [{"lease_id": lease_id, **runs} for lease_id, runs in per_lease.items()],
+                "drop_leases": [],
+            })
+            self._send(self.keys.ack(worker), payload)
+            acks.append(Ack.model_validate_json(payload) if parse_acks else None)
         return acks
 
     def _capability(self, lease_id: str) -> str | None:

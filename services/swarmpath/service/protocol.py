@@ -120,6 +120,7 @@ __all__ = [
     "JobStatus",
     "Keys",
     "Lease",
+    "LeaseAck",
     "LeaseBundle",
     "LeaseDrop",
     "LeaseRequest",
@@ -333,15 +334,36 @@ class LeaseDrop(Model):
     proof: Secret
 
 
+class LeaseAck(Model):
+    """The statuses of one lease's results in an :class:`Ack`: its run indices by status."""
+
+    lease_id: str
+    accepted: list[int] = Field(default_factory=list)
+    duplicate: list[int] = Field(default_factory=list)
+    stale: list[int] = Field(default_factory=list)
+
+
 class Ack(Model):
     """Published on ``<prefix>/ack/<worker>`` after the results are durably stored.
 
-    ``drop_leases``: leases the worker must abandon (cancelled, expired, unknown); it stops their
-    unfinished runs and stops retrying their results."""
+    ``leases``: the statuses of the message's results, per lease (protocol 4; ``results``, one
+    entry per result, is what protocol 3 sent and stays readable). ``drop_leases``: leases the
+    worker must abandon (cancelled, expired, unknown); it stops their unfinished runs and stops
+    retrying their results."""
 
     worker: Identifier
     results: list[RunAck] = Field(default_factory=list)
+    leases: list[LeaseAck] = Field(default_factory=list)
     drop_leases: list[LeaseDrop] = Field(default_factory=list, max_length=MAX_BUNDLE_LEASES * 16)
+
+    def statuses(self) -> list[tuple[str, int, AckStatus]]:
+        """(lease id, run, status) of every result acknowledged, in either form."""
+        out: list[tuple[str, int, AckStatus]] = [(r.lease_id, r.run, r.status)
+                                                 for r in self.results]
+        for la in self.leases:
+            for status in ("accepted", "duplicate", "stale"):
+                out += [(la.lease_id, run, status) for run in getattr(la, status)]
+        return out
 
 
 class Cancel(Model):
@@ -443,7 +465,7 @@ def error_fields(exc: Exception) -> list[str]:
 # receives (from users and workers) as it reads them (fields with defaults may be left out).
 SENT_BY_COORDINATOR = frozenset(
     {"cell_spec", "run_request", "work_reply", "lease", "lease_bundle", "no_work", "ack", "cancel",
-     "lease_drop", "worker_status", "job_status"}
+     "lease_drop", "lease_ack", "worker_status", "job_status"}
 )
 SCHEMA_MODELS: dict[str, Any] = {
     "job_spec": JOB_SPEC_ADAPTER,
@@ -464,6 +486,7 @@ SCHEMA_MODELS: dict[str, Any] = {
     "run_result_head": RunResultHead,
     "ack": Ack,
     "lease_drop": LeaseDrop,
+    "lease_ack": LeaseAck,
     "cancel": Cancel,
     "worker_status": WorkerStatus,
     "job_status": JobStatus,

@@ -162,15 +162,16 @@ class Reporting:
         except Exception as exc:
             log.warning("ignored a malformed ack: %s", " ".join(str(exc).split())[:200])
             return
+        settled = ack.statuses()
         with self._wake:
-            if ack.results:
+            if settled:
                 self._last_ack = time.monotonic()
-            for r in ack.results:
-                entry = self._pending.pop((r.lease_id, r.run), None)
+            for lease_id, run, status in settled:
+                entry = self._pending.pop((lease_id, run), None)
                 if entry is not None:
                     self._acked_seq = max(self._acked_seq, entry.seq)
-                if r.status == "stale":
-                    log.info("result %s run %d was stale (%s)", r.cell, r.run, r.lease_id)
+                if status == "stale":
+                    log.info("result of run %d was stale (%s)", run, lease_id)
             for drop in ack.drop_leases:
                 self._drop_proven(drop, "coordinator dropped")
             self._wake.notify_all()
