@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import base64
 import hashlib
+import json
 import sys
 from pathlib import Path
 
@@ -27,6 +28,7 @@ from swarmpath.service.protocol import (
     decode_work_reply,
     encode,
 )
+from swarmpath.service.result_frame import as_dict, decode_frame, decode_record
 from swarmpath.service.scenarios import (
     ByteLRU,
     ScenarioRefused,
@@ -153,7 +155,7 @@ def test_a_large_scenario_travels_by_reference_and_is_refused_to_anyone_else(
             while not episode.done:
                 episode.step()
             direct = episode.outcome()
-            assert f'"length":{direct.length!r}' in payload.decode()
+            assert as_dict(decode_record(payload))["metrics"]["length"] == direct.length
         for payload in pack_batches("w1", [data for _run, data in results]):
             core.handle_results(f"swarmpath/results/{lease.job_id}", payload)
         runs = c.get(f"/jobs/{lease.job_id}/runs").json()["items"]
@@ -325,7 +327,7 @@ def test_the_worker_fails_a_lease_whose_scenario_is_refused_and_goes_on(data_dir
         worker._take([wrong])
         assert wrong.lease_id not in worker._active and not worker._queue
         (key, payload), = session.puts
-        batch = payload.decode()
+        batch = json.dumps([as_dict(r) for r in decode_frame(payload)[1]], separators=(",", ":"))
         assert key.endswith(wrong.job_id) and '"status":"failed"' in batch
         assert f"map {map_id}: the coordinator did not send scenario" in batch
         assert "refused: lease" in batch and "has no scenario" in batch
