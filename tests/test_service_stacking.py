@@ -4,7 +4,6 @@ cancellation; the lease sizer shares a learned cost within a family of stackable
 
 from __future__ import annotations
 
-import json
 import threading
 import time
 
@@ -12,7 +11,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from swarmpath.optimizers import minimize
-from swarmpath.service.capability import new_capability, result_ok
+from swarmpath.service.capability import new_capability
 from swarmpath.service.coordinator import Coordinator, CoordinatorSettings, LeaseSizer, create_app
 from swarmpath.service.protocol import (
     BenchmarkCell,
@@ -21,10 +20,10 @@ from swarmpath.service.protocol import (
     LeaseRequest,
     MapCell,
     RunResult,
-    decode,
     decode_work_reply,
     encode,
 )
+from swarmpath.service.result_frame import as_dict, decode_record, record_ok
 from swarmpath.service.worker import Cancelled, ThreadSlot, pack_batches
 from swarmpath.service.worker.stacking import execute_stack, plan_stacks, stacked_outcomes
 
@@ -43,7 +42,11 @@ def fn(spec: BenchmarkCell, function: str, **changes: object) -> BenchmarkCell:
 
 
 def decoded(outcome: list[tuple[int, bytes]]) -> list[RunResult]:
-    return [decode(RunResult, data) for _run, data in outcome]
+    return [RunResult(**as_dict(decode_record(data))) for _run, data in outcome]
+
+
+def proven(capability: str, outcome: list[tuple[int, bytes]]) -> list[bool]:
+    return [record_ok(capability, decode_record(data)) for _run, data in outcome]
 
 
 def test_leases_differing_only_in_the_function_share_a_stack():
@@ -84,9 +87,9 @@ def test_a_stack_gives_each_lease_the_numbers_of_minimize_and_its_own_proofs():
         assert [r.curve for r in results] == direct.curve.tolist()
         assert [r.best_position for r in results] == direct.best_position.tolist()
         assert all(r.lease_id == one.lease_id and r.cell == one.cell for r in results)
-        assert all(result_ok(one.capability, r) for r in results)
+        assert all(proven(one.capability, outcome))
         other = group[(group.index(one) + 1) % 4]
-        assert not any(result_ok(other.capability, r) for r in results)
+        assert not any(proven(other.capability, outcome))
 
 
 def test_cancelling_one_lease_of_a_stack_and_then_all():
@@ -179,14 +182,14 @@ def test_stacked_bundles_through_the_coordinator_equal_minimize_run_by_run(core)
         outcomes = dict(stacked_outcomes(group, [lambda: False] * len(group)))
         results = [data for i in range(len(group)) for _run, data in outcomes[i]]
         if len(group) > 1:  # a result claimed for another lease of the stack is refused
-            forged = json.loads(results[0])
-            forged["lease_id"] = group[1].lease_id
+            forged = results[0].replace(group[0].lease_id.encode(), group[1].lease_id.encode())
+            assert forged != results[0]
             ack = coordinator.handle_results(
-                f"swarmpath/results/{job}", pack_batches("w1", [json.dumps(forged).encode()])[0])
-            assert ack is not None and [r.status for r in ack.results] == ["stale"]
+                f"swarmpath/results/{job}", pack_batches("w1", [forged])[0])
+            assert ack is not None and [s for _l, _r, s in ack.statuses()] == ["stale"]
         for payload in pack_batches("w1", results):
             ack = coordinator.handle_results(f"swarmpath/results/{job}", payload)
-            assert ack is not None and {r.status for r in ack.results} == {"accepted"}
+            assert ack is not None and {s for _l, _r, s in ack.statuses()} == {"accepted"}
     assert stacked >= 3  # bundles hold several cells of one algorithm: they ran stacked
     assert client.get(f"/jobs/{job}").json()["state"] == "done"
     items = client.get(f"/jobs/{job}/runs", params={"limit": 100}).json()["items"]
