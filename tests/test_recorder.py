@@ -485,3 +485,33 @@ def test_maps_have_their_own_frames_side_by_side_and_runs_their_metadata(tmp_pat
     assert (small_run["map"], small_run["run"], small_run["success"]) == ("small", "2", "true")
     assert small_run["scene_topic"] == "/scene/P/small" and small_run["entity_prefix"] == "run-2/"
     assert small_run["frame_id"] == "map/small"
+
+
+# -------------------------------------------------------------------------- recorder process
+def test_the_recorder_process_writes_what_the_store_holds_even_after_dying(store):
+    """The MCAP written by the recorder process (poked as results are stored, killed once
+    midway and restarted) has exactly the messages of the file the coordinator's own recorders
+    write from the same store."""
+    from swarmpath.service.recorder.process import RecorderProcess
+
+    job = store.create_job(SPEC, now=T0)
+    recorder = RecorderProcess(store.data_dir)
+    try:
+        lease = store.lease("w1", 3, now=T0)
+        assert set(store.accept_results(execute(lease), T0)) == {"accepted"}
+        recorder.poke(job)
+        recorder._proc.kill()  # a crash: the next call starts another, which rebuilds
+        recorder._proc.join(10)
+        assert drain(store) == 17
+        recorder.poke(job)
+        path = recorder.finish(job)
+        assert path == final_path(store.data_dir, job) and recorder.ready(job)
+    finally:
+        recorder.close()
+    assert recorder._proc.exitcode is not None
+    summary, meta, got = read_all(path)
+    check_indexed(summary)
+    path.rename(path.with_name("process.mcap"))
+    _summary, meta_in, want = read_all(Recorders(store).finish(job))
+    assert [(c.topic, m, t) for _s, c, m, t in got] == [(c.topic, m, t) for _s, c, m, t in want]
+    assert len(got) == 40 and meta == meta_in

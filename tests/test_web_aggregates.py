@@ -103,6 +103,28 @@ def test_job_aggregates_benchmark_view_is_incremental_and_deduplicated():
     assert view["groups"][0]["algorithms"]["GWO"]["runs"] == 0
 
 
+def test_adding_runs_together_equals_adding_them_one_by_one():
+    """add_many (what the coordinator calls per accepted batch, curves as arrays) gives the same
+    view as add per run: whole curves, a thinned one, failures, repeats, unknown cells."""
+    rng = np.random.default_rng(3)
+    entries = []
+    for cell in range(4):
+        for run in range(4):
+            curve = np.minimum.accumulate(rng.uniform(0.0, 10.0, 20))
+            metrics: dict = {"best_fitness": float(curve[-1])}
+            if (cell, run) == (1, 2):  # a thinned curve (every 4th value, and the last)
+                curve, metrics = np.append(curve[::4], curve[-1]), {**metrics, "curve_stride": 4}
+            entries.append((cell, run, (cell, run) != (2, 1), metrics, curve, None))
+    entries += [entries[0], (9, 0, True, {}, None, None), (0, 7, True, {}, None, None)]
+    one = agg.JobAggregates("j1", "benchmark", _bench_cells())
+    for cell, run, ok, metrics, curve, path in entries:
+        one.add(cell, run, ok=ok, metrics=metrics, curve=curve, path=path)
+    many = agg.JobAggregates("j1", "benchmark", _bench_cells())
+    assert many.add_many(entries) == 16 and many.add_many(entries[:3]) == 0
+    a, b = one.view(), many.view()
+    assert a == b and a["groups"][1]["algorithms"]["GWO"]["failed"] == 1
+
+
 def test_job_aggregates_map_view_counts_success_and_marks_failures():
     spec = {"kind": "map", "planner": "ICOOT", "map": "m1", "scenario": None, "params": {}}
     job = agg.JobAggregates("j2", "map", [{"index": 0, "key": "ICOOT/m1", "spec": spec,

@@ -8,8 +8,9 @@ Starts ``swarmpath up --workers N`` (one slot each; free loopback ports, a fresh
 submits one job of GWO on F1-F4, 2 dims, 2 agents, ``--iterations`` iterations (each result carries
 a curve of that many points) and ``--runs`` runs, waits for its end and prints one Markdown row:
 runs, seconds (the coordinator's ``finished - started``), runs/s, CPU seconds of the coordinator
-process (``swarmpath up`` itself: REST, Zenoh router, store, MCAP recorder) during the job and
-per run, CPU of the workers and slots, and the 1-minute load average before and after.
+process (``swarmpath up`` itself: REST, Zenoh router, result intake, store) during the job and
+per run, the same for its MCAP recorder process (which follows the store on its own core), CPU
+of the workers and slots, and the 1-minute load average before and after.
 
 ``--profile OUT``: samples the coordinator process with py-spy (``pip install py-spy``; not a
 dependency of the project) during the job and writes its ``--format raw`` stacks to OUT; the
@@ -87,11 +88,12 @@ def main(argv: list[str] | None = None) -> int:
             spy.wait(60)
     secs, total = elapsed(st), st["runs_total"]
     cpu = st["cpu"]
-    print("| runs | s | runs/s | coordinator CPU s | per run | workers / slots CPU s "
-          "| load before -> after |")
-    print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    print("| runs | s | runs/s | coordinator CPU s | per run | recorder CPU s | per run "
+          "| workers / slots CPU s | load before -> after |")
+    print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     print(f"| {total} | {secs:.2f} | {total / secs:,.0f} | {cpu['coordinator']:.2f} "
-          f"| {1000 * cpu['coordinator'] / total:.3f} ms | {cpu['workers']:.1f} / "
+          f"| {1000 * cpu['coordinator'] / total:.3f} ms | {cpu['recorder']:.2f} "
+          f"| {1000 * cpu['recorder'] / total:.3f} ms | {cpu['workers']:.1f} / "
           f"{cpu['slots']:.1f} | {st['load'][0]:.2f} -> {st['load'][1]:.2f} |")
     if args.profile is not None and args.profile.exists():
         print()

@@ -76,6 +76,21 @@ def proc_cpu_rss(pid: int) -> tuple[float, float]:
     return cpu, rss
 
 
+def children_cpu(pid: int) -> float:
+    """CPU seconds of the live children of ``pid`` (the coordinator's MCAP recorder process)."""
+    total = 0.0
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                text = (entry / "stat").read_text()
+            except OSError:
+                continue
+            fields = text[text.rindex(")") + 2:].split()
+            if int(fields[1]) == pid:
+                total += (int(fields[11]) + int(fields[12])) / CLK_TCK
+    return total
+
+
 def percentile(values: list[float], q: float) -> float:
     if not values:
         return float("nan")
@@ -237,6 +252,7 @@ def run(args: argparse.Namespace, data: Path, root: Path = ROOT) -> dict[str, An
         store0 = store_bytes(data / "store")
         load0 = os.getloadavg()[0]
         cpu0, rss0 = proc_cpu_rss(pid)
+        rec0 = children_cpu(pid)
         sim0 = farm.sim_cpu()
         t0 = time.monotonic()
         r = farm.client.post("/jobs", json=spec)
@@ -257,6 +273,7 @@ def run(args: argparse.Namespace, data: Path, root: Path = ROOT) -> dict[str, An
                 break
             time.sleep(0.5)
         cpu1, rss1 = proc_cpu_rss(pid)
+        rec1 = children_cpu(pid)
         sim1 = farm.sim_cpu()
         load1 = os.getloadavg()[0]
         metrics = farm.metrics()
@@ -277,6 +294,7 @@ def run(args: argparse.Namespace, data: Path, root: Path = ROOT) -> dict[str, An
         "seconds": round(span, 3), "runs_per_s": round(done / span, 1) if span > 0 else None,
         "coordinator_cpu_s": round(cpu1 - cpu0, 2),
         "cpu_ms_per_run": round((cpu1 - cpu0) * 1e3 / max(1, done), 4),
+        "recorder_cpu_ms_per_run": round((rec1 - rec0) * 1e3 / max(1, done), 4),
         "simulator_cpu_s": round(sim1 - sim0, 2),
         "ack_ms_p50": round(percentile(ack, 50), 2), "ack_ms_p99": round(percentile(ack, 99), 2),
         "lease_rtt_ms_p50": round(percentile(rtt, 50), 2),
@@ -301,8 +319,8 @@ def run(args: argparse.Namespace, data: Path, root: Path = ROOT) -> dict[str, An
 
 
 def markdown(results: list[dict[str, Any]]) -> str:
-    head = ("| tree | K | slots | runs | s | runs/s | coord CPU ms/run | sim CPU s | "
-            "ack p50/p99 ms | lease RTT p50/p99 ms | store B/run | MCAP B/run | "
+    head = ("| tree | K | slots | runs | s | runs/s | coord CPU ms/run | recorder CPU ms/run "
+            "| sim CPU s | ack p50/p99 ms | lease RTT p50/p99 ms | store B/run | MCAP B/run | "
             "RSS MB start/max/end | alive | runs/worker min/med/max (none) | load |")
     lines = [head, "|" + "---|" * (head.count("|") - 1)]
     for r in results:
@@ -310,7 +328,8 @@ def markdown(results: list[dict[str, Any]]) -> str:
         lines.append(
             f"| {r['tree']} | {r['workers']} | {r['slots']} | "
             f"{r['runs_finished']}/{r['runs_total']} | {r['seconds']} | {r['runs_per_s']} | "
-            f"{r['cpu_ms_per_run']} | {r['simulator_cpu_s']} | "
+            f"{r['cpu_ms_per_run']} | {r.get('recorder_cpu_ms_per_run', '')} | "
+            f"{r['simulator_cpu_s']} | "
             f"{r['ack_ms_p50']}/{r['ack_ms_p99']} | {r['lease_rtt_ms_p50']}/"
             f"{r['lease_rtt_ms_p99']} | {r['store_bytes_per_run']} | {r['mcap_bytes_per_run']} "
             f"| {r['rss_mb']['start']}/{r['rss_mb']['max']}/{r['rss_mb']['end']} | "

@@ -70,7 +70,8 @@ LOG_LEVEL = "warning"
 
 def process_cpu(root: int) -> dict[str, float]:
     """CPU seconds (user + system) of ``root`` and its live descendants, by role: the
-    coordinator (``root``, the ``swarmpath up`` process), its workers (children) and their slots
+    coordinator (``root``, the ``swarmpath up`` process), its MCAP recorder process (the child
+    started by multiprocessing), its workers (the other children) and their slots
     (grandchildren). Linux /proc only; empty elsewhere."""
     stats: dict[int, tuple[int, float]] = {}
     for entry in Path("/proc").iterdir():
@@ -90,11 +91,22 @@ def process_cpu(root: int) -> dict[str, float]:
             if pid not in depth and ppid in depth:
                 depth[pid] = depth[ppid] + 1
                 changed = True
-    out = {"coordinator": 0.0, "workers": 0.0, "slots": 0.0}
+    out = {"coordinator": 0.0, "recorder": 0.0, "workers": 0.0, "slots": 0.0}
     for pid, d in depth.items():
         if pid in stats:
-            out[("coordinator", "workers", "slots")[min(d, 2)]] += stats[pid][1]
+            role = ("coordinator", "workers", "slots")[min(d, 2)]
+            if d == 1 and _multiprocessing_child(pid):
+                role = "recorder"
+            out[role] += stats[pid][1]
     return out
+
+
+def _multiprocessing_child(pid: int) -> bool:
+    """A process started by multiprocessing (the coordinator's recorder, its resource tracker)."""
+    try:
+        return b"multiprocessing" in (Path("/proc") / str(pid) / "cmdline").read_bytes()
+    except OSError:
+        return False
 
 
 def note(msg: str) -> None:

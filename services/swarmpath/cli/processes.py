@@ -89,7 +89,7 @@ def _coordinator_settings(
         data_dir=data, zenoh_listen=_endpoints(zenoh, "--zenoh", DEFAULT_ZENOH), prefix=prefix,
         lease_seconds=lease_seconds, shm=shm,
         dictionary_file=str(auth_dictionary) if auth_dictionary else None,
-        zenoh_extra=_extra(zenoh_config, "--zenoh-config"),
+        zenoh_extra=_extra(zenoh_config, "--zenoh-config"), recorder_process=True,
     )
 
 

@@ -44,6 +44,7 @@ from swarmpath.service.protocol import (
     encode,
 )
 from swarmpath.service.recorder import Recorders
+from swarmpath.service.recorder.process import RecorderProcess
 from swarmpath.service.settings import DEFAULT_HTTP, CoordinatorSettings
 from swarmpath.service.store import FINAL_STATES, Store
 from swarmpath.service.util import json_safe
@@ -86,7 +87,9 @@ class Coordinator(ResultIntake):
         self.settings = settings
         self.keys = Keys(settings.prefix)
         self.store = Store(settings.data_dir, synchronous=settings.synchronous)
-        self.recorders = Recorders(self.store)
+        self.recorders: Recorders | RecorderProcess = (
+            RecorderProcess(settings.data_dir, settings.synchronous)
+            if settings.recorder_process else Recorders(self.store))
         self.dashboard = Dashboard(self.store, Path(settings.data_dir) / "dashboard")
         self.sizer = LeaseSizer(settings.target_lease_seconds, settings.min_lease_runs)
         self.publish: Callable[[str, bytes], None] = publish or (lambda key, payload: None)

@@ -32,6 +32,7 @@ from swarmpath.service.protocol import (
     encode,
 )
 from swarmpath.service.recorder import Recorders
+from swarmpath.service.recorder.process import RecorderProcess
 from swarmpath.service.result_frame import decode_frame, is_frame, record_ok
 from swarmpath.service.settings import CoordinatorSettings
 from swarmpath.service.store import FINAL_STATES, Store
@@ -49,7 +50,7 @@ class ResultIntake:
     settings: CoordinatorSettings
     keys: Keys
     store: Store
-    recorders: Recorders
+    recorders: Recorders | RecorderProcess
     dashboard: Any
     sizer: LeaseSizer
     stats: Counter[str]
@@ -83,7 +84,8 @@ class ResultIntake:
         return info
 
     def _record(self, job_id: str, results: list[Incoming], now: float) -> None:
-        """Write accepted results to the job's MCAP (the store has them already)."""
+        """Write accepted results to the job's MCAP (the store has them already); a recorder
+        process is told to read them from the store."""
         info = self._job_info(job_id)
         if info is None:
             return
@@ -91,6 +93,9 @@ class ResultIntake:
             if self.recorders.ready(job_id):  # finalized meanwhile (e.g. cancelled)
                 return
             self._recording.add(job_id)
+            if isinstance(self.recorders, RecorderProcess):
+                self.recorders.poke(job_id)
+                return
             for r in results:
                 idx, spec, _parsed = info["cells"][r.cell]
                 record: dict[str, Any] = {

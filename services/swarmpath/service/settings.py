@@ -51,6 +51,8 @@ class CoordinatorSettings:
     zenoh_extra: dict[str, Any] | None = None
     synchronous: str = "FULL"  # SQLite durability (FULL: acks survive a power cut)
     tick_seconds: float = 1.0
+    # write the MCAP files in a process of their own that follows the store (recorder/process.py)
+    recorder_process: bool = False
     require_liveliness: bool = True  # lease only to workers whose liveliness token is seen
     max_workers: int = 1024  # worker table entries at most (see worker_table.py)
     forget_workers_seconds: float = 600.0  # a gone worker is listed this long, then forgotten

@@ -166,8 +166,18 @@ class RunViewsMixin(StoreBase):
             item.update(decode_series(res["series"]))
         return item
 
-    def iter_run_records(self, job_id: str, batch: int = 500) -> Iterator[dict[str, Any]]:
-        """Every stored result of a job, in acceptance order, as recorder records (raw numbers,
+    def last_result_rowid(self) -> int:
+        """The position of the newest stored result of any job (0: none), for
+        ``iter_run_records(after=...)``."""
+        with self._read() as db:
+            row = db.execute("SELECT MAX(rowid) FROM results").fetchone()
+        return int(row[0] or 0)
+
+    def iter_run_records(
+        self, job_id: str, batch: int = 500, after: int = 0
+    ) -> Iterator[dict[str, Any]]:
+        """Every stored result of a job (those after position ``after``, see
+        :meth:`last_result_rowid`), in acceptance order, as recorder records (raw numbers,
         series included). Reads in batches without holding the lock in between."""
         with self._read() as db:
             job = self._job_row(db, job_id)
@@ -179,11 +189,13 @@ class RunViewsMixin(StoreBase):
                 c["idx"]: (c["key"], json.loads(c["spec"]))
                 for c in db.execute("SELECT idx, key, spec FROM cells WHERE job_seq = ?", (seq,))
             }
-        last = 0
+        last = after
+        # a tail (after > 0) is read along the rowid, not the job's index entries (+job_seq)
+        where = "+job_seq = ?" if after else "job_seq = ?"
         while True:
             with self._read() as db:
                 rows = db.execute(
-                    "SELECT rowid, * FROM results WHERE job_seq = ? AND rowid > ? "
+                    f"SELECT rowid, * FROM results WHERE {where} AND rowid > ? "
                     "ORDER BY rowid LIMIT ?",
                     (seq, last, batch),
                 ).fetchall()

@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 import threading
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -111,6 +111,33 @@ class JobAggregates:
             self.version += 1
             self.finished += 1
             return True
+
+    def add_many(self, entries: Iterable[tuple[int, int, bool, Mapping[str, Any], Any, Any]]
+                 ) -> int:
+        """Finished runs (cell index, run, ok, metrics, curve, path) at once, as :meth:`add`
+        each (repeats and runs out of range ignored); a benchmark cell samples its runs' curves
+        together. Returns how many were added."""
+        with self._lock:
+            by_cell: dict[int, dict[int, tuple[bool, Mapping[str, Any], Any, Any]]] = {}
+            for index, run, ok, metrics, curve, path in entries:
+                if not 0 <= index < len(self._cells):
+                    continue
+                cell = self._cells[index]
+                if 0 <= run < cell.seen.size and not cell.seen[run]:
+                    by_cell.setdefault(index, {}).setdefault(run, (ok, metrics, curve, path))
+            added = 0
+            for index, runs in by_cell.items():
+                cell = self._cells[index]
+                if isinstance(cell, _BenchmarkCell):
+                    cell.add_many([(run, ok, m, curve) for run, (ok, m, curve, _p) in
+                                   runs.items()])
+                else:
+                    for run, (ok, m, _c, path) in runs.items():
+                        cell.add(run, ok, m, path)
+                added += len(runs)
+            self.version += added  # as many versions as runs, like one add per run
+            self.finished += added
+            return added
 
     def add_record(self, record: Mapping[str, Any]) -> bool:
         """A store/recorder record (``Store.iter_run_records``)."""

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -49,6 +49,27 @@ class _BenchmarkCell:
             stride = int(_number(metrics.get("curve_stride")) or 1)
             err = sample_curve(curve, self.grid, stride) - self.f_star
             self.rows[run] = np.maximum(err, 0.0)
+
+    def add_many(self, items: Sequence[tuple[int, bool, Mapping[str, Any], Any]]) -> None:
+        """Several new runs (run, ok, metrics, curve) at once: the whole curves (one value per
+        iteration) are sampled in one numpy operation, the others one by one (:meth:`add`)."""
+        length = int(self.grid[-1])
+        runs: list[int] = []
+        curves: list[Any] = []
+        for run, ok, metrics, curve in items:
+            if ok and curve is not None and len(curve) == length \
+                    and "curve_stride" not in metrics:
+                self.seen[run] = self.ok[run] = True
+                best = _number(metrics.get("best_fitness"))
+                self.best[run] = math.inf if best is None else best
+                runs.append(run)
+                curves.append(curve)
+            else:
+                self.add(run, ok, metrics, curve)
+        if runs:
+            self.cache = None
+            err = np.asarray(curves, dtype=np.float64)[:, self.grid - 1] - self.f_star
+            self.rows[runs] = np.maximum(err, 0.0)
 
     def view(self) -> dict[str, Any]:
         if self.cache is None:

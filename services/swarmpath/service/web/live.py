@@ -70,11 +70,12 @@ class Dashboard:
         job = self.aggregates(job_id, wait=False)  # never wait here: this is the store's
         if job is None:  # result thread, and a job built from the store takes seconds
             return
+        entries = []
         for r in results:
             index = job.cell_index(r.cell)
             if index is not None:
-                job.add(index, r.run, ok=r.status == "ok", metrics=r.metrics, curve=r.curve,
-                        path=r.path)
+                entries.append((index, r.run, r.status == "ok", r.metrics, r.curve, r.path))
+        job.add_many(entries)
 
     def aggregates(self, job_id: str, wait: bool = True) -> JobAggregates | None:
         """The job's aggregates (None: unknown job), built from the store (or its saved

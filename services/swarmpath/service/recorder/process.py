@@ -1,0 +1,205 @@
+"""The MCAP recorder in its own process, following the store: :class:`RecorderProcess`.
+
+Writing the MCAP (JSON of every result and curve, zstd chunks) was the largest part of the
+coordinator's CPU per run (docs/benchmarks.md, coordinator profile). The files are a view of the
+SQLite store (:mod:`swarmpath.service.recorder`), so another process can write them: it opens the
+same store (WAL: its reads never block the coordinator's writes), and whenever the coordinator
+says that a job has new results (:meth:`RecorderProcess.poke`, one small pipe message per result
+group), it reads the rows after the last one it wrote and hands them to the job's
+:class:`~swarmpath.service.recorder.job.JobRecorder`, exactly as a rebuild from the store does:
+the same records, in the same (acceptance) order, so the file has the same content as one
+written in the coordinator. It also catches up every open job once a second, flushes on the
+recorders' timer, and finishes a job's file when the coordinator asks (:meth:`finish`, which
+waits for the answer). Durability is the store's: an acknowledged result is committed before
+any poke, and a recorder that dies is restarted, rebuilding its open files from the store.
+
+The coordinator side has the methods of :class:`~swarmpath.service.recorder.Recorders` that the
+coordinator uses (``ready``, ``path``, ``finish``, ``tick``, ``recover``, ``close``) plus
+:meth:`poke`; ``follows_store`` tells them apart.
+"""
+
+from __future__ import annotations
+
+import logging
+import multiprocessing
+import threading
+import time
+from multiprocessing.connection import Connection
+from pathlib import Path
+from typing import Any
+
+from swarmpath.service.recorder.common import final_path
+
+log = logging.getLogger("swarmpath.recorder")
+
+CATCH_UP_SECONDS = 1.0  # every open job is caught up at least this often
+REPLY_SECONDS = 600.0  # a finish or recover (a rebuild of a large job) may take this long
+
+
+class RecorderProcess:
+    """The coordinator's handle on the recorder process (see the module docstring)."""
+
+    follows_store = True
+
+    def __init__(self, data_dir: Path | str, synchronous: str = "FULL"):
+        self.data_dir = Path(data_dir)
+        self.synchronous = synchronous
+        self._lock = threading.Lock()
+        self._ctx = multiprocessing.get_context("spawn")
+        self._proc: Any = None
+        self._conn: Connection | None = None
+        self._closed = False
+        self._start()
+
+    def _start(self, recover: bool = False) -> None:
+        here, there = self._ctx.Pipe()
+        self._proc = self._ctx.Process(
+            target=serve, args=(str(self.data_dir), self.synchronous, there, recover),
+            name="swarmpath-recorder", daemon=True)
+        self._proc.start()
+        there.close()
+        self._conn = here
+
+    def _alive(self) -> Connection:
+        """The pipe to a live recorder (restarted when it died; it rebuilds from the store)."""
+        if self._proc is None or not self._proc.is_alive():
+            log.error("the recorder process is gone (exit code %s): restarting it",
+                      None if self._proc is None else self._proc.exitcode)
+            self._start(recover=True)
+        assert self._conn is not None
+        return self._conn
+
+    def _call(self, *msg: Any) -> Any:
+        with self._lock:
+            conn = self._alive()
+            conn.send(msg)
+            if not conn.poll(REPLY_SECONDS):
+                raise TimeoutError(f"the recorder did not answer {msg[0]!r} within "
+                                   f"{REPLY_SECONDS:.0f} s")
+            ok, value = conn.recv()
+        if not ok:
+            raise RuntimeError(f"recorder: {value}")
+        return value
+
+    # -------------------------------------------------------------------- the Recorders API
+    def path(self, job_id: str) -> Path:
+        return final_path(self.data_dir, job_id)
+
+    def ready(self, job_id: str) -> bool:
+        return self.path(job_id).exists()
+
+    def poke(self, job_id: str) -> None:
+        """The job has new results in the store (no answer is awaited)."""
+        if self._closed:
+            return
+        with self._lock:
+            try:
+                self._alive().send(("poke", job_id))
+            except (OSError, ValueError):  # a broken pipe: the next call restarts it
+                log.warning("poking the recorder about job %s failed", job_id)
+
+    def finish(self, job_id: str) -> Path:
+        return Path(self._call("finish", job_id))
+
+    def recover(self) -> list[str]:
+        return list(self._call("recover"))
+
+    def tick(self) -> int:
+        """The recorder flushes on its own timer; this only restarts it when it died."""
+        if not self._closed:
+            with self._lock:
+                self._alive()
+        return 0
+
+    def close(self) -> None:
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            if self._proc is not None and self._proc.is_alive():
+                self._call("close")
+        except Exception:
+            log.exception("closing the recorder failed")
+        if self._proc is not None:
+            self._proc.join(10)
+            if self._proc.is_alive():
+                self._proc.kill()
+        if self._conn is not None:
+            self._conn.close()
+
+
+# ------------------------------------------------------------------------ the other process
+def serve(data_dir: str, synchronous: str, conn: Connection, recover: bool = False) -> None:
+    """The recorder process: answer the coordinator's messages until ``close`` (``recover``: a
+    restart; first rebuild what the previous recorder left)."""
+    from swarmpath.service.recorder.registry import Recorders
+    from swarmpath.service.store import Store
+
+    store = Store(data_dir, synchronous=synchronous)
+    recorders = Recorders(store)
+    last: dict[str, int] = {}  # job -> position of the last result handed to its recorder
+    dirty: set[str] = set()
+    caught_up = time.monotonic()
+
+    def catch_up(job_id: str) -> None:
+        if recorders.ready(job_id):  # finished: nothing more goes into it
+            last.pop(job_id, None)
+            return
+        if job_id not in last:
+            last[job_id] = store.last_result_rowid()
+            recorders.open(job_id)  # new: written from the store up to (at least) there
+        newest = store.last_result_rowid()
+        if newest > last[job_id]:
+            rec = recorders.open(job_id)
+            for record in store.iter_run_records(job_id, after=last[job_id]):
+                rec.add(record)  # runs already written are skipped
+            last[job_id] = newest
+
+    def handle(kind: str, arg: Any) -> Any:
+        if kind == "finish":
+            catch_up(arg)
+            last.pop(arg, None)
+            return str(recorders.finish(arg))
+        if kind == "recover":
+            touched = recorders.recover()
+            dirty.update(store.unfinished_jobs())
+            return touched
+        raise ValueError(f"unknown message {kind!r}")
+
+    if recover:
+        handle("recover", None)
+    try:
+        while True:
+            if conn.poll(0.2):
+                while True:  # everything waiting, then one catch-up for all the pokes
+                    kind, *args = conn.recv()
+                    if kind == "poke":
+                        dirty.add(args[0])
+                    elif kind == "close":
+                        recorders.close()
+                        store.close()
+                        conn.send((True, None))
+                        return
+                    else:
+                        try:
+                            reply = (True, handle(kind, args[0] if args else None))
+                        except Exception as exc:  # the coordinator raises it; we go on
+                            log.exception("recorder: %s failed", kind)
+                            reply = (False, f"{type(exc).__name__}: {exc}")
+                        conn.send(reply)
+                    if not conn.poll(0):
+                        break
+            now = time.monotonic()
+            if now - caught_up >= CATCH_UP_SECONDS:
+                dirty.update(last)
+                caught_up = now
+            for job_id in sorted(dirty):
+                try:
+                    catch_up(job_id)
+                except Exception:
+                    log.exception("recorder: writing job %s failed", job_id)
+            dirty.clear()
+            recorders.tick()
+    except (EOFError, OSError):  # the coordinator is gone: leave the .part files
+        recorders.close()
+        store.close()
