@@ -278,12 +278,15 @@ class ResultIntake:
             self._accepted.append((now, len(accepted)))
         info = self._job_info(job_id)
         if info is not None:
+            by_cell: dict[str, list[float]] = {}
             for r in accepted:
                 if r.status == "ok" and r.cell in info["cells"]:
-                    try:
-                        self.sizer.observe(info["cells"][r.cell][2], r.seconds)
-                    except Exception:  # pragma: no cover - specs come from the store
-                        pass
+                    by_cell.setdefault(r.cell, []).append(r.seconds)
+            for cell, seconds in by_cell.items():
+                try:
+                    self.sizer.observe_many(info["cells"][cell][2], seconds)
+                except Exception:  # pragma: no cover - specs come from the store
+                    pass
         try:
             self._record(job_id, accepted, now)
         except Exception:

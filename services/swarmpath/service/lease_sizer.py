@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 import threading
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 
 from swarmpath.service.protocol import BenchmarkCell, Lease, MapCell
 
@@ -85,16 +85,20 @@ class LeaseSizer:
         return max(low, int(budget / est))
 
     def observe(self, spec: BenchmarkCell | MapCell, seconds_per_run: float) -> None:
-        if not (seconds_per_run > 0 and math.isfinite(seconds_per_run)):
-            return
-        keys = [self.cost_key(spec), self.family_key(spec)]
+        self.observe_many(spec, [seconds_per_run])
+
+    def observe_many(self, spec: BenchmarkCell | MapCell, seconds: Iterable[float]) -> None:
+        """Runs of one cell spec, in order (the same estimates as :meth:`observe` for each; the
+        spec's keys are made once)."""
+        keys = [k for k in (self.cost_key(spec), self.family_key(spec)) if k is not None]
         with self._lock:
-            for key in keys:
-                if key is None:
+            for seconds_per_run in seconds:
+                if not (seconds_per_run > 0 and math.isfinite(seconds_per_run)):
                     continue
-                old = self._estimates.get(key)
-                self._estimates[key] = (
-                    seconds_per_run if old is None
-                    else old + self.alpha * (seconds_per_run - old)
-                )
+                for key in keys:
+                    old = self._estimates.get(key)
+                    self._estimates[key] = (
+                        seconds_per_run if old is None
+                        else old + self.alpha * (seconds_per_run - old)
+                    )
 

@@ -7,9 +7,13 @@ cell and job rows are read and updated once per lease, not once per run."""
 from __future__ import annotations
 
 import hmac
+import math
 import sqlite3
 import time
 from collections.abc import Iterable, Sequence
+from typing import Any
+
+import orjson
 
 from swarmpath.service.capability import result_ok
 from swarmpath.service.incoming import Incoming
@@ -110,7 +114,7 @@ class ResultsMixin(StoreBase):
                 else None
             series = {"curve": r.curve, "best_position": r.best_position, "path": r.path}
             rows.append((seq, cell_idx, run, lease_id, r.worker, r.status, r.failure, value,
-                         r.seconds, _dumps(r.metrics), encode_series(series), now))
+                         r.seconds, _metrics_json(r.metrics), encode_series(series), now))
         if not rows:
             return out
         db.executemany(
@@ -161,6 +165,16 @@ class ResultsMixin(StoreBase):
                 (now, seq),
             )
         return out
+
+
+def _metrics_json(metrics: dict[str, Any]) -> str:
+    """The metrics column: compact JSON (orjson; the general encoder when a value is not a
+    finite float or a 64-bit integer, e.g. ``Infinity``, which orjson would write as null)."""
+    for v in metrics.values():
+        if (isinstance(v, float) and not math.isfinite(v)) or \
+                (isinstance(v, int) and not -2**63 <= v < 2**64):
+            return _dumps(metrics)
+    return orjson.dumps(metrics).decode()
 
 
 def _proven(capability: str, r: RunResult | Incoming) -> bool:
