@@ -30,7 +30,10 @@ from swarmpath.world.optimum import DEFAULT_BUDGET, MAX_DISKS, shortest_path
 from swarmpath.world.scenario import Scenario
 
 DEFAULT_STEP_LIMIT = 2000
-FINISH_TOLERANCE = 0.01  # m
+#: A static goal is reached when the robot's centre is this close to it (m): the exact
+#: optimum's own tolerance, so no successful path can end short of the goal and be shorter than
+#: the optimum (a path ending d from the goal can be up to d shorter).
+FINISH_TOLERANCE = 1e-9
 DEFAULT_TIME_FACTOR = 6.0  # time limit: this many times the straight-line travel time, plus 60 s
 
 
@@ -175,10 +178,10 @@ class Episode:
         self.sim.drive(decision.target, decision.duration, self.time_limit, decision.finish,
                        decision.align)
         # A moving goal counts as reached within the tolerance. A static goal only when the
-        # robot ends on it (the papers report errors of ~1 mm): within the tolerance the run
-        # drives the last straight stretch itself when that stretch is free now, and otherwise
-        # goes on (stopping short of a goal it could not reach is no success, and an executed
-        # path shorter than the optimum is impossible).
+        # robot ends on it (FINISH_TOLERANCE; the papers report errors of ~1 mm): within the
+        # tolerance the run drives the last straight stretch itself when that stretch is free
+        # now, and otherwise goes on (stopping short of a goal it could not reach is no success,
+        # and an executed path shorter than the optimum is impossible).
         if self.sim.reached and not self._goal_moves and not self._on_goal():
             self._final_approach()
         if self.sim.reached and (self._goal_moves or self._on_goal()):
@@ -193,7 +196,9 @@ class Episode:
 
     def _final_approach(self) -> None:
         """Drive straight onto a static goal within the tolerance if the segment keeps the robot's
-        clearance from every obstacle where it is now (touching counts as a collision)."""
+        clearance from every obstacle where it is now (touching counts as a collision), until
+        the centre is within FINISH_TOLERANCE of it (the simulator's usual arrival distance,
+        0.1 mm, would leave a path up to that much short)."""
         pose = np.array([self.sim.pose.x, self.sim.pose.y])
         goal = np.asarray(self.sim.world.goal, dtype=float)
         obstacles = self.sim.world.obstacles()
@@ -201,7 +206,8 @@ class Episode:
             clearance = float(obstacles.segment_clearance(pose, goal))
             if collides(clearance, self.sim.radius):
                 return
-        self.sim.drive(goal, None, self.time_limit, finish=True, align=True)
+        self.sim.drive(goal, None, self.time_limit, finish=True, align=True,
+                       arrive=FINISH_TOLERANCE)
 
     def run(self) -> RunOutcome:
         while not self.done:

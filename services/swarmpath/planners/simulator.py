@@ -98,16 +98,19 @@ class Simulator:
         time_limit: float,
         finish: bool = False,
         align: bool = False,
+        arrive: float = ARRIVE,
     ) -> None:
         """Drive toward ``target`` for ``duration`` seconds (the robot waits there if it arrives
         early: the world keeps moving), or until it arrives when ``duration`` is None; stop early
         when the goal is reached (unless ``finish``: the target is the goal, drive onto it) or at
         the episode's ``time_limit``. ``align``: a differential drive turns in place until it
-        faces the target and then drives straight (:func:`aligned_drive_command`)."""
+        faces the target and then drives straight (:func:`aligned_drive_command`). The robot has
+        arrived within ``arrive`` metres of the target (the episode's final approach asks for
+        the goal itself)."""
         end = time_limit if duration is None else min(time_limit, self.time + duration)
         tx, ty = float(target[0]), float(target[1])
         while self.time < end - 1e-12:
-            arrived = math.hypot(tx - self.pose.x, ty - self.pose.y) < ARRIVE
+            arrived = math.hypot(tx - self.pose.x, ty - self.pose.y) < arrive
             if arrived and duration is None:
                 break
             if arrived:
@@ -116,8 +119,12 @@ class Simulator:
                 vx, vy, w = omni_command(self.model, self.pose, (tx, ty), self.dt)
                 self.pose = self.model.advance(self.pose, vx, vy, w, self.dt)
             else:
-                command = aligned_drive_command if align else diff_drive_command
-                v, w = command(self.model, self.pose, (tx, ty), self.dt)
+                if align:
+                    v, w = aligned_drive_command(self.model, self.pose, (tx, ty), self.dt,
+                                                 arrive=arrive)
+                else:
+                    v, w = diff_drive_command(self.model, self.pose, (tx, ty), self.dt,
+                                              arrive=arrive)
                 self.pose = self.model.advance(self.pose, v, w, self.dt)
             self.world.advance(self.dt)
             self.trajectory.append((self.pose.x, self.pose.y, self.time))

@@ -159,6 +159,7 @@ def aligned_drive_command(
     target: tuple[float, float],
     dt: float,
     tolerance: float = ALIGN_TOLERANCE,
+    arrive: float | None = None,
 ) -> tuple[float, float]:
     """Turn in place until facing the target, then drive straight at it (a polyline follower).
 
@@ -167,11 +168,12 @@ def aligned_drive_command(
     drives at up to ``max_linear`` without overshooting, correcting the (round-off) error with
     w = error / dt. The centre therefore moves along the straight segment from where it stands to
     the target, which is what a planner whose segments were collision-checked needs: unlike
-    :func:`diff_drive_command`, no arc bulges off the checked segment.
+    :func:`diff_drive_command`, no arc bulges off the checked segment. Within ``arrive`` metres
+    (default :data:`ARRIVE`) of the target it stops.
     """
     dx, dy = target[0] - pose.x, target[1] - pose.y
     dist = math.hypot(dx, dy)
-    if dist < ARRIVE:
+    if dist < (ARRIVE if arrive is None else arrive):
         return 0.0, 0.0
     err = wrap_angle(math.atan2(dy, dx) - pose.theta)
     w = max(-model.max_angular, min(model.max_angular, err / dt))
