@@ -50,8 +50,9 @@ Rules for kernel authors:
    swarmpath.optimizers.compiled.functions import evaluate``): ``scripts/bench/kernels.py``
    compiles a copy of ``run`` with that name bound to an evaluate whose function is fixed at
    compile time (the fused loop of issue 14's target). Do not pass functions as arguments or
-   use ``objmode`` in a kernel (either makes it uncachable or slow; ``functions.numpy_exp``
-   is the one exception, isolated in its own small function).
+   use ``objmode`` in a kernel (either makes it uncachable or slow). Where the reference's
+   numbers come from one of numpy's own loops (exp, power, cbrt, matmul), call that loop
+   (:mod:`.ufuncs`; by symbol name through ``ufuncs.link`` keeps the caller cacheable).
 """
 
 from swarmpath.optimizers.compiled.registry import (

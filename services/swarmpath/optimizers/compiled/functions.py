@@ -25,11 +25,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, objmode
+from numba import njit
 
 from swarmpath.functions.registry import list_functions
 from swarmpath.functions.trig import COS, SIN
 from swarmpath.optimizers.compiled.streams import RANDOM, take
+from swarmpath.optimizers.compiled.ufuncs import exp_inplace
 
 #: Function ids of the compiled kernels, by registered name.
 FUNCTION_IDS: dict[str, int] = {
@@ -263,9 +264,9 @@ def value(fid, x, w):
 
 @njit(cache=True)
 def numpy_exp(e):
-    """e <- np.exp(e), numpy's own (object mode: a microsecond or two)."""
-    with objmode():
-        np.exp(e, out=e)
+    """e <- np.exp(e), numpy's own loop called directly (:func:`ufuncs.exp_inplace`: tens of
+    nanoseconds where object mode took microseconds per call)."""
+    exp_inplace(e, np.empty(5, dtype=np.int64))
 
 
 @njit(cache=True)

@@ -118,24 +118,42 @@ def link(symbol: str, ufunc: np.ufunc, types: str) -> None:
     llvm.add_symbol(symbol, ctypes.cast(loop, ctypes.c_void_p).value)
 
 
-_POWER = "swarmpath_numpy_power_ddd"
-link(_POWER, np.power, "ddd")
+def _linked_loop(symbol: str, ufunc: np.ufunc, types: str) -> Any:
+    """An intrinsic calling numpy's loop ``symbol``(args, dimensions, steps, NULL), the three
+    arrays given by address (int64)."""
+    link(symbol, ufunc, types)
+
+    @intrinsic
+    def call(typingctx, args, dimensions, steps):
+        signature = nbtypes.void(nbtypes.int64, nbtypes.int64, nbtypes.int64)
+
+        def codegen(context, builder, sig, values):
+            pointer = ir.IntType(8).as_pointer()
+            fnty = ir.FunctionType(ir.VoidType(), [pointer] * 4)
+            fn = cgutils.get_or_insert_function(builder.module, fnty, symbol)
+            operands = [builder.inttoptr(v, pointer) for v in values]
+            builder.call(fn, [*operands, ir.Constant(pointer, None)])
+            return context.get_dummy_value()
+
+        return signature, codegen
+
+    return call
 
 
-@intrinsic
-def _call_power(typingctx, args, dimensions, steps):
-    """numpy's power loop(args, dimensions, steps, NULL), the three arrays given by address."""
-    signature = nbtypes.void(nbtypes.int64, nbtypes.int64, nbtypes.int64)
+_call_power = _linked_loop("swarmpath_numpy_power_ddd", np.power, "ddd")
+_call_exp = _linked_loop("swarmpath_numpy_exp_dd", np.exp, "dd")
 
-    def codegen(context, builder, sig, values):
-        pointer = ir.IntType(8).as_pointer()
-        fnty = ir.FunctionType(ir.VoidType(), [pointer] * 4)
-        fn = cgutils.get_or_insert_function(builder.module, fnty, _POWER)
-        operands = [builder.inttoptr(v, pointer) for v in values]
-        builder.call(fn, [*operands, ir.Constant(pointer, None)])
-        return context.get_dummy_value()
 
-    return signature, codegen
+@njit(cache=True)
+def exp_inplace(x, call):
+    """x = np.exp(x) in place for a contiguous float64 x, with numpy's own loop (on AVX-512 not
+    the C library's exp); ``call`` is int64 scratch (5,)."""
+    call[0] = x.ctypes.data
+    call[1] = x.ctypes.data
+    call[2] = x.size
+    call[3] = 8
+    call[4] = 8
+    _call_exp(call.ctypes.data, call[2:].ctypes.data, call[3:].ctypes.data)
 
 
 @njit(cache=True)
@@ -155,7 +173,7 @@ def power(x, e, call):
     call[4] = 8
     call[5] = 0
     call[6] = 8
-    _call_power(call.ctypes.data, call[3:].ctypes.data, call[4:].ctypes.data)  # type: ignore[call-arg]
+    _call_power(call.ctypes.data, call[3:].ctypes.data, call[4:].ctypes.data)
     return values[2]
 
 
