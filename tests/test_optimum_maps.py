@@ -77,6 +77,29 @@ def test_any_angle_optimum_within_the_octile_optimum(name: str, every: int) -> N
         assert half.length <= octile + 1e-4
 
 
+def test_the_octile_over_1_0824_lower_bound_is_false_by_corner_cutting() -> None:
+    """The issue's "any-angle optimum >= octile / 1.0824" fails on arena 0-based pair 3,
+    (1, 3) -> (3, 1): both diagonal moves pass a blocked cell's corner ((1, 2), then (2, 1)), which
+    MovingAI's octile rule forbids (no corner cutting), so the octile path detours to 2 + sqrt 2;
+    the any-angle path of a point robot runs the straight diagonal past those corners, 2 sqrt 2.
+    With the import's robot (0.105 m) it bends around them and still stays below octile/1.0824."""
+    m = load_movingai_map(DATA / "arena.map")
+    text = (DATA / "arena.map").read_text().splitlines()[4:]
+    assert text[2][1] != "." and text[1][2] != "."  # the corners the octile path may not cut
+    assert text[3][1] == text[2][2] == text[1][3] == "."  # start, middle, goal cells are free
+    sx, sy, gx, gy, octile = _scen(DATA / "arena.map.scen", 1)[3]
+    assert (sx, sy, gx, gy) == (1, 3, 3, 1) and octile == pytest.approx(2 + math.sqrt(2), abs=1e-5)
+    height = m.grid.shape[0]
+    w, h = m.scenario.size
+    obs = m.scenario.static_obstacles()
+    start, goal = movingai_cell_center(sx, sy, height), movingai_cell_center(gx, gy, height)
+    point = shortest_path(start, goal, obs, 1e-6, (0.0, 0.0, w, h), budget=None)
+    robot = shortest_path(start, goal, obs, m.scenario.robot.radius, (0.0, 0.0, w, h), budget=None)
+    assert point.length == pytest.approx(2 * math.sqrt(2), abs=1e-5)
+    assert point.length <= robot.length <= octile
+    assert robot.length < octile / 1.0824  # 2.8440 m < 3.1543 m: the bound is false here
+
+
 def test_budget_gives_up_with_the_reason() -> None:
     s = load_ros_map(DATA / "tb3_sandbox.yaml").scenario
     w, h = s.size
