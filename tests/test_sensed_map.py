@@ -82,3 +82,21 @@ def test_surface_points_sample_every_static_surface_densely():
     xs = np.sort(edge[:, 0])
     assert xs[0] == 4.0 and np.diff(np.append(xs, 6.0)).max() <= 0.05 + 1e-12
     assert sensed_map.surface_points(ObstacleSet.empty(), 0.05).shape == (0, 2)
+
+
+def test_condense_keeps_the_first_hit_of_every_cell_in_order():
+    """Against the definition: hits within reach, the first of each cell (pairs of cell indices
+    compared as pairs), in their input order; negative coordinates and reach inf included."""
+    rng = np.random.default_rng(11)
+    hits = np.vstack([rng.uniform(-3.0, 5.0, (400, 2)), rng.uniform(0.0, 0.05, (50, 2))])
+    for reach, cell in ((np.inf, 0.01), (2.0, 0.1), (0.5, 0.3)):
+        near = hits[np.hypot(*(hits - [0.5, -0.2]).T) <= reach]
+        seen, expected = set(), []
+        for h in near:
+            key = (int(np.floor(h[0] / cell)), int(np.floor(h[1] / cell)))
+            if key not in seen:
+                seen.add(key)
+                expected.append(h)
+        got = sensed_map.condense(hits, np.array([0.5, -0.2]), reach, cell)
+        assert np.array_equal(got, np.array(expected).reshape(-1, 2))
+    assert sensed_map.condense(np.zeros((0, 2)), np.zeros(2), 1.0, 0.1).shape == (0, 2)
