@@ -230,3 +230,16 @@ def test_plan_of_one_planner_leaves_scipy_stats_unloaded():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          timeout=300, check=True)
     assert out.stdout.strip().splitlines()[-1] == "False False"
+
+
+def test_plan_workers_import_no_command_line():
+    """``plan -j`` children unpickle swarmpath.parallel's child loop and plan_runs.episode_task:
+    neither may pull in the cli package (typer and every command, ~0.3 s of CPU per child)."""
+    import subprocess
+    import sys
+
+    code = ("import sys, swarmpath.parallel, swarmpath.plan_runs\n"
+            "print('typer' in sys.modules, 'swarmpath.cli' in sys.modules)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120, check=True)
+    assert out.stdout.strip() == "False False"

@@ -30,7 +30,7 @@ from rich.measure import Measurement
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from swarmpath.cli import parallel
+from swarmpath import parallel, plan_runs
 from swarmpath.cli.core import (
     InputError,
     app,
@@ -127,42 +127,13 @@ def make_spec(planners: str, maps: str, runs: int = 10, seed: int = 1,
 # -------------------------------------------------------------------------------------- running
 def run_episode(spec: PlanSpec, planner: str, scenario: Any, run: int,
                 on_step: Callable[[], None] | None = None) -> dict[str, Any]:
-    """One run as a JSON-ready dict (``RunOutcome`` fields).
+    """One run as a JSON-ready dict (:func:`swarmpath.plan_runs.run_episode`)."""
+    return plan_runs.run_episode(_task(spec, planner, scenario, run), on_step)
 
-    A planner that raises (a bug: planners report failures as results) gives a failed run whose
-    reason names the exception; the error is also noted on stderr.
-    """
-    from swarmpath.planners import Episode
 
-    ep = None
-    try:
-        ep = Episode(scenario, planner, spec.seed, run, spec.params.get(planner),
-                     optimum_budget=spec.optimum_budget)
-        while not ep.done:
-            ep.step()
-            if on_step is not None:
-                on_step()
-        return ep.outcome().to_dict()
-    except Exception as exc:  # recorded as a failed run, never hidden
-        reason = f"internal error: {type(exc).__name__}: {exc}"
-        typer.echo(f"swarmpath plan: warning: {planner} on {scenario.name} run {run}: {reason}",
-                   err=True)
-        if ep is not None:
-            try:
-                out = ep.outcome().to_dict()
-                out.update(success=False, reason=reason)
-                return out
-            except Exception:
-                pass
-        return {
-            "planner": planner, "map": scenario.name, "run": run, "seed": spec.seed,
-            "success": False, "reason": reason, "collisions": 0, "length": 0.0,
-            "error": math.dist(scenario.start, scenario.goal), "smoothness": 0.0,
-            "ompl_smoothness": 0.0, "min_clearance": None, "steps": 0, "iterations": 0,
-            "seconds": 0.0, "travel_time": 0.0, "optimum": None, "gap": None,
-            "planned_length": None, "robot_driven_contacts": 0, "obstacle_driven_contacts": 0,
-            "path": [[float(scenario.start[0]), float(scenario.start[1]), 0.0]],
-        }
+def _task(spec: PlanSpec, planner: str, scenario: Any, run: int) -> plan_runs.EpisodeTask:
+    return plan_runs.EpisodeTask(scenario, planner, spec.seed, run, spec.params.get(planner),
+                                 spec.optimum_budget)
 
 
 def run_plan(
@@ -176,7 +147,10 @@ def run_plan(
     planner, seed, run), so the results are the same for any ``jobs``; with more processes than
     cores the planning times grow, and the planners that plan against a wall-clock budget (OMPL)
     get less done. ``on_step(n)``: n simulated steps done; ``on_done(runs)``: runs finished."""
-    tasks = [(spec, i, run) for i in range(len(spec.cells())) for run in range(spec.runs)]
+    # each task carries its own run's inputs only (not the spec), so the children import the
+    # planners and nothing of the command line
+    tasks = [_task(spec, planner, scenario, run)
+             for planner, scenario in spec.cells() for run in range(spec.runs)]
     finished = 0
 
     def done(_task: Any) -> None:
@@ -185,21 +159,12 @@ def run_plan(
         if on_done is not None:
             on_done(finished)
 
-    outcomes = parallel.run_tasks(_episode, tasks, jobs, on_step, done)
+    outcomes = parallel.run_tasks(plan_runs.episode_task, tasks, jobs, on_step, done)
     cells = []
     for i, (planner, scenario) in enumerate(spec.cells()):
         runs = outcomes[i * spec.runs:(i + 1) * spec.runs]
         cells.append(CellResult(planner, scenario, runs, spec.seed))
     return cells
-
-
-def _episode(task: tuple[PlanSpec, int, int], report: Callable[[int], None]) -> dict[str, Any]:
-    """One run of one cell as a JSON-ready dict (in a child process or here)."""
-    from swarmpath.planners.summary import json_safe
-
-    spec, index, run = task
-    planner, scenario = spec.cells()[index]
-    return dict(json_safe(run_episode(spec, planner, scenario, run, lambda: report(1))))
 
 
 def simulated_world(scenario: Any, seed: int, run: int) -> Any:
