@@ -10,10 +10,12 @@ with a compiled kernel (``swarmpath.optimizers.compiled``; default: all of them)
 * ``numpy``: ``minimize_many`` over the functions (stacked, default chunks; F7 alone), CPU
   seconds / (functions x runs);
 * ``numba``: the same call with ``backend="numba"`` (one kernel call per run, from Python);
-* ``fused``: a copy of the kernel's ``run`` compiled with its ``evaluate`` bound to one whose
-  function is fixed at compile time (the function's code inlined, F10's exp from the C library
-  instead of numpy's), called directly per run (no per-run Python beyond the call): what a
-  hand-written compiled loop of the same algorithm costs. Its numbers are checked against the
+* ``fused``: the kernel run with an ``evaluate`` whose function is fixed at compile time (the
+  function's code inlined, F10's exp from the C library instead of numpy's; through the
+  module's ``loop(evaluate, ...)``, or its @njit ``run`` recompiled by
+  ``ufuncs.with_objective``; an algorithm with neither gets no fused column), called directly
+  per run (no per-run Python beyond the call): what a hand-written compiled loop of the same
+  algorithm costs. Its numbers are checked against the
   backend's (equal except F10 in the last bits).
 
 CPU time (``time.process_time``) of this process; the three are interleaved per function and the
@@ -28,7 +30,6 @@ import argparse
 import os
 import sys
 import time
-import types
 
 import numpy as np
 from numba import njit
@@ -46,6 +47,7 @@ from swarmpath.optimizers.compiled.functions import (
     value,
 )
 from swarmpath.optimizers.compiled.streams import RANDOM, take
+from swarmpath.optimizers.compiled.ufuncs import with_objective
 from swarmpath.optimizers.streams import run_generator
 
 DIM, AGENTS, ITERATIONS = 30, 30, 500
@@ -88,13 +90,18 @@ def fused_evaluate(fid: int):
     return evaluate
 
 
-def fused_kernel(run, evaluate):
-    """A copy of the kernel ``run`` (a numba dispatcher) calling ``evaluate`` instead of the
-    backend's runtime-dispatched one."""
-    py = run.py_func
-    scope = {**py.__globals__, "evaluate": evaluate}
-    return njit(types.FunctionType(py.__code__, scope, py.__name__, py.__defaults__,
-                                   py.__closure__))
+def fused_runner(algo: str, evaluate):
+    """The algorithm's kernel with ``evaluate`` as its objective: the module's
+    ``loop(evaluate, ...)`` if it has one, else its @njit ``run`` recompiled with that global
+    (``ufuncs.with_objective``); None if neither exists."""
+    kernel = find_kernel(algo)
+    assert kernel is not None
+    module = sys.modules[kernel.run.__module__]
+    if hasattr(module, "loop"):
+        return lambda *args: module.loop(evaluate, *args)
+    if hasattr(kernel.run, "py_func"):
+        return with_objective(kernel.run, evaluate)
+    return None
 
 
 def cpu(fn) -> float:
@@ -110,7 +117,9 @@ def bench_algorithm(algo: str, functions: list[str], runs: int, repeats: int) ->
     lower = {f: np.full(DIM, get_function(f).lower) for f in functions}
     upper = {f: np.full(DIM, get_function(f).upper) for f in functions}
     shift = np.zeros(DIM)
-    fused = {f: fused_kernel(kernel.run, fused_evaluate(FUNCTION_IDS[f])) for f in functions}
+    fused = {f: fused_runner(algo, fused_evaluate(FUNCTION_IDS[f])) for f in functions}
+    if any(v is None for v in fused.values()):
+        return [f"#### {algo}: no fused loop (its module has no loop(evaluate, ...)) ", ""]
     kw = dict(dim=DIM, agents=AGENTS, iterations=ITERATIONS, runs=runs, seed=1)
 
     def fused_runs(f: str, n: int) -> list[tuple[float, np.ndarray]]:

@@ -47,12 +47,14 @@ Rules for kernel authors:
    that every algorithm without a kernel refuses ``backend="numba"``.
 6. ``cache=True`` on every @njit (workers compile once); loops over runs stay in Python.
 7. Call the objective through the module-level name ``evaluate`` (``from
-   swarmpath.optimizers.compiled.functions import evaluate``): ``scripts/bench/kernels.py``
-   compiles a copy of ``run`` with that name bound to an evaluate whose function is fixed at
-   compile time (the fused loop of issue 14's target). Do not pass functions as arguments or
-   use ``objmode`` in a kernel (either makes it uncachable or slow). Where the reference's
-   numbers come from one of numpy's own loops (exp, power, cbrt, matmul), call that loop
-   (:mod:`.ufuncs`; by symbol name through ``ufuncs.link`` keeps the caller cacheable).
+   swarmpath.optimizers.compiled.functions import evaluate``), never as a function argument
+   (that makes the kernel uncachable). ``scripts/bench/kernels.py`` times the fused loop of
+   issue 14's target by recompiling the kernel with ``evaluate`` bound to one whose function
+   is fixed at compile time (``ufuncs.with_objective``): if ``run`` is a Python shim (numpy
+   loops passed as arguments), give the module ``loop(evaluate, rng, fid, ...)`` doing that.
+   Avoid ``objmode`` in a kernel (~20 us per call inside a large function). Where the
+   reference's numbers come from one of numpy's own loops (exp, power, cbrt, matmul), call that
+   loop (:mod:`.ufuncs`; by symbol name through ``ufuncs.link`` keeps the caller cacheable).
 """
 
 from swarmpath.optimizers.compiled.registry import (
