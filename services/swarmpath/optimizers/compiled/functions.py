@@ -16,8 +16,8 @@ in the order numpy adds on this build (its baseline SIMD is two doubles wide, no
 (Ackley) needs numpy's own ``exp`` for that: numpy's vectorised exp and the C library's differ
 in the last bit for about one argument in a hundred, and near Ackley's optimum a last-bit
 difference reorders agents. :func:`evaluate` therefore computes a whole population's exponent
-arguments in compiled code and calls ``np.exp`` on them once per evaluation (object mode, a few
-microseconds).
+arguments in compiled code and runs numpy's own exp loop on them once per evaluation
+(:func:`numpy_exp`).
 """
 
 from __future__ import annotations
