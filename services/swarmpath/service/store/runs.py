@@ -7,6 +7,8 @@ import sqlite3
 from collections.abc import Iterator
 from typing import Any
 
+import orjson
+
 from swarmpath.service.store.base import StoreBase, _safe
 from swarmpath.service.store.series import decode_series
 
@@ -233,7 +235,7 @@ class RunViewsMixin(StoreBase):
     def _record(
         job_id: str, kind: str, seed: int, rpc: int, r: sqlite3.Row, key: str, spec: dict[str, Any]
     ) -> dict[str, Any]:
-        series = decode_series(r["series"])
+        series = decode_series(r["series"], arrays=("curve",))
         return {
             "job_id": job_id,
             "kind": kind,
@@ -248,7 +250,16 @@ class RunViewsMixin(StoreBase):
             "status": r["status"],
             "failure": r["failure"],
             "seconds": r["seconds"],
-            "metrics": json.loads(r["metrics"]),
+            "metrics": _metrics(r["metrics"]),
             "created": r["created"],
             **series,
         }
+
+
+def _metrics(text: str) -> dict[str, Any]:
+    """A metrics column (orjson; json for the ``Infinity``/``NaN`` orjson does not read)."""
+    try:
+        out: dict[str, Any] = orjson.loads(text)
+    except orjson.JSONDecodeError:
+        out = json.loads(text)
+    return out

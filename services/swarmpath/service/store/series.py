@@ -16,6 +16,7 @@ SERIES_MAGIC = b"SPS2"
 #: The earlier form: the same body, zlib-compressed (still read).
 SERIES_MAGIC_ZLIB = b"SPS1"
 _HEADS: dict[tuple[tuple[str, tuple[int, ...]], ...], bytes] = {}  # header bytes by shapes
+_PARSED: dict[bytes, list[Any]] = {}  # parsed headers by their bytes
 
 
 def encode_series(series: dict[str, Any]) -> bytes | None:
@@ -45,12 +46,13 @@ def encode_series(series: dict[str, Any]) -> bytes | None:
     return SERIES_MAGIC + head + b"".join(parts)
 
 
-def decode_series(blob: bytes | None) -> dict[str, Any]:
-    """The series of a ``results.series`` value as lists (curve: floats, path: [x, y, t] rows)."""
+def decode_series(blob: bytes | None, arrays: tuple[str, ...] = ()) -> dict[str, Any]:
+    """The series of a ``results.series`` value as lists (curve: floats, path: [x, y, t] rows);
+    those named in ``arrays`` as read-only float64 arrays (no list made)."""
     if blob is None:
         return {}
     if blob.startswith(SERIES_MAGIC):
-        body = bytes(blob[len(SERIES_MAGIC):])
+        body = memoryview(blob)[len(SERIES_MAGIC):]
     elif blob.startswith(SERIES_MAGIC_ZLIB):
         body = zlib.decompress(blob[len(SERIES_MAGIC_ZLIB):])
     else:
@@ -60,9 +62,15 @@ def decode_series(blob: bytes | None) -> dict[str, Any]:
     n = int.from_bytes(body[:4], "little")
     offset = 4 + n
     out: dict[str, Any] = {}
-    for name, shape in json.loads(body[4:offset]):
+    text = bytes(body[4:offset])
+    header = _PARSED.get(text)
+    if header is None:
+        header = json.loads(text)
+        if len(_PARSED) < 4096:
+            _PARSED[text] = header
+    for name, shape in header:
         count = math.prod(shape)
         arr = np.frombuffer(body, dtype="<f8", count=count, offset=offset).reshape(shape)
         offset += 8 * count
-        out[name] = arr.tolist()
+        out[name] = arr if name in arrays else arr.tolist()
     return out
