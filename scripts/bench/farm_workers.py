@@ -49,6 +49,7 @@ from swarmpath.service.protocol import (
     RunResult,
     decode,
 )
+from swarmpath.service.result_frame import as_dict, decode_record
 from swarmpath.service.worker import (
     Slot,
     Worker,
@@ -83,7 +84,8 @@ class Templates:
                     cell_index=0, runs_per_cell=n, seed=0, runs=list(range(n)), spec=spec,
                     deadline=0.0, lease_seconds=1.0, heartbeat_seconds=1.0,
                     capability=new_capability())
-                pool = [decode(RunResult, data) for _run, data in execute_lease(lease)]
+                pool = [RunResult(**as_dict(decode_record(data)))
+                        for _run, data in execute_lease(lease)]
                 pool = [r.model_copy(update={"proof": None}) for r in pool]
                 self._by_spec[key] = pool
             return pool
