@@ -56,6 +56,7 @@ class StepContext:
     resolution: float = 0.05  # grid repair step
     lower: Array | None = None  # (2,) box the waypoint must stay in
     upper: Array | None = None
+    backend: str = "numpy"  # or "numba": the grid repair compiled (the same numbers)
 
 
 def wrapped_abs(a: Array) -> Array:
@@ -216,6 +217,17 @@ def _repair_grid(C: Array, ctx: StepContext, reach: int = 24, chunk: int = 8) ->
         return C, np.zeros(C.shape[:-1])
     p = ctx.position
     flat = C.reshape(-1, 2)
+    if ctx.backend == "numba":
+        from swarmpath.planners.compiled import repair_grid_kernel
+
+        bounded = ctx.lower is not None and ctx.upper is not None
+        lower = np.asarray(ctx.lower if bounded else np.zeros(2), dtype=float)
+        upper = np.asarray(ctx.upper if bounded else np.zeros(2), dtype=float)
+        out, short = repair_grid_kernel(
+            np.ascontiguousarray(flat, dtype=float), np.asarray(p, dtype=float),
+            np.ascontiguousarray(hits, dtype=float), float(ctx.margin), float(ctx.resolution),
+            lower, upper, bounded, int(reach))
+        return out.reshape(C.shape), short.reshape(C.shape[:-1])
     out = flat.copy()
     d_pt, _, d_seg, _ = _distances(flat, ctx)
     short = np.maximum(ctx.margin - np.minimum(d_pt, d_seg), 0.0)

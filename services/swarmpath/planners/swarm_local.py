@@ -109,6 +109,8 @@ class SwarmLocalPlanner(Planner):
         "knowledge": "sensors",  # "map": the static obstacles are known from the start
         "aim_hits": "known",  # the known path avoids: "known" (all remembered) or "near"
         "contact_band": 0.2,  # m beyond the body: no move closes on a sensed point this near
+        # "numba": the grid repair compiled (planners.compiled; the same numbers, optional dep.)
+        "backend": "numpy",
     }
     choices: ClassVar[dict[str, tuple[str, ...]]] = {
         "repair": ("mfb", "grid", "none"),
@@ -117,6 +119,7 @@ class SwarmLocalPlanner(Planner):
         "aim": ("shortcut", "carrot"),
         "knowledge": ("sensors", "map"),
         "aim_hits": ("known", "near"),
+        "backend": ("numpy", "numba"),
     }
     #: Optimizer parameters of the preset (e.g. ICOOT's two leaders), merged under user ones.
     optimizer_params: ClassVar[dict[str, Any]] = {}
@@ -139,6 +142,12 @@ class SwarmLocalPlanner(Planner):
             get_optimizer(str(p["optimizer"]))
         except KeyError as exc:
             raise PlannerError(f"{cls.name}.optimizer: {exc.args[0]}") from None
+        if p["backend"] == "numba":
+            try:
+                import numba  # noqa: F401
+            except ImportError:
+                raise PlannerError(f"{cls.name}.backend: 'numba' needs numba installed "
+                                   "(pip install 'swarmpath[fast]')") from None
 
     @classmethod
     def knows_static_map(cls, p):
@@ -147,6 +156,8 @@ class SwarmLocalPlanner(Planner):
     def __init__(self, scenario, params, rng, static_map=None):
         super().__init__(scenario, params, rng, static_map)
         self._streams = RunStreams([rng])
+        if self.p["backend"] == "numba" and self.p["repair"] == "grid":
+            _load_kernel()  # compiled or loaded from numba's cache here, not in a decision
         # knowledge = "map": the static obstacles' surfaces, sampled like sensor hits, are known
         # for the whole run (as if every static surface had been sensed before the start)
         self._prior = np.zeros((0, 2))
@@ -490,6 +501,7 @@ class SwarmLocalPlanner(Planner):
             safety=self._safety(obs.time),
             lower=lower,
             upper=upper,
+            backend=str(self.p["backend"]),
         )
         duration = float(self.p["replan"])
         # The goal itself is a candidate: when it is within reach and visible, go straight there.
@@ -555,6 +567,14 @@ class SwarmLocalPlanner(Planner):
         if room[0] > obs.robot_radius:  # only imminent contact is worth a detour
             return Decision(p.copy(), iterations, duration)  # safe here: wait for a way to open
         return Decision(options[int(np.argmax(room))], iterations, duration)
+
+
+def _load_kernel() -> None:
+    """Load the compiled grid repair (one call on a tiny problem)."""
+    hit = np.array([[1.0, 0.0]])
+    ctx = local.StepContext(position=np.zeros(2), goal=np.array([2.0, 0.0]), hits=hit,
+                            margin=0.5, repair="grid", backend="numba")
+    local.repair_grid(np.array([[0.9, 0.0]]), ctx)
 
 
 def _preset(name: str, optimizer: str, description: str, reference: str, sensors: str,

@@ -1,0 +1,111 @@
+"""Compiled grid repair (numba): the swarm planners' ``backend = "numba"``.
+
+:func:`swarmpath.planners.local._repair_grid` in one compiled loop, with the same numbers: the
+reference uses only + - * /, sqrt, minima and comparisons (no libm function), and the kernel
+repeats each operation in the reference's order and association, without fastmath (so no fused
+multiply-add): every value is the same double. The repaired candidates and their remaining
+violation are then equal to the last bit (``tests/test_planner_compiled.py``), and so are the
+episodes. Only the repair is compiled; the cost (arctan2, sin, cos, hypot) stays in numpy.
+
+Imported only by a planner whose ``backend`` is ``"numba"`` (numba is an optional dependency:
+``pip install 'swarmpath[fast]'``); the first call compiles, or loads the compiled code from
+numba's cache.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+Array = np.ndarray
+
+
+@njit(cache=True)
+def _point_d2_min(x: float, y: float, hits: Array) -> float:
+    best = math.inf
+    for j in range(hits.shape[0]):
+        dx = x - hits[j, 0]
+        dx = dx * dx
+        dy = y - hits[j, 1]
+        dy = dy * dy
+        d2 = dx + dy
+        if d2 < best:
+            best = d2
+    return best
+
+
+@njit(cache=True)
+def _segment_d2_min(px: float, py: float, x: float, y: float, wx: Array, wy: Array) -> float:
+    ux = x - px
+    uy = y - py
+    den = ux * ux + uy * uy + 1e-300
+    best = math.inf
+    for j in range(wx.shape[0]):
+        t = ux * wx[j] + uy * wy[j]
+        t = t / den
+        if t < 0.0:
+            t = 0.0
+        if t > 1.0:
+            t = 1.0
+        ex = wx[j] - t * ux
+        ex = ex * ex
+        ey = wy[j] - t * uy
+        ey = ey * ey
+        d2 = ex + ey
+        if d2 < best:
+            best = d2
+    return best
+
+
+@njit(cache=True)
+def _clip(v: float, lo: float, hi: float, bounded: bool) -> float:
+    if bounded:
+        if v < lo:
+            v = lo
+        if v > hi:
+            v = hi
+    return v
+
+
+@njit(cache=True)
+def repair_grid_kernel(flat: Array, p: Array, hits: Array, margin: float, resolution: float,
+                       lower: Array, upper: Array, bounded: bool, reach: int) -> tuple[
+                           Array, Array]:
+    """(repaired (n, 2), violation (n,)) of candidates ``flat`` (n, 2); ``local._repair_grid``."""
+    n = flat.shape[0]
+    px, py = p[0], p[1]
+    wx = hits[:, 0] - px
+    wy = hits[:, 1] - py
+    out = flat.copy()
+    short = np.zeros(n)
+    for i in range(n):
+        cx, cy = flat[i, 0], flat[i, 1]
+        d_pt = math.sqrt(_point_d2_min(cx, cy, hits))
+        d_seg = math.sqrt(_segment_d2_min(px, py, cx, cy, wx, wy))
+        s = margin - min(d_pt, d_seg)
+        if not s > 0.0:
+            continue
+        short[i] = s
+        # slide across the line's dominant axis: x for a mostly vertical line, y otherwise
+        axis = 0 if abs(cy - py) > abs(cx - px) else 1
+        for k in range(1, reach + 1):
+            step = k * resolution
+            for sign in range(2):
+                offset = step if sign == 0 else -step
+                tx = cx + (offset if axis == 0 else 0.0)
+                ty = cy + (offset if axis == 1 else 0.0)
+                tx = _clip(tx, lower[0], upper[0], bounded)
+                ty = _clip(ty, lower[1], upper[1], bounded)
+                if not math.sqrt(_point_d2_min(tx, ty, hits)) >= margin:
+                    continue
+                if not math.sqrt(_segment_d2_min(px, py, tx, ty, wx, wy)) >= margin:
+                    continue
+                out[i, 0] = tx
+                out[i, 1] = ty
+                short[i] = 0.0
+                break
+            if short[i] == 0.0:
+                break
+    return out, short

@@ -1,0 +1,56 @@
+"""The swarm planners' ``backend = "numba"`` (planners.compiled): the grid repair compiled, with
+the numpy reference's numbers to the last bit."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from swarmpath.planners import Episode, get_planner, list_planners, local
+from swarmpath.planners.base import PlannerError
+from swarmpath.world import get_map
+
+GRID = [name for name in list_planners()
+        if get_planner(name).defaults.get("repair") == "grid"
+        and "backend" in get_planner(name).defaults]
+
+
+def _context(rng, bounded, margin):
+    wall = np.stack([np.full(30, 0.6), np.linspace(-0.7, 0.7, 30)], axis=1)
+    ring = 0.4 * np.stack([np.cos(np.linspace(0, 5, 20)), np.sin(np.linspace(0, 5, 20))], axis=1)
+    ring += np.array([-0.5, 0.3])
+    hits = np.vstack([wall, ring, rng.uniform(-1.2, 1.2, (15, 2))])
+    box = dict(lower=np.array([-1.0, -0.9]), upper=np.array([1.0, 0.8])) if bounded else {}
+    return local.StepContext(position=np.array([0.05, -0.02]), goal=np.array([3.0, 0.5]),
+                             hits=hits, margin=margin, repair="grid", safety=0.03, **box)
+
+
+@pytest.mark.parametrize("bounded", [True, False])
+@pytest.mark.parametrize("margin", [0.06, 0.12, 0.2])
+def test_compiled_grid_repair_equals_numpy(bounded, margin):
+    rng = np.random.default_rng(int(margin * 100) + bounded)
+    ctx = _context(rng, bounded, margin)
+    fast = dataclasses.replace(ctx, backend="numba")
+    cands = rng.uniform(-1.1, 1.1, (300, 2))
+    cands[:5] = [[0.6, 0.0], [0.05, -0.02], [-1.0, 0.8], [0.6, 0.7], [1.0, -0.9]]
+    ref, ref_short = local._repair_grid(cands, ctx)
+    got, got_short = local._repair_grid(cands, fast)
+    assert np.array_equal(ref, got) and np.array_equal(ref_short, got_short)
+    assert np.any(ref_short > 0) and np.any((ref_short == 0) & np.any(ref != cands, axis=1))
+    a, b = local.score(cands.reshape(20, 15, 2), ctx), local.score(cands.reshape(20, 15, 2), fast)
+    assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
+
+
+@pytest.mark.parametrize("name", GRID)
+def test_planner_episode_is_the_same_with_numba(name):
+    scenario = get_map("icoot-map4")
+    runs = [Episode(scenario, name, 2, 0, {"backend": b}, step_limit=40).run() for b in
+            ("numpy", "numba")]
+    a, b = (r.to_dict() for r in runs)
+    a.pop("seconds"), b.pop("seconds")
+    assert a == b and a["iterations"] > 0
+
+
+def test_backend_is_checked():
+    with pytest.raises(PlannerError, match="backend"):
+        get_planner("ICOOT").resolve_params({"backend": "cuda"})
