@@ -3,6 +3,7 @@
 
     PYTHONPATH=services .venv/bin/python scripts/bench/plan_time.py \
         [--map mfb-static] [--planners ICOOT,IHPO,MFB,HPSO-MFB] [--seeds 10] [--repeat 1]
+        [--params '{"backend": "numba"}']
 
 Each planner runs once per seed 1..N (run 0 of each seed) through :class:`Episode`, as
 ``swarmpath plan`` does. Per run: the CPU time of the planner's decisions (process time, less
@@ -33,9 +34,10 @@ from swarmpath.world import get_map
 SWARM = ("ICOOT", "IHPO", "MFB", "HPSO-MFB")
 
 
-def one_run(scenario: Any, planner: str, seed: int) -> tuple[float, float, str, Any]:
+def one_run(scenario: Any, planner: str, seed: int,
+            params: dict[str, Any] | None = None) -> tuple[float, float, str, Any]:
     """(CPU s, wall s of the decisions, digest, outcome) of run 0 of ``seed``."""
-    ep = Episode(scenario, planner, seed, 0)
+    ep = Episode(scenario, planner, seed, 0, params)
     decide = ep.planner.decide
     spent = [0.0]
 
@@ -65,8 +67,11 @@ def main(argv: Sequence[str] | None = None) -> None:
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--repeat", type=int, default=1)
     ap.add_argument("--runs", action="store_true", help="one line per run too")
+    ap.add_argument("--params", default=None,
+                    help="parameters for every planner (JSON), e.g. '{\"backend\": \"numba\"}'")
     args = ap.parse_args(argv)
     scenario = get_map(args.map)
+    params = json.loads(args.params) if args.params else None
     rows = ["| planner | runs | median CPU s | p90 CPU s | median wall s | digest of the runs |",
             "| --- | ---: | ---: | ---: | ---: | --- |"]
     lines = []
@@ -75,7 +80,7 @@ def main(argv: Sequence[str] | None = None) -> None:
         for seed in range(1, args.seeds + 1):
             best = None
             for _ in range(max(1, args.repeat)):
-                c, w, d, out = one_run(scenario, planner, seed)
+                c, w, d, out = one_run(scenario, planner, seed, params)
                 if best is not None and d != best[2]:
                     raise SystemExit(f"{planner} seed {seed}: a repeat gave another run")
                 best = (c, w, d, out) if best is None or c < best[0] else best
