@@ -1,5 +1,5 @@
-"""The swarm planners' ``backend = "numba"`` (planners.compiled): the grid repair compiled, with
-the numpy reference's numbers to the last bit."""
+"""The swarm planners' ``backend = "numba"`` (planners.compiled): the grid repair and the hit
+distances compiled, with the numpy reference's numbers to the last bit."""
 
 import dataclasses
 
@@ -10,9 +10,7 @@ from swarmpath.planners import Episode, get_planner, list_planners, local
 from swarmpath.planners.base import PlannerError
 from swarmpath.world import get_map
 
-GRID = [name for name in list_planners()
-        if get_planner(name).defaults.get("repair") == "grid"
-        and "backend" in get_planner(name).defaults]
+SWARM = [name for name in list_planners() if "backend" in get_planner(name).defaults]
 
 
 def _context(rng, bounded, margin):
@@ -39,9 +37,15 @@ def test_compiled_grid_repair_equals_numpy(bounded, margin):
     assert np.any(ref_short > 0) and np.any((ref_short == 0) & np.any(ref != cands, axis=1))
     a, b = local.score(cands.reshape(20, 15, 2), ctx), local.score(cands.reshape(20, 15, 2), fast)
     assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
+    for one, other in zip(local._distances(cands, ctx), local._distances(cands, fast),
+                          strict=True):
+        assert np.array_equal(one, other) and one.dtype == other.dtype
+    mfb, mfb_fast = (dataclasses.replace(c, repair="mfb") for c in (ctx, fast))
+    a, b = local.score(cands, mfb), local.score(cands, mfb_fast)
+    assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
 
 
-@pytest.mark.parametrize("name", GRID)
+@pytest.mark.parametrize("name", SWARM)
 def test_planner_episode_is_the_same_with_numba(name):
     scenario = get_map("icoot-map4")
     runs = [Episode(scenario, name, 2, 0, {"backend": b}, step_limit=40).run() for b in

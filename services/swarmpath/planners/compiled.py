@@ -109,3 +109,51 @@ def repair_grid_kernel(flat: Array, p: Array, hits: Array, margin: float, resolu
             if short[i] == 0.0:
                 break
     return out, short
+
+
+@njit(cache=True)
+def distances_kernel(flat: Array, p: Array, hits: Array) -> tuple[Array, Array, Array, Array]:
+    """``local._distances`` of candidates ``flat`` (n, 2): the distance to the nearest hit and its
+    index, and the same for the segment from p (first index on ties, as ``np.argmin``)."""
+    n = flat.shape[0]
+    px, py = p[0], p[1]
+    wx = hits[:, 0] - px
+    wy = hits[:, 1] - py
+    d_pt = np.empty(n)
+    d_seg = np.empty(n)
+    i_pt = np.zeros(n, dtype=np.int64)
+    i_seg = np.zeros(n, dtype=np.int64)
+    for i in range(n):
+        x, y = flat[i, 0], flat[i, 1]
+        best = math.inf
+        for j in range(hits.shape[0]):
+            dx = x - hits[j, 0]
+            dx = dx * dx
+            dy = y - hits[j, 1]
+            dy = dy * dy
+            d2 = dx + dy
+            if d2 < best:
+                best = d2
+                i_pt[i] = j
+        d_pt[i] = math.sqrt(best)
+        ux = x - px
+        uy = y - py
+        den = ux * ux + uy * uy + 1e-300
+        best = math.inf
+        for j in range(hits.shape[0]):
+            t = ux * wx[j] + uy * wy[j]
+            t = t / den
+            if t < 0.0:
+                t = 0.0
+            if t > 1.0:
+                t = 1.0
+            ex = wx[j] - t * ux
+            ex = ex * ex
+            ey = wy[j] - t * uy
+            ey = ey * ey
+            d2 = ex + ey
+            if d2 < best:
+                best = d2
+                i_seg[i] = j
+        d_seg[i] = math.sqrt(best)
+    return d_pt, i_pt, d_seg, i_seg

@@ -170,6 +170,14 @@ def repair_mfb(C: Array, ctx: StepContext, rounds: int = 3) -> Array:
 def _distances(C: Array, ctx: StepContext) -> tuple[Array, NDArray[np.int64], Array, NDArray[
     np.int64
 ]]:
+    if ctx.backend == "numba" and len(ctx.hits):
+        from swarmpath.planners.compiled import distances_kernel
+
+        shape = C.shape[:-1]
+        d_pt, i_pt, d_seg, i_seg = distances_kernel(
+            np.ascontiguousarray(C.reshape(-1, 2), dtype=float),
+            np.asarray(ctx.position, dtype=float), np.ascontiguousarray(ctx.hits, dtype=float))
+        return d_pt.reshape(shape), i_pt.reshape(shape), d_seg.reshape(shape), i_seg.reshape(shape)
     d_pt, i_pt = point_hit_distance(C, ctx.hits)
     d_seg, i_seg = segment_hit_distance(ctx.position, C, ctx.hits)
     return d_pt, i_pt, d_seg, i_seg

@@ -156,7 +156,7 @@ class SwarmLocalPlanner(Planner):
     def __init__(self, scenario, params, rng, static_map=None):
         super().__init__(scenario, params, rng, static_map)
         self._streams = RunStreams([rng])
-        if self.p["backend"] == "numba" and self.p["repair"] == "grid":
+        if self.p["backend"] == "numba":
             _load_kernel()  # compiled or loaded from numba's cache here, not in a decision
         # knowledge = "map": the static obstacles' surfaces, sampled like sensor hits, are known
         # for the whole run (as if every static surface had been sensed before the start)
@@ -570,11 +570,12 @@ class SwarmLocalPlanner(Planner):
 
 
 def _load_kernel() -> None:
-    """Load the compiled grid repair (one call on a tiny problem)."""
+    """Load the compiled kernels (one call each on a tiny problem)."""
     hit = np.array([[1.0, 0.0]])
     ctx = local.StepContext(position=np.zeros(2), goal=np.array([2.0, 0.0]), hits=hit,
                             margin=0.5, repair="grid", backend="numba")
     local.repair_grid(np.array([[0.9, 0.0]]), ctx)
+    local.repair_mfb(np.array([[0.9, 0.0]]), ctx)
 
 
 def _preset(name: str, optimizer: str, description: str, reference: str, sensors: str,
