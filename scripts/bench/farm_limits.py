@@ -12,9 +12,9 @@ core's ``handle_lease_request``. No network except in the last row. The coordina
 in this process on a fresh data directory (SQLite ``synchronous=FULL`` as in production); each
 row times one piece over the same results (CPU seconds of this process per run, and wall):
 
-* decode + proof: ``decode(ResultBatch)`` and the HMAC check of every result;
-* SQLite: ``Store.accept_results`` in groups of 64 batches (one transaction and fsync each),
-  the proofs checked again inside as the store does;
+* decode + proof: the coordinator's decoding of each result frame and the HMAC check of every
+  result;
+* SQLite: ``Store.accept_results`` in groups of 64 batches (one transaction and fsync each);
 * MCAP: the recorder writing each accepted run (``Coordinator._record``: /results and /curves
   messages, 1 MiB zstd chunks);
 * dashboard: the live aggregates (``Dashboard.observe``);
@@ -44,16 +44,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from farm_workers import simulated_results
 
-from swarmpath.service.capability import result_ok
 from swarmpath.service.coordinator import Coordinator, CoordinatorSettings
 from swarmpath.service.protocol import (
     BenchmarkJobSpec,
     Lease,
     LeaseBundle,
     LeaseRequest,
-    ResultBatch,
-    RunResult,
-    decode,
     decode_work_reply,
     encode,
 )
@@ -99,20 +95,22 @@ def coordinator_pieces(args: argparse.Namespace, tmp: Path) -> list[tuple[str, f
         job_b = core.submit(spec).id
         batches_b = payloads(lease_all(core, "w1"), "w1")
         key_b = core.keys.results(job_b)
-        decoded: list[RunResult] = []
+        key_a = core.keys.results(job_a)
+        decoded: list[Any] = []
 
         def decode_all() -> None:
             for p in batches_a:
-                for r in decode(ResultBatch, p).results:
-                    assert result_ok(core._capability(r.lease_id), r)
-                    decoded.append(r)
+                item = core._decode_batch(key_a, p)
+                assert item is not None and all(r.capability for r in item[1])
+                decoded.extend(item[1])
 
         rows.append(("decode + proof", *timed(decode_all)))
 
         def store_all() -> None:
             per = max(1, len(decoded) * GROUP // len(batches_a))
             for i in range(0, len(decoded), per):
-                core.store.accept_results(decoded[i:i + per], time.time())
+                statuses = core.store.accept_results(decoded[i:i + per], time.time())
+                assert set(statuses) == {"accepted"}, set(statuses)
 
         rows.append(("SQLite (accept_results, FULL)", *timed(store_all)))
         rows.append(("MCAP (recorder)", *timed(lambda: core._record(job_a, decoded,
@@ -122,7 +120,8 @@ def coordinator_pieces(args: argparse.Namespace, tmp: Path) -> list[tuple[str, f
 
         def intake_all() -> None:
             for i in range(0, len(batches_b), GROUP):
-                core.handle_result_batches([(key_b, p) for p in batches_b[i:i + GROUP]])
+                core.handle_result_batches([(key_b, p) for p in batches_b[i:i + GROUP]],
+                                           parse_acks=False)
 
         rows.append(("whole intake (handle_result_batches)", *timed(intake_all)))
         status = core.store.job_status(job_b)
