@@ -65,3 +65,21 @@ def test_lease_requests_get_busy_while_results_wait(tmp_path):
         bridge._work.put(None)
         thread.join(10)
         core.close()
+
+
+def test_a_worker_told_busy_does_not_resend_its_unacknowledged_results():
+    import time
+
+    from swarmpath.service.protocol import BenchmarkCell
+    from swarmpath.service.worker import execute_lease
+    from test_service_api import make_lease, offline_worker
+
+    w = offline_worker(ack_timeout=5.0)
+    spec = BenchmarkCell(algorithm="PSO", function="F1", dim=2, agents=5, iterations=3)
+    lease = make_lease(spec, [0, 1])
+    w._publish_results(lease, execute_lease(lease))
+    t = time.monotonic()
+    w._last_ack = t - 100.0  # no ack for a long time ...
+    w._last_busy = t + 8.0  # ... but the coordinator said "busy" 1.5 s ago: it is behind
+    assert w.resend_due(t + 9.5) == 0
+    assert w.resend_due(t + 13.5) == 2  # silent and not busy for ack_timeout: put again

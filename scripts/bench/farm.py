@@ -160,6 +160,8 @@ class Farm:
                    "--max-runs", str(a.runs_per_lease), "--max-leases", str(a.max_leases),
                    "--seconds", str(a.seconds + 120), "--stats", str(stats),
                    "--log-level", a.log_level]
+            if a.run_jitter:
+                cmd += ["--run-jitter", str(a.run_jitter)]
             if a.wrong_capability:
                 cmd.append("--wrong-capability")
             self.sims.append((subprocess.Popen(cmd, stdout=self.log, stderr=self.log, env=env,
@@ -364,6 +366,8 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
     ap.add_argument("--map", action="append", help="map runs (with paths) on this preset map")
     ap.add_argument("--planner", default="MFB")
     ap.add_argument("--run-ms", type=float, default=0.0, help="simulated compute per run")
+    ap.add_argument("--run-jitter", type=float, default=0.0,
+                    help="each group of runs takes run-ms x runs x U(1 - J, 1 + J)")
     ap.add_argument("--runs-per-lease", type=int, default=1000,
                     help="a worker's max_runs per lease (the coordinator sizes below it)")
     ap.add_argument("--max-leases", type=int, default=32, help="leases per bundle at most")

@@ -26,6 +26,7 @@ import heapq
 import json
 import logging
 import os
+import random
 import signal
 import sys
 import threading
@@ -169,10 +170,13 @@ class SimSlot(Slot):
     results are the templates' (see the module docstring). Cancelled leases report Cancelled."""
 
     def __init__(self, index: int, on_done: Callable[[Slot, Outcomes], None],
-                 run_seconds: float, wrong_key: bool = False):
+                 run_seconds: float, wrong_key: bool = False, jitter: float = 0.0,
+                 seed: int = 0):
         super().__init__(index, on_done)
         self.run_seconds = run_seconds
         self.wrong_key = wrong_key
+        self.jitter = jitter  # a group takes run_seconds x runs x U(1 - jitter, 1 + jitter)
+        self._rng = random.Random(seed)
         self._cancelled: set[str] = set()
 
     def submit(self, leases: Sequence[Lease]) -> None:
@@ -181,7 +185,9 @@ class SimSlot(Slot):
         self._cancelled = set()
         runs = sum(len(lease.runs) for lease in group)
         assert CLOCK is not None
-        CLOCK.at(time.monotonic() + runs * self.run_seconds, lambda: self._finish(group))
+        spread = 1.0 + self.jitter * (2.0 * self._rng.random() - 1.0)
+        CLOCK.at(time.monotonic() + runs * self.run_seconds * spread,
+                 lambda: self._finish(group))
 
     def _finish(self, group: list[Lease]) -> None:
         from swarmpath.service.worker import Cancelled
@@ -204,17 +210,20 @@ class SimSlot(Slot):
 class SimWorker(Worker):
     """The real worker with simulated slots, measuring lease round trips and ack latencies."""
 
-    def __init__(self, settings: WorkerSettings, run_seconds: float, wrong_key: bool = False):
+    def __init__(self, settings: WorkerSettings, run_seconds: float, wrong_key: bool = False,
+                 jitter: float = 0.0):
         super().__init__(settings)
         self.run_seconds = run_seconds
         self.wrong_key = wrong_key
+        self.jitter = jitter
         self.lease_rtt_ms: list[float] = []
         self.ack_ms: list[float] = []
         self.no_work = 0
         self.leases_got = 0
 
     def new_slot(self, index: int) -> Slot:
-        return SimSlot(index, self._on_slot_done, self.run_seconds, self.wrong_key)
+        return SimSlot(index, self._on_slot_done, self.run_seconds, self.wrong_key,
+                       self.jitter, hash((self.id, index)))
 
     def _ask(self) -> Lease | LeaseBundle | NoWork | None:
         started = time.perf_counter()
@@ -259,6 +268,8 @@ def main() -> int:
     ap.add_argument("--max-runs", type=int, default=1000)
     ap.add_argument("--max-leases", type=int, default=32)
     ap.add_argument("--seconds", type=float, default=600.0, help="stop after this long at most")
+    ap.add_argument("--run-jitter", type=float, default=0.0,
+                    help="a group's time varies by this fraction either way (uniform)")
     ap.add_argument("--wrong-capability", action="store_true",
                     help="prove results with a made-up key (a negative control)")
     ap.add_argument("--stats", type=Path)
@@ -274,7 +285,7 @@ def main() -> int:
         connect=[args.connect], prefix=args.prefix, slots=args.slots,
         worker_id=f"{args.id_prefix}-{i}", max_runs=args.max_runs, max_leases=args.max_leases,
         executor="thread", user=user, password=password, grace_seconds=5.0, ack_timeout=5.0,
-    ), args.run_ms / 1e3, args.wrong_capability) for i in range(args.count)]
+    ), args.run_ms / 1e3, args.wrong_capability, args.run_jitter) for i in range(args.count)]
     done = threading.Event()
 
     def stop(_signum: int = 0, _frame: Any = None) -> None:

@@ -67,6 +67,7 @@ class Worker(Reporting):
         self._seq = 0  # puts of results so far
         self._acked_seq = 0  # highest put with an acknowledged result
         self._last_ack = time.monotonic()
+        self._last_busy = 0.0
         self.scenarios = ByteLRU(settings.scenario_cache_bytes)  # fetched scenarios by hash
 
     # ------------------------------------------------------------------------------ control
@@ -234,6 +235,8 @@ class Worker(Reporting):
                 backoff = 0.0
                 self._resend_all()
             if isinstance(reply, NoWork):
+                if reply.reason.startswith("busy"):  # behind on storing: our results wait
+                    self._last_busy = time.monotonic()
                 self._stop.wait(reply.retry_after)
                 continue
             self._take(reply.leases if isinstance(reply, LeaseBundle) else [reply])

@@ -75,6 +75,7 @@ class Reporting:
     _seq: int
     _acked_seq: int
     _last_ack: float
+    _last_busy: float  # when a lease request was last answered "busy" (0: never)
 
     def _dispatch(self) -> None:  # the Worker's
         raise NotImplementedError
@@ -242,14 +243,15 @@ class Reporting:
 
     def resend_due(self, now: float | None = None) -> int:
         """Put again what was not acknowledged within ack_timeout (doubling, at most 30 s) -
-        unless acks keep coming for earlier puts: the coordinator handles each worker's messages
-        in order, so it is busy, not deaf, and re-sending would only add duplicates to its queue.
+        unless acks keep coming for earlier puts, or lease requests are answered ``busy``
+        (back-pressure): the coordinator handles each worker's messages in order, so it is busy,
+        not deaf, and re-sending would only add duplicates to its queue.
         A result is re-sent at once when a later put was acknowledged before it (it was lost)
         or after an outage (``_resend_all``). Returns how many results were put again."""
         now = time.monotonic() if now is None else now
         due: dict[str, list[_Pending]] = {}
         with self._lock:
-            silent = now - self._last_ack >= self.settings.ack_timeout
+            silent = now - max(self._last_ack, self._last_busy) >= self.settings.ack_timeout
             for p in self._pending.values():
                 wait = min(30.0, self.settings.ack_timeout * 2 ** max(0, p.attempts - 1))
                 overtaken = p.seq < self._acked_seq
