@@ -38,7 +38,6 @@ def fill(core: Any, spec: dict[str, Any]) -> str:
     """Submit ``spec`` and hand the coordinator's result handler synthetic results (monotone
     best-so-far curves, each result proven with its lease's capability, as a worker sends them).
     """
-    from swarmpath.service.capability import result_proof
     from swarmpath.service.protocol import (
         Lease,
         LeaseBundle,
@@ -48,7 +47,7 @@ def fill(core: Any, spec: dict[str, Any]) -> str:
         encode,
         parse_job_spec,
     )
-    from swarmpath.service.worker import pack_batches
+    from swarmpath.service.worker import fit_result, pack_batches
 
     status = core.submit(parse_job_spec(spec))
     rng = np.random.default_rng(1)
@@ -74,8 +73,7 @@ def fill(core: Any, spec: dict[str, Any]) -> str:
                     metrics={"best_fitness": float(curves[i, -1]),
                              "evaluations": spec["agents"] * (iterations + 1)},
                     curve=curves[i].tolist(), best_position=rng.uniform(-1, 1, 30).tolist())
-                proof = result_proof(lease.capability, result)
-                payloads.append(encode(result.model_copy(update={"proof": proof})))
+                payloads.append(fit_result(result, capability=lease.capability))
             core.handle_result_batches([(f"swarmpath/results/{lease.job_id}", p)
                                         for p in pack_batches("bench", payloads)])
     done = core.store.job_status(status.id)
