@@ -81,6 +81,7 @@ class IHPO(HPO):
         per_dim = self.p["beta_draw"] == "dimension"
         self.extra_slabs = 1 if per_dim else 0
         self.extra_rows = 0 if per_dim else 1
+        self._terms: tuple[Draw, Array, Array | None] | None = None
 
     def _alpha(self, cp: float, slabs: Array, rows: Array) -> Array:
         """alpha = (2 u - 1) CP, broadcastable to (R, N, d)."""
@@ -93,12 +94,26 @@ class IHPO(HPO):
             u = rows[:, 0, :1, None]  # (R, 1, 1): the first agent's number serves everyone
         return (2.0 * u - 1.0) * cp
 
-    def _moved(self, draw: Draw, C: float, kbest: int, rows: slice) -> Array:
+    def _iteration_terms(self, draw: Draw, C: float) -> tuple[Array, Array | None]:
+        """alpha (R, N, d) of this iteration and, where eq 14b applies it, the prey's factor
+        S alpha: computed once per draw (the sweep moves the agents in several blocks), the same
+        products as per block."""
+        cached = self._terms
+        if cached is not None and cached[0] is draw:
+            return cached[1], cached[2]
         cc = C if self.p["cp_c"] == "hpo" else 1.0
         cp = math.sin(cc - self.t / self.T)
-        alpha_all = self._alpha(cp, draw.slabs, draw.rows)
+        alpha = np.broadcast_to(self._alpha(cp, draw.slabs, draw.rows), self.X.shape)
+        scaled = None
+        if self.p["alpha_branches"] != "hunter" and self.p["alpha_on"] in ("step", "literal"):
+            scaled = draw.S * alpha  # eq 14b: T + alpha C Z cos(2 pi r4) (T - x)
+        self._terms = (draw, alpha, scaled)
+        return alpha, scaled
+
+    def _moved(self, draw: Draw, C: float, kbest: int, rows: slice) -> Array:
+        alpha_all, scaled = self._iteration_terms(draw, C)
         X = self.X[:, rows].copy()
-        alpha = np.broadcast_to(alpha_all, self.X.shape)[:, rows]
+        alpha = alpha_all[:, rows]
         branches = self.p["alpha_branches"]
         on = self.p["alpha_on"]
         r, i = self._hunter_rows(draw, rows)
@@ -126,8 +141,8 @@ class IHPO(HPO):
         T = self.best_position[:, None, :]
         S = draw.S[:, rows]
         if branches == "hunter" or on in ("step", "literal"):
-            if branches != "hunter":
-                S = S * alpha  # eq 14b: T + alpha C Z cos(2 pi r4) (T - x)
+            if scaled is not None:
+                S = scaled[:, rows]
             np.subtract(T, X, out=X)
             X *= S
             X += T
