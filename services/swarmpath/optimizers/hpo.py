@@ -214,7 +214,7 @@ class HPO(Optimizer):
         value does not depend on the batch), and kept up to and including its first agent that
         improves on T: until then every move used the T the loop would have used. The next block
         starts after it, from the new T. The evaluations counted and the best point recorded are
-        those of the loop (``record``: strict improvement, as agent after agent). About
+        those of the loop (``evaluate``'s record: strict improvement, as agent after agent). About
         (improvements of T + hunters + 1) objective calls per iteration instead of N.
         """
         _, agents = draw.hunters
@@ -228,7 +228,12 @@ class HPO(Optimizer):
             better = np.flatnonzero(np.where(np.isnan(F[0]), np.inf, F[0]) < self.best_fitness[0])
             stop = X.shape[1] if better.size == 0 else int(better[0]) + 1
             self.X[:, i : i + stop] = X[:, :stop]
-            self.record(X[:, :stop], F[:, :stop])
+            # ``record`` of the kept agents: counted, and the last one, if it improved, is the
+            # new best (every other kept value is at least the old best)
+            self.evaluations += stop
+            if better.size:
+                self.best_fitness = F[:, stop - 1].copy()
+                self.best_position = X[:, stop - 1].copy()
             i += stop
 
     def _hunter_rows(self, draw: Draw, rows: slice) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
