@@ -20,6 +20,8 @@ row times one piece over the same results (CPU seconds of this process per run, 
 * dashboard: the live aggregates (``Dashboard.observe``);
 * whole intake: ``Coordinator.handle_result_batches`` (all of the above and the acks) on a
   second, identical job;
+* per message: a progress message renewing a lease (``handle_progress``: decode, proof,
+  one SQLite transaction) and a lease request granting one 8-run lease;
 * Zenoh router: a router session and a client session in this process, the client putting
   payloads of the results' batch size with congestion control BLOCK to a subscriber of the
   router session that only counts them (messages/s and MB/s through loopback TCP).
@@ -44,12 +46,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from farm_workers import simulated_results
 
+from swarmpath.service.capability import progress_proof
 from swarmpath.service.coordinator import Coordinator, CoordinatorSettings
 from swarmpath.service.protocol import (
     BenchmarkJobSpec,
     Lease,
     LeaseBundle,
     LeaseRequest,
+    RunProgress,
     decode_work_reply,
     encode,
 )
@@ -83,7 +87,9 @@ def payloads(leases: list[Lease], worker: str) -> list[bytes]:
     return pack_batches(worker, data)
 
 
-def coordinator_pieces(args: argparse.Namespace, tmp: Path) -> list[tuple[str, float, float]]:
+def coordinator_pieces(
+    args: argparse.Namespace, tmp: Path, per_message: list[tuple[str, float, float, int]],
+) -> list[tuple[str, float, float]]:
     core = Coordinator(CoordinatorSettings(data_dir=tmp / "store"))
     spec = BenchmarkJobSpec(kind="benchmark", algorithms=["GWO"], functions=["F1"], dims=[2],
                             runs=args.runs, agents=2, iterations=args.iterations)
@@ -93,7 +99,12 @@ def coordinator_pieces(args: argparse.Namespace, tmp: Path) -> list[tuple[str, f
         job_a = core.submit(spec).id
         batches_a = payloads(lease_all(core, "w1"), "w1")
         job_b = core.submit(spec).id
-        batches_b = payloads(lease_all(core, "w1"), "w1")
+        leases_b = lease_all(core, "w1")
+        batches_b = payloads(leases_b, "w1")
+        messages = [(core.keys.progress(lease.job_id), encode(RunProgress(
+            lease_id=lease.lease_id, job_id=lease.job_id, worker="w1", cell=lease.cell,
+            runs=lease.runs, seq=seq, proof=progress_proof(lease.capability, lease.lease_id, seq),
+        ))) for seq in (1, 2) for lease in leases_b]
         key_b = core.keys.results(job_b)
         key_a = core.keys.results(job_a)
         decoded: list[Any] = []
@@ -117,6 +128,25 @@ def coordinator_pieces(args: argparse.Namespace, tmp: Path) -> list[tuple[str, f
                                                                       time.time()))))
         rows.append(("dashboard aggregates", *timed(
             lambda: core.dashboard.observe(job_a, decoded, time.time()))))
+
+        def progress_all() -> None:
+            for key, payload in messages:
+                core.handle_progress(key, payload)
+
+        cpu, wall = timed(progress_all)
+        per_message.append(("progress message (lease renewal)", cpu, wall, len(messages)))
+        core.submit(spec)
+        requests = [0]
+
+        def lease_requests() -> None:
+            for _ in range(200):
+                reply = core.handle_lease_request(encode(LeaseRequest(
+                    worker="w1", max_runs=8, max_leases=1)))
+                requests[0] += 1
+                assert b'"lease"' in reply
+
+        cpu, wall = timed(lease_requests)
+        per_message.append(("lease request (one 8-run lease)", cpu, wall, requests[0]))
 
         def intake_all() -> None:
             for i in range(0, len(batches_b), GROUP):
@@ -175,13 +205,18 @@ def main() -> None:
     ap.add_argument("--zenoh-messages", type=int, default=20000)
     args = ap.parse_args()
     with tempfile.TemporaryDirectory(prefix="farm-limits-") as tmp:
-        rows = coordinator_pieces(args, Path(tmp))
+        per_message: list[tuple[str, float, float, int]] = []
+        rows = coordinator_pieces(args, Path(tmp), per_message)
     print(f"{args.runs} runs, {args.iterations}-point curves\n")
     print("| piece | CPU ms/run | wall ms/run | runs/s of one core (CPU) |")
     print("|---|---|---|---|")
     for name, cpu, wall in rows:
         print(f"| {name} | {cpu * 1e3 / args.runs:.4f} | {wall * 1e3 / args.runs:.4f} | "
               f"{args.runs / cpu if cpu else float('inf'):,.0f} |")
+    print("\n| message (count) | CPU ms each | wall ms each | per second of one core (CPU) |")
+    print("|---|---|---|---|")
+    for name, cpu, wall, n in per_message:
+        print(f"| {name} ({n}) | {cpu * 1e3 / n:.4f} | {wall * 1e3 / n:.4f} | {n / cpu:,.0f} |")
     print("\n| Zenoh payload | messages/s | MB/s |")
     print("|---|---|---|")
     for size in (10_000, 512_000):
