@@ -20,8 +20,10 @@ coordinator uses (``ready``, ``path``, ``finish``, ``tick``, ``recover``, ``clos
 
 from __future__ import annotations
 
+import fcntl
 import logging
 import multiprocessing
+import os
 import threading
 import time
 from multiprocessing.connection import Connection
@@ -132,9 +134,16 @@ class RecorderProcess:
 def serve(data_dir: str, synchronous: str, conn: Connection, recover: bool = False) -> None:
     """The recorder process: answer the coordinator's messages until ``close`` (``recover``: a
     restart; first rebuild what the previous recorder left)."""
+    from swarmpath.service.recorder.common import mcap_dir
     from swarmpath.service.recorder.registry import Recorders
     from swarmpath.service.store import Store
 
+    # One writer of a data directory's files at a time: the recorder of a coordinator killed a
+    # moment ago may still be closing them; the lock is the OS's, released when it exits.
+    mcap_dir(data_dir).mkdir(parents=True, exist_ok=True)
+    lock = open(mcap_dir(data_dir) / ".recorder.lock", "a+b")  # held until the process exits
+    fcntl.flock(lock, fcntl.LOCK_EX)
+    parent = os.getppid()
     store = Store(data_dir, synchronous=synchronous)
     recorders = Recorders(store)
     last: dict[str, int] = {}  # job -> position of the last result handed to its recorder
@@ -151,8 +160,10 @@ def serve(data_dir: str, synchronous: str, conn: Connection, recover: bool = Fal
         newest = store.last_result_rowid()
         if newest > last[job_id]:
             rec = recorders.open(job_id)
-            for record in store.iter_run_records(job_id, after=last[job_id]):
+            for i, record in enumerate(store.iter_run_records(job_id, after=last[job_id])):
                 rec.add(record)  # runs already written are skipped
+                if i % 1000 == 999 and os.getppid() != parent:
+                    raise EOFError("the coordinator is gone")
             last[job_id] = newest
 
     def handle(kind: str, arg: Any) -> Any:
@@ -196,6 +207,8 @@ def serve(data_dir: str, synchronous: str, conn: Connection, recover: bool = Fal
             for job_id in sorted(dirty):
                 try:
                     catch_up(job_id)
+                except EOFError:
+                    raise
                 except Exception:
                     log.exception("recorder: writing job %s failed", job_id)
             dirty.clear()
