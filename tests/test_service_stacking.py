@@ -11,6 +11,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from swarmpath.optimizers import minimize
+from swarmpath.optimizers.api import CHUNK_ELEMENTS
 from swarmpath.service.capability import new_capability
 from swarmpath.service.coordinator import Coordinator, CoordinatorSettings, LeaseSizer, create_app
 from swarmpath.service.protocol import (
@@ -25,7 +26,12 @@ from swarmpath.service.protocol import (
 )
 from swarmpath.service.result_frame import as_dict, decode_record, record_ok
 from swarmpath.service.worker import Cancelled, ThreadSlot, pack_batches
-from swarmpath.service.worker.stacking import execute_stack, plan_stacks, stacked_outcomes
+from swarmpath.service.worker.stacking import (
+    STACK_ELEMENTS,
+    execute_stack,
+    plan_stacks,
+    stacked_outcomes,
+)
 
 PSO = BenchmarkCell(algorithm="PSO", function="F1", dim=3, agents=6, iterations=12)
 
@@ -65,7 +71,13 @@ def test_leases_differing_only_in_the_function_share_a_stack():
         lease(fn(PSO, "F3", backend="numba"), [0], "n"),  # another backend
     ]
     assert plan_stacks(group) == [[0, 1, 3], [2, 10], [4], [5], [6], [7], [8], [9], [11]]
-    # a stack holds at most `limit` coordinates per population (runs x agents x dim)
+    # a stack holds at most `limit` coordinates per population (runs x agents x dim): by
+    # default one chunk of minimize
+    assert STACK_ELEMENTS == CHUNK_ELEMENTS
+    wide = fn(PSO, "F1", dim=30, agents=30)  # 27,000 coordinates per lease of 30 runs
+    group30 = [lease(fn(wide, f), list(range(30)), f) for f in ("F1", "F2", "F3", "F4", "F5")]
+    assert plan_stacks(group30) == [[0, 1, 2], [3, 4]]
+
     assert plan_stacks(group[:2] + group[3:4], limit=4 * 6 * 3) == [[0, 1], [2]]
     assert plan_stacks([lease(PSO, list(range(5)), "big")], limit=4 * 6 * 3) == [[0]]
 

@@ -1,12 +1,15 @@
 """Stacking: the benchmark leases of a group that differ only in their function run as one
-``minimize_many`` batch (the ICOOT paper's Table 2 setting costs about half the CPU per run
-stacked when a cell's lease holds fewer runs than one of ``minimize``'s chunks: docs/benchmarks.md).
+``minimize_many`` batch, so that leases of a few runs each share one of ``minimize``'s chunks
+instead of each being a small batch of its own (docs/benchmarks.md, Stacking).
 
 A group (the leases of one LeaseBundle) is cut into *stacks*: leases of one job whose cell specs
-are equal but for ``function`` (same algorithm, dim, agents, iterations, params, transform and,
-whatever fields a spec gains, those too) go into one stack, in the group's order, as long as the
-stack's population stays within ``BATCH_ELEMENTS`` coordinates; any other lease is a stack of
-its own and runs as before (:func:`~.execution.execute_lease`).
+are equal but for ``function`` (same algorithm, dim, agents, iterations, params, transform,
+backend and, whatever fields a spec gains, those too) go into one stack, in the group's order, as
+long as the stack's population stays within ``STACK_ELEMENTS`` coordinates, one chunk of
+``minimize``: the stacks run one after the other, each a single optimizer whose arrays stay in
+the CPU caches for all its iterations (measured faster than one large stack whose chunks are
+stepped in turn). Any other lease, and a lease larger than a chunk, is a stack of its own and
+runs as before (:func:`~.execution.execute_lease`).
 
 Each lease keeps everything it has alone: its runs give the numbers of
 ``minimize(algorithm, function, ..., run_ids=lease.runs)`` (``minimize_many`` guarantees it),
@@ -25,7 +28,6 @@ from typing import Any
 
 from swarmpath.service.protocol import BenchmarkCell, Lease
 from swarmpath.service.worker.execution import (
-    BATCH_ELEMENTS,
     Cancelled,
     execute_lease,
     minimize_options,
@@ -34,6 +36,10 @@ from swarmpath.service.worker.execution import (
 from swarmpath.service.worker.packing import fit_result
 
 log = logging.getLogger("swarmpath.worker")
+
+#: Coordinates per population of one stack: ``swarmpath.optimizers.api.CHUNK_ELEMENTS`` (not
+#: imported: the worker process itself never loads the optimizers).
+STACK_ELEMENTS = 100_000
 
 #: What a stack gives for each of its leases: the encoded results ``(run, bytes)`` in run
 #: order, or the :class:`Cancelled` of a lease that was cancelled.
@@ -56,7 +62,7 @@ def _elements(lease: Lease) -> int:
     return len(lease.runs) * spec.agents * spec.dim
 
 
-def plan_stacks(leases: Sequence[Lease], limit: int = BATCH_ELEMENTS) -> list[list[int]]:
+def plan_stacks(leases: Sequence[Lease], limit: int = STACK_ELEMENTS) -> list[list[int]]:
     """Indices into ``leases``, cut into stacks (see the module docstring), each in the group's
     order; the stacks are ordered by their first lease."""
     stacks: list[list[int]] = []
