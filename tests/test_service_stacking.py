@@ -236,3 +236,12 @@ def test_no_stacking_runs_every_lease_alone():
             direct = minimize("PSO", one.spec.function, 3, 6, 12, seed=4, run_ids=one.runs)
             assert [r.metrics["best_fitness"] for r in decoded(got[i])] == \
                 direct.best_fitness.tolist()
+
+
+def test_the_sizers_estimates_are_bounded(monkeypatch):
+    sizer = LeaseSizer(target_seconds=10.0, min_runs=8)
+    monkeypatch.setattr(LeaseSizer, "MAX_ESTIMATES", 10)
+    for dim in range(1, 40):
+        sizer.observe(fn(PSO, "F1", dim=dim), 0.01)
+        assert len(sizer._estimates) <= 10
+    assert sizer.estimate(fn(PSO, "F2", dim=39)) == 0.01  # the latest family is kept

@@ -31,6 +31,7 @@ class LeaseSizer:
     seconds reach that target."""
 
     MAP_PRIOR_SECONDS = 5.0
+    MAX_ESTIMATES = 100_000  # cell and family costs kept (specs come from users)
 
     def __init__(self, target_seconds: float = 10.0, min_runs: int = 8, alpha: float = 0.3):
         self.target_seconds = float(target_seconds)
@@ -92,6 +93,9 @@ class LeaseSizer:
         spec's keys are made once)."""
         keys = [k for k in (self.cost_key(spec), self.family_key(spec)) if k is not None]
         with self._lock:
+            if len(self._estimates) + len(keys) > self.MAX_ESTIMATES and \
+                    any(k not in self._estimates for k in keys):
+                self._estimates.clear()  # bounded: costs are learnt again from the next results
             for seconds_per_run in seconds:
                 if not (seconds_per_run > 0 and math.isfinite(seconds_per_run)):
                     continue
