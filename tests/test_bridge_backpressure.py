@@ -83,3 +83,20 @@ def test_a_worker_told_busy_does_not_resend_its_unacknowledged_results():
     w._last_busy = t + 8.0  # ... but the coordinator said "busy" 1.5 s ago: it is behind
     assert w.resend_due(t + 9.5) == 0
     assert w.resend_due(t + 13.5) == 2  # silent and not busy for ack_timeout: put again
+
+
+def test_idle_workers_are_told_to_wait_longer_the_more_of_them_there_are(tmp_path):
+    core = Coordinator(CoordinatorSettings(data_dir=tmp_path, synchronous="NORMAL"))
+    try:
+        request = encode(LeaseRequest(worker="w0"))
+        core.worker_alive("w0")
+        reply = decode_work_reply(core.handle_lease_request(request))
+        assert isinstance(reply, NoWork) and reply.reason == "empty"
+        assert reply.retry_after == core.settings.retry_after  # a small farm: as before
+        for i in range(1, 600):
+            core.worker_alive(f"w{i}")
+        reply = decode_work_reply(core.handle_lease_request(request))
+        assert isinstance(reply, NoWork)
+        assert reply.retry_after == 600 / core.EMPTY_POLLS_PER_SECOND  # 3 s: 200 polls/s in all
+    finally:
+        core.close()

@@ -251,6 +251,9 @@ def run(args: argparse.Namespace, data: Path, root: Path = ROOT) -> dict[str, An
         farm.wait(lambda: farm.alive() >= args.workers, 60 + args.workers * 0.2,
                   f"{args.workers} workers alive", poll=0.5)
         alive_before = farm.alive()
+        idle0 = proc_cpu_rss(pid)[0] + children_cpu(pid)
+        time.sleep(args.idle_seconds)  # K live workers, nothing to lease: what they cost
+        idle = proc_cpu_rss(pid)[0] + children_cpu(pid) - idle0
         store0 = store_bytes(data / "store")
         load0 = os.getloadavg()[0]
         cpu0, rss0 = proc_cpu_rss(pid)
@@ -298,6 +301,8 @@ def run(args: argparse.Namespace, data: Path, root: Path = ROOT) -> dict[str, An
         "cpu_ms_per_run": round((cpu1 - cpu0) * 1e3 / max(1, done), 4),
         "recorder_cpu_ms_per_run": round((rec1 - rec0) * 1e3 / max(1, done), 4),
         "simulator_cpu_s": round(sim1 - sim0, 2),
+        "idle_cpu_ms_per_worker_s": round(idle * 1e3 / max(args.idle_seconds, 1e-9)
+                                          / args.workers, 4) if args.idle_seconds else None,
         "ack_ms_p50": round(percentile(ack, 50), 2), "ack_ms_p99": round(percentile(ack, 99), 2),
         "lease_rtt_ms_p50": round(percentile(rtt, 50), 2),
         "lease_rtt_ms_p99": round(percentile(rtt, 99), 2),
@@ -337,6 +342,10 @@ def markdown(results: list[dict[str, Any]]) -> str:
             f"| {r['rss_mb']['start']}/{r['rss_mb']['max']}/{r['rss_mb']['end']} | "
             f"{r['alive_seen']} | {w['min']}/{w['median']}/{w['max']} ({w['none']}) | "
             f"{r['load'][0]}-{r['load'][1]} |")
+        if r.get("idle_cpu_ms_per_worker_s") is not None:
+            lines.append(f"\n(K = {r['workers']}, {r['tree']}: idle, the coordinator and its "
+                         f"recorder spent {r['idle_cpu_ms_per_worker_s']} ms of CPU per worker "
+                         "per second)\n")
     base = {r["workers"]: r for r in results if r["tree"] == "baseline"}
     for r in results:
         b = base.get(r["workers"])
@@ -373,6 +382,9 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
     ap.add_argument("--max-leases", type=int, default=32, help="leases per bundle at most")
     ap.add_argument("--lease-seconds", type=float, default=30.0)
     ap.add_argument("--seconds", type=float, default=300.0, help="cancel the job after this")
+    ap.add_argument("--idle-seconds", type=float, default=0.0,
+                    help="before the job: measure the coordinator's CPU this long with the K "
+                    "workers alive and nothing to lease (per worker per second)")
     ap.add_argument("--wrong-capability", action="store_true",
                     help="negative control: results proven with a wrong key (never accepted)")
     ap.add_argument("--json", type=Path, help="write the whole result here")

@@ -21,7 +21,8 @@ row times one piece over the same results (CPU seconds of this process per run, 
 * whole intake: ``Coordinator.handle_result_batches`` (all of the above and the acks) on a
   second, identical job;
 * per message: a progress message renewing a lease (``handle_progress``: decode, proof,
-  one SQLite transaction) and a lease request granting one 8-run lease;
+  one SQLite transaction), a lease request granting one 8-run lease, and one answered
+  ``no_work`` (what idle workers cost);
 * Zenoh router: a router session and a client session in this process, the client putting
   payloads of the results' batch size with congestion control BLOCK to a subscriber of the
   router session that only counts them (messages/s and MB/s through loopback TCP).
@@ -99,12 +100,16 @@ def coordinator_pieces(
         job_a = core.submit(spec).id
         batches_a = payloads(lease_all(core, "w1"), "w1")
         job_b = core.submit(spec).id
-        leases_b = lease_all(core, "w1")
-        batches_b = payloads(leases_b, "w1")
+        batches_b = payloads(lease_all(core, "w1"), "w1")
+        core.submit(spec)  # a job of small leases (8 runs each) to renew
+        target = core.sizer.target_seconds
+        core.sizer.target_seconds = 1e-6
+        leases_c = lease_all(core, "w1")
+        core.sizer.target_seconds = target
         messages = [(core.keys.progress(lease.job_id), encode(RunProgress(
             lease_id=lease.lease_id, job_id=lease.job_id, worker="w1", cell=lease.cell,
             runs=lease.runs, seq=seq, proof=progress_proof(lease.capability, lease.lease_id, seq),
-        ))) for seq in (1, 2) for lease in leases_b]
+        ))) for seq in (1, 2) for lease in leases_c]
         key_b = core.keys.results(job_b)
         key_a = core.keys.results(job_a)
         decoded: list[Any] = []
@@ -147,6 +152,15 @@ def coordinator_pieces(
 
         cpu, wall = timed(lease_requests)
         per_message.append(("lease request (one 8-run lease)", cpu, wall, requests[0]))
+        lease_all(core, "w1")
+
+        def empty_requests() -> None:
+            for _ in range(200):
+                reply = core.handle_lease_request(encode(LeaseRequest(worker="w1")))
+                assert b'"no_work"' in reply
+
+        cpu, wall = timed(empty_requests)
+        per_message.append(("lease request answered no_work (nothing to lease)", cpu, wall, 200))
 
         def intake_all() -> None:
             for i in range(0, len(batches_b), GROUP):
