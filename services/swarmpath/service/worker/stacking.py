@@ -62,9 +62,11 @@ def _elements(lease: Lease) -> int:
     return len(lease.runs) * spec.agents * spec.dim
 
 
-def plan_stacks(leases: Sequence[Lease], limit: int = STACK_ELEMENTS) -> list[list[int]]:
+def plan_stacks(leases: Sequence[Lease], limit: int | None = None) -> list[list[int]]:
     """Indices into ``leases``, cut into stacks (see the module docstring), each in the group's
-    order; the stacks are ordered by their first lease."""
+    order; the stacks are ordered by their first lease. ``limit``: coordinates per stack
+    (default ``STACK_ELEMENTS``, read at each call)."""
+    limit = STACK_ELEMENTS if limit is None else limit
     stacks: list[list[int]] = []
     open_stack: dict[str, tuple[list[int], int]] = {}  # key -> (stack, coordinates so far)
     for i, lease in enumerate(leases):
