@@ -9,10 +9,11 @@ import numpy as np
 import pytest
 
 from swarmpath.planners import Episode, get_planner, list_planners
-from swarmpath.planners.cost_to_go import CostToGo
+from swarmpath.planners.cost_to_go import MAX_CELLS, CostToGo
 from swarmpath.planners.episode import scenario_optimum
 from swarmpath.planners.rfo_gwo import RfoFamilyPlanner
 from swarmpath.world import get_map
+from swarmpath.world.geometry import ObstacleSet
 from swarmpath.world.scenario_io import load_scenario
 
 TWO_WALLS = Path(__file__).parent / "data" / "two_walls.json"
@@ -34,6 +35,22 @@ def test_cost_to_go_follows_free_space():
     assert np.hypot(11 - 7.6, 7 - 6.5) < np.hypot(11 - 7.6, 7 - 3.6)
     assert below < above
     assert np.isinf(field(np.array([[4.1, 2.0]]))[0])  # inside the first wall
+
+
+def test_cost_to_go_cells_are_never_coarser_than_the_clearance():
+    """A 300-cell field of a 512 m maze had 1.7 m cells, coarser than its 1 m walls (the RFO
+    family stalled there); a field's cells are at most the clearance, as far as MAX_CELLS allows,
+    and small maps keep their 300 cells."""
+    wall = np.array([[100.0, 0.0], [100.2, 0.0], [100.2, 90.0], [100.0, 90.0]])
+    obs = ObstacleSet(np.zeros((0, 3)), (wall,))
+    big = CostToGo(obs, (200.0, 100.0), np.array([110.0, 5.0]), 0.3)
+    assert big.spec.resolution == pytest.approx(0.3)
+    capped = CostToGo(obs, (600.0, 600.0), np.array([110.0, 5.0]), 0.3)
+    assert 0.3 < capped.spec.resolution and capped.free.size <= MAX_CELLS
+    small = CostToGo(obs, (12.0, 8.0), np.array([11.0, 7.0]), 0.3)
+    assert small.spec.resolution == pytest.approx(12.0 / 300)
+    # around the wall's top, never through it
+    assert big(np.array([[99.6, 5.0]]))[0] >= np.hypot(0.5, 85.3) + np.hypot(9.9, 85.3)
 
 
 @pytest.mark.parametrize("planner", HYBRIDS)
