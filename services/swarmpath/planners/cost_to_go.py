@@ -6,15 +6,15 @@ pocket, a wall between start and goal reaching the border): a measure that decre
 shortest way has no such trap, so "closer" always has a way forward.
 
 The field is Dijkstra's distance to the goal over an 8-connected grid (no corner cutting) of the
-cells whose centre keeps more than ``clearance`` from every obstacle, at ``cells`` cells along
-the longer world side, and never coarser than ``clearance`` itself (as far as ``MAX_CELLS``
-allows): on maze512-32-9 (512 m, 1 m walls, clearance 0.30 m) 300 cells are 1.7 m, coarser than
-a wall, and the RFO family's foxes stalled at wall ends (no point of their 3 m box both valid
-and "closer" on that grid); at 0.81 m (the cap) RFO-GWO reaches the goal. A point's value is the least, over the free cells of its 3 x 3
-neighbourhood, of the cell's value plus the straight distance to the cell's centre (+inf when
-none is free or none reaches the goal). Grid distances are up to 8% above the true length
-(octile moves); the planners need only that the value decreases toward the goal. Pure numpy and
-scipy, no state beyond the field.
+cells whose centre keeps more than ``clearance`` from every obstacle, at ``cells`` cells along the
+longer world side, and never coarser than ``clearance`` itself (as far as ``MAX_CELLS`` allows): on
+maze512-32-9 (512 m, 1 m walls, clearance 0.30 m) 300 cells are 1.7 m, coarser than a wall, and the
+RFO family's foxes stalled at wall ends (no point of their 3 m box both valid and "closer" on that
+grid); at 0.81 m (the cap) RFO-GWO reaches the goal. A point's value is the least, over the free
+cells of its 3 x 3 neighbourhood, of the cell's value plus the straight distance to the cell's
+centre (+inf when none is free or none reaches the goal). Grid distances are up to 8% above the
+true length (octile moves); the planners need only that the value decreases toward the goal. Pure
+numpy and scipy, no state beyond the field.
 """
 
 from __future__ import annotations
