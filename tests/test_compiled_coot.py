@@ -114,3 +114,28 @@ def test_power_is_numpys():
     x = np.concatenate([1.0 + rng.random(20_000) * 60.0, rng.random(2_000) * 1e-3, [1.0, 2.0]])
     for e in (2.0, -2.0, -1.0, 0.5, 1.0, 1.5, -30.0, 30.0, 0.0):
         assert np.array_equal(_powers(x, e), x**e), e
+
+
+def test_the_kernel_cache_is_keyed_by_every_source(tmp_path):
+    """numba keys a cached kernel on its own file only; the cache directory is therefore named
+    by a hash of all the sources the kernels are compiled from, so that editing, e.g., the
+    trigonometry that ``functions.evaluate`` inlines compiles the kernels afresh."""
+    import shutil
+    from pathlib import Path
+
+    from numba.core import config
+
+    from swarmpath.optimizers import compiled
+
+    assert config.CACHE_DIR == compiled.versioned_cache_dir()
+    assert find_kernel("ICOOT").run._cache._cache_path.startswith(config.CACHE_DIR)
+    source = Path(compiled.__file__).resolve().parents[2]  # services/swarmpath
+    for part in ("optimizers", "functions"):
+        skip = shutil.ignore_patterns("__pycache__")
+        shutil.copytree(source / part, tmp_path / part, ignore=skip)
+    copy = tmp_path / "optimizers" / "compiled"
+    before = compiled.versioned_cache_dir(copy)
+    assert Path(before).name == Path(config.CACHE_DIR).name  # the same sources, the same name
+    trig = tmp_path / "functions" / "trig.py"
+    trig.write_text(trig.read_text() + "\n# edited\n")
+    assert compiled.versioned_cache_dir(copy) != before

@@ -57,7 +57,38 @@ Rules for kernel authors:
    loop (:mod:`.ufuncs`; by symbol name through ``ufuncs.link`` keeps the caller cacheable).
 """
 
-from swarmpath.optimizers.compiled.registry import (
+import hashlib
+import os
+from pathlib import Path
+
+from numba.core import config as _numba_config
+
+_PACKAGE = Path(__file__).resolve().parent
+
+
+def versioned_cache_dir(package: Path = _PACKAGE) -> str:
+    """Where numba caches the kernels: a directory named by a hash of the sources they are
+    compiled from (``swarmpath.optimizers`` and ``swarmpath.functions``), under
+    ``NUMBA_CACHE_DIR`` if set, else this package's ``__pycache__``.
+
+    numba keys a cached function on its own file only: a kernel that inlines ``evaluate`` (or a
+    constant such as ``trig.COS``) from another module kept running the old code after that
+    module changed (a cached ``run`` of a.py calling b.helper returned the old helper's value
+    after b.py was edited). With the directory keyed by every source, any change compiles
+    afresh; a worker never runs stale kernels after an update.
+    """
+    digest = hashlib.sha256()
+    for folder in (package.parent, package.parent.parent / "functions"):
+        for path in sorted(folder.rglob("*.py")):
+            digest.update(path.relative_to(folder.parent).as_posix().encode())
+            digest.update(path.read_bytes())
+    base = os.environ.get("NUMBA_CACHE_DIR") or str(package / "__pycache__")
+    return os.path.join(base, f"swarmpath-{digest.hexdigest()[:16]}")
+
+
+_numba_config.CACHE_DIR = versioned_cache_dir()  # type: ignore[attr-defined]
+
+from swarmpath.optimizers.compiled.registry import (  # noqa: E402 - after the cache dir is set
     Kernel,
     find_kernel,
     kernel_names,
