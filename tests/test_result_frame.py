@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from swarmpath.service.capability import new_capability
+from swarmpath.service.frame_head import fast_head
 from swarmpath.service.model import MAX_BODY_BYTES, MAX_ITERATIONS
 from swarmpath.service.result_frame import (
     FRAME_MAGIC,
@@ -129,3 +130,51 @@ def ok_head(**changes) -> dict:
 def test_hostile_frames_are_rejected_with_the_reason(payload, reason):
     with pytest.raises(FrameError, match=reason):
         decode_frame(payload)
+
+
+@pytest.mark.parametrize("changes", [
+    {}, {"status": "failed", "failure": "boom"}, {"seconds": 2}, {"seconds": -0.0},
+    {"metrics": {"best_fitness": float("nan"), "hit": True, "note": "x", "none": None}},
+    {"metrics": {"deep": [1]}}, {"metrics": []}, {"run": "5"}, {"run": 5.0}, {"run": True},
+    {"seconds": "1.5"}, {"seconds": True}, {"seconds": float("nan")}, {"status": "OK"},
+    {"failure": 3}, {"cell": "c" * 256}, {"cell": "c" * 257}, {"failure": "f" * 20_001},
+    {"lease_id": "L1\n"}, {"job_id": ""}, {"worker": "w" * 129}, {"extra": None},
+    {"arrays": [["curve", "<f8", [2.0]]]}, {"arrays": [["curve", "<f8", ["2"]]]},
+    {"arrays": [("curve", "<f8", [2])] * 4}, {"arrays": [["curve", "<f8"]]},
+    {"arrays": {"curve": 1}}, {"metrics": {"big": 2**70}}, {"metrics": {"big": 2**64 - 1}},
+    {"metrics": {"small": 1e300, "neg": -(2**63)}},
+])
+def test_fast_head_check_accepts_exactly_what_the_model_accepts(changes):
+    """Heads read by the hot-path check give the model's values, and every head the model
+    rejects is rejected with the model's reason (the field named)."""
+    fields = ok_head(**changes)
+    text = json.dumps(fields).encode()
+    payload = raw_frame({"worker": "w1", "count": 1},
+                        [(fields, bytes(16) if "arrays" in changes else b"")])
+    try:
+        want = RunResultHead.model_validate_json(text)
+    except Exception as exc:
+        field = str(exc).splitlines()[1].split(".")[0]
+        with pytest.raises(FrameError, match=f"record 0: {field}"):
+            decode_frame(payload)
+        return
+    try:
+        (rec,) = decode_frame(payload)[1]
+    except FrameError as exc:  # the layout (array bytes) can still be wrong; never the head
+        assert "record 0: array" in str(exc)
+        return
+    got = rec.head.fields()
+    expected = want.model_dump(exclude={"arrays"})
+    assert json.dumps(got, sort_keys=True) == json.dumps(expected, sort_keys=True)
+    assert [type(v) for v in got.values()] == [type(v) for v in expected.values()]
+
+
+def test_a_worker_head_takes_the_fast_check():
+    """What encode_record writes is read without the model (the hot path)."""
+    data = encode_record(head(metrics={"best_fitness": 0.5, "success": True}),
+                         {"curve": np.ones(3)}, CAP)
+    n = int.from_bytes(data[:4], "little")
+    got = fast_head(data[4:4 + n])
+    assert got is not None and got.arrays == [("curve", "<f8", [3])]
+    assert got.fields() == head(metrics={"best_fitness": 0.5, "success": True}).model_dump(
+        exclude={"arrays"})

@@ -15,10 +15,11 @@ HMAC-SHA256 digest, keyed with the lease's capability (its text, UTF-8), of
 the arrays): the coordinator checks the bytes it received, nothing is re-serialized.
 
 Decoding checks everything before anything is used: the magic, every length against what is
-left of the payload, every head against its schema (``schemas/run_result_head.schema.json``),
-dtypes and shapes, and that the last record ends exactly at the payload's end; any violation
-rejects the whole frame with a :class:`FrameError` naming what is wrong. The arrays returned are
-read-only views of the payload (no copy). Pure functions, no I/O.
+left of the payload, every head against its schema (``schemas/run_result_head.schema.json``:
+plainly valid heads by :mod:`~swarmpath.service.frame_head`, any other by the pydantic model,
+which names what it rejects), dtypes and shapes, and that the last record ends exactly at the
+payload's end; any violation rejects the whole frame with a :class:`FrameError` naming what is
+wrong. The arrays returned are read-only views of the payload (no copy). Pure functions, no I/O.
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import Field, ValidationError
 
+from swarmpath.service.frame_head import RecordHead, fast_count, fast_head
 from swarmpath.service.model import (
     MAX_BODY_BYTES,
     MAX_DIM,
@@ -92,7 +94,7 @@ class FrameError(ValueError):
 class FrameRecord:
     """One decoded record: its head, its arrays (read-only views), the signed bytes and proof."""
 
-    head: RunResultHead
+    head: RecordHead
     arrays: dict[str, np.ndarray]
     signed: bytes
     proof: bytes
@@ -165,17 +167,21 @@ def decode_frame(payload: bytes) -> tuple[str, list[FrameRecord]]:
         raise FrameError("not a result frame (magic)")
     pos = len(FRAME_MAGIC)
     text, pos = _chunk(payload, pos, MAX_FRAME_HEAD, "frame head")
-    try:
-        frame = FrameHead.model_validate_json(text)
-    except ValidationError as exc:
-        raise FrameError(f"frame head: {_first(exc)}") from None
+    checked = fast_count(text)
+    if checked is None:
+        try:
+            frame = FrameHead.model_validate_json(text)
+        except ValidationError as exc:
+            raise FrameError(f"frame head: {_first(exc)}") from None
+        checked = frame.worker, frame.count
+    worker, count = checked
     records = []
-    for i in range(frame.count):
+    for i in range(count):
         rec, pos = _record(payload, pos, i)
         records.append(rec)
     if pos != len(payload):
         raise FrameError(f"{len(payload) - pos} bytes after the last record")
-    return frame.worker, records
+    return worker, records
 
 
 def decode_record(data: bytes) -> FrameRecord:
@@ -189,10 +195,15 @@ def decode_record(data: bytes) -> FrameRecord:
 def _record(payload: bytes, pos: int, i: int) -> tuple[FrameRecord, int]:
     start = pos
     text, pos = _chunk(payload, pos, MAX_RESULT_HEAD, f"record {i} head")
-    try:
-        head = RunResultHead.model_validate_json(text)
-    except ValidationError as exc:
-        raise FrameError(f"record {i}: {_first(exc)}") from None
+    head = fast_head(text)
+    if head is None:  # not plainly valid: the model decides, and names the field it rejects
+        try:
+            model = RunResultHead.model_validate_json(text)
+        except ValidationError as exc:
+            raise FrameError(f"record {i}: {_first(exc)}") from None
+        head = RecordHead(model.lease_id, model.job_id, model.cell, model.run, model.worker,
+                          model.status, model.failure, model.seconds, dict(model.metrics),
+                          [(n, d, list(s)) for n, d, s in model.arrays])
     arrays: dict[str, np.ndarray] = {}
     for name, _dtype, shape in head.arrays:
         if name in arrays:
@@ -213,7 +224,7 @@ def _record(payload: bytes, pos: int, i: int) -> tuple[FrameRecord, int]:
 def as_dict(record: FrameRecord) -> dict[str, Any]:
     """A record as the fields of a RunResult without its proof (lists for the arrays): for tools
     and tests that read what a worker sends."""
-    out: dict[str, Any] = record.head.model_dump(exclude={"arrays"})
+    out: dict[str, Any] = record.head.fields()
     out.update({"curve": None, "best_position": None, "path": None})
     out.update({name: arr.tolist() for name, arr in record.arrays.items()})
     return out
