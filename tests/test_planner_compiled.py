@@ -45,6 +45,24 @@ def test_compiled_grid_repair_equals_numpy(bounded, margin):
     assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
 
 
+@pytest.mark.parametrize("bounded", [True, False])
+@pytest.mark.parametrize("margin", [0.06, 0.12, 0.2])
+@pytest.mark.parametrize("rounds", [1, 3])
+def test_compiled_mfb_repair_equals_numpy(bounded, margin, rounds):
+    rng = np.random.default_rng(int(margin * 100) + 7 * bounded + rounds)
+    ctx = dataclasses.replace(_context(rng, bounded, margin), repair="mfb")
+    fast = dataclasses.replace(ctx, backend="numba")
+    cands = rng.uniform(-1.1, 1.1, (300, 2))
+    # on a hit, on the robot, straight behind a hit (the left normal), outside the box
+    cands[:5] = [[0.6, 0.0], [0.05, -0.02], [1.15, -0.02], [1.3, 0.7], [-1.2, -1.0]]
+    ref, ref_short = local._repair_mfb(cands.reshape(20, 15, 2), ctx, rounds)
+    got, got_short = local._repair_mfb(cands.reshape(20, 15, 2), fast, rounds)
+    assert np.array_equal(ref, got) and np.array_equal(ref_short, got_short)
+    moved = np.any(ref.reshape(-1, 2) != cands, axis=1)
+    # both cases repaired some candidates, and some stay infeasible
+    assert moved.sum() > 10 and np.any(ref_short > 0) and np.any(moved & (ref_short.ravel() == 0))
+
+
 @pytest.mark.parametrize("name", SWARM)
 def test_planner_episode_is_the_same_with_numba(name):
     scenario = get_map("icoot-map4")

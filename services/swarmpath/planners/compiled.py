@@ -157,3 +157,76 @@ def distances_kernel(flat: Array, p: Array, hits: Array) -> tuple[Array, Array, 
                 i_seg[i] = j
         d_seg[i] = math.sqrt(best)
     return d_pt, i_pt, d_seg, i_seg
+
+
+@njit(cache=True)
+def _hypot(x: float, y: float) -> float:
+    return math.hypot(x, y)  # libm's hypot, as np.hypot
+
+
+@njit(cache=True)
+def repair_mfb_kernel(flat: Array, p: Array, hits: Array, margin: float, safety: float,
+                      delta: float, lower: Array, upper: Array, bounded: bool,
+                      rounds: int) -> tuple[Array, Array]:
+    """(repaired (n, 2), violation (n,)) of candidates ``flat`` (n, 2): ``local._repair_mfb``
+    round by round (a round with no infeasible candidate ends the repair; the box clip applies
+    to every candidate after a round that repaired any, as in the reference)."""
+    n = flat.shape[0]
+    px, py = p[0], p[1]
+    c = flat.copy()
+    push_base = margin + safety
+    for _ in range(rounds):
+        d_pt, i_pt, d_seg, i_seg = distances_kernel(c, p, hits)
+        any_bad = False
+        for i in range(n):
+            if d_pt[i] < margin or d_seg[i] < margin:
+                any_bad = True
+                break
+        if not any_bad:
+            return c, np.zeros(n)
+        for i in range(n):
+            cx, cy = c[i, 0], c[i, 1]
+            if d_pt[i] < margin:  # case 1 (eqs 19-20): out of the obstacle, radially
+                vx = cx - hits[i_pt[i], 0]
+                vy = cy - hits[i_pt[i], 1]
+                nv = _hypot(vx, vy)
+                if nv > 1e-12:
+                    ax = vx / nv
+                    ay = vy / nv
+                else:
+                    ax = 1.0
+                    ay = 0.0
+                push = push_base - d_pt[i]
+                c[i, 0] = cx + push * ax
+                c[i, 1] = cy + push * ay
+            elif d_seg[i] < margin:  # case 2 (eqs 21-22): sideways (local._lateral)
+                qx, qy = hits[i_seg[i], 0], hits[i_seg[i], 1]
+                ux = cx - px
+                uy = cy - py
+                l2 = max(ux * ux + uy * uy, 1e-24)
+                s = ((qx - px) * ux + (qy - py) * uy) / l2
+                if s < 0.0:
+                    s = 0.0
+                if s > 1.0:
+                    s = 1.0
+                sx = (px + s * ux) - qx
+                sy = (py + s * uy) - qy
+                norm = _hypot(sx, sy)
+                if norm > 1e-9:
+                    ax = sx / norm
+                    ay = sy / norm
+                else:
+                    root = math.sqrt(l2)
+                    ax = -uy / root
+                    ay = ux / root
+                step = delta * _hypot(cx - px, cy - py)
+                c[i, 0] = cx + step * ax
+                c[i, 1] = cy + step * ay
+            c[i, 0] = _clip(c[i, 0], lower[0], upper[0], bounded)
+            c[i, 1] = _clip(c[i, 1], lower[1], upper[1], bounded)
+    d_pt, i_pt, d_seg, i_seg = distances_kernel(c, p, hits)
+    short = np.empty(n)
+    for i in range(n):
+        s = margin - min(d_pt[i], d_seg[i])
+        short[i] = s if s > 0.0 else 0.0
+    return c, short

@@ -56,7 +56,7 @@ class StepContext:
     resolution: float = 0.05  # grid repair step
     lower: Array | None = None  # (2,) box the waypoint must stay in
     upper: Array | None = None
-    backend: str = "numpy"  # or "numba": the grid repair compiled (the same numbers)
+    backend: str = "numpy"  # or "numba": the repairs compiled (the same numbers)
 
 
 def wrapped_abs(a: Array) -> Array:
@@ -183,11 +183,29 @@ def _distances(C: Array, ctx: StepContext) -> tuple[Array, NDArray[np.int64], Ar
     return d_pt, i_pt, d_seg, i_seg
 
 
+def _box(ctx: StepContext) -> tuple[Array, Array, bool]:
+    """(lower, upper, bounded) of the waypoint box for a compiled kernel."""
+    bounded = ctx.lower is not None and ctx.upper is not None
+    lower = np.asarray(ctx.lower if bounded else np.zeros(2), dtype=float)
+    upper = np.asarray(ctx.upper if bounded else np.zeros(2), dtype=float)
+    return lower, upper, bounded
+
+
 def _repair_mfb(C: Array, ctx: StepContext, rounds: int) -> tuple[Array, Array]:
     """(repaired candidates, their remaining violation)."""
     hits = ctx.hits
     if len(hits) == 0:
         return C, np.zeros(C.shape[:-1])
+    if ctx.backend == "numba":
+        from swarmpath.planners.compiled import repair_mfb_kernel
+
+        lower, upper, bounded = _box(ctx)
+        out, short = repair_mfb_kernel(
+            np.ascontiguousarray(C.reshape(-1, 2), dtype=float),
+            np.asarray(ctx.position, dtype=float), np.ascontiguousarray(hits, dtype=float),
+            float(ctx.margin), float(ctx.safety), float(ctx.delta), lower, upper, bounded,
+            int(rounds))
+        return out.reshape(C.shape), short.reshape(C.shape[:-1])
     for _ in range(rounds):
         d_pt, i_pt, d_seg, i_seg = _distances(C, ctx)
         inside = d_pt < ctx.margin  # case 1 (eq 18)
@@ -228,9 +246,7 @@ def _repair_grid(C: Array, ctx: StepContext, reach: int = 24, chunk: int = 8) ->
     if ctx.backend == "numba":
         from swarmpath.planners.compiled import repair_grid_kernel
 
-        bounded = ctx.lower is not None and ctx.upper is not None
-        lower = np.asarray(ctx.lower if bounded else np.zeros(2), dtype=float)
-        upper = np.asarray(ctx.upper if bounded else np.zeros(2), dtype=float)
+        lower, upper, bounded = _box(ctx)
         out, short = repair_grid_kernel(
             np.ascontiguousarray(flat, dtype=float), np.asarray(p, dtype=float),
             np.ascontiguousarray(hits, dtype=float), float(ctx.margin), float(ctx.resolution),
