@@ -6,7 +6,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from swarmpath.planners import Episode, get_planner, list_planners, local
+from swarmpath.planners import Episode, get_planner, list_planners, local, sensed_map
 from swarmpath.planners.base import PlannerError
 from swarmpath.world import get_map
 
@@ -76,3 +76,24 @@ def test_planner_episode_is_the_same_with_numba(name):
 def test_backend_is_checked():
     with pytest.raises(PlannerError, match="backend"):
         get_planner("ICOOT").resolve_params({"backend": "cuda"})
+
+
+def test_compiled_segment_clearance_equals_numpy():
+    rng = np.random.default_rng(5)
+    hits = rng.uniform(-1.0, 1.0, (70, 2))
+    path = np.cumsum(rng.uniform(-0.3, 0.5, (12, 2)), axis=0)
+    path[3] = path[2]  # a zero-length piece
+    for reach in (0.2, 1.0, 50.0):
+        ref = sensed_map.path_clearance(path, hits, reach)
+        assert ref == sensed_map.path_clearance(path, hits, reach, "numba") and ref < 0.3
+    aims = set()
+    for margin in (0.05, 0.1, 0.3):
+        for lookahead in (0.5, 1.5, 4.0):
+            ref = sensed_map.shortcut(path, hits, margin, lookahead)
+            got = sensed_map.shortcut(path, hits, margin, lookahead, backend="numba")
+            assert np.array_equal(ref, got)
+            aims.add(tuple(ref))
+    assert len(aims) > 3  # the margins and lookaheads pick different samples
+    a, b = path[:-1], path[1:]
+    ref = sensed_map._segments_clearance(hits, a, b, "numpy")
+    assert np.array_equal(ref, sensed_map._segments_clearance(hits, a, b, "numba"))

@@ -230,3 +230,32 @@ def repair_mfb_kernel(flat: Array, p: Array, hits: Array, margin: float, safety:
         s = margin - min(d_pt[i], d_seg[i])
         short[i] = s if s > 0.0 else 0.0
     return c, short
+
+
+@njit(cache=True)
+def segments_clearance_kernel(points: Array, a: Array, b: Array) -> Array:
+    """Least distance from ``points`` (h, 2) to each segment a[k] -> b[k] (m,): the minimum over
+    the points of :func:`swarmpath.world.geometry.point_segment_distance`, in its operations."""
+    m = a.shape[0]
+    out = np.empty(m)
+    for k in range(m):
+        ax, ay = a[k, 0], a[k, 1]
+        dx = b[k, 0] - ax
+        dy = b[k, 1] - ay
+        dd = dx * dx + dy * dy
+        safe = dd if dd > 0.0 else 1.0
+        best = math.inf
+        for j in range(points.shape[0]):
+            qx, qy = points[j, 0], points[j, 1]
+            t = ((qx - ax) * dx + (qy - ay) * dy) / safe
+            if t < 0.0:
+                t = 0.0
+            if t > 1.0:
+                t = 1.0
+            if not dd > 0.0:
+                t = 0.0
+            d = _hypot(qx - (ax + t * dx), qy - (ay + t * dy))
+            if d < best:
+                best = d
+        out[k] = best
+    return out

@@ -291,7 +291,21 @@ def rejoin(pts: Array, position: Array, tolerance: float) -> Array | None:
     return np.vstack([position[None, :], pts[k + 1:]])
 
 
-def path_clearance(pts: Array, hits: Array, reach: float) -> float:
+def _segments_clearance(points: Array, a: Array, b: Array, backend: str) -> Array:
+    """Least distance from ``points`` (h, 2) to each segment a -> b (m, 2), (m,); ``backend =
+    "numba"`` runs :func:`swarmpath.planners.compiled.segments_clearance_kernel` (the same
+    numbers)."""
+    if backend == "numba":
+        from swarmpath.planners.compiled import segments_clearance_kernel
+
+        f = np.ascontiguousarray
+        return np.asarray(segments_clearance_kernel(f(points, dtype=float), f(a, dtype=float),
+                                                    f(b, dtype=float)))
+    return np.asarray(point_segment_distance(points[None, :, :], a[:, None, :],
+                                             b[:, None, :]).min(axis=1))
+
+
+def path_clearance(pts: Array, hits: Array, reach: float, backend: str = "numpy") -> float:
     """Least distance from the hits to the part of the polyline ``pts`` within ``reach`` (along
     it) of its start."""
     if len(hits) == 0 or len(pts) < 2:
@@ -299,11 +313,12 @@ def path_clearance(pts: Array, hits: Array, reach: float) -> float:
     cum = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(pts, axis=0).T))])
     n = int(np.searchsorted(cum, reach, side="right")) + 1
     a, b = pts[: min(n, len(pts) - 1)], pts[1 : min(n, len(pts) - 1) + 1]
-    return float(point_segment_distance(hits[:, None, :], a[None], b[None]).min())
+    return float(_segments_clearance(hits, a, b, backend).min())
 
 
 def shortcut(
-    pts: Array, hits: Array, margin: float, lookahead: float, samples: int = 16
+    pts: Array, hits: Array, margin: float, lookahead: float, samples: int = 16,
+    backend: str = "numpy",
 ) -> Array:
     """The farthest point within ``lookahead`` along the polyline ``pts`` (from the robot at
     ``pts[0]``) that the robot can reach in a straight line keeping ``margin`` from every hit.
@@ -318,7 +333,8 @@ def shortcut(
     candidates = along(pts, lookahead * np.arange(1, samples + 1) / samples)
     if len(hits) == 0:
         return np.asarray(candidates[-1], dtype=float)
-    clear = point_segment_distance(hits[None, :, :], pts[0], candidates[:, None, :]).min(axis=1)
+    start = np.broadcast_to(np.asarray(pts[0], dtype=float), candidates.shape)
+    clear = _segments_clearance(hits, start, candidates, backend)
     ok = np.flatnonzero(clear >= margin)
     return np.asarray(candidates[ok[-1] if ok.size else 0], dtype=float)
 

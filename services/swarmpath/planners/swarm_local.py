@@ -361,7 +361,8 @@ class SwarmLocalPlanner(Planner):
             path = self._known_path(p, goal, known, margin, clearance, world)
         if self.p["aim"] == "carrot":
             return sensed_map.along(path, lookahead)
-        return sensed_map.shortcut(path, hits, margin, lookahead)
+        return sensed_map.shortcut(path, hits, margin, lookahead,
+                                   backend=str(self.p["backend"]))
 
     def _known_path(self, p: Array, goal: Array, hits: Array, margin: float, clearance: float,
                     world: tuple[float, float, float, float]) -> Array:
@@ -376,7 +377,8 @@ class SwarmLocalPlanner(Planner):
         if cached is not None and np.allclose(cached[-1], goal):
             rest = sensed_map.rejoin(cached, p, float(self.p["rejoin"]))
             reach = 2 * (float(self.p["step"]) + 2 * margin)
-            if rest is not None and sensed_map.path_clearance(rest, hits, reach) >= margin:
+            if rest is not None and sensed_map.path_clearance(
+                    rest, hits, reach, str(self.p["backend"])) >= margin:
                 return rest
         coarse = sensed_map.condense(hits, p, np.inf, float(self.p["map_cell"]))
         known = sensed_map.known_obstacles(coarse, link=2 * margin)
