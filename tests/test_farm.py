@@ -68,3 +68,18 @@ def test_results_proven_with_a_wrong_key_are_never_accepted(tmp_path):
     assert res["state"] == "cancelled" and res["runs_finished"] == 0
     assert res["metrics"]["results_accepted_total"] == 0
     assert res["metrics"]["results_stale_total"] >= 20
+
+
+def test_map_runs_arrive_with_their_paths(tmp_path):
+    code, res = farm(tmp_path, "--workers", "2", "--runs", "6", "--map", "mfb-static",
+                     "--planner", "MFB", "--seconds", "60")
+    assert code == 0 and res["state"] == "done" and res["runs_finished"] == 6
+    store = Store(tmp_path / "data" / "this-k2" / "store")
+    try:
+        runs = list(store.iter_runs(res["job"]))
+    finally:
+        store.close()
+    assert [r["run_id"] for r in runs] == list(range(6))
+    # a real run's path (rows x, y, t) and outcome, each run's times its own
+    assert all(r["success"] and len(r["path"]) > 10 and len(r["path"][0]) == 3 for r in runs)
+    assert len({r["path"][-1][2] for r in runs}) == 6
