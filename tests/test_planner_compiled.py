@@ -97,3 +97,24 @@ def test_compiled_segment_clearance_equals_numpy():
     a, b = path[:-1], path[1:]
     ref = sensed_map._segments_clearance(hits, a, b, "numpy")
     assert np.array_equal(ref, sensed_map._segments_clearance(hits, a, b, "numba"))
+
+
+@pytest.mark.parametrize("surface", [0.05, 0.2, 0.5])
+def test_compiled_surface_motion_equals_numpy(surface):
+    rng = np.random.default_rng(int(surface * 100))
+    moved = 0
+    for _ in range(20):
+        a = np.linspace(0.0, rng.uniform(1.0, 6.0), 60)
+        radius = rng.uniform(0.5, 3.0, (60, 1))
+        previous = np.stack([np.cos(a), np.sin(a)], axis=1) * radius
+        current = previous + rng.normal(0.0, 0.03, previous.shape)
+        current[:20] += 0.05  # a piece of the surface moved
+        ref = sensed_map.motion(previous, current, 0.25, surface=surface)
+        got = sensed_map.motion(previous, current, 0.25, surface=surface, backend="numba")
+        assert np.array_equal(ref[0], got[0]) and np.array_equal(ref[1], got[1])
+        moved += int(ref[0].sum())
+        for one, other in zip(sensed_map._to_surface(current, previous, surface),
+                              sensed_map._to_surface(current, previous, surface, "numba"),
+                              strict=True):
+            assert np.array_equal(one, other)
+    assert moved > 0

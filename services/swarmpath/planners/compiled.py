@@ -259,3 +259,47 @@ def segments_clearance_kernel(points: Array, a: Array, b: Array) -> Array:
                 best = d
         out[k] = best
     return out
+
+
+@njit(cache=True)
+def surface_kernel(points: Array, scan: Array, surface: float, dist: Array,
+                   nearest: Array) -> tuple[Array, Array]:
+    """``sensed_map._to_surface_from``: (distance, nearest point) of each of ``points`` (n, 2) to
+    the polyline of ``scan``'s consecutive hits closer than ``surface``, given the distance to
+    the nearest hit and that hit (kept where no piece is strictly closer)."""
+    n = points.shape[0]
+    out_d = dist.copy()
+    out_p = nearest.copy()
+    m = scan.shape[0] - 1
+    joined = np.zeros(max(m, 0), dtype=np.bool_)
+    for i in range(m):
+        gap = _hypot(scan[i + 1, 0] - scan[i, 0], scan[i + 1, 1] - scan[i, 1])
+        joined[i] = gap < surface and gap > 1e-9
+    for k in range(n):
+        px, py = points[k, 0], points[k, 1]
+        best = math.inf
+        fx = 0.0
+        fy = 0.0
+        for i in range(m):
+            if not joined[i]:
+                continue
+            ax, ay = scan[i, 0], scan[i, 1]
+            ux = scan[i + 1, 0] - ax
+            uy = scan[i + 1, 1] - ay
+            t = (ux * (px - ax) + uy * (py - ay)) / (ux * ux + uy * uy)
+            if t < 0.0:
+                t = 0.0
+            if t > 1.0:
+                t = 1.0
+            hx = ax + t * ux
+            hy = ay + t * uy
+            d = _hypot(px - hx, py - hy)
+            if d < best:
+                best = d
+                fx = hx
+                fy = hy
+        if best < dist[k]:
+            out_d[k] = best
+            out_p[k, 0] = fx
+            out_p[k, 1] = fy
+    return out_d, out_p

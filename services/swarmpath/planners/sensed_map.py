@@ -70,20 +70,31 @@ def surface_points(obstacles: ObstacleSet, spacing: float) -> Array:
     return np.concatenate(parts)
 
 
-def _to_surface(points: Array, scan: Array, surface: float) -> tuple[Array, Array]:
+def _to_surface(points: Array, scan: Array, surface: float,
+                backend: str = "numpy") -> tuple[Array, Array]:
     """Distance from each point to the sensed surface of ``scan`` and the nearest point of it.
 
     The surface is the polyline through consecutive hits of the scan (adjacent rays, in the
     sensor's order) closer than ``surface``, plus every hit as a point.
     """
-    return _to_surface_from(points, scan, surface, *cKDTree(scan).query(points))[:2]
+    dist, idx = cKDTree(scan).query(points)
+    return _to_surface_from(points, scan, surface, dist, idx, backend)[:2]
 
 
 def _to_surface_from(points: Array, scan: Array, surface: float, dist: Array,
-                     idx: NDArray[np.intp]) -> tuple[Array, Array, NDArray[np.intp]]:
+                     idx: NDArray[np.intp], backend: str = "numpy") -> tuple[
+                         Array, Array, NDArray[np.intp]]:
     """:func:`_to_surface` given the nearest hit of ``scan`` to each point (distance and index,
-    as ``cKDTree(scan).query(points)`` returns them), which it also returns."""
+    as ``cKDTree(scan).query(points)`` returns them), which it also returns. ``backend =
+    "numba"``: :func:`swarmpath.planners.compiled.surface_kernel` (the same numbers)."""
     nearest = scan[idx]
+    if backend == "numba":
+        from swarmpath.planners.compiled import surface_kernel
+
+        f = np.ascontiguousarray
+        d, near = surface_kernel(f(points, dtype=float), f(scan, dtype=float), float(surface),
+                                 f(dist, dtype=float), f(nearest, dtype=float))
+        return d, near, idx
     a, b = scan[:-1], scan[1:]
     gap = np.hypot(*(b - a).T)
     joined = (gap < surface) & (gap > 1e-9)
@@ -105,18 +116,20 @@ def _to_surface_from(points: Array, scan: Array, surface: float, dist: Array,
 def motion(
     previous: Array, current: Array, dt: float,
     max_speed: float = 2.0, min_speed: float = 0.05, surface: float = 0.0,
+    backend: str = "numpy",
 ) -> tuple[NDArray[np.bool_], Array]:
     """Which points of ``current`` moved since ``previous`` (``dt`` seconds earlier), and their
-    measured velocities (n, 2) (rule: :func:`predict`)."""
+    measured velocities (n, 2) (rule: :func:`predict`; ``backend`` as in
+    :func:`_to_surface_from`)."""
     none = (np.zeros(len(current), dtype=bool), np.zeros((len(current), 2)))
     if len(previous) == 0 or len(current) == 0 or dt <= 0:
         return none
     if surface > 0:
         # the nearest previous hit of each current one serves both the surface distance and
         # the check back (one k-d tree query)
-        dist, nearest, idx = _to_surface_from(current, previous, surface,
-                                              *cKDTree(previous).query(current))
-        back, _ = _to_surface(previous, current, surface)
+        d0, i0 = cKDTree(previous).query(current)
+        dist, nearest, idx = _to_surface_from(current, previous, surface, d0, i0, backend)
+        back, _ = _to_surface(previous, current, surface, backend)
         dist = np.where(back[idx] >= min_speed * dt, dist, 0.0)
     else:
         dist, idx = cKDTree(previous).query(current)

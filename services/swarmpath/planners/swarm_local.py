@@ -218,7 +218,8 @@ class SwarmLocalPlanner(Planner):
         if self._last_scan is not None:
             t0, previous = self._last_scan
             moving, velocity = sensed_map.motion(previous, current, obs.time - t0,
-                                                 surface=float(self.p["surface"]))
+                                                 surface=float(self.p["surface"]),
+                                                 backend=str(self.p["backend"]))
         self._scan = (current, moving)  # for ``_keep_off``
         whole = velocity.copy()
         tracked = self._track(current, moving, whole)
