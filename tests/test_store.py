@@ -604,3 +604,25 @@ def test_series_are_stored_exactly_and_old_rows_still_read(store):
     store.accept_results(results, now=T0)
     item = store.run(job, results[1].run)
     assert item["curve"] == results[1].curve and item["best_position"] == results[1].best_position
+
+
+def test_run_records_of_interleaved_jobs_in_acceptance_order(store):
+    """Two jobs' results stored alternately: each job's records, and only its, in the order
+    they were accepted, from the start or after a position, across read batches."""
+    jobs = [store.create_job(SPEC, now=T0), store.create_job({**SPEC, "seed": 8}, now=T0)]
+    leases: dict[str, list] = {job: [] for job in jobs}
+    while (lease := store.lease("w1", 3, now=T0)) is not None:  # all of both jobs, held
+        leases[lease.job_id].append(lease)
+    order: dict[str, list[int]] = {job: [] for job in jobs}
+    marks: list[tuple[int, dict[str, int]]] = []  # (position, results of each job before it)
+    for pair in zip(*leases.values(), strict=True):  # stored alternately
+        for lease in pair:
+            store.accept_results(execute(lease), T0)
+            order[lease.job_id] += lease.run_ids()
+        marks.append((store.last_result_rowid(), {job: len(order[job]) for job in jobs}))
+    for job in jobs:
+        got = [r["run_id"] for r in store.iter_run_records(job, batch=4)]
+        assert got == order[job] and len(got) == 20
+        position, before = marks[2]
+        tail = [r["run_id"] for r in store.iter_run_records(job, batch=4, after=position)]
+        assert tail == order[job][before[job]:] and 0 < len(tail) < 20

@@ -176,7 +176,7 @@ class RunViewsMixin(StoreBase):
         return int(row[0] or 0)
 
     def iter_run_records(
-        self, job_id: str, batch: int = 500, after: int = 0
+        self, job_id: str, batch: int = 2000, after: int = 0
     ) -> Iterator[dict[str, Any]]:
         """Every stored result of a job (those after position ``after``, see
         :meth:`last_result_rowid`), in acceptance order, as recorder records (raw numbers,
@@ -191,13 +191,19 @@ class RunViewsMixin(StoreBase):
                 c["idx"]: (c["key"], json.loads(c["spec"]))
                 for c in db.execute("SELECT idx, key, spec FROM cells WHERE job_seq = ?", (seq,))
             }
+            if not after:  # from the job's first result (its index entries, no row read)
+                first = db.execute(
+                    "SELECT min(rowid) FROM results WHERE job_seq = ?", (seq,)).fetchone()[0]
+                if first is None:
+                    return
+                after = first - 1
         last = after
-        # a tail (after > 0) is read along the rowid, not the job's index entries (+job_seq)
-        where = "+job_seq = ?" if after else "job_seq = ?"
+        # read along the rowid (+job_seq: not the job's index entries, which are in run order
+        # and would make every batch sort the job's remaining results)
         while True:
             with self._read() as db:
                 rows = db.execute(
-                    f"SELECT rowid, * FROM results WHERE {where} AND rowid > ? "
+                    "SELECT rowid, * FROM results WHERE +job_seq = ? AND rowid > ? "
                     "ORDER BY rowid LIMIT ?",
                     (seq, last, batch),
                 ).fetchall()
