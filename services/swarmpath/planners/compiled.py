@@ -1,11 +1,17 @@
-"""Compiled grid repair (numba): the swarm planners' ``backend = "numba"``.
+"""Compiled kernels (numba) of the swarm planners' ``backend = "numba"``.
 
-:func:`swarmpath.planners.local._repair_grid` in one compiled loop, with the same numbers: the
-reference uses only + - * /, sqrt, minima and comparisons (no libm function), and the kernel
-repeats each operation in the reference's order and association, without fastmath (so no fused
-multiply-add): every value is the same double. The repaired candidates and their remaining
-violation are then equal to the last bit (``tests/test_planner_compiled.py``), and so are the
-episodes. Only the repair is compiled; the cost (arctan2, sin, cos, hypot) stays in numpy.
+* the grid repair (:func:`swarmpath.planners.local._repair_grid`) and the hit distances;
+* the MFB repair, eqs 18-22 of Ajeil et al. (:func:`swarmpath.planners.local._repair_mfb`);
+* the aim's clearances: least distance from sensed points to segments
+  (:func:`swarmpath.planners.sensed_map.shortcut` and ``path_clearance``);
+* sensing's distances to the sensed surface (:func:`swarmpath.planners.sensed_map.motion`).
+
+Each with the same numbers as its numpy reference: the references use + - * /, sqrt, hypot,
+minima and comparisons only, and each kernel repeats every operation in the reference's order
+and association, without fastmath (so no fused multiply-add); hypot is libm's in both
+(``math.hypot`` in numba, ``np.hypot`` in numpy). Every value is then the same double
+(``tests/test_planner_compiled.py``), and so are the episodes. The cost (arctan2, sin, cos)
+stays in numpy.
 
 Imported only by a planner whose ``backend`` is ``"numba"`` (numba is an optional dependency:
 ``pip install 'swarmpath[fast]'``); the first call compiles, or loads the compiled code from

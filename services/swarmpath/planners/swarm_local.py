@@ -109,7 +109,8 @@ class SwarmLocalPlanner(Planner):
         "knowledge": "sensors",  # "map": the static obstacles are known from the start
         "aim_hits": "known",  # the known path avoids: "known" (all remembered) or "near"
         "contact_band": 0.2,  # m beyond the body: no move closes on a sensed point this near
-        # "numba": the grid repair compiled (planners.compiled; the same numbers, optional dep.)
+        # "numba": the repairs, the aim's clearances and sensing's surface distances compiled
+        # (planners.compiled; the same numbers, optional dep.)
         "backend": "numpy",
     }
     choices: ClassVar[dict[str, tuple[str, ...]]] = {
@@ -579,6 +580,11 @@ def _load_kernel() -> None:
                             margin=0.5, repair="grid", backend="numba")
     local.repair_grid(np.array([[0.9, 0.0]]), ctx)
     local.repair_mfb(np.array([[0.9, 0.0]]), ctx)
+    path = np.array([[0.0, 0.0], [2.0, 0.0]])
+    sensed_map.shortcut(path, hit, 0.5, 1.0, backend="numba")
+    sensed_map.path_clearance(path, hit, 1.0, "numba")
+    scan = np.array([[1.0, 0.0], [1.0, 0.1], [1.0, 0.2]])
+    sensed_map.motion(scan, scan + 0.01, 0.1, surface=0.2, backend="numba")
 
 
 def _preset(name: str, optimizer: str, description: str, reference: str, sensors: str,
