@@ -621,8 +621,15 @@ def test_run_records_of_interleaved_jobs_in_acceptance_order(store):
             order[lease.job_id] += lease.run_ids()
         marks.append((store.last_result_rowid(), {job: len(order[job]) for job in jobs}))
     for job in jobs:
-        got = [r["run_id"] for r in store.iter_run_records(job, batch=4)]
+        records = list(store.iter_run_records(job, batch=4))
+        got = [r["run_id"] for r in records]
         assert got == order[job] and len(got) == 20
+        for record in records[:3]:  # the same record as one read alone
+            alone = store.run_record(job, record["run_id"])
+            assert alone is not None and alone.keys() == record.keys()
+            assert {k: v for k, v in alone.items() if k != "curve"} == \
+                {k: v for k, v in record.items() if k != "curve"}
+            assert alone["curve"].tolist() == record["curve"].tolist()
         position, before = marks[2]
         tail = [r["run_id"] for r in store.iter_run_records(job, batch=4, after=position)]
         assert tail == order[job][before[job]:] and 0 < len(tail) < 20

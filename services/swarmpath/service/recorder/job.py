@@ -87,6 +87,7 @@ class JobRecorder:
         self._scenarios: dict[str, Any] = {}  # map name -> Scenario (None: no geometry)
         self._offsets: dict[str, float] | None = None  # map name -> x of its frame in "world"
         self._schemas: dict[str, int] = {}
+        self._identities: dict[str, tuple[dict[str, Any], dict[str, Any]]] = {}  # by cell
         self._channels: dict[str, int] = {}
         self._dirty = False
         self._last_flush = clock()
@@ -184,12 +185,18 @@ class JobRecorder:
         return msg
 
     def _benchmark_run(self, record: dict[str, Any]) -> None:
-        spec = record["spec"]
-        identity = {"algorithm": spec["algorithm"], "function": spec["function"],
-                    "dim": int(spec["dim"])}
+        cell = record["cell"]
+        known = self._identities.get(cell)
+        if known is None:  # per cell, not per run
+            spec = record["spec"]
+            identity = {"algorithm": spec["algorithm"], "function": spec["function"],
+                        "dim": int(spec["dim"])}
+            known = self._identities[cell] = (
+                identity, {**identity, "backend": spec.get("backend") or "numpy"})
+        identity, with_backend = known
         ns = _ns(record["created"])
-        self._put("/results", "swarmpath.BenchmarkRunResult", ns, _fast_json(self._result_message(
-            record, {**identity, "backend": spec.get("backend") or "numpy"})))
+        self._put("/results", "swarmpath.BenchmarkRunResult", ns,
+                  _fast_json(self._result_message(record, with_backend)))
         curve = record.get("curve")
         if curve is not None and len(curve):
             # the curve as a float64 array: orjson writes its shortest round-trip decimals

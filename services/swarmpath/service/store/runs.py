@@ -199,20 +199,21 @@ class RunViewsMixin(StoreBase):
                 after = first - 1
         last = after
         # read along the rowid (+job_seq: not the job's index entries, which are in run order
-        # and would make every batch sort the job's remaining results)
+        # and would make every batch sort the job's remaining results); plain tuples, not Rows
         while True:
             with self._read() as db:
-                rows = db.execute(
-                    "SELECT rowid, * FROM results WHERE +job_seq = ? AND rowid > ? "
-                    "ORDER BY rowid LIMIT ?",
+                cur = db.cursor()
+                cur.row_factory = None
+                rows = cur.execute(
+                    f"SELECT rowid, {', '.join(_RECORD_COLUMNS)} FROM results "
+                    "WHERE +job_seq = ? AND rowid > ? ORDER BY rowid LIMIT ?",
                     (seq, last, batch),
                 ).fetchall()
             if not rows:
                 return
-            for r in rows:
-                key, spec = cells[r["cell_idx"]]
-                yield self._record(job_id, kind, seed, rpc, r, key, spec)
-            last = rows[-1]["rowid"]
+            for row in rows:
+                yield _record_of(job_id, kind, seed, rpc, row, cells)
+            last = rows[-1][0]
 
     def run_record(self, job_id: str, run_id: int) -> dict[str, Any] | None:
         """The recorder record of one finished run (None if unknown or not finished)."""
@@ -260,6 +261,26 @@ class RunViewsMixin(StoreBase):
             "created": r["created"],
             **series,
         }
+
+
+#: The results columns a recorder record is made of, in the order :func:`_record_of` reads them.
+_RECORD_COLUMNS = ("cell_idx", "run", "worker", "lease_id", "status", "failure", "seconds",
+                   "metrics", "created", "series")
+
+
+def _record_of(job_id: str, kind: str, seed: int, rpc: int, row: tuple[Any, ...],
+               cells: dict[int, tuple[str, dict[str, Any]]]) -> dict[str, Any]:
+    """:meth:`RunsMixin._record` of a tuple ``(rowid, *_RECORD_COLUMNS)``."""
+    _, cell_idx, run, worker, lease_id, status, failure, seconds, metrics, created, blob = row
+    key, spec = cells[cell_idx]
+    out = {
+        "job_id": job_id, "kind": kind, "run_id": cell_idx * rpc + run, "cell_index": cell_idx,
+        "cell": key, "spec": spec, "run": run, "seed": seed, "worker": worker,
+        "lease_id": lease_id, "status": status, "failure": failure, "seconds": seconds,
+        "metrics": _metrics(metrics), "created": created,
+    }
+    out.update(decode_series(blob, arrays=("curve",)))
+    return out
 
 
 def _metrics(text: str) -> dict[str, Any]:
