@@ -44,6 +44,7 @@ from swarmpath.optimizers.api import (
     check_backend,
     resolve_transform,
 )
+from swarmpath.provenance import numeric_platform
 
 MAX_RUNS = 10_000
 #: Rough CPU seconds per population element and iteration (23 ms per run of 30 x 30 x 500).
@@ -448,6 +449,7 @@ def bench(
 
     if as_json:
         doc = report.study_to_json(spec.settings(), cells, seconds, __version__, tests)
+        doc["platform"] = numeric_platform()
         sys.stdout.write(json.dumps(doc, allow_nan=False) + "\n")
         return
     print_tables(spec, cells, seconds, tests)

@@ -24,6 +24,7 @@ from swarmpath import __version__, reference, report, reproduction
 from swarmpath.cli import parallel
 from swarmpath.cli.core import InputError, app
 from swarmpath.cli.study_options import BackendOpt
+from swarmpath.provenance import numeric_platform
 
 FORMATS = ("table", "markdown", "csv")
 
@@ -312,6 +313,7 @@ def reproduce(
             backend = str(setting.get("backend", "numpy"))
         doc = reproduction.document(tab, setting, rows, statistics)
         doc["version"] = __version__
+        doc["platform"] = numeric_platform()
         docs.append(doc)
         if out is not None:
             output.write_outputs(out, tab, setting, rows, markers,

@@ -1,0 +1,46 @@
+"""The numeric platform fingerprint: stable in a process, bounded when it comes from outside."""
+
+import json
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from swarmpath import provenance
+from swarmpath.cli import app
+
+
+def test_platform_names_numpy_and_a_stable_fingerprint():
+    first, second = provenance.numeric_platform(), provenance.numeric_platform()
+    assert first == second
+    assert first["numpy"] == np.__version__
+    assert len(first["fingerprint"]) == provenance.FINGERPRINT_CHARS
+    assert first["fingerprint"] == provenance.fingerprint(first)
+    assert set(first) <= set(provenance.clean_platform(first))
+
+
+def test_fingerprint_changes_with_any_field():
+    platform = provenance.numeric_platform()
+    for key in (k for k in platform if k != "fingerprint"):
+        changed = {**platform, key: platform[key] + " X86_V4"}
+        assert provenance.fingerprint(changed) != platform["fingerprint"], key
+
+
+@pytest.mark.parametrize(("value", "named"), [
+    ({f"k{i}": "v" for i in range(provenance.MAX_KEYS + 1)}, "at most"),
+    ({"simd": "x" * (provenance.MAX_VALUE_CHARS + 1)}, "platform.simd"),
+    ({"simd": 3}, "platform.simd"),
+    ({"k" * (provenance.MAX_KEY_CHARS + 1): "v"}, "keys are strings"),
+    (["numpy"], "must be an object"),
+])
+def test_hostile_platform_is_refused_by_name(value, named):
+    with pytest.raises(ValueError, match=named):
+        provenance.clean_platform(value)
+
+
+def test_bench_json_carries_the_local_platform():
+    result = CliRunner().invoke(app, ["bench", "-a", "pso", "-f", "F1", "-d", "2", "--runs", "2",
+                                      "--agents", "5", "--iterations", "3", "--json"])
+    assert result.exit_code == 0, result.output
+    doc = json.loads(result.stdout)
+    assert doc["platform"] == provenance.numeric_platform()
