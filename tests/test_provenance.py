@@ -44,3 +44,40 @@ def test_bench_json_carries_the_local_platform():
     assert result.exit_code == 0, result.output
     doc = json.loads(result.stdout)
     assert doc["platform"] == provenance.numeric_platform()
+
+
+# ------------------------------------------------------------------------- through the service
+@pytest.fixture
+def service(tmp_path, monkeypatch):
+    from fastapi.testclient import TestClient
+
+    from swarmpath.service.coordinator import CoordinatorSettings, create_app
+
+    monkeypatch.delenv("SWARMPATH_TOKEN", raising=False)
+    app = create_app(CoordinatorSettings(data_dir=tmp_path / "data"), use_zenoh=False)
+    with TestClient(app) as client:
+        yield client, app.state.core
+
+
+def test_a_workers_platform_shows_in_get_workers(service):
+    from swarmpath.service.protocol import LeaseRequest, encode
+
+    client, core = service
+    core.worker_alive("w1")
+    core.handle_lease_request(encode(LeaseRequest(worker="w1",
+                                                  platform=provenance.numeric_platform())))
+    (shown,) = client.get("/workers").json()
+    assert shown["id"] == "w1" and shown["platform"] == provenance.numeric_platform()
+
+
+def test_an_oversize_platform_is_refused_naming_the_field(service):
+    from swarmpath.service.protocol import LeaseRequest, NoWork, decode_work_reply
+
+    client, core = service
+    core.worker_alive("w1")
+    hostile = json.dumps({"worker": "w1", "platform": {"simd": "x" * 100_000}}).encode()
+    reply = decode_work_reply(core.handle_lease_request(hostile))
+    assert isinstance(reply, NoWork) and "platform" in reply.reason
+    assert client.get("/workers").json()[0]["platform"] == {}
+    with pytest.raises(ValueError, match="platform"):
+        LeaseRequest(worker="w1", platform={f"k{i}": "v" for i in range(100)})

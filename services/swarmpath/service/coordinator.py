@@ -180,6 +180,7 @@ class Coordinator(ResultIntake):
                 slots=entry.slots if entry else 1, current_runs=current,
                 runs_done=int(act.get("runs_done", 0)),
                 last_seen=entry.last_seen if entry else 0.0, alive=bool(entry and entry.alive),
+                platform=entry.platform if entry else {},
             ))
         return out
 
@@ -211,7 +212,8 @@ class Coordinator(ResultIntake):
             self.stats["malformed"] += 1
             log.warning("dropped a malformed lease request: %s", _short(exc))
             return self._no_work(f"malformed lease request: {_short(exc, 200)}", 5.0)
-        self._seen(req.worker, now, host=req.host, pid=req.pid, slots=req.slots)
+        self._seen(req.worker, now, host=req.host, pid=req.pid, slots=req.slots,
+                   platform=req.platform)
         if req.protocol != PROTOCOL_VERSION:
             return self._no_work(
                 f"protocol {req.protocol} not supported; this coordinator speaks "

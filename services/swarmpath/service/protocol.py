@@ -24,12 +24,14 @@ from datetime import UTC, datetime
 from typing import Annotated, Any, Literal, TypeVar
 
 from pydantic import (
+    AfterValidator,
     BaseModel,
     Field,
     TypeAdapter,
     computed_field,
 )
 
+from swarmpath.provenance import clean_platform
 from swarmpath.service.jobspec import (
     CELL_ADAPTER,
     JOB_SPEC_ADAPTER,
@@ -174,6 +176,9 @@ class RunRequest(Model):
     spec: CellSpec
 
 
+Platform = Annotated[dict[str, Any], AfterValidator(clean_platform)]
+
+
 class LeaseRequest(Model):
     """Payload of a query on ``<prefix>/work``: a worker asks for up to ``max_runs`` runs."""
 
@@ -188,6 +193,9 @@ class LeaseRequest(Model):
     slots: int = Field(default=1, ge=1)
     version: str = ""
     protocol: int = PROTOCOL_VERSION
+    platform: Platform | None = Field(
+        default=None, description="the worker's numeric platform (swarmpath.provenance), "
+        "bounded; shown in GET /workers, never trusted for anything else")
 
 
 class Lease(Model):
@@ -394,6 +402,8 @@ class WorkerStatus(Model):
     runs_done: int = 0
     last_seen: float = Field(0.0, description="Unix time")
     alive: bool = True
+    platform: dict[str, str] = Field(
+        default_factory=dict, description="numeric platform the worker last reported")
 
     @computed_field  # type: ignore[prop-decorator]
     @property

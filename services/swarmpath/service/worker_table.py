@@ -26,6 +26,7 @@ class WorkerEntry:
     last_seen: float = 0.0
     gone_at: float | None = None
     extra: dict[str, str] = field(default_factory=dict)
+    platform: dict[str, str] = field(default_factory=dict)
 
 
 class WorkerTable:
@@ -67,8 +68,10 @@ class WorkerTable:
             if entry is not None and entry.alive:
                 entry.alive, entry.gone_at = False, now
 
-    def seen(self, worker: str, now: float, host: str = "", pid: int = 0, slots: int = 0) -> None:
-        """A message of a known worker: refresh it (unknown ids are ignored)."""
+    def seen(self, worker: str, now: float, host: str = "", pid: int = 0, slots: int = 0,
+             platform: dict[str, str] | None = None) -> None:
+        """A message of a known worker: refresh it (unknown ids are ignored). ``platform`` is
+        already bounded (protocol.LeaseRequest validates it)."""
         with self._lock:
             entry = self._entries.get(worker)
             if entry is None:
@@ -80,6 +83,8 @@ class WorkerTable:
                 entry.pid = int(pid)
             if slots:
                 entry.slots = max(1, min(int(slots), MAX_SLOTS))
+            if platform:
+                entry.platform = dict(platform)
 
     def is_alive(self, worker: str) -> bool:
         with self._lock:
@@ -96,7 +101,7 @@ class WorkerTable:
 
     def snapshot(self) -> dict[str, WorkerEntry]:
         with self._lock:
-            return {w: replace(e) for w, e in self._entries.items()}
+            return {w: replace(e, platform=dict(e.platform)) for w, e in self._entries.items()}
 
     def prune(self, now: float) -> int:
         """Forget workers gone for longer than forget_seconds. Returns how many."""

@@ -17,6 +17,7 @@ from collections import deque
 from collections.abc import Sequence
 from typing import Any
 
+from swarmpath.provenance import numeric_platform
 from swarmpath.service.capability import progress_proof
 from swarmpath.service.protocol import (
     MAX_BUNDLE_LEASES,
@@ -49,6 +50,7 @@ class Worker(Reporting):
         Keys(settings.prefix).worker_token(self.id)  # validates the id
         self.keys = Keys(settings.prefix)
         self.host = socket.gethostname()
+        self._platform = numeric_platform()  # the slots run on this host, with this numpy
         self._lock = threading.RLock()
         self._wake = threading.Condition(self._lock)
         self._stop = threading.Event()
@@ -190,7 +192,7 @@ class Worker(Reporting):
             worker=self.id, max_runs=self.settings.max_runs,
             max_leases=max(1, min(self.settings.max_leases, MAX_BUNDLE_LEASES)),
             host=self.host, pid=os.getpid(), slots=len(self._slots), version=_version(),
-            protocol=PROTOCOL_VERSION,
+            protocol=PROTOCOL_VERSION, platform=self._platform,
         ))
 
     def _ask(self) -> Lease | LeaseBundle | NoWork | None:
