@@ -3,7 +3,7 @@
 
     PYTHONPATH=services .venv/bin/python scripts/bench/frameworks.py \\
         --mealpy-python /tmp/cmp-mealpy/bin/python --evox-python /tmp/cmp-evox/bin/python \\
-        --evosax-python /tmp/cmp-evosax/bin/python [--algorithms PSO,GWO] [--functions F1,F9,F10]
+        --evosax-python /tmp/cmp-evosax/bin/python [--algorithms PSO,GWO,FDO] [--functions F1,F9]
 
 Budget: 30 dims, 30 agents, 500 iterations, ``--runs`` runs (30) for the frameworks that batch
 runs (swarmpath: one ``minimize`` call; evosax: ``jit(vmap(scan))``; EvoX: one run at a time,
@@ -41,7 +41,7 @@ BOUNDS = {"F1": 100.0, "F9": 5.12, "F10": 32.0}
 FRAMEWORKS = ("swarmpath-numpy", "swarmpath-numba", "mealpy", "evox", "evosax")
 # Which algorithms each foreign framework has, and under which name (read from their sources).
 HAS = {
-    "mealpy": {"PSO": "PSO.OriginalPSO", "GWO": "GWO.OriginalGWO"},
+    "mealpy": {"PSO": "PSO.OriginalPSO", "GWO": "GWO.OriginalGWO", "FDO": "FDO.OriginalFDO"},
     "evox": {"PSO": "PSO"},
     "evosax": {"PSO": "PSO"},
 }
@@ -337,7 +337,7 @@ def table(results: dict[str, dict[str, Any]], args: argparse.Namespace) -> list[
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
-    ap.add_argument("--algorithms", default="PSO,GWO")
+    ap.add_argument("--algorithms", default="PSO,GWO,FDO")
     ap.add_argument("--functions", default="F1,F9,F10")
     ap.add_argument("--runs", type=int, default=30, help="runs of the batching frameworks")
     ap.add_argument("--mealpy-runs", type=int, default=3)
