@@ -46,7 +46,7 @@ from swarmpath.service.protocol import (
 from swarmpath.service.recorder import Recorders
 from swarmpath.service.recorder.process import RecorderProcess
 from swarmpath.service.settings import DEFAULT_HTTP, CoordinatorSettings
-from swarmpath.service.store import FINAL_STATES, Store
+from swarmpath.service.store import FINAL_STATES, Store, StoreError
 from swarmpath.service.util import json_safe
 from swarmpath.service.util import short as _short
 from swarmpath.service.web.live import Dashboard
@@ -287,7 +287,19 @@ class Coordinator(ResultIntake):
                 self.dashboard.finished(job_id)
             self._recording.discard(job_id)
             self._jobs.pop(job_id, None)
+            self._forget(job_id)
             return self.recorders.path(job_id)
+
+    def _forget(self, job_id: str) -> None:
+        """An ended job's per-lease caches out (the store keeps what re-sent results need)."""
+        try:
+            leases = self.store.forget_job(job_id)
+        except StoreError:  # closing
+            return
+        with self._lock:
+            for lease_id in leases:
+                self._settled.pop(lease_id, None)
+                self._caps.pop(lease_id, None)
 
     def mcap_path(self, job_id: str) -> tuple[Path | None, str]:
         """(path, '') when the job's MCAP can be downloaded, else (None, reason)."""

@@ -20,6 +20,7 @@ from swarmpath.service.protocol import (
 
 SCHEMA_VERSION = 2  # 2: leases.capability, leases.beat
 DB_NAME = "swarmpath.sqlite3"
+CACHE_KIB = 2048  # SQLite page cache of the connection, KiB (bounded; its default is 2,000)
 JOB_STATES: tuple[JobState, ...] = ("queued", "running", "done", "failed", "cancelled")
 FINAL_STATES = frozenset({"done", "failed", "cancelled"})
 
@@ -85,6 +86,7 @@ CREATE INDEX IF NOT EXISTS leases_active ON leases (deadline) WHERE state = 'act
 CREATE INDEX IF NOT EXISTS leases_active_worker ON leases (worker) WHERE state = 'active';
 CREATE INDEX IF NOT EXISTS leases_active_cell ON leases (job_seq, cell_idx)
     WHERE state = 'active';
+CREATE INDEX IF NOT EXISTS leases_by_job ON leases (job_seq);  -- an ended job's caches out
 CREATE TABLE IF NOT EXISTS results (
     job_seq  INTEGER NOT NULL,
     cell_idx INTEGER NOT NULL,
@@ -157,6 +159,7 @@ class StoreBase:
         self.synchronous = synchronous.upper()
         self._db.execute(f"PRAGMA synchronous={self.synchronous}")
         self._db.execute("PRAGMA foreign_keys=ON")
+        self._db.execute(f"PRAGMA cache_size=-{CACHE_KIB}")  # page cache: bounded, in KiB
         self._lease_runs: dict[str, frozenset[int]] = {}
         self._cell_specs: dict[tuple[int, int], tuple[str, CellSpec]] = {}
         self._closed = False
@@ -248,6 +251,22 @@ class StoreBase:
         )
         return int(db.execute("SELECT value FROM meta WHERE key = ?", (f"counter.{counter}",))
                    .fetchone()[0])
+
+    def forget_job(self, job_id: str) -> list[str]:
+        """Drop the caches of an ended job (its leases' run sets and its cell specs); returns
+        its lease ids, for the caller's own per-lease caches. The database keeps everything."""
+        with self._read() as db:
+            row = db.execute("SELECT seq FROM jobs WHERE id = ?", (job_id,)).fetchone()
+            if row is None:
+                return []
+            seq = int(row[0])
+            leases = [r[0] for r in db.execute(
+                "SELECT lease_id FROM leases WHERE job_seq = ?", (seq,))]
+            for lease_id in leases:
+                self._lease_runs.pop(lease_id, None)
+            for key in [k for k in self._cell_specs if k[0] == seq]:
+                del self._cell_specs[key]
+        return leases
 
     def _runs_of(self, lease_id: str, runs_json: str) -> frozenset[int]:
         cached = self._lease_runs.get(lease_id)
