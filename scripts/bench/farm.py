@@ -240,6 +240,29 @@ def store_bytes(store: Path) -> int:
     return sum(p.stat().st_size for p in store.glob("swarmpath.sqlite3*") if p.is_file())
 
 
+def one_job(args: argparse.Namespace, farm: Farm, spec: dict[str, Any], pid: int, t0: float,
+            rss: list[tuple[float, float]]) -> tuple[str, dict[str, Any]]:
+    """Submit one job and wait for its end (cancel it after ``args.seconds``), sampling the
+    coordinator's RSS into ``rss``; returns its id and final status."""
+    r = farm.client.post("/jobs", json=spec)
+    r.raise_for_status()
+    job = r.json()["id"]
+    note(f"farm: job {job} ({r.json()['runs_total']} runs) on {args.workers} workers x "
+         f"{args.slots} slots")
+    status: dict[str, Any] = {}
+    while True:
+        status = farm.client.get(f"/jobs/{job}").json()
+        rss.append((round(time.monotonic() - t0, 2), proc_cpu_rss(pid)[1]))
+        if status["state"] in ("done", "failed", "cancelled"):
+            break
+        if time.monotonic() - t0 > args.seconds:
+            note(f"farm: {args.seconds} s are up: cancelling job {job}")
+            status = farm.client.delete(f"/jobs/{job}").raise_for_status().json()
+            break
+        time.sleep(0.5)
+    return job, status
+
+
 def run(args: argparse.Namespace, data: Path, root: Path = ROOT) -> dict[str, Any]:
     """One measurement: a coordinator and ``args.workers`` simulated workers of checkout
     ``root``, one job, everything under ``data``."""
@@ -260,23 +283,17 @@ def run(args: argparse.Namespace, data: Path, root: Path = ROOT) -> dict[str, An
         rec0 = children_cpu(pid)
         sim0 = farm.sim_cpu()
         t0 = time.monotonic()
-        r = farm.client.post("/jobs", json=spec)
-        r.raise_for_status()
-        job = r.json()["id"]
-        note(f"farm: job {job} ({r.json()['runs_total']} runs) on {args.workers} workers x "
-             f"{args.slots} slots")
         rss: list[tuple[float, float]] = [(0.0, rss0)]
-        status: dict[str, Any] = {}
-        while True:
-            status = farm.client.get(f"/jobs/{job}").json()
-            rss.append((round(time.monotonic() - t0, 2), proc_cpu_rss(pid)[1]))
-            if status["state"] in ("done", "failed", "cancelled"):
-                break
-            if time.monotonic() - t0 > args.seconds:
-                note(f"farm: {args.seconds} s are up: cancelling job {job}")
-                status = farm.client.delete(f"/jobs/{job}").raise_for_status().json()
-                break
-            time.sleep(0.5)
+        rss_jobs: list[float] = []  # RSS at the end of each successive job
+        finished = last = 0
+        span = 0.0
+        for _ in range(args.jobs):
+            job, status = one_job(args, farm, spec, pid, t0, rss)
+            rss_jobs.append(round(proc_cpu_rss(pid)[1], 1))
+            last = int(status["runs_done"]) + int(status["runs_failed"])
+            finished += last
+            span += (float(status["finished"] or time.time()) - float(status["started"] or 0)) \
+                if status.get("started") else float("nan")
         cpu1, rss1 = proc_cpu_rss(pid)
         rec1 = children_cpu(pid)
         sim1 = farm.sim_cpu()
@@ -285,9 +302,7 @@ def run(args: argparse.Namespace, data: Path, root: Path = ROOT) -> dict[str, An
         table = farm.client.get("/workers").json()
         sims = farm.stop_sims()
         farm.stop_coordinator()
-    done = int(status["runs_done"]) + int(status["runs_failed"])
-    span = (float(status["finished"] or time.time()) - float(status["started"] or 0)) \
-        if status.get("started") else float("nan")
+    done = finished
     per_worker = sorted(int(w["runs_done"]) for w in table)
     rtt = [x for w in sims for x in w["lease_rtt_ms"]]
     ack = [x for w in sims for x in w["ack_ms"]]
@@ -307,10 +322,11 @@ def run(args: argparse.Namespace, data: Path, root: Path = ROOT) -> dict[str, An
         "lease_rtt_ms_p50": round(percentile(rtt, 50), 2),
         "lease_rtt_ms_p99": round(percentile(rtt, 99), 2),
         "store_bytes_per_run": round((store_bytes(data / "store") - store0) / max(1, done)),
-        "mcap_bytes_per_run": round(mcap.stat().st_size / max(1, done)) if mcap.is_file()
+        "mcap_bytes_per_run": round(mcap.stat().st_size / max(1, last)) if mcap.is_file()
         else None,
         "rss_mb": {"start": round(rss0, 1), "max": round(max(x for _, x in rss), 1),
                    "end": round(rss1, 1)},
+        "rss_end_of_each_job_mb": rss_jobs,
         "rss_series": [(t, round(x, 1)) for t, x in rss[:: max(1, len(rss) // 40)]],
         "alive_seen": alive_before, "table_entries": len(table),
         "runs_per_worker": {"min": per_worker[0] if per_worker else 0,
@@ -342,6 +358,10 @@ def markdown(results: list[dict[str, Any]]) -> str:
             f"| {r['rss_mb']['start']}/{r['rss_mb']['max']}/{r['rss_mb']['end']} | "
             f"{r['alive_seen']} | {w['min']}/{w['median']}/{w['max']} ({w['none']}) | "
             f"{r['load'][0]}-{r['load'][1]} |")
+        if len(r.get("rss_end_of_each_job_mb", [])) > 1:
+            lines.append(f"\n(K = {r['workers']}, {r['tree']}: RSS MB at the end of each of "
+                         f"{len(r['rss_end_of_each_job_mb'])} successive jobs: "
+                         f"{', '.join(map(str, r['rss_end_of_each_job_mb']))})\n")
         if r.get("idle_cpu_ms_per_worker_s") is not None:
             lines.append(f"\n(K = {r['workers']}, {r['tree']}: idle, the coordinator and its "
                          f"recorder spent {r['idle_cpu_ms_per_worker_s']} ms of CPU per worker "
@@ -382,6 +402,8 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
     ap.add_argument("--max-leases", type=int, default=32, help="leases per bundle at most")
     ap.add_argument("--lease-seconds", type=float, default=30.0)
     ap.add_argument("--seconds", type=float, default=300.0, help="cancel the job after this")
+    ap.add_argument("--jobs", type=int, default=1,
+                    help="successive jobs on the same coordinator (RSS at the end of each)")
     ap.add_argument("--idle-seconds", type=float, default=0.0,
                     help="before the job: measure the coordinator's CPU this long with the K "
                     "workers alive and nothing to lease (per worker per second)")
