@@ -24,6 +24,7 @@ from swarmpath.service.result_frame import (
     pack_frames,
     record_ok,
 )
+from swarmpath.service.store.series import decode_series, encode_series, raw_series
 
 CAP = new_capability()
 
@@ -178,3 +179,19 @@ def test_a_worker_head_takes_the_fast_check():
     assert got is not None and got.arrays == [("curve", "<f8", [3])]
     assert got.fields() == head(metrics={"best_fitness": 0.5, "success": True}).model_dump(
         exclude={"arrays"})
+
+
+def test_received_arrays_are_stored_as_they_came():
+    """The store's series column made from a record's received bytes is what encoding its
+    arrays gives, and reads back to the same arrays whatever order they were declared in."""
+    curve, best, path = np.linspace(2.0, 0.0, 7), np.array([0.5, -1.0]), np.ones((3, 3))
+    rec = decode_record(encode_record(head(), {"curve": curve, "best_position": best,
+                                               "path": path}, CAP))
+    assert raw_series(rec.head.arrays, rec.raw) == encode_series(dict(rec.arrays))
+    assert raw_series([], b"") is None
+    swapped = raw_frame({"worker": "w1", "count": 1}, [(
+        ok_head(arrays=[["best_position", "<f8", [2]], ["curve", "<f8", [7]]]),
+        best.tobytes() + curve.tobytes())])
+    (rec,) = decode_frame(swapped)[1]
+    back = decode_series(raw_series(rec.head.arrays, rec.raw))
+    assert back == {"best_position": best.tolist(), "curve": curve.tolist()}

@@ -39,6 +39,8 @@ class Incoming:
     best_position: np.ndarray | None = None
     path: np.ndarray | None = None
     capability: str | None = field(default=None, repr=False)
+    #: the series as the store keeps them (``results.series``), when the wire gave them so
+    stored_series: bytes | None = field(default=None, repr=False)
 
     @classmethod
     def from_result(cls, r: RunResult, capability: str | None = None) -> Incoming:

@@ -36,6 +36,7 @@ from swarmpath.service.recorder.process import RecorderProcess
 from swarmpath.service.result_frame import decode_frame, is_frame, record_ok
 from swarmpath.service.settings import CoordinatorSettings
 from swarmpath.service.store import FINAL_STATES, Store
+from swarmpath.service.store.series import raw_series
 from swarmpath.service.util import short as _short
 
 log = logging.getLogger("swarmpath.coordinator")
@@ -152,6 +153,7 @@ class ResultIntake:
             entry.best_position = rec.arrays.get("best_position")
             entry.path = rec.arrays.get("path")
             entry.capability = cap
+            entry.stored_series = raw_series(h.arrays, rec.raw)
         self._count_foreign(foreign, worker)
         self._count_unproven(unproven)
         return worker, entries

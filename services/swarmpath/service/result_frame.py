@@ -98,6 +98,8 @@ class FrameRecord:
     arrays: dict[str, np.ndarray]
     signed: bytes
     proof: bytes
+    #: the arrays' bytes as received (in ``head.arrays`` order), for storing them as they are
+    raw: bytes = b""
 
 
 def record_proof(capability: str, signed: bytes) -> bytes:
@@ -205,6 +207,7 @@ def _record(payload: bytes, pos: int, i: int) -> tuple[FrameRecord, int]:
                           model.status, model.failure, model.seconds, dict(model.metrics),
                           [(n, d, list(s)) for n, d, s in model.arrays])
     arrays: dict[str, np.ndarray] = {}
+    first = pos
     for name, _dtype, shape in head.arrays:
         if name in arrays:
             raise FrameError(f"record {i}: array {name} declared twice")
@@ -217,7 +220,8 @@ def _record(payload: bytes, pos: int, i: int) -> tuple[FrameRecord, int]:
         pos = end
     if pos + PROOF_BYTES > len(payload):
         raise FrameError(f"record {i}: no room for its proof")
-    rec = FrameRecord(head, arrays, payload[start:pos], payload[pos:pos + PROOF_BYTES])
+    rec = FrameRecord(head, arrays, payload[start:pos], payload[pos:pos + PROOF_BYTES],
+                      payload[first:pos])
     return rec, pos + PROOF_BYTES
 
 

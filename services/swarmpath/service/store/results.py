@@ -112,9 +112,12 @@ class ResultsMixin(StoreBase):
             raw = r.metrics.get("best_fitness") if benchmark else None
             value = float(raw) if isinstance(raw, int | float) and not isinstance(raw, bool) \
                 else None
-            series = {"curve": r.curve, "best_position": r.best_position, "path": r.path}
+            blob = r.stored_series if isinstance(r, Incoming) else None
+            if blob is None:
+                blob = encode_series(
+                    {"curve": r.curve, "best_position": r.best_position, "path": r.path})
             rows.append((seq, cell_idx, run, lease_id, r.worker, r.status, r.failure, value,
-                         r.seconds, _metrics_json(r.metrics), encode_series(series), now))
+                         r.seconds, _metrics_json(r.metrics), blob, now))
         if not rows:
             return out
         db.executemany(

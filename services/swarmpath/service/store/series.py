@@ -46,6 +46,22 @@ def encode_series(series: dict[str, Any]) -> bytes | None:
     return SERIES_MAGIC + head + b"".join(parts)
 
 
+def raw_series(shapes: list[tuple[str, str, list[int]]], raw: bytes) -> bytes | None:
+    """The ``results.series`` value of arrays received as ``raw`` (their float64 LE bytes, one
+    after the other, named and shaped by ``shapes``: a result frame's ``[name, dtype, shape]``
+    declarations): :func:`encode_series` of the same arrays, without making them first."""
+    if not shapes:
+        return None
+    key = tuple((name, tuple(shape)) for name, _dtype, shape in shapes)
+    head = _HEADS.get(key)
+    if head is None:
+        text = _dumps([[name, list(shape)] for name, shape in key]).encode()
+        head = len(text).to_bytes(4, "little") + text
+        if len(_HEADS) < 4096:
+            _HEADS[key] = head
+    return b"".join((SERIES_MAGIC, head, raw))
+
+
 def decode_series(blob: bytes | None, arrays: tuple[str, ...] = ()) -> dict[str, Any]:
     """The series of a ``results.series`` value as lists (curve: floats, path: [x, y, t] rows);
     those named in ``arrays`` as read-only float64 arrays (no list made)."""
