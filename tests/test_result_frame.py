@@ -143,7 +143,8 @@ def test_hostile_frames_are_rejected_with_the_reason(payload, reason):
     {"arrays": [["curve", "<f8", [2.0]]]}, {"arrays": [["curve", "<f8", ["2"]]]},
     {"arrays": [("curve", "<f8", [2])] * 4}, {"arrays": [["curve", "<f8"]]},
     {"arrays": {"curve": 1}}, {"metrics": {"big": 2**70}}, {"metrics": {"big": 2**64 - 1}},
-    {"metrics": {"small": 1e300, "neg": -(2**63)}},
+    {"metrics": {"small": 1e300, "neg": -(2**63)}}, {"lease_id": ["L1"]}, {"cell": {"a": 1}},
+    {"worker": 7},
 ])
 def test_fast_head_check_accepts_exactly_what_the_model_accepts(changes):
     """Heads read by the hot-path check give the model's values, and every head the model

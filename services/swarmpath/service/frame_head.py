@@ -27,7 +27,13 @@ _FIELDS = frozenset({"lease_id", "job_id", "cell", "run", "worker", "status", "f
                      "seconds", "metrics", "arrays"})
 _REQUIRED = frozenset({"lease_id", "job_id", "cell", "run", "worker", "seconds"})
 _NAMES = frozenset({"curve", "best_position", "path"})
-_SCALARS = (bool, int, float, str, type(None))
+_SCALARS = frozenset({bool, int, float, str, type(None)})
+_STATUSES = frozenset({"ok", "failed"})
+_EMPTY: dict[str, Any] = {}
+_EMPTY_LIST: list[Any] = []
+#: (lease_id, job_id, worker, cell) tuples found valid lately (bounded: cleared when full)
+_CHECKED: set[tuple[Any, ...]] = set()
+MAX_CHECKED = 4096
 _HUGE = 2.0**63
 MAX_CELL = 256
 MAX_FAILURE = 20_000
@@ -62,14 +68,23 @@ def fast_head(text: bytes) -> RecordHead | None:
         d = orjson.loads(text)
     except orjson.JSONDecodeError:
         return None
-    if type(d) is not dict or not _REQUIRED <= d.keys() <= _FIELDS:
+    if type(d) is not dict:
         return None
-    for name in _IDS:
-        value = d[name]
-        if type(value) is not str or _ID.fullmatch(value) is None:
+    keys = d.keys()
+    if keys != _FIELDS and not _REQUIRED <= keys <= _FIELDS:
+        return None
+    names = (d["lease_id"], d["job_id"], d["worker"], d["cell"])
+    for value in names:
+        if type(value) is not str:  # (a list or a dict could not even be looked up below)
             return None
-    cell, run, seconds = d["cell"], d["run"], d["seconds"]
-    if type(cell) is not str or len(cell) > MAX_CELL or type(run) is not int or run < 0:
+    if names not in _CHECKED:  # the same lease, job, worker and cell come run after run
+        if not _names_ok(names):
+            return None
+        if len(_CHECKED) >= MAX_CHECKED:
+            _CHECKED.clear()
+        _CHECKED.add(names)
+    run, seconds = d["run"], d["seconds"]
+    if type(run) is not int or run < 0:
         return None
     if type(seconds) is float:
         if not seconds >= 0:  # NaN included
@@ -80,22 +95,28 @@ def fast_head(text: bytes) -> RecordHead | None:
         return None
     status = d.get("status", "ok")
     failure = d.get("failure")
-    if status not in ("ok", "failed") or type(status) is not str:
+    if type(status) is not str or status not in _STATUSES:
         return None
     if failure is not None and (type(failure) is not str or len(failure) > MAX_FAILURE):
         return None
-    metrics = d.get("metrics", {})
+    metrics = d.get("metrics", _EMPTY)
     if type(metrics) is not dict:
         return None
     for value in metrics.values():
         kind = type(value)
         if kind not in _SCALARS or (kind is float and abs(value) >= _HUGE):
             return None  # orjson reads an integer past 64 bits as a float; the model, an int
-    arrays = _arrays(d.get("arrays", []))
+    arrays = _arrays(d.get("arrays", _EMPTY_LIST))
     if arrays is None:
         return None
-    return RecordHead(d["lease_id"], d["job_id"], cell, run, d["worker"], status, failure,
-                      seconds, metrics, arrays)
+    return RecordHead(names[0], names[1], names[3], run, names[2], status, failure,
+                      seconds, metrics if metrics is not _EMPTY else {}, arrays)
+
+
+def _names_ok(names: tuple[Any, ...]) -> bool:
+    """lease_id, job_id and worker identifiers, cell at most MAX_CELL characters (strings)."""
+    return all(_ID.fullmatch(value) is not None for value in names[:3]) and \
+        len(names[3]) <= MAX_CELL
 
 
 def _arrays(value: Any) -> list[tuple[str, str, list[int]]] | None:
@@ -106,8 +127,8 @@ def _arrays(value: Any) -> list[tuple[str, str, list[int]]] | None:
         if type(item) is not list or len(item) != 3:
             return None
         name, dtype, shape = item
-        if type(name) is not str or name not in _NAMES or type(dtype) is not str \
-                or dtype != "<f8" or type(shape) is not list:
+        if type(name) is not str or name not in _NAMES or dtype != "<f8" \
+                or type(dtype) is not str or type(shape) is not list:
             return None
         for n in shape:
             if type(n) is not int:
