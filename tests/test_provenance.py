@@ -1,5 +1,6 @@
 """The numeric platform fingerprint: stable in a process, bounded when it comes from outside."""
 
+import io
 import json
 
 import numpy as np
@@ -81,3 +82,26 @@ def test_an_oversize_platform_is_refused_naming_the_field(service):
     assert client.get("/workers").json()[0]["platform"] == {}
     with pytest.raises(ValueError, match="platform"):
         LeaseRequest(worker="w1", platform={f"k{i}": "v" for i in range(100)})
+
+
+def test_a_jobs_mcap_names_the_platform_of_each_worker(service):
+    from mcap.reader import make_reader
+
+    from swarmpath.service.protocol import Lease, LeaseRequest, decode_work_reply, encode
+    from swarmpath.service.worker import execute_lease, pack_batches
+
+    client, core = service
+    spec = {"kind": "benchmark", "algorithms": ["PSO"], "functions": ["F1"], "dims": [2],
+            "runs": 2, "agents": 5, "iterations": 3, "seed": 1}
+    job = client.post("/jobs", json=spec).json()
+    core.worker_alive("w1")
+    request = encode(LeaseRequest(worker="w1", max_runs=10,
+                                  platform=provenance.numeric_platform()))
+    while isinstance(lease := decode_work_reply(core.handle_lease_request(request)), Lease):
+        for payload in pack_batches("w1", [d for _r, d in execute_lease(lease)]):
+            core.handle_results(f"swarmpath/results/{lease.job_id}", payload)
+    assert client.get(f"/jobs/{job['id']}").json()["state"] == "done"
+    mcap = client.get(f"/jobs/{job['id']}/mcap")
+    records = [m.metadata for m in make_reader(io.BytesIO(mcap.content)).iter_metadata()
+               if m.name == "swarmpath.platform"]
+    assert records == [{**provenance.numeric_platform(), "worker": "w1"}]  # once, not per run

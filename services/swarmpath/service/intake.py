@@ -107,6 +107,7 @@ class ResultIntake:
                     "seconds": r.seconds, "metrics": r.metrics, "created": now,
                 }
                 record.update(r.series())
+                record["platform"] = self.worker_table.platform(r.worker)
                 self.recorders.add(job_id, record)
 
     def handle_results(self, key: str, payload: bytes, now: float | None = None) -> Ack | None:

@@ -86,6 +86,12 @@ class WorkerTable:
             if platform:
                 entry.platform = dict(platform)
 
+    def platform(self, worker: str) -> dict[str, str]:
+        """The numeric platform a worker last reported (empty if none or unknown)."""
+        with self._lock:
+            entry = self._entries.get(worker)
+            return dict(entry.platform) if entry is not None else {}
+
     def is_alive(self, worker: str) -> bool:
         with self._lock:
             entry = self._entries.get(worker)

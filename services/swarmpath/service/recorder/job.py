@@ -42,6 +42,7 @@ from swarmpath.service.recorder.scene import (
 )
 from swarmpath.service.recorder.schemas import OWN_SCHEMAS
 
+MAX_PLATFORM_RECORDS = 1024  # swarmpath.platform metadata records per job
 LAYOUT_VERSION = 2  # 2: a frame per map (/tf), static occupancy, swarmpath.run metadata
 FLUSH_INTERVAL = 1.0
 CHUNK_SIZE = 1024 * 1024
@@ -89,6 +90,7 @@ class JobRecorder:
         self._schemas: dict[str, int] = {}
         self._identities: dict[str, tuple[dict[str, Any], dict[str, Any]]] = {}  # by cell
         self._channels: dict[str, int] = {}
+        self._platforms: set[tuple[str, str]] = set()  # (worker, fingerprint) written
         self._dirty = False
         self._last_flush = clock()
         self.final.parent.mkdir(parents=True, exist_ok=True)
@@ -155,6 +157,7 @@ class JobRecorder:
         Returns False when that run id was already written (nothing is written twice)."""
         if self.closed:
             raise RuntimeError(f"recorder of job {self.job_id} is closed")
+        self._note_platform(record)  # also when the run came from the store first
         run_id = int(record["run_id"])
         if run_id in self.written:
             return False
@@ -165,6 +168,20 @@ class JobRecorder:
             self._map_run(record)
         self.flush_if_due()
         return True
+
+    def _note_platform(self, record: dict[str, Any]) -> None:
+        """One ``swarmpath.platform`` metadata record per (worker, platform fingerprint) seen in
+        this job (the coordinator's in-process recorder only: the platform is not stored, so a
+        file rebuilt from the store has none). Bounded by MAX_PLATFORM_RECORDS."""
+        platform = record.get("platform") or {}
+        if not platform or len(self._platforms) >= MAX_PLATFORM_RECORDS:
+            return
+        key = (str(record.get("worker") or ""), str(platform.get("fingerprint", "")))
+        if key in self._platforms:
+            return
+        self._platforms.add(key)
+        self._writer.add_metadata("swarmpath.platform", {
+            **{str(k): str(v) for k, v in platform.items()}, "worker": key[0]})
 
     def _result_message(self, record: dict[str, Any], identity: dict[str, Any]) -> dict[str, Any]:
         msg: dict[str, Any] = {
