@@ -257,3 +257,39 @@ def test_eviction_keeps_running_jobs_before_ended_ones(tmp_path):
         assert dash.aggregates_loaded() == [ids[2], ids[3]]
     finally:
         store.close()
+
+
+def test_closing_the_coordinator_stops_a_running_build_without_an_error(tmp_path, monkeypatch,
+                                                                         caplog):
+    import logging
+    import threading
+    import time
+
+    from swarmpath.service.coordinator import Coordinator
+    from swarmpath.service.protocol import parse_job_spec
+    from swarmpath.service.store import StoreError
+
+    core = Coordinator(CoordinatorSettings(data_dir=tmp_path / "data"))
+    job = core.submit(parse_job_spec(BENCH)).id
+    reading = threading.Event()
+
+    def endless_records(job_id, batch=500):  # a long scan: fails once the store is closed
+        run = 0
+        while True:
+            if core.store._closed:
+                raise StoreError("store is closed")
+            reading.set()
+            yield {"cell_index": 0, "run": run % 4, "status": "ok",
+                   "metrics": {"best_fitness": 0.0}}
+            run += 1
+            time.sleep(0.001)
+
+    monkeypatch.setattr(core.store, "iter_run_records", endless_records)
+    core.dashboard.aggregates(job, wait=False)  # builds in a thread
+    assert reading.wait(30)
+    builds = [t for t in threading.enumerate() if t.name == f"dashboard-{job}"]
+    assert builds
+    with caplog.at_level(logging.INFO, logger="swarmpath"):
+        core.close()
+    assert not any(t.is_alive() for t in builds)
+    assert not [r for r in caplog.records if r.levelno >= logging.ERROR]

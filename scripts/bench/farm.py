@@ -310,7 +310,7 @@ def run(args: argparse.Namespace, data: Path, root: Path = ROOT) -> dict[str, An
     return {
         "workers": args.workers, "slots": args.slots, "procs": min(args.procs, args.workers),
         "run_ms": args.run_ms, "spec": spec, "job": job, "state": status["state"],
-        "runs_total": status["runs_total"], "runs_finished": done,
+        "runs_total": status["runs_total"] * args.jobs, "runs_finished": done,
         "seconds": round(span, 3), "runs_per_s": round(done / span, 1) if span > 0 else None,
         "coordinator_cpu_s": round(cpu1 - cpu0, 2),
         "cpu_ms_per_run": round((cpu1 - cpu0) * 1e3 / max(1, done), 4),

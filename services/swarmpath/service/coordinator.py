@@ -132,6 +132,7 @@ class Coordinator(ResultIntake):
     def close(self) -> None:
         self.accepting = False
         try:
+            self.dashboard.close()  # its build threads read the store
             self.recorders.close()
         finally:
             self.store.close()

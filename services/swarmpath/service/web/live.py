@@ -52,6 +52,8 @@ class Dashboard:
         self._encoded: OrderedDict[str, tuple[int, bytes]] = OrderedDict()
         self._ended: set[str] = set()  # jobs seen ending (evicted first)
         self._snapshot: tuple[float, bytes] = (-1.0, b"")
+        self._closing = threading.Event()  # close(): builds stop reading the store
+        self._threads: set[threading.Thread] = set()  # builds and warm-ups running
 
     # ------------------------------------------------------------------------------- feeding
     def observe(self, job_id: str, results: Iterable[Any], now: float | None = None) -> None:
@@ -103,8 +105,10 @@ class Dashboard:
                     self._evict()
                     args = (job, status, spec, cells)
                     if not wait:
-                        threading.Thread(target=self._build, args=args, daemon=True,
-                                         name=f"dashboard-{job_id}").start()
+                        thread = threading.Thread(target=self._build, args=args,
+                                                  daemon=True, name=f"dashboard-{job_id}")
+                        self._threads.add(thread)  # we hold the lock
+                        thread.start()
                         return job
                 else:
                     args = None
@@ -145,17 +149,26 @@ class Dashboard:
                     job.set_loading(True)
                     with self._lock:
                         self._jobs[job_id] = job
-                n = sum(job.add_record(rec) for rec in self.store.iter_run_records(job_id))
+                n = 0
+                for rec in self.store.iter_run_records(job_id):
+                    if self._closing.is_set():
+                        break
+                    n += job.add_record(rec)
                 how = f"{n} stored runs"
-                if status.state in FINAL_STATES and saved is not None:
+                if status.state in FINAL_STATES and saved is not None \
+                        and not self._closing.is_set():
                     job.set_loading(False)  # the saved page is the complete one
                     self._save(job, saved)
         except Exception:
-            log.exception("building the dashboard's aggregates of job %s failed", job_id)
+            if self._closing.is_set():  # the store closed under us: shutting down
+                log.info("dashboard: building job %s's aggregates stopped (closing)", job_id)
+            else:
+                log.exception("building the dashboard's aggregates of job %s failed", job_id)
         finally:
             job.set_loading(False)
             with self._lock:
                 self._ready.pop(job_id).set()
+                self._threads.discard(threading.current_thread())
         log.info("dashboard: job %s aggregated from %s in %.2f s", job_id, how,
                  time.perf_counter() - started)
         return job
@@ -208,13 +221,34 @@ class Dashboard:
             try:
                 import swarmpath.compare  # noqa: F401
                 for job_id in ids:
+                    if self._closing.is_set():
+                        break
                     self.aggregates(job_id)
             except Exception:
-                log.exception("warming the dashboard up failed")
+                if not self._closing.is_set():
+                    log.exception("warming the dashboard up failed")
+            finally:
+                with self._lock:
+                    self._threads.discard(threading.current_thread())
 
         thread = threading.Thread(target=run, name="dashboard-warm", daemon=True)
-        thread.start()
+        self._start(thread)
         return thread
+
+    def _start(self, thread: threading.Thread) -> None:
+        with self._lock:
+            self._threads.add(thread)
+        thread.start()
+
+    def close(self, timeout: float = 10.0) -> None:
+        """Stop the builds (they stop at their next stored run) and wait for them, at most
+        ``timeout`` seconds in all: call it before closing the store."""
+        self._closing.set()
+        deadline = time.monotonic() + timeout
+        with self._lock:
+            threads = list(self._threads)
+        for thread in threads:
+            thread.join(max(0.0, deadline - time.monotonic()))
 
     def page_data(self, job_id: str) -> tuple[int, bytes] | None:
         """(version, JSON bytes) of the job page's data: the aggregates' view, recomputed at
