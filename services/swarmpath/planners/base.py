@@ -64,6 +64,9 @@ class Planner(ABC):
     choices: ClassVar[Mapping[str, tuple[str, ...]]] = {}
     #: Sensor model used when the scenario names none (local planners).
     default_sensors: ClassVar[str | None] = None
+    #: Whether the simulator's motion guard executes this planner's decisions: no step whose
+    #: swept body would touch a static obstacle is driven as is (:meth:`Simulator._guarded`).
+    guarded: ClassVar[bool] = False
 
     def __init__(
         self,

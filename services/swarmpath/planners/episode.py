@@ -147,7 +147,8 @@ class Episode:
         static = scenario.static_obstacles() if known else None
         self.planner = cls(scenario, params, run_generator(seed, run, OPTIMIZER), static)
         sensors = scenario.sensors or cls.default_sensors
-        self.sim = Simulator(scenario, run_generator(seed, run, SIMULATION), sensors)
+        self.sim = Simulator(scenario, run_generator(seed, run, SIMULATION), sensors,
+                             guard=cls.guarded)
         self.step_limit = step_limit
         if time_limit is None:
             straight = math.dist(scenario.start, scenario.goal)

@@ -72,6 +72,7 @@ class SwarmLocalPlanner(Planner):
 
     name = "swarm-local"
     kind = "local"
+    guarded = True  # a swarm waypoint reached by a turning diff drive may graze a wall
     default_sensors = "mfb-12"
     defaults: ClassVar[dict[str, Any]] = {
         "optimizer": "PSO",
