@@ -48,14 +48,15 @@ def test_bench_json_carries_the_local_platform():
 
 
 # ------------------------------------------------------------------------- through the service
-@pytest.fixture
-def service(tmp_path, monkeypatch):
+@pytest.fixture(params=[False, True], ids=["in-process", "recorder-process"])
+def service(request, tmp_path, monkeypatch):
     from fastapi.testclient import TestClient
 
     from swarmpath.service.coordinator import CoordinatorSettings, create_app
 
     monkeypatch.delenv("SWARMPATH_TOKEN", raising=False)
-    app = create_app(CoordinatorSettings(data_dir=tmp_path / "data"), use_zenoh=False)
+    settings = CoordinatorSettings(data_dir=tmp_path / "data", recorder_process=request.param)
+    app = create_app(settings, use_zenoh=False)
     with TestClient(app) as client:
         yield client, app.state.core
 

@@ -95,7 +95,8 @@ class ResultIntake:
                 return
             self._recording.add(job_id)
             if isinstance(self.recorders, RecorderProcess):
-                self.recorders.poke(job_id)
+                self.recorders.poke(job_id, {w: p for w in {r.worker for r in results}
+                                             if (p := self.worker_table.platform(w))})
                 return
             for r in results:
                 idx, spec, _parsed = info["cells"][r.cell]

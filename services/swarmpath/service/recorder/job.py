@@ -157,7 +157,8 @@ class JobRecorder:
         Returns False when that run id was already written (nothing is written twice)."""
         if self.closed:
             raise RuntimeError(f"recorder of job {self.job_id} is closed")
-        self._note_platform(record)  # also when the run came from the store first
+        # also when the run came from the store first
+        self.note_platform(str(record.get("worker") or ""), record.get("platform") or {})
         run_id = int(record["run_id"])
         if run_id in self.written:
             return False
@@ -169,14 +170,13 @@ class JobRecorder:
         self.flush_if_due()
         return True
 
-    def _note_platform(self, record: dict[str, Any]) -> None:
+    def note_platform(self, worker: str, platform: dict[str, str]) -> None:
         """One ``swarmpath.platform`` metadata record per (worker, platform fingerprint) seen in
-        this job (the coordinator's in-process recorder only: the platform is not stored, so a
-        file rebuilt from the store has none). Bounded by MAX_PLATFORM_RECORDS."""
-        platform = record.get("platform") or {}
-        if not platform or len(self._platforms) >= MAX_PLATFORM_RECORDS:
+        this job (from the coordinator's worker table: the platform is not stored, so a file
+        rebuilt from the store has none). Bounded by MAX_PLATFORM_RECORDS."""
+        if self.closed or not platform or len(self._platforms) >= MAX_PLATFORM_RECORDS:
             return
-        key = (str(record.get("worker") or ""), str(platform.get("fingerprint", "")))
+        key = (worker, str(platform.get("fingerprint", "")))
         if key in self._platforms:
             return
         self._platforms.add(key)

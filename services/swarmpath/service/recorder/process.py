@@ -90,13 +90,14 @@ class RecorderProcess:
     def ready(self, job_id: str) -> bool:
         return self.path(job_id).exists()
 
-    def poke(self, job_id: str) -> None:
-        """The job has new results in the store (no answer is awaited)."""
+    def poke(self, job_id: str, platforms: dict[str, dict[str, str]] | None = None) -> None:
+        """The job has new results in the store (no answer is awaited); ``platforms``: the
+        numeric platform of the workers that sent them (worker id -> platform)."""
         if self._closed:
             return
         with self._lock:
             try:
-                self._alive().send(("poke", job_id))
+                self._alive().send(("poke", job_id, platforms or {}))
             except (OSError, ValueError):  # a broken pipe: the next call restarts it
                 log.warning("poking the recorder about job %s failed", job_id)
 
@@ -147,13 +148,17 @@ def serve(data_dir: str, synchronous: str, conn: Connection, recover: bool = Fal
     store = Store(data_dir, synchronous=synchronous)
     recorders = Recorders(store)
     last: dict[str, int] = {}  # job -> position of the last result handed to its recorder
+    platforms: dict[str, dict[str, dict[str, str]]] = {}  # job -> worker -> platform, to note
     dirty: set[str] = set()
     caught_up = time.monotonic()
 
     def catch_up(job_id: str) -> None:
+        noted = platforms.pop(job_id, {})
         if recorders.ready(job_id):  # finished: nothing more goes into it
             last.pop(job_id, None)
             return
+        for worker, platform in noted.items():
+            recorders.open(job_id).note_platform(worker, platform)
         if job_id not in last:
             last[job_id] = store.last_result_rowid()
             recorders.open(job_id)  # new: written from the store up to (at least) there
@@ -186,6 +191,8 @@ def serve(data_dir: str, synchronous: str, conn: Connection, recover: bool = Fal
                     kind, *args = conn.recv()
                     if kind == "poke":
                         dirty.add(args[0])
+                        if len(args) > 1 and args[1]:
+                            platforms.setdefault(args[0], {}).update(args[1])
                     elif kind == "close":
                         recorders.close()
                         store.close()
