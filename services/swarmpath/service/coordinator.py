@@ -22,6 +22,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from swarmpath.service import memdebug
 from swarmpath.service.capability import drop_proof
 from swarmpath.service.catalog import build_catalog
 from swarmpath.service.intake import ResultIntake
@@ -108,6 +109,7 @@ class Coordinator(ResultIntake):
         self._settled: OrderedDict[str, tuple[str, str, set[int]]] = OrderedDict()
         # lease -> capability of recent leases (at most CACHED_CAPABILITIES, oldest out)
         self._caps: OrderedDict[str, str] = OrderedDict()
+        memdebug.start()  # SWARMPATH_TRACEMALLOC=DIR: allocation snapshots at each job's end
 
     # ---------------------------------------------------------------------------- lifecycle
     def startup(self, now: float | None = None) -> list[str]:
@@ -289,6 +291,7 @@ class Coordinator(ResultIntake):
             self._recording.discard(job_id)
             self._jobs.pop(job_id, None)
             self._forget(job_id)
+            memdebug.dump(job_id)
             return self.recorders.path(job_id)
 
     def _forget(self, job_id: str) -> None:
