@@ -131,7 +131,6 @@ from the planner's generator: the same seed gives the same path.
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Mapping
 from typing import Any, ClassVar
@@ -139,18 +138,16 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmpath.optimizers import Problem, RunStreams, create
 from swarmpath.planners import sensed_map
 from swarmpath.planners.base import (
     Decision,
     Observation,
     ParamValue,
-    Planner,
     PlannerError,
     register,
 )
-from swarmpath.planners.cost_to_go import CostToGo
-from swarmpath.planners.rfo_geometry import _BoxQuery, _Clearance, _hit_clearance, path_length
+from swarmpath.planners.rfo_geometry import _Clearance, _hit_clearance, path_length
+from swarmpath.planners.rfo_refine import RfoRefine
 from swarmpath.robot.kinematics import ARRIVE
 from swarmpath.world.geometry import (
     ObstacleSet,
@@ -159,10 +156,8 @@ from swarmpath.world.geometry import (
 from swarmpath.world.scenario import Scenario
 
 Array = NDArray[np.float64]
-STALL_TOLERANCE = 0.01  # m: smaller gains of the best fox do not count as progress
 STATIC_HIT = 0.05  # m: a sensed hit this close to the static map or the border is explained by it
 HIT_CELL = 0.05  # m: sensed hits are condensed to one per cell of this size
-PENALTY = 1e6  # GWO objective of an invalid wolf (plus its violation): any valid wolf beats it
 REFERENCE = (
     "Ketafa & Al-Darraji, Iraqi J. Science 65(2) 2024 1070-1088, doi 10.24996/ijs.2024.65.2.38, "
     "sections 3-4, eqs 1-17, Algorithms 1-2, Tables 1-2"
@@ -172,15 +167,12 @@ REFERENCE = (
 
 
 # ------------------------------------------------------------------------------------ planners
-class RfoFamilyPlanner(Planner):
+class RfoFamilyPlanner(RfoRefine):
     """Shared machinery of the three planners; the registered subclasses fix the stages."""
 
     name = "rfo-family"
     kind = "global"
     reference = REFERENCE
-    #: What a fox whose eq (2) node is infeasible does: "local" = RFO's local search (eqs 3-5,
-    #: RFO alone), "gwo" = Algorithm 2 (GWO obstacle avoidance).
-    fallback: ClassVar[str] = "local"
     #: Run section 4.2 (EA with the Erase mutation, multiphase refinement) on the found path.
     smooth: ClassVar[bool] = False
 
@@ -497,407 +489,6 @@ class RfoFamilyPlanner(Planner):
             return
         self.path = path
         self._waypoints = path[1:]
-
-    # ------------------------------------------------------------------------ progress
-    def _euclidean(self, P: Array) -> Array:
-        """Eq 17: the straight-line distance to the target."""
-        return np.asarray(np.hypot(P[..., 0] - self._goal[0], P[..., 1] - self._goal[1]))
-
-    def _use_geodesic(self, obstacles: ObstacleSet, start: Array, goal: Array,
-                      note: str = "") -> bool:
-        """Switch "closer to the target" to the way along free space (:class:`CostToGo`, keeping
-        the safety clearance); False, with the failure set, when the start has no such way."""
-        field = CostToGo(obstacles, self.scenario.size, goal, self._thr_safe,
-                         int(self.p["progress_cells"]))
-        self._togo = field
-        self.progress_used = "geodesic"
-        if not math.isfinite(float(field(start[None, :])[0])):
-            self._failure = (
-                f"no way from the start to the goal keeping {self._thr_safe:.3g} m from every "
-                f"obstacle (robot radius + safety margin) on a grid of "
-                f"{field.spec.resolution:.3g} m cells: the goal is walled off, or the way "
-                f"passes gaps narrower than the grid resolves (raise progress_cells){note}"
-            )
-            return False
-        return True
-
-    # ------------------------------------------------------------------------ validity
-    def _segments_ok(self, A: Array, B: Array) -> NDArray[np.bool_]:
-        d = self._geo.segment(A, B, self._thr_safe)
-        return ~collides(d, self._thr_safe)
-
-    def _moves_ok(self, A: Array, B: Array, node_threshold: float) -> tuple[
-        NDArray[np.bool_], NDArray[np.bool_]
-    ]:
-        """Segments AB under the safety rule, and nodes B under ``node_threshold`` (goal exempt)."""
-        seg, end = self._geo.segment_and_end(A, B, max(self._thr_safe, node_threshold))
-        at_goal = np.all(B == self._goal, axis=-1)
-        return ~collides(seg, self._thr_safe), at_goal | ~collides(end, node_threshold)
-
-    # ------------------------------------------------------------ phase A: Algorithm 1
-    def _search(self, start: Array, goal: Array) -> tuple[list[Array], int]:
-        """Algorithm 1. Returns the histories of the foxes that reached the target, in order of
-        arrival (empty: none did), and the iterations consumed.
-
-        With ``arrivals`` = 1 (RFO, RFO-GWO) the first fox to reach the target ends the search
-        (lines 25-27). With more (RFO-GWO-EA, where the EA's population is built from them), the
-        foxes that arrived stop and the others go on until ``arrivals`` foxes have arrived, or
-        ``arrival_wait`` times the first fox's iterations (at least one) have passed since, or
-        the search stalls or runs out of iterations. Up to the first arrival the random numbers
-        drawn are the same, so the first path is the one ``arrivals`` = 1 returns.
-        """
-        rng = self.rng
-        N = int(self.p["foxes"])
-        T = int(self.p["iterations"])
-        R = float(self.p["radius"])
-        snap = float(self.p["goal_snap"])
-        want = int(self.p["arrivals"])
-        lo, hi = self._lo, self._hi
-        arrived: list[Array] = []
-        active = np.ones(N, dtype=bool)
-
-        def arrive(i: int) -> None:
-            arrived.append(np.array(hist[i]))
-            active[i] = False
-
-        # Line 1: n foxes around the start, each at a valid node reached by a free segment.
-        cand = np.clip(start + rng.uniform(-R, R, (N, 2)), lo, hi)
-        starts = np.broadcast_to(start, cand.shape)
-        good = np.logical_and(*self._moves_ok(starts, cand, self._thr_safe))
-        pos = np.broadcast_to(start, cand.shape).copy()
-        hist: list[list[Array]] = [[start.copy()] for _ in range(N)]
-        for i in np.flatnonzero(good).tolist():
-            if self._move(i, cand[i], pos, hist, goal, snap):
-                arrive(i)
-                if len(arrived) >= want:
-                    return arrived, 0
-        for i in range(N):  # a fox at the start may already see the target
-            if active[i] and self._arrive(i, pos, hist, goal, snap):
-                arrive(i)
-                if len(arrived) >= want:
-                    return arrived, 0
-        first = 0  # iteration of the first arrival
-
-        patience = int(self.p["patience"])
-        wait = float(self.p["arrival_wait"])
-        record, stalled = math.inf, 0
-        for t in range(1, T + 1):
-            if arrived and t - 1 - first >= max(1, math.ceil(wait * first)):
-                return arrived, t - 1
-            dist = self._togo(pos)  # eq 17 (or the way along free space, see ``progress``)
-            dist = np.where(active, dist, np.inf)
-            self.trace.append(float(dist.min()))
-            if dist.min() < record - STALL_TOLERANCE:
-                record, stalled = float(dist.min()), 0
-            else:
-                stalled += 1
-                if patience and stalled >= patience:
-                    if not arrived:
-                        self._stall = (patience, record)
-                    return arrived, t - 1
-            order = np.argsort(dist, kind="stable")  # line 6
-            best = order[0]  # line 7
-            ref = np.broadcast_to(goal, pos.shape).copy()
-            if self.p["reference"] == "best":
-                ref[np.arange(N) != best] = pos[best]
-            reach = np.where(active, dist, 0.0)
-            bound = reach if self.p["alpha_bound"] == "distance" else np.sqrt(reach)
-            u = rng.random(N) if self.p["alpha_draw"] == "fox" else np.full(N, rng.random())
-            alpha = u * bound
-            delta = ref - pos
-            step = np.sign(delta) * np.minimum(alpha[:, None], np.abs(delta))  # eq 2, clamped
-            new = np.clip(pos + step, lo, hi)
-            closer = self._togo(new) < dist
-            seg_ok, node_ok = self._moves_ok(pos, new, self._thr_node)
-            ok = closer & seg_ok & node_ok
-            if self.fallback == "local":
-                moved = self._local_phase(pos, new, ok, rng, active)
-            else:
-                moved = ok.copy()
-                fail = order[~ok[order] & active[order]]  # lines 16 and 21, in fitness order
-                if fail.size:
-                    # the obstacle the segment hits, or the one too close to the node
-                    seg_bad = ~seg_ok[fail]
-                    ends = np.where(seg_bad[:, None], pos[fail], new[fail])
-                    ks = np.where(
-                        seg_bad,
-                        self._geo.nearest(ends, new[fail], self._thr_safe),
-                        self._geo.nearest(new[fail], new[fail], self._thr_node),
-                    )
-                    q, found = self._gwo(pos[fail], ks, dist[fail])
-                    new[fail[found]] = q[found]
-                    moved[fail[found]] = True
-            for i in order:
-                if active[i] and moved[i] and self._move(i, new[i], pos, hist, goal, snap):
-                    arrive(i)  # lines 25-27
-                    if len(arrived) == 1:
-                        first = t
-                    if len(arrived) >= want:
-                        return arrived, t
-        return arrived, T
-
-    def _move(self, i: int, q: Array, pos: Array, hist: list[list[Array]], goal: Array,
-              snap: float) -> bool:
-        """Fox i moves to node q (onto the target instead if q is within ``snap`` of it and the
-        segment to the target is valid); True when it has reached the target."""
-        if (not np.array_equal(q, goal) and math.dist(q, goal) <= snap
-                and self._segments_ok(pos[i], goal)[0]):
-            q = goal
-        pos[i] = q
-        hist[i].append(pos[i].copy())
-        return self._arrive(i, pos, hist, goal, snap)
-
-    def _arrive(self, i: int, pos: Array, hist: list[list[Array]], goal: Array,
-                snap: float) -> bool:
-        if np.array_equal(pos[i], goal):
-            return True
-        if math.dist(pos[i], goal) <= snap and self._segments_ok(pos[i], goal)[0]:
-            pos[i] = goal
-            hist[i].append(goal.copy())
-            return True
-        return False
-
-    # ------------------------------------------------- RFO alone: local search (eqs 3-5)
-    def _local_phase(self, pos: Array, new: Array, ok: NDArray[np.bool_],
-                     rng: np.random.Generator, active: NDArray[np.bool_]) -> NDArray[np.bool_]:
-        """Foxes whose eq (2) node failed stay put; the unnoticed ones (mu > notice) explore."""
-        N = pos.shape[0]
-        mu = rng.random(N)
-        a = rng.random()  # scaling a, once per iteration
-        phi0: Array = np.asarray(rng.random(N)) * (2 * math.pi)
-        phi1: Array = np.asarray(rng.random(N)) * (2 * math.pi)
-        rmax = float(self.p["radius"])
-        with np.errstate(invalid="ignore", divide="ignore"):
-            r: Array = np.asarray(
-                np.where(phi0 > 0, rmax * np.sin(phi0) / np.where(phi0 > 0, phi0, 1.0), rmax)
-            )
-        movers = ~ok & active & (mu > float(self.p["notice"]))
-        moved = ok.copy()
-        if movers.any():
-            idx = np.flatnonzero(movers)
-            step = (a * r[idx])[:, None] * np.column_stack([np.cos(phi1[idx]), np.sin(phi1[idx])])
-            cand = np.clip(pos[idx] + step, self._lo, self._hi)
-            good = np.logical_and(*self._moves_ok(pos[idx], cand, self._thr_safe))
-            good &= np.any(cand != pos[idx], axis=1)
-            new[idx[good]] = cand[good]
-            moved[idx[good]] = True
-        return moved
-
-    # ----------------------------------------------------------------- Algorithm 2: GWO
-    def _gwo(self, P: Array, ks: NDArray[np.intp], dist: Array) -> tuple[Array, NDArray[np.bool_]]:
-        """Algorithm 2 for the foxes at P (F, 2) blocked by obstacles ks (F,), as one batch.
-
-        For each fox, ``wolves`` wolves in the box of half-width ``radius`` around it maximise
-        their distance from its obstacle (minimise the negated distance) for ``gwo_iterations``
-        iterations of the registered GWO (eqs 3-16). A wolf is admissible when it is a valid node
-        reached from the fox by a valid segment and is closer to the target than the fox (it is
-        "preferable to the current location of fox_i"); an inadmissible wolf scores PENALTY plus
-        its violation. Returns the best admissible wolf per fox and whether one was found.
-        """
-        F = P.shape[0]
-        R = float(self.p["radius"])
-        lower = np.maximum(P - R, self._lo)
-        upper = np.minimum(P + R, self._hi)
-        togo = self._togo
-        thr = self._thr_safe
-        m = int(self.p["wolves"])
-        query = _BoxQuery(self._geo, P, lower, upper, thr, m, ks)
-        dp = np.repeat(dist, m)
-        blocked = np.repeat(ks >= 0, m)
-
-        def objective(X: Array, streams: RunStreams) -> Array:
-            W = X.reshape(-1, 2)
-            dseg, dnode, dobs = query(W)
-            dg = togo(W)
-            valid = ~collides(dseg, thr) & ~collides(dnode, thr) & (dg < dp)
-            viol = (np.maximum(thr - dseg, 0.0) + np.maximum(thr - dnode, 0.0)
-                    + np.maximum(dg - dp, 0.0))
-            fit = np.where(blocked, -dobs, dg)
-            return np.where(valid, fit, PENALTY + viol).reshape(F, m)
-
-        # one generator per fox, seeded from the planner's generator
-        seeds = np.asarray(self.rng.integers(0, 2**63, size=F), dtype=np.int64)
-        streams = RunStreams([np.random.Generator(np.random.PCG64(int(s))) for s in seeds])
-        opt = create("GWO", Problem(objective, lower, upper), m,
-                     int(self.p["gwo_iterations"]), streams)
-        opt.initialize()
-        while not opt.done:
-            opt.step()
-        return opt.best_position.copy(), opt.best_fitness < PENALTY
-
-    # ------------------------------------------------ section 4.2: EA + multiphase
-    def _refine(self, paths: list[Array]) -> list[Array]:
-        """Section 4.2 on every path of ``paths`` (refined side by side, independently): the EA,
-        then up to ``phases`` rounds of split, EA and (``node_opt = "gwo"``) the GWO optimisation
-        of the path nodes (:meth:`_relax`). A path leaves the rounds once one shortens it by less
-        than ``refine_tol`` (relative)."""
-        paths = self._ea(paths)
-        tol = float(self.p["refine_tol"])
-        live = list(range(len(paths)))
-        for _ in range(int(self.p["phases"])):
-            if not live:
-                break
-            before = [path_length(paths[c]) for c in live]
-            out = self._ea([self._split(paths[c], self._split_length) for c in live])
-            if self.p["node_opt"] == "gwo":
-                out = self._relax(out)
-            for c, q in zip(live, out, strict=True):
-                paths[c] = q
-            live = [c for c, b in zip(live, before, strict=True)
-                    if path_length(paths[c]) <= (1.0 - tol) * b]
-        return paths
-
-    def _relax(self, paths: list[Array]) -> list[Array]:
-        """GWO optimisation of the path nodes: every interior node V_k is a sub-problem, the
-        point x in a box around V_k that minimises |V_{k-1} x| + |x V_{k+1}| with both segments
-        passing the safety rule (the neighbours fixed).
-
-        Nodes of one parity do not share a segment, so the odd nodes of every path are optimised
-        as one batch of independent GWO runs, then the even ones (``relax_sweeps`` times, fewer
-        when a sweep moves nothing). The box of V_k has half-width ``relax_box`` times its longer
-        adjacent segment (at most ``radius``), clipped to the world; a node moves only when the
-        best wolf is valid and shortens the path, so no path gets longer and every new segment
-        is checked.
-        """
-        paths = [q.copy() for q in paths]
-        for _ in range(int(self.p["relax_sweeps"])):
-            moved = False
-            for first in (1, 2):
-                ks = [np.arange(first, len(q) - 1, 2) for q in paths]
-                if not sum(k.size for k in ks):
-                    continue
-                A = np.concatenate([q[k - 1] for q, k in zip(paths, ks, strict=True)])
-                V = np.concatenate([q[k] for q, k in zip(paths, ks, strict=True)])
-                B = np.concatenate([q[k + 1] for q, k in zip(paths, ks, strict=True)])
-                best, better = self._gwo_nodes(A, V, B)
-                at = 0
-                for q, k in zip(paths, ks, strict=True):
-                    sel = better[at:at + k.size]
-                    q[k[sel]] = best[at:at + k.size][sel]
-                    at += k.size
-                moved |= bool(better.any())
-            if not moved:
-                break
-        return paths
-
-    def _gwo_nodes(self, A: Array, V: Array, B: Array) -> tuple[Array, NDArray[np.bool_]]:
-        """One batch of node sub-problems (see :meth:`_relax`): the best point per node and
-        whether it is valid and shortens the path by more than 1e-9 m."""
-        K = V.shape[0]
-        span = np.maximum(np.hypot(*(V - A).T), np.hypot(*(V - B).T))
-        half = np.minimum(float(self.p["relax_box"]) * span, float(self.p["radius"]))
-        lower = np.maximum(V - half[:, None], self._lo)
-        upper = np.minimum(V + half[:, None], self._hi)
-        # a node on the straight line between its neighbours is already optimal: skip it
-        bend = np.hypot(*(V - A).T) + np.hypot(*(B - V).T) - np.hypot(*(B - A).T)
-        live = np.all(upper - lower > 1e-9, axis=1) & (bend > 1e-9)
-        out = V.copy()
-        better = np.zeros(K, dtype=bool)
-        if not live.any():
-            return out, better
-        A, V, B, lower, upper = A[live], V[live], B[live], lower[live], upper[live]
-        m = int(self.p["wolves"])
-        thr = self._thr_safe
-        Am, Bm = np.repeat(A, m, axis=0), np.repeat(B, m, axis=0)
-
-        def objective(X: Array, streams: RunStreams) -> Array:
-            W = X.reshape(-1, 2)
-            d = self._geo.segment(np.concatenate([Am, W]), np.concatenate([W, Bm]), thr)
-            da, db = d[: len(W)], d[len(W):]
-            length = np.hypot(*(W - Am).T) + np.hypot(*(Bm - W).T)
-            valid = ~collides(da, thr) & ~collides(db, thr)
-            viol = np.maximum(thr - da, 0.0) + np.maximum(thr - db, 0.0)
-            return np.where(valid, length, PENALTY + viol).reshape(-1, m)
-
-        seeds = np.asarray(self.rng.integers(0, 2**63, size=int(live.sum())), dtype=np.int64)
-        streams = RunStreams([np.random.Generator(np.random.PCG64(int(s))) for s in seeds])
-        opt = create("GWO", Problem(objective, lower, upper), m,
-                     int(self.p["gwo_iterations"]), streams)
-        opt.initialize()
-        while not opt.done:
-            opt.step()
-        now = np.hypot(*(V - A).T) + np.hypot(*(B - V).T)
-        gain = opt.best_fitness < now - 1e-9
-        idx = np.flatnonzero(live)[gain]
-        out[idx] = opt.best_position[gain]
-        better[idx] = True
-        return out, better
-
-    def _prune(self, path: Array) -> Array:
-        """The nodes the path needs: in order, an interior node is erased when the segment from
-        the last kept node to the next node passes the safety rule (the Erase mutation with
-        j = i + 2, applied greedily; never longer). Also drops the repeated nodes that GWO can
-        produce when a node lands on its neighbour."""
-        keep = [0]
-        for k in range(1, len(path) - 1):
-            a, b = path[keep[-1]], path[k + 1]
-            if not self._segments_ok(a[None, :], b[None, :])[0]:
-                keep.append(k)
-        keep.append(len(path) - 1)
-        return path[keep]
-
-    @staticmethod
-    def _split(path: Array, length: float) -> Array:
-        """Cut every segment longer than ``length`` into equal pieces (points on the segment)."""
-        out = [path[:1]]
-        for a, b in itertools.pairwise(path):
-            n = max(1, math.ceil(math.dist(a, b) / length))
-            s = np.arange(1, n + 1)[:, None] / n
-            pts = a + s * (b - a)
-            pts[-1] = b
-            out.append(pts)
-        return np.concatenate(out)
-
-    def _ea(self, paths: list[Array]) -> list[Array]:
-        """Evolutionary algorithm whose only variation is the Erase mutation (section 4.2), run
-        on every path of ``paths`` side by side (independent populations, one random stream).
-
-        Each population starts as ``ea_population`` copies of its reference path. Each
-        generation every path V_0..V_n draws two node indices i <= j; if j > i + 1 and the
-        segment V_i V_j passes the safety rule, its child erases V_{i+1}..V_{j-1} (never longer,
-        by the triangle inequality, and valid: its only new segment was checked). Parents and
-        children compete on length ((mu + lambda) selection, ties to fewer nodes, then to the
-        older path). Returns the shortest path of each population.
-        """
-        C, P = len(paths), int(self.p["ea_population"])
-        group = np.repeat(np.arange(C), P)
-        pop = [q for q in paths for _ in range(P)]  # never modified in place: children are new
-        cums = [c for q in paths for c in [_cumulative(q)] * P]
-        lengths = np.array([c[-1] for c in cums])
-        sizes = np.array([len(q) for q in pop])
-        for _ in range(int(self.p["ea_generations"])):
-            u = self.rng.random((C * P, 2))
-            ij = np.minimum((u * sizes[:, None]).astype(np.intp), sizes[:, None] - 1)
-            lo, hi = ij.min(axis=1), ij.max(axis=1)
-            picks = np.flatnonzero(hi - lo >= 2)
-            if not picks.size:
-                continue
-            A = np.array([pop[m][lo[m]] for m in picks])
-            B = np.array([pop[m][hi[m]] for m in picks])
-            ok = self._segments_ok(A, B)
-            if not ok.any():
-                continue
-            picks, A, B = picks[ok], A[ok], B[ok]
-            kids = [np.concatenate([pop[m][: lo[m] + 1], pop[m][hi[m]:]]) for m in picks]
-            kid_lengths = lengths[picks] + np.hypot(*(B - A).T) - np.array(
-                [cums[m][hi[m]] - cums[m][lo[m]] for m in picks])
-            pool = pop + kids
-            pool_group = np.concatenate([group, group[picks]])
-            pool_lengths = np.concatenate([lengths, kid_lengths])
-            pool_sizes = np.concatenate([sizes, [len(q) for q in kids]])
-            order = np.lexsort((np.arange(len(pool)), pool_sizes, pool_lengths, pool_group))
-            # each group has at least P members (its parents): keep the first P of each
-            starts = np.searchsorted(pool_group[order], np.arange(C))
-            keep = order[(starts[:, None] + np.arange(P)).ravel()]
-            pop = [pool[k] for k in keep]
-            cums = [cums[k] if k < len(cums) else _cumulative(pool[k]) for k in keep]
-            lengths, sizes = pool_lengths[keep], pool_sizes[keep]
-        return [pop[c * P] for c in range(C)]
-
-
-def _cumulative(path: Array) -> Array:
-    """Cumulative length along the path (first entry 0)."""
-    return np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(path, axis=0).T))])
 
 
 _COMMON = RfoFamilyPlanner.defaults
