@@ -14,7 +14,7 @@ from rich.console import Console
 from typer.testing import CliRunner
 
 from swarmpath import compare, report
-from swarmpath.cli import app
+from swarmpath.cli import app, bench_spec
 from swarmpath.cli import bench as bench_cli
 from swarmpath.optimizers import ParameterError, list_optimizers, minimize
 from swarmpath.stats import describe
@@ -144,7 +144,7 @@ def test_json_with_params_and_shift_matches_minimize():
 
 
 def test_runs_in_small_batches_give_the_same_runs(monkeypatch):
-    spec = bench_cli.make_spec("GWO", "F1", "5", runs=7, agents=6, iterations=5, seed=2)
+    spec = bench_spec.make_spec("GWO", "F1", "5", runs=7, agents=6, iterations=5, seed=2)
     whole = bench_cli.run_cell(spec, "GWO", "F1", 5)
     monkeypatch.setattr(bench_cli, "BATCH_ELEMENTS", 6 * 5 * 3)  # batches of 3 runs
     steps: list[int] = []
@@ -157,7 +157,7 @@ def test_runs_in_small_batches_give_the_same_runs(monkeypatch):
 def test_processes_and_stacks_give_each_cells_own_runs(monkeypatch):
     """Any processes, stacked functions and batches: the numbers of one minimize per cell."""
     algos = [a for a in list_optimizers() if a in ("GWO", "FDO", "PSO")]
-    spec = bench_cli.make_spec(",".join(algos), "F1,F7,F9,F12", "3,4", runs=5, agents=6,
+    spec = bench_spec.make_spec(",".join(algos), "F1,F7,F9,F12", "3,4", runs=5, agents=6,
                                iterations=6, seed=9, shifted=True)
     monkeypatch.setattr(bench_cli, "BATCH_ELEMENTS", 3 * 2 * 6 * 4)  # mixed batch sizes
     tasks = bench_cli.plan_tasks(spec)
@@ -319,7 +319,7 @@ def test_plot_writes_curves_and_box_plots_per_function_and_dim(tmp_path):
 
 
 def test_cells_keep_each_runs_curve_for_the_plots():
-    spec = bench_cli.make_spec("GWO", "F1", "3", runs=3, agents=6, iterations=8, seed=4)
+    spec = bench_spec.make_spec("GWO", "F1", "3", runs=3, agents=6, iterations=8, seed=4)
     (cell,) = bench_cli.run_bench(spec)
     ref = minimize("GWO", "F1", dim=3, agents=6, iterations=8, runs=3, seed=4)
     assert np.array_equal(np.asarray(cell.curves), ref.curve)

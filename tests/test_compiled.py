@@ -188,12 +188,12 @@ def test_the_numpy_backend_never_imports_numba():
 
 
 def test_bench_with_the_numba_backend_gives_the_reference_tables_numbers():
-    from swarmpath.cli import bench
+    from swarmpath.cli import bench, bench_spec
 
     kw = dict(runs=3, agents=5, iterations=6, seed=2, transform="shift")
     cells = {}
     for backend in BACKENDS:
-        spec = bench.make_spec(",".join(WITH_KERNEL), "F1,F7,F8", "3", backend=backend, **kw)
+        spec = bench_spec.make_spec(",".join(WITH_KERNEL), "F1,F7,F8", "3", backend=backend, **kw)
         assert spec.settings()["backend"] == backend
         cells[backend] = bench.run_bench(spec, jobs=1)
     for ref, fast in zip(cells["numpy"], cells["numba"], strict=True):

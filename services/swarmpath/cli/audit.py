@@ -19,7 +19,8 @@ from rich.console import Console
 from swarmpath import __version__
 from swarmpath.audit import AUDIT_TRANSFORMS, AuditRow, Key, audit
 from swarmpath.cli import parallel
-from swarmpath.cli.bench import check_range, make_spec, run_bench
+from swarmpath.cli.bench import run_bench
+from swarmpath.cli.bench_spec import check_range, make_spec
 from swarmpath.cli.core import InputError, app
 from swarmpath.cli.study_options import (
     AgentsOpt,

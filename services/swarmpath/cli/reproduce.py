@@ -80,8 +80,9 @@ def study_setting(table: reference.Table, runs: int | None, seed: int,
 # ------------------------------------------------------------------------------------ running
 def run_benchmark_local(setting: dict[str, Any], jobs: int) -> list[report.Cell]:
     from swarmpath.cli import bench
+    from swarmpath.cli.bench_spec import make_spec
 
-    spec = bench.make_spec(
+    spec = make_spec(
         ",".join(setting["algorithms"]), ",".join(setting["functions"]),
         ",".join(str(d) for d in setting["dims"]), runs=setting["runs"],
         agents=setting["agents"], iterations=setting["iterations"], seed=setting["seed"],
