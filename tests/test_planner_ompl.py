@@ -9,6 +9,7 @@ import pytest
 
 from swarmpath.planners import Episode, PlannerError, get_planner, list_planners
 from swarmpath.planners import ompl_baselines as ompl_mod
+from swarmpath.planners.ompl_checks import FastChecker
 from swarmpath.world import Obstacle, RobotSpec, Scenario, get_map
 from swarmpath.world.geometry import ObstacleSet, collides
 from swarmpath.world.scenario_io import load_scenario, scenario_from_dict
@@ -177,7 +178,7 @@ def test_fast_checker_agrees_with_the_exact_geometry(map_name):
     scenario = get_map(map_name)
     obstacles = scenario.static_obstacles()
     thr = scenario.robot.radius + 0.02
-    checker = ompl_mod.FastChecker(obstacles, thr)
+    checker = FastChecker(obstacles, thr)
     rng = np.random.default_rng(5)
     w, h = scenario.size
     P = rng.uniform([0, 0], [w, h], size=(400, 2))
