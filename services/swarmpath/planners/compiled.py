@@ -29,8 +29,11 @@ Array = np.ndarray
 
 
 @njit(cache=True)
-def _point_d2_min(x: float, y: float, hits: Array) -> float:
+def _point_nearest(x: float, y: float, hits: Array) -> tuple[float, int]:
+    """(squared distance, index) of the hit nearest (x, y) (first index on ties; (inf, 0) with
+    no hits)."""
     best = math.inf
+    at = 0
     for j in range(hits.shape[0]):
         dx = x - hits[j, 0]
         dx = dx * dx
@@ -39,15 +42,20 @@ def _point_d2_min(x: float, y: float, hits: Array) -> float:
         d2 = dx + dy
         if d2 < best:
             best = d2
-    return best
+            at = j
+    return best, at
 
 
 @njit(cache=True)
-def _segment_d2_min(px: float, py: float, x: float, y: float, wx: Array, wy: Array) -> float:
+def _segment_nearest(px: float, py: float, x: float, y: float, wx: Array,
+                     wy: Array) -> tuple[float, int]:
+    """(squared distance, index) of the hit (wx, wy relative to p) nearest the segment from p to
+    (x, y) (first index on ties; (inf, 0) with no hits)."""
     ux = x - px
     uy = y - py
     den = ux * ux + uy * uy + 1e-300
     best = math.inf
+    at = 0
     for j in range(wx.shape[0]):
         t = ux * wx[j] + uy * wy[j]
         t = t / den
@@ -62,7 +70,8 @@ def _segment_d2_min(px: float, py: float, x: float, y: float, wx: Array, wy: Arr
         d2 = ex + ey
         if d2 < best:
             best = d2
-    return best
+            at = j
+    return best, at
 
 
 @njit(cache=True)
@@ -88,8 +97,8 @@ def repair_grid_kernel(flat: Array, p: Array, hits: Array, margin: float, resolu
     short = np.zeros(n)
     for i in range(n):
         cx, cy = flat[i, 0], flat[i, 1]
-        d_pt = math.sqrt(_point_d2_min(cx, cy, hits))
-        d_seg = math.sqrt(_segment_d2_min(px, py, cx, cy, wx, wy))
+        d_pt = math.sqrt(_point_nearest(cx, cy, hits)[0])
+        d_seg = math.sqrt(_segment_nearest(px, py, cx, cy, wx, wy)[0])
         s = margin - min(d_pt, d_seg)
         if not s > 0.0:
             continue
@@ -104,9 +113,9 @@ def repair_grid_kernel(flat: Array, p: Array, hits: Array, margin: float, resolu
                 ty = cy + (offset if axis == 1 else 0.0)
                 tx = _clip(tx, lower[0], upper[0], bounded)
                 ty = _clip(ty, lower[1], upper[1], bounded)
-                if not math.sqrt(_point_d2_min(tx, ty, hits)) >= margin:
+                if not math.sqrt(_point_nearest(tx, ty, hits)[0]) >= margin:
                     continue
-                if not math.sqrt(_segment_d2_min(px, py, tx, ty, wx, wy)) >= margin:
+                if not math.sqrt(_segment_nearest(px, py, tx, ty, wx, wy)[0]) >= margin:
                     continue
                 out[i, 0] = tx
                 out[i, 1] = ty
@@ -131,36 +140,9 @@ def distances_kernel(flat: Array, p: Array, hits: Array) -> tuple[Array, Array, 
     i_seg = np.zeros(n, dtype=np.int64)
     for i in range(n):
         x, y = flat[i, 0], flat[i, 1]
-        best = math.inf
-        for j in range(hits.shape[0]):
-            dx = x - hits[j, 0]
-            dx = dx * dx
-            dy = y - hits[j, 1]
-            dy = dy * dy
-            d2 = dx + dy
-            if d2 < best:
-                best = d2
-                i_pt[i] = j
+        best, i_pt[i] = _point_nearest(x, y, hits)
         d_pt[i] = math.sqrt(best)
-        ux = x - px
-        uy = y - py
-        den = ux * ux + uy * uy + 1e-300
-        best = math.inf
-        for j in range(hits.shape[0]):
-            t = ux * wx[j] + uy * wy[j]
-            t = t / den
-            if t < 0.0:
-                t = 0.0
-            if t > 1.0:
-                t = 1.0
-            ex = wx[j] - t * ux
-            ex = ex * ex
-            ey = wy[j] - t * uy
-            ey = ey * ey
-            d2 = ex + ey
-            if d2 < best:
-                best = d2
-                i_seg[i] = j
+        best, i_seg[i] = _segment_nearest(px, py, x, y, wx, wy)
         d_seg[i] = math.sqrt(best)
     return d_pt, i_pt, d_seg, i_seg
 
