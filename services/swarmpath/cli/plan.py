@@ -24,11 +24,8 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import typer
-from rich import box
 from rich.console import Console
-from rich.measure import Measurement
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-from rich.table import Table
 
 from swarmpath import parallel, plan_runs
 from swarmpath.cli.core import (
@@ -44,7 +41,7 @@ from swarmpath.cli.plan_maps import (
     make_options,
     resolve_maps,
 )
-from swarmpath.legend import legend_text
+from swarmpath.cli.plan_tables import print_tables
 from swarmpath.world.optimum_base import DEFAULT_BUDGET
 
 MAX_RUNS = 10_000
@@ -199,95 +196,6 @@ def document(cells: Sequence[CellResult], reference: str | None = None,
                      "octile": octile.get(name)})
     return {"runs": runs, "summary": summarize(runs),
             "statistics": map_statistics(runs, planners, reference).to_json(), "maps": maps}
-
-
-# --------------------------------------------------------------------------------------- tables
-def _num(v: Any, digits: int = 4) -> str:
-    return "-" if v is None else f"{float(v):.{digits}f}"
-
-
-def _causes(r: dict[str, Any]) -> str:
-    """Collisions by cause, robot-driven / obstacle-driven (see metrics.contact_causes)."""
-    return f"{r.get('robot_driven_contacts') or 0}/{r.get('obstacle_driven_contacts') or 0}"
-
-
-def render_cell(cell: CellResult, row: dict[str, Any], reason: str | None = None,
-                octile: float | None = None) -> Table:
-    """The paper-style run table of one planner x map (``row``: its summary; ``reason``: why
-    there is no exact optimum; ``octile``: the MovingAI .scen optimum as a reference)."""
-    optimum = row["optimum"]
-    title = f"{cell.planner} on {cell.scenario.name}"
-    title += (f" (exact optimum {optimum:.4f} m" if optimum is not None
-              else f" (no exact optimum: {reason or 'see the runs'}")
-    title += f"; octile optimum {octile:.4f} m)" if octile is not None else ")"
-    table = Table(title=title, box=box.SIMPLE_HEAD, pad_edge=False)
-    for name in ("Run", "Distance (m)", "Error (m)", "Elapsed time (s)", "Success",
-                 "Collisions", "Robot/obstacle-driven", "Gap (%)", "Steps", "Iterations"):
-        table.add_column(name, justify="left" if name == "Success" else "right", no_wrap=True)
-    planned = any(r.get("planned_length") is not None for r in cell.runs)
-    if planned:  # global planners: the length they planned beside the one driven
-        table.add_column("Planned (m)", justify="right", no_wrap=True)
-    failed = any(not r["success"] for r in cell.runs)
-    if failed:
-        table.add_column("Reason")
-    for r in cell.runs:
-        gap = None if r["gap"] is None else 100.0 * r["gap"]
-        cols = [str(r["run"] + 1), _num(r["length"]), _num(r["error"]), _num(r["seconds"], 3),
-                "yes" if r["success"] else "no", str(r["collisions"]), _causes(r), _num(gap, 2),
-                str(r["steps"]), str(r["iterations"])]
-        if planned:
-            cols.append(_num(r.get("planned_length")))
-        if failed:
-            cols.append("" if r["success"] else str(r["reason"]))
-        table.add_row(*cols)
-    gap_mean = None if row["gap_mean"] is None else 100.0 * row["gap_mean"]
-    mean = ["Mean", _num(row["length_mean"]), _num(row["error_mean"]), _num(row["seconds_mean"], 3),
-            f"{row['successes']}/{row['runs']}", str(row["collisions"]), _causes(row),
-            _num(gap_mean, 2),
-            f"{row['steps_mean']:.1f}", f"{row['iterations_mean']:.0f}"]
-    if planned:
-        mean.append("")
-    if failed:
-        mean.append("")
-    table.add_row(*mean, style="bold", end_section=True)
-    return table
-
-
-def print_tables(cells: Sequence[CellResult], spec: PlanSpec, seconds: float) -> None:
-    from swarmpath.planners.summary import summarize
-
-    console = Console()
-    tables = []
-    for cell in cells:
-        reason = spec.optima.get(cell.scenario.name, (None, None))[1]
-        tables.append(render_cell(cell, summarize(cell.runs)[0], reason,
-                                  spec.octile.get(cell.scenario.name)))
-    if not console.is_terminal:  # pipes and files: never squeeze the numbers
-        widest = max(Measurement.get(console, console.options.update(width=100_000), t).maximum
-                     for t in tables)
-        console = Console(width=max(80, widest))
-    for t in tables:
-        console.print(t)
-    console.print(
-        f"{spec.runs} runs per planner x map, seed {spec.seed}; Distance = executed path length "
-        "(Planned: the global planner's plan), Robot/obstacle-driven = colliding steps where the "
-        "robot moved into the obstacle / a moving obstacle reached a still or retreating robot, "
-        "Error = final distance to the goal, Elapsed time = "
-        "planning wall time; the Mean row averages Distance and Gap over successful runs; "
-        f"{seconds:.1f} s",
-        highlight=False,
-    )
-    console.print(legend_text(["Collisions", "Gap (%)"]), markup=False, highlight=False)
-    if len(spec.planners) > 1:
-        from swarmpath.cli import plan_stats
-        from swarmpath.compare_maps import map_statistics
-
-        runs = [r for c in cells for r in c.runs]
-        tests = map_statistics(runs, spec.planners, spec.reference)
-        console.print(plan_stats.render_comparison(tests, summarize(runs), spec.planners))
-        console.print(plan_stats.render_counts(tests, spec.planners))
-        for line in plan_stats.lines(tests):
-            console.print(line, highlight=False)
 
 
 # ---------------------------------------------------------------------------------------- plots
