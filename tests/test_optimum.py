@@ -12,7 +12,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from swarmpath.world.geometry import ObstacleSet, point_segment_distance
-from swarmpath.world.optimum import OptimalPath, shortest_path
+from swarmpath.world.optimum import OptimalPath, _sorted_csr, shortest_path
 
 # The MFB paper's static map (Ajeil et al. 2020, Table 3): ten circles of radius 0.5.
 MFB_CENTRES = [
@@ -365,3 +365,24 @@ def test_mfb_static_map_optimum() -> None:
     grid = _grid_path((0.0, 0.0), (10.0, 10.0), obs, 0.5, world, 0.05)
     grid_len = _polyline_length(grid)
     assert res.length <= grid_len <= res.length * 1.02
+
+
+def test_sorted_csr_is_the_canonical_matrix_of_its_entries() -> None:
+    """The search's graph built straight from its (row, column)-sorted edges equals scipy's own
+    COO -> CSR conversion entry for entry, including empty rows and an empty graph."""
+    rng = np.random.default_rng(3)
+    for n, m in ((1, 0), (7, 12), (60, 400)):
+        keys = np.unique(rng.integers(0, n * n, size=m))
+        rows, cols = keys // n, keys % n
+        w = rng.random(len(keys))
+        ours = _sorted_csr(rows, cols, w, n)
+        ref = coo_matrix((w, (rows, cols)), shape=(n, n)).tocsr()
+        assert ours.shape == ref.shape
+        np.testing.assert_array_equal(ours.indptr, ref.indptr)
+        np.testing.assert_array_equal(ours.indices, ref.indices)
+        np.testing.assert_array_equal(ours.data, ref.data)
+        if n > 1:
+            a = dijkstra(ours, directed=False, indices=0, return_predecessors=True)
+            b = dijkstra(ref, directed=False, indices=0, return_predecessors=True)
+            np.testing.assert_array_equal(a[0], b[0])
+            np.testing.assert_array_equal(a[1], b[1])

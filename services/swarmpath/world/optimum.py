@@ -68,7 +68,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.sparse import coo_matrix
+from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from swarmpath.world.geometry import ObstacleSet
@@ -97,6 +97,15 @@ MAX_DISKS = 20_000
 INDEX_ABOVE = 600  # disks above which the spatial index decides pairs, segments and arcs
 _PAIRS = 1 << 17  # disk pairs per chunk
 _TINY_WEIGHT = 1e-300  # zero-length edges must stay edges in the sparse graph
+
+
+def _sorted_csr(rows: IntArray, cols: IntArray, weights: Array, n: int) -> csr_matrix:
+    """The n x n sparse matrix with ``weights`` at (``rows``, ``cols``), given sorted by (row,
+    column) without repeats: these arrays already are its canonical CSR form (the same matrix
+    as ``coo_matrix(...).tocsr()``, without the conversion and duplicate summing)."""
+    indptr = np.zeros(n + 1, dtype=np.intp)
+    np.cumsum(np.bincount(rows, minlength=n), out=indptr[1:])
+    return csr_matrix((weights, cols, indptr), shape=(n, n))
 
 
 @dataclass(frozen=True, eq=False)
@@ -265,9 +274,7 @@ def shortest_path(
     uniq = np.ones(len(srt), dtype=bool)
     uniq[1:] = key[srt][1:] != key[srt][:-1]
     sel = srt[uniq]
-    graph = coo_matrix(
-        (np.maximum(ew[sel], _TINY_WEIGHT), (lo_[sel], hi_[sel])), shape=(n_nodes, n_nodes)
-    ).tocsr()
+    graph = _sorted_csr(lo_[sel], hi_[sel], np.maximum(ew[sel], _TINY_WEIGHT), n_nodes)
     dist, pred = dijkstra(graph, directed=False, indices=0, return_predecessors=True)
     length = float(dist[1])
     if not math.isfinite(length):

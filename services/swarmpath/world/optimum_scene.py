@@ -117,8 +117,11 @@ class _Scene:
             i = int(np.argmin(d))
             if d[i] < self.m - TOL:
                 return f"circle {i} (clearance {d[i]:.6g} < margin {self.m:g})"
-        for j, poly in enumerate(self.polygons):
-            dj = float(point_polygon_distance(p, poly))
+        # A polygon whose box grown by margin + TOL does not hold p is farther than that from
+        # it: only the others are measured (the same answer, the first blocking polygon).
+        near = np.all((p >= self.bb_lo) & (p <= self.bb_hi), axis=-1)
+        for j in np.flatnonzero(near).tolist():
+            dj = float(point_polygon_distance(p, self.polygons[j]))
             if dj < self.m - TOL:
                 return f"polygon {j} (clearance {dj:.6g} < margin {self.m:g})"
         return None
