@@ -24,6 +24,7 @@ from swarmpath.service.recorder import (
     part_path,
     salvage_messages,
 )
+from swarmpath.service.recorder.common import COMPRESSION_ENV, COMPRESSIONS, chunk_compression
 from swarmpath.service.store import Store
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -47,7 +48,7 @@ def check_indexed(summary) -> None:
     assert summary.chunk_indexes, "no chunk indexes"
     for ci in summary.chunk_indexes:
         assert ci.message_index_offsets, "chunk index without message indexes"
-        assert ci.compression == "zstd"
+        assert ci.compression == "lz4"  # the default chunk compression
     assert summary.statistics.message_count == sum(
         summary.statistics.channel_message_counts.values()
     )
@@ -123,6 +124,55 @@ def test_a_run_is_written_once(store, tmp_path):
     rec.finish()
     _summary, _meta, messages = read_all(tmp_path / "x.mcap")
     assert [m["run_id"] for _s, c, m, _t in messages if c.topic == "/results"] == [3]
+
+
+
+
+@pytest.mark.parametrize("name", COMPRESSIONS)
+def test_every_chunk_compression_holds_the_same_messages(store, tmp_path, name):
+    job = store.create_job(SPEC, now=T0)
+    drain(store)
+    records = list(store.iter_run_records(job))
+    files = {}
+    for label, compression in (("default", None), (name, chunk_compression(name))):
+        rec = JobRecorder(tmp_path / f"{label}.mcap", job, "benchmark", SPEC, T0,
+                          flush_interval=1e9, compression=compression)
+        for record in records:
+            rec.add(record)
+        files[label] = rec.finish()
+    summary, _meta, messages = read_all(files[name])
+    _s, _m, default_messages = read_all(files["default"])
+    assert messages == default_messages and len(messages) == 2 * len(records)
+    assert {ci.compression for ci in summary.chunk_indexes} == {"" if name == "none" else name}
+
+
+def test_the_fast_message_path_writes_the_bytes_of_writer_add_message(store, tmp_path):
+    """JobRecorder appends message records itself (_FastMessages); with it switched off the
+    mcap writer's add_message writes them: the two files are identical, byte for byte."""
+    job = store.create_job(SPEC, now=T0)
+    drain(store)
+    records = list(store.iter_run_records(job))
+    paths = []
+    for fast in (True, False):
+        rec = JobRecorder(tmp_path / f"{fast}.mcap", job, "benchmark", SPEC, T0,
+                          flush_interval=1e9, chunk_size=4096)  # several chunk cuts
+        assert rec._fast is not None
+        if not fast:
+            rec._fast = None
+        for record in records:
+            rec.add(record)
+        paths.append(rec.finish())
+    summary, _meta, _messages = read_all(paths[0])
+    assert len(summary.chunk_indexes) > 1
+    assert paths[0].read_bytes() == paths[1].read_bytes()
+
+
+def test_an_unknown_chunk_compression_is_refused_naming_the_setting(monkeypatch, store):
+    monkeypatch.setenv(COMPRESSION_ENV, "brotli")
+    with pytest.raises(ValueError, match=COMPRESSION_ENV):
+        Recorders(store)
+    monkeypatch.setenv(COMPRESSION_ENV, "ZSTD")
+    assert Recorders(store).compression is chunk_compression("zstd")
 
 
 def test_finish_takes_stored_results_a_concurrent_batch_has_not_recorded_yet(store):

@@ -3,11 +3,13 @@
 Files live in ``<data_dir>/mcap/``: ``<job>.mcap.part`` while the job runs, renamed (atomically) to
 ``<job>.mcap`` once :meth:`JobRecorder.finish` wrote the summary section. MCAP has no append mode.
 
-Writing: chunked (1 MiB, zstd), message indexes and chunk indexes on, chunk CRCs and the data
-section CRC on, statistics and summary offsets on. :meth:`JobRecorder.flush_if_due` closes the open
-chunk when at least ``flush_interval`` (1 s) passed since the last flush; it runs after every
-message and should also be called from a ~1 s timer (:meth:`Recorders.tick`) so that an idle job
-is flushed too. A process kill therefore loses at most about a second of messages from the .part
+Writing: chunked (1 MiB; lz4, or zstd/none with ``$SWARMPATH_MCAP_COMPRESSION``, see
+:func:`~swarmpath.service.recorder.common.chunk_compression`), message indexes and chunk indexes
+on, chunk CRCs and the data section CRC on, statistics and summary offsets on.
+:meth:`JobRecorder.flush_if_due` closes the open chunk when at least ``flush_interval`` (1 s)
+passed since the last flush; it runs after every message and should also be called from a ~1 s
+timer (:meth:`Recorders.tick`) so that an idle job is flushed too. A process kill therefore loses
+at most about a second of messages from the .part
 file, and those are recoverable anyway, see below.
 
 Recovery: the SQLite store is the source of truth; the MCAP is a view of it. When the coordinator

@@ -5,11 +5,32 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import re
 from pathlib import Path
 from typing import Any
 
 _BIG = 1.7976931348623157e308
+
+
+COMPRESSION_ENV = "SWARMPATH_MCAP_COMPRESSION"
+COMPRESSIONS = ("lz4", "zstd", "none")  # MCAP chunk compression names; the first is the default
+
+
+def chunk_compression(value: str | None = None) -> Any:
+    """The MCAP chunk compression named by ``value`` (or by ``$SWARMPATH_MCAP_COMPRESSION``;
+    unset: lz4) as the writer's ``CompressionType``. lz4 is the default because it costs a
+    fraction of zstd's CPU (the recorder must keep up with the farm); zstd files are about 40%
+    smaller (docs/benchmarks.md). Foxglove reads both. An unknown name raises ValueError
+    naming the setting."""
+    from mcap.writer import CompressionType
+
+    name = (os.environ.get(COMPRESSION_ENV, "") if value is None else value).strip().lower()
+    name = name or COMPRESSIONS[0]
+    if name not in COMPRESSIONS:
+        raise ValueError(f"{COMPRESSION_ENV}={name!r}: the MCAP chunk compression must be one "
+                         f"of {', '.join(COMPRESSIONS)}")
+    return CompressionType[name.upper()]
 
 
 # ------------------------------------------------------------------------------------ helpers

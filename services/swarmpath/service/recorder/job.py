@@ -24,6 +24,7 @@ from swarmpath.service.recorder.common import (
     _ns,
     _topic_name,
     _version,
+    chunk_compression,
     clamped,
 )
 from swarmpath.service.recorder.scene import (
@@ -135,7 +136,7 @@ class JobRecorder:
         *,
         flush_interval: float = FLUSH_INTERVAL,
         chunk_size: int = CHUNK_SIZE,
-        compression: CompressionType = CompressionType.ZSTD,
+        compression: CompressionType | None = None,
         clock: Callable[[], float] = time.monotonic,
     ):
         self.final = Path(path)
@@ -160,7 +161,7 @@ class JobRecorder:
         self._writer = Writer(
             self._file,
             chunk_size=chunk_size,
-            compression=compression,
+            compression=chunk_compression() if compression is None else compression,
             index_types=IndexType.ALL,
             repeat_channels=True,
             repeat_schemas=True,

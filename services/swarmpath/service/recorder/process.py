@@ -1,6 +1,6 @@
 """The MCAP recorder in its own process, following the store: :class:`RecorderProcess`.
 
-Writing the MCAP (JSON of every result and curve, zstd chunks) was the largest part of the
+Writing the MCAP (JSON of every result and curve, compressed chunks) was the largest part of the
 coordinator's CPU per run (docs/benchmarks.md, coordinator profile). The files are a view of the
 SQLite store (:mod:`swarmpath.service.recorder`), so another process can write them: it opens the
 same store (WAL: its reads never block the coordinator's writes), and whenever the coordinator
@@ -30,7 +30,7 @@ from multiprocessing.connection import Connection
 from pathlib import Path
 from typing import Any
 
-from swarmpath.service.recorder.common import final_path
+from swarmpath.service.recorder.common import chunk_compression, final_path
 
 log = logging.getLogger("swarmpath.recorder")
 
@@ -45,6 +45,7 @@ class RecorderProcess:
 
     def __init__(self, data_dir: Path | str, synchronous: str = "FULL"):
         self.data_dir = Path(data_dir)
+        chunk_compression()  # a bad setting fails here, naming it, not in the other process
         self.synchronous = synchronous
         self._lock = threading.Lock()
         self._ctx = multiprocessing.get_context("spawn")

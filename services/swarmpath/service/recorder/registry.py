@@ -10,7 +10,7 @@ from typing import Any
 
 from mcap.writer import CompressionType
 
-from swarmpath.service.recorder.common import final_path
+from swarmpath.service.recorder.common import chunk_compression, final_path
 from swarmpath.service.recorder.job import FLUSH_INTERVAL, JobRecorder
 
 
@@ -19,12 +19,13 @@ class Recorders:
 
     def __init__(
         self, store: Any, *, flush_interval: float = FLUSH_INTERVAL,
-        compression: CompressionType = CompressionType.ZSTD,
+        compression: CompressionType | None = None,
     ):
         self.store = store
         self.data_dir = Path(store.data_dir)
         self.flush_interval = flush_interval
-        self.compression = compression
+        # None: the documented setting (chunk_compression), read once per coordinator
+        self.compression = chunk_compression() if compression is None else compression
         self._open: dict[str, JobRecorder] = {}
         self._lock = threading.RLock()
 
