@@ -44,12 +44,12 @@ from pathlib import Path
 from typing import Any
 
 import httpx
-import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "services"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import synthetic  # noqa: E402  (scripts/bench/synthetic.py)
 from service import Up, free_port, note  # noqa: E402  (scripts/bench/service.py)
 
 TABLE2_ALGORITHMS = ["PSO", "SSA", "FDO", "mCOOT", "COOT", "ICOOT"]
@@ -57,61 +57,17 @@ FUNCTIONS = [f"F{i}" for i in range(1, 14)]
 
 
 # ------------------------------------------------------------------------------ (a) pages
-def synthetic_results(lease: Any, rng: np.random.Generator, iterations: int) -> list[bytes]:
-    """Encoded RunResults of a lease (with their proofs): monotone best-so-far curves, like a
-    worker's."""
-    from swarmpath.service.protocol import RunResult
-    from swarmpath.service.worker.packing import fit_result
-
-    n = len(lease.runs)
-    steps = rng.exponential(0.02, size=(n, iterations))
-    curves = 10.0 ** (4.0 - np.cumsum(steps, axis=1) * rng.uniform(0.2, 2.0, size=(n, 1)))
-    out = []
-    for i, run in enumerate(lease.runs):
-        curve = np.minimum.accumulate(curves[i])
-        out.append(fit_result(RunResult(
-            lease_id=lease.lease_id, job_id=lease.job_id, cell=lease.cell, run=run,
-            worker=lease.worker, seconds=0.001,
-            metrics={"best_fitness": float(curve[-1]), "evaluations": 30 * iterations},
-            curve=curve.tolist(), best_position=rng.uniform(-1, 1, 30).tolist()),
-            capability=lease.capability))
-    return out
-
-
 def fill(core: Any, spec: dict[str, Any]) -> str:
     """Submit ``spec`` and feed synthetic results through the coordinator's result handler."""
-    from swarmpath.service.protocol import (
-        Lease,
-        LeaseBundle,
-        LeaseRequest,
-        decode_work_reply,
-        encode,
-        parse_job_spec,
-    )
-    from swarmpath.service.worker import pack_batches
 
-    status = core.submit(parse_job_spec(spec))
-    rng = np.random.default_rng(1)
-    core.worker_alive("bench")
-    done, t0 = 0, time.perf_counter()
-    while True:
-        reply = decode_work_reply(core.handle_lease_request(
-            encode(LeaseRequest(worker="bench", max_runs=1000, max_leases=8))))
-        leases = [reply] if isinstance(reply, Lease) else (
-            reply.leases if isinstance(reply, LeaseBundle) else [])
-        if not leases:
-            break
-        for lease in leases:
-            payloads = pack_batches("bench", synthetic_results(lease, rng, spec["iterations"]))
-            core.handle_result_batches([(f"swarmpath/results/{lease.job_id}", p)
-                                        for p in payloads])
-            done += len(lease.runs)
+    def progress(done: int, total: int, seconds: float) -> None:
         if done % 5000 < 1000:
-            note(f"  {done}/{status.runs_total} runs stored ({time.perf_counter() - t0:.0f} s)")
-    final = core.store.job_status(status.id)
+            note(f"  {done}/{total} runs stored ({seconds:.0f} s)")
+
+    job, final = synthetic.fill(core, spec, 30 * spec["iterations"], progress)
     if final is None or final.runs_done != final.runs_total:
         raise RuntimeError(f"the synthetic results were not all accepted: {final}")
-    return status.id
+    return job
 
 
 def timed(fn: Any, repeat: int = 5) -> tuple[float, Any]:

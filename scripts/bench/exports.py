@@ -24,12 +24,12 @@ from pathlib import Path
 from typing import Any
 
 import httpx
-import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "services"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import synthetic  # noqa: E402  (scripts/bench/synthetic.py)
 from dashboard import FUNCTIONS, TABLE2_ALGORITHMS  # noqa: E402
 from service import free_port, note  # noqa: E402
 
@@ -38,48 +38,10 @@ def fill(core: Any, spec: dict[str, Any]) -> str:
     """Submit ``spec`` and hand the coordinator's result handler synthetic results (monotone
     best-so-far curves, each result proven with its lease's capability, as a worker sends them).
     """
-    from swarmpath.service.protocol import (
-        Lease,
-        LeaseBundle,
-        LeaseRequest,
-        RunResult,
-        decode_work_reply,
-        encode,
-        parse_job_spec,
-    )
-    from swarmpath.service.worker import fit_result, pack_batches
-
-    status = core.submit(parse_job_spec(spec))
-    rng = np.random.default_rng(1)
-    core.worker_alive("bench")
-    iterations = spec["iterations"]
-    while True:
-        reply = decode_work_reply(core.handle_lease_request(
-            encode(LeaseRequest(worker="bench", max_runs=1000, max_leases=8))))
-        leases = [reply] if isinstance(reply, Lease) else (
-            reply.leases if isinstance(reply, LeaseBundle) else [])
-        if not leases:
-            break
-        for lease in leases:
-            n = len(lease.runs)
-            steps = rng.exponential(0.02, size=(n, iterations))
-            curves = np.minimum.accumulate(
-                10.0 ** (4.0 - np.cumsum(steps, axis=1) * rng.uniform(0.2, 2.0, (n, 1))), axis=1)
-            payloads = []
-            for i, run in enumerate(lease.runs):
-                result = RunResult(
-                    lease_id=lease.lease_id, job_id=lease.job_id, cell=lease.cell, run=run,
-                    worker="bench", seconds=0.001,
-                    metrics={"best_fitness": float(curves[i, -1]),
-                             "evaluations": spec["agents"] * (iterations + 1)},
-                    curve=curves[i].tolist(), best_position=rng.uniform(-1, 1, 30).tolist())
-                payloads.append(fit_result(result, capability=lease.capability))
-            core.handle_result_batches([(f"swarmpath/results/{lease.job_id}", p)
-                                        for p in pack_batches("bench", payloads)])
-    done = core.store.job_status(status.id)
+    job, done = synthetic.fill(core, spec, spec["agents"] * (spec["iterations"] + 1))
     if done.runs_done != done.runs_total:
         raise SystemExit(f"only {done.runs_done} of {done.runs_total} results were accepted")
-    return status.id
+    return job
 
 
 def main() -> None:
