@@ -50,7 +50,7 @@ from swarmpath.optimizers import Problem, RunStreams, create, get_optimizer
 from swarmpath.optimizers.base import ParameterError
 from swarmpath.planners import local, sensed_map
 from swarmpath.planners.base import Decision, Observation, PlannerError, register
-from swarmpath.planners.swarm_sensing import SwarmSensing
+from swarmpath.planners.swarm_moves import SwarmMoveLimits
 from swarmpath.robot.sensors import get_sensor_model
 
 Array = np.ndarray
@@ -60,13 +60,10 @@ Array = np.ndarray
 # and the robot touched the corner (rfogwo-map3, ICOOT seed 1, t = 234 s), and on mfb-static the
 # least body gap fell to 0.78 cm under a 1 cm safety distance. 1 cm: at most 1.4 cm.
 HIT_CELL = 0.01
-#: m beyond the body: a sensed point this near is touching (rays hit the surface exactly; the
-#: planner keeps at least 1 cm from every hit, so a run without contact never comes this near).
-CONTACT = 0.002
 CARROT_CLEARANCE = 0.01  # m: the known-map path keeps this much beyond the planner's margin
 
 
-class SwarmLocalPlanner(SwarmSensing):
+class SwarmLocalPlanner(SwarmMoveLimits):
     """Generic swarm local planner; named subclasses fix the optimizer and its paper's settings."""
 
     name = "swarm-local"
@@ -210,55 +207,6 @@ class SwarmLocalPlanner(SwarmSensing):
             raise PlannerError(str(exc)) from None
 
     # ----------------------------------------------------------------------------- deciding
-    def _aim(self, p: Array, goal: Array, hits: Array, margin: float,
-             world: tuple[float, float, float, float], known: Array | None = None) -> Array:
-        """What f1 and f2 measure against (module docstring, step 2): ``known`` are the points
-        the known path avoids (default ``hits``), ``hits`` the nearby ones the shortcut must keep
-        ``margin`` from."""
-        if self.p["heuristic"] == "euclidean":
-            return goal
-        if known is None:
-            known = hits
-        lookahead = float(self.p["lookahead"])
-        clearance = margin + float(self.p["carrot_clearance"])
-        path = np.array([p, goal])
-        # Nothing known near the straight line to the goal: that line is the known shortest path
-        # (the convex hulls are not needed to see it).
-        if len(known) and local.segment_hit_distance(p, goal[None, :], known)[0][0] < clearance:
-            path = self._known_path(p, goal, known, margin, clearance, world)
-        if self.p["aim"] == "carrot":
-            return sensed_map.along(path, lookahead)
-        return sensed_map.shortcut(path, hits, margin, lookahead,
-                                   backend=str(self.p["backend"]))
-
-    def _known_path(self, p: Array, goal: Array, hits: Array, margin: float, clearance: float,
-                    world: tuple[float, float, float, float]) -> Array:
-        """Shortest path to the goal in the sensed map (straight line if there is none).
-
-        Planned again only when needed: while the robot is within ``rejoin`` of the last known
-        path, the goal has not moved, and that path still keeps ``margin`` from every sensed
-        point within the sensing reach, the rest of it is still the shortest known path (static
-        obstacles only add to the known map), so it is reused.
-        """
-        cached = self._path
-        if cached is not None and np.allclose(cached[-1], goal):
-            rest = sensed_map.rejoin(cached, p, float(self.p["rejoin"]))
-            reach = 2 * (float(self.p["step"]) + 2 * margin)
-            if rest is not None and sensed_map.path_clearance(
-                    rest, hits, reach, str(self.p["backend"])) >= margin:
-                return rest
-        coarse = sensed_map.condense(hits, p, np.inf, float(self.p["map_cell"]))
-        known = sensed_map.known_obstacles(coarse, link=2 * margin)
-        # The hulls grow as more of an obstacle is seen, so the robot may already be closer to
-        # one than ``clearance``: plan with what it has (the candidates still need margin).
-        room = float(known.point_clearance(p[None, :])[0])
-        path = sensed_map.known_path(p, goal, known, min(clearance, room - 1e-6), world)
-        if path is None:
-            self._path = None
-            return np.array([p, goal])
-        self._path = path if float(self.p["rejoin"]) > 0 else None
-        return path
-
     def _hold(self, p: Array, aim: Array, ctx: local.StepContext) -> bool:
         """Keep driving to the last swarm waypoint: still ahead, still feasible in the current
         sensed map, and still within ``hold_angle`` of the direction to the aim."""
@@ -276,53 +224,6 @@ class SwarmLocalPlanner(SwarmSensing):
 
     def decide(self, obs: Observation) -> Decision:
         return self._keep_off(obs, self._cut(obs, self._decide(obs)))
-
-    def _cut(self, obs: Observation, decision: Decision) -> Decision:
-        if decision.target is None:
-            return decision
-        commit = self._commit(obs.time, obs.robot_radius)
-        if self._travel <= commit:
-            return decision
-        p = np.array([obs.pose.x, obs.pose.y])
-        move = np.asarray(decision.target, dtype=float) - p
-        length = float(np.hypot(*move))
-        if length <= commit:
-            return decision
-        target = p + move * (max(commit, 0.0) / length)
-        return Decision(target, decision.iterations, decision.duration, decision.reason,
-                        decision.finish)
-
-    def _keep_off(self, obs: Observation, decision: Decision) -> Decision:
-        """Never drive toward what the robot touches (:func:`local.keep_off`), whatever the
-        swarm, the hold or the fallback chose. The points of this scan within ``CONTACT`` of the
-        body (touching) and the points it saw moving within ``contact_band`` more (a moving
-        obstacle can close that much while the decision is driven) keep the part of the move
-        toward them from being driven: the robot slides along the tangent, moves away or stops,
-        and a differential drive turns in place before it drives, so that its path follows the
-        kept direction instead of bulging into the obstacle. Without such a point the decision is
-        unchanged (runs that come no nearer than that are the same as without the rule)."""
-        points, moving = self._scan
-        if decision.target is None or not len(points):
-            return decision
-        p = np.array([obs.pose.x, obs.pose.y])
-        move = np.asarray(decision.target, dtype=float) - p
-        reach = obs.robot_radius + CONTACT + float(self.p["contact_band"]) * moving.astype(float)
-        kept = local.keep_off(p, move, points, reach)
-        if np.array_equal(kept, move):
-            return decision
-        self._held = None
-        return Decision(p + kept, decision.iterations, decision.duration, decision.reason,
-                        align=True)
-
-    def _commit(self, time: float, radius: float) -> float:
-        """How far one decision may move the robot (see ``_travel``): within the sensing range,
-        and with coarse steps also where a corner between two rays sticks out by less than the
-        safety distance (with fine steps the robot senses again long before that)."""
-        safety = self._safety(time)
-        commit = self._range - safety
-        if self._coarse and self._ray_gap > 0:
-            commit = min(commit, 2 * safety / self._ray_gap - radius - safety)
-        return max(commit, safety)
 
     def _decide(self, obs: Observation) -> Decision:
         p = np.array([obs.pose.x, obs.pose.y])

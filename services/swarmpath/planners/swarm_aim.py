@@ -1,0 +1,69 @@
+"""The aim of the swarm local planner: what f1 and f2 measure against (step 2).
+
+:class:`SwarmAim` is a base of :class:`~swarmpath.planners.swarm_local.SwarmLocalPlanner` (its
+module docstring describes ``heuristic``, ``aim`` and the known path); the planner's
+``__init__`` sets the state declared below.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from swarmpath.planners import local, sensed_map
+from swarmpath.planners.swarm_sensing import Array, SwarmSensing
+
+
+class SwarmAim(SwarmSensing):
+    """The point f1 aims at: the goal, or a point of the shortest path in the sensed map."""
+
+    _path: Array | None
+
+
+    def _aim(self, p: Array, goal: Array, hits: Array, margin: float,
+             world: tuple[float, float, float, float], known: Array | None = None) -> Array:
+        """What f1 and f2 measure against (module docstring, step 2): ``known`` are the points
+        the known path avoids (default ``hits``), ``hits`` the nearby ones the shortcut must keep
+        ``margin`` from."""
+        if self.p["heuristic"] == "euclidean":
+            return goal
+        if known is None:
+            known = hits
+        lookahead = float(self.p["lookahead"])
+        clearance = margin + float(self.p["carrot_clearance"])
+        path = np.array([p, goal])
+        # Nothing known near the straight line to the goal: that line is the known shortest path
+        # (the convex hulls are not needed to see it).
+        if len(known) and local.segment_hit_distance(p, goal[None, :], known)[0][0] < clearance:
+            path = self._known_path(p, goal, known, margin, clearance, world)
+        if self.p["aim"] == "carrot":
+            return sensed_map.along(path, lookahead)
+        return sensed_map.shortcut(path, hits, margin, lookahead,
+                                   backend=str(self.p["backend"]))
+
+    def _known_path(self, p: Array, goal: Array, hits: Array, margin: float, clearance: float,
+                    world: tuple[float, float, float, float]) -> Array:
+        """Shortest path to the goal in the sensed map (straight line if there is none).
+
+        Planned again only when needed: while the robot is within ``rejoin`` of the last known
+        path, the goal has not moved, and that path still keeps ``margin`` from every sensed
+        point within the sensing reach, the rest of it is still the shortest known path (static
+        obstacles only add to the known map), so it is reused.
+        """
+        cached = self._path
+        if cached is not None and np.allclose(cached[-1], goal):
+            rest = sensed_map.rejoin(cached, p, float(self.p["rejoin"]))
+            reach = 2 * (float(self.p["step"]) + 2 * margin)
+            if rest is not None and sensed_map.path_clearance(
+                    rest, hits, reach, str(self.p["backend"])) >= margin:
+                return rest
+        coarse = sensed_map.condense(hits, p, np.inf, float(self.p["map_cell"]))
+        known = sensed_map.known_obstacles(coarse, link=2 * margin)
+        # The hulls grow as more of an obstacle is seen, so the robot may already be closer to
+        # one than ``clearance``: plan with what it has (the candidates still need margin).
+        room = float(known.point_clearance(p[None, :])[0])
+        path = sensed_map.known_path(p, goal, known, min(clearance, room - 1e-6), world)
+        if path is None:
+            self._path = None
+            return np.array([p, goal])
+        self._path = path if float(self.p["rejoin"]) > 0 else None
+        return path
