@@ -44,6 +44,7 @@ from pathlib import Path
 from typing import Any
 
 import httpx
+from polling import wait_until  # scripts/bench/polling.py
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -168,16 +169,12 @@ class Farm:
                                                start_new_session=True), stats))
 
     def wait(self, cond: Any, timeout: float, what: str, poll: float = 0.2) -> None:
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
+        def exited() -> str | None:
             if self.coordinator is not None and self.coordinator.poll() is not None:
-                raise RuntimeError(f"the coordinator exited waiting for {what}; see "
-                                   f"{self.log.name}")
-            with contextlib.suppress(httpx.HTTPError, ValueError, KeyError):
-                if cond():
-                    return
-            time.sleep(poll)
-        raise TimeoutError(f"timed out waiting for {what}; see {self.log.name}")
+                return "the coordinator exited"
+            return None
+
+        wait_until(cond, timeout, what, exited, f"see {self.log.name}", poll)
 
     def alive(self) -> int:
         return sum(1 for w in self.client.get("/workers").json() if w["alive"])

@@ -55,6 +55,7 @@ from pathlib import Path
 from typing import Any
 
 import httpx
+from polling import wait_until  # scripts/bench/polling.py
 
 ROOT = Path(__file__).resolve().parents[2]
 ENV = {**os.environ, "PYTHONPATH": str(ROOT / "services"), "PYTHONUNBUFFERED": "1"}
@@ -148,16 +149,12 @@ class Up:
         self.stop()
 
     def wait(self, cond: Any, timeout: float, what: str, poll: float = 0.2) -> None:
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
+        def exited() -> str | None:
             if self.proc.poll() is not None:
-                raise RuntimeError(f"swarmpath up exited ({self.proc.returncode}) waiting for "
-                                   f"{what}; log in {self.log.name}")
-            with contextlib.suppress(httpx.HTTPError, ValueError, KeyError):
-                if cond():
-                    return
-            time.sleep(poll)
-        raise TimeoutError(f"timed out waiting for {what}; log in {self.log.name}")
+                return f"swarmpath up exited ({self.proc.returncode})"
+            return None
+
+        wait_until(cond, timeout, what, exited, f"log in {self.log.name}", poll)
 
     def run_job(self, spec: dict[str, Any], timeout: float) -> dict[str, Any]:
         """Submit, wait for the end; the status gets ``cpu`` (CPU seconds spent by role during
