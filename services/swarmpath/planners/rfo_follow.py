@@ -1,8 +1,23 @@
 """Following the RFO family's path among moving obstacles, and a moving goal.
 
-:class:`RfoFollow` is the base of :class:`~swarmpath.planners.rfo_gwo.RfoFamilyPlanner` (whose
-docstring, "Following the path among moving obstacles", describes what it does); the planner
-sets the state declared below and plans (:meth:`_begin`, :meth:`_plan`).
+:class:`RfoFollow` is the base of :class:`~swarmpath.planners.rfo_gwo.RfoFamilyPlanner`; the
+planner sets the state declared below and plans (:meth:`_begin`, :meth:`_plan`).
+
+Following the path among moving obstacles
+-----------------------------------------
+The planner gets only the static map. A moving goal: when the path is used up and the goal is more
+than ``goal_snap`` from where it was planned to, the planner plans again from the robot to the
+goal's new place. When the observation carries a sensor reading and the
+scenario declares moving obstacles (that fact only), :meth:`RfoFollow._follow` hands out
+decisions of ``replan`` (0.25 s) so that the robot re-senses. Hits farther than ``STATIC_HIT``
+from the static map and the border, with their positions predicted ``predict`` (1 s) ahead
+(:func:`sensed_map.predict`) and condensed within ``watch`` (3 m) (:func:`sensed_map.condense`),
+must stay farther than r + ``dynamic_margin`` (0.3 m) from the segment to the current waypoint;
+otherwise the robot waits or steps ``side_step`` (0.3 m) to the candidate (12 directions) that
+keeps that margin and is nearest the waypoint, or, with none, to the one with the most room. A
+waypoint no longer reachable on the static map after a step aside triggers a new plan from the
+current position. Without sensors or moving obstacles the waypoints are handed out as
+:mod:`swarmpath.planners.rfo_gwo` describes.
 """
 
 from __future__ import annotations

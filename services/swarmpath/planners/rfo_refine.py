@@ -1,8 +1,26 @@
 """Section 4.2 of the RFO family: the EA with the Erase mutation and the multiphase refinement.
 
 Ketafa & Al-Darraji, Iraqi J. Science 65(2) (2024) 1070-1088, doi 10.24996/ijs.2024.65.2.38,
-section 4.2 (``RFO-GWO-EA`` only; :class:`~swarmpath.planners.rfo_gwo.RfoFamilyPlanner`'s
-docstring describes it).
+section 4.2. :class:`RfoRefine` is a base of :class:`~swarmpath.planners.rfo_gwo.RfoFamilyPlanner`,
+whose plan calls it.
+
+Phase B/C, section 4.2 (``RFO-GWO-EA`` only)
+-------------------------------------------
+Every path of the ``arrivals`` foxes is refined (side by side, independently) and the shortest
+result is the plan. An EA with the Erase mutation as its only operator
+(:meth:`RfoRefine._ea`: a population of ``ea_population`` copies of the path; Erase picks
+two nodes V_i, V_j, j > i + 1, and if V_i V_j passes the safety rule removes the nodes between
+them; (mu + lambda) selection on length, ``ea_generations`` = 50) runs on the path; then up to
+``phases`` (4) rounds of the multiphase technique: cut every segment longer than the split length
+into equal pieces, run the EA again, and (``node_opt = "gwo"``) optimise the nodes with GWO
+(:meth:`RfoRefine._relax`: each interior node is a sub-problem, the point of a box around
+it minimising the length of its two segments under the safety rule, odd and even nodes in turn,
+``relax_sweeps`` = 2, box half-width ``relax_box`` = 0.5 times the longer adjacent segment; a node
+moves only to a valid, shorter place). A path leaves the rounds once one shortens it by less than
+``refine_tol`` (1e-4). Finally every node whose neighbours see each other under the safety rule is
+erased (:meth:`RfoRefine._prune`). Erase and the node moves never lengthen a path and add
+only checked segments; the split points lie on valid segments, so ``RFO-GWO-EA`` is never longer
+than ``RFO-GWO`` with the same seed.
 """
 
 from __future__ import annotations

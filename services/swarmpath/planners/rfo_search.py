@@ -2,8 +2,74 @@
 
 Ketafa & Al-Darraji, Iraqi J. Science 65(2) (2024) 1070-1088, doi 10.24996/ijs.2024.65.2.38,
 sections 3.1-3.2 and 4.1. :class:`RfoSearch` holds the search of
-:class:`~swarmpath.planners.rfo_gwo.RfoFamilyPlanner` (whose docstring describes it) together with
-its measure of progress and validity rules; the planner sets the state it reads when it plans.
+:class:`~swarmpath.planners.rfo_gwo.RfoFamilyPlanner` together with its measure of progress and
+validity rules; the planner sets the state it reads when it plans.
+
+Phase A, Algorithm 1 (all three planners)
+-----------------------------------------
+``foxes`` foxes start at uniform points of the box of half-width ``radius`` around the start
+(invalid draws stay at the start); each keeps its location history, which begins at the start.
+Every iteration the foxes are sorted by eq 17 (distance to the target) and, in that order, each
+proposes the eq 2 move x' = x + alpha sign(ref - x) with ref = the target (the prey, which the
+planner knows; ``reference = "best"``: the best fox for the others, as eq 2 is printed, and the
+target for the best fox). alpha = u d with u ~ U(0, 1) per fox (``alpha_draw = "population"``: one
+u per iteration, section 3.1's reading) and d = sqrt(|x - target|) (eq 1/17 as printed, square
+root of the Euclidean distance in metres; ``alpha_bound = "distance"``: d = |x - target|). Each
+component of the step is clamped so that it does not pass the reference (the fox can land exactly
+on the target) and the point is clipped to the world. The node is valid when it is closer to the
+target, the segment from the fox's last node passes the safety rule and the node passes the node
+rule (the target itself is exempt from the node rule). A valid node is appended to the fox's
+history, except that a node within ``goal_snap`` (0.2 m, the episode's acceptance tolerance) of
+the target is replaced by the target when the segment to it is valid (or, failing that, the target
+is appended after it when that segment is valid). The first fox to reach the target returns its
+history: the cost is the iteration count at that moment (0 if a fox reaches it at
+initialisation). ``arrivals`` (RFO-GWO-EA: 5, else 1) foxes: the foxes that arrived stop and the
+others go on until that many have arrived, or ``arrival_wait`` (1.0) times the first fox's
+iterations have passed since (at least one), or the search stalls; the cost is then every
+iteration consumed. The random numbers up to the first arrival are the same, so the first path is
+``RFO-GWO``'s. Without the EA the shortest of the paths is used.
+
+Clearance rules (section 4.1; the paper works in cm on 17000 cm maps, we in m, and both margins
+are *in addition to* the robot radius r, as the paper's robot is a body, not a point):
+
+* safety rule (the "more than 20 cm from the border of any barrier" rule): clearance of every
+  segment, and of every node not produced by eq 2, > r + s with the scale-aware margin
+  s = min(``safety_margin`` (0.2 m), ``safety_scale`` (0.01) * the larger world side)
+  (``RfoFamilyPlanner.safety_clearance``): exactly 20 cm on the paper's 170 m maps, 10 cm on
+  a 10 m map (the diff-drive robots of the ICOOT/IHPO maps leave the polyline by up to 7.5 cm at
+  corners; 3 cm let them touch);
+* node rule (the "smaller than one metre from the border of any barriers" rule that hands the
+  fox to GWO): clearance of an eq 2 node > r + m with the scale-aware margin
+  m = max(``safety_margin``, min(``node_margin`` (1.0 m), ``node_scale`` (0.02) * the larger
+  world side)) (``RfoFamilyPlanner.node_clearance``): exactly 1 m on the paper's 170 m
+  maps, 0.2 m on a 10 m map. Applying it to GWO's wolves as well left mfb-static (10 m wide,
+  r = 0.5 m) unsolved after 2000 iterations.
+
+Both are the product's collision rule (:func:`~swarmpath.world.geometry.collides`, touching
+counts) applied with the enlarged radius, so every output segment is collision-free for the robot
+with at least s to spare; the final path is re-checked with
+:meth:`ObstacleSet.segment_clearance` before it is handed out.
+
+When the eq 2 node is invalid:
+
+* ``RFO`` (RFO alone): the fox stays at its previous place (section 3.1: "otherwise, they return
+  to their previous place") and, if unnoticed (mu ~ U(0, 1) > ``notice`` = 0.75), makes the RFO
+  local-search move of eqs 3-5 in two dimensions: x' = x + a r (cos phi1, sin phi1) with the scaling
+  a ~ U(0, 1) once per iteration, phi0, phi1 ~ U(0, 2 pi) per fox and the observation radius
+  r = ``radius`` sin(phi0)/phi0 (eq 4 with Table 1's r in [0, 3] as its scale, in metres). The
+  move is kept if it passes the safety rule (it need not be closer). Reproduction (eqs 6-9) is
+  not used: a fox born in the alpha couple's habitat has no collision-free history.
+* ``RFO-GWO``: Algorithm 2. The "current obstacle" is the one the segment hits (least segment
+  clearance) or, if only the node rule failed, the one nearest to the node. ``wolves`` (Table 1:
+  M = 7) wolves, uniform in the box of half-width ``radius`` around the fox, run
+  ``gwo_iterations`` iterations of the registered GWO (eqs 3-16, authors' leader update) on the
+  negated distance from that obstacle (Algorithm 2 maximises it). A wolf counts only if it is
+  "preferable to the current location of the fox": closer to the target, reached by a segment
+  that passes the safety rule and itself passing the safety rule; others score PENALTY plus their
+  violation. The best wolf found becomes the fox's next node; with none the fox stays
+  ("return current position of fox_i"). The foxes handled by GWO in one iteration are optimised
+  as one batch (they do not interact within an iteration; each has its own generator seeded from
+  the planner's).
 """
 
 from __future__ import annotations
