@@ -285,13 +285,13 @@ def shortest_path(
     while chain[-1] != 0:
         chain.append(int(pred[chain[-1]]))
     chain.reverse()
-    pts = [node_xy[0]]
+    pts = [node_xy[:1]]  # pieces (k, 2) of the polyline, joined once at the end
     n_tan = len(node_u)
     for a, b in itertools.pairwise(chain):
         cand = np.flatnonzero((lo_ == min(a, b)) & (hi_ == max(a, b)))
         e = int(cand[np.argmin(ew[cand])])
         if e < n_tan:
-            pts.append(node_xy[b])
+            pts.append(node_xy[b : b + 1])
             continue
         k = e - n_tan
         dk, th0, dth = int(adisk[k]), float(ath0[k]), float(adth[k])
@@ -300,8 +300,8 @@ def shortest_path(
         else:
             arc = _arc_points(centres[dk], float(radii[dk]), th0 + dth, -dth, arc_tol)
         arc[-1] = node_xy[b]
-        pts.extend(arc)
-    poly = np.asarray(pts)
+        pts.append(arc)
+    poly = np.concatenate(pts)
     dup = np.zeros(len(poly), dtype=bool)
     dup[1:] = np.all(poly[1:] == poly[:-1], axis=1)
     return OptimalPath(length, poly[~dup], True, None)
