@@ -8,6 +8,7 @@ import os
 import struct
 import time
 from collections.abc import Callable
+from itertools import chain
 from pathlib import Path
 from typing import Any, BinaryIO
 
@@ -52,6 +53,8 @@ CHUNK_SIZE = 1024 * 1024
 _MESSAGE_HEAD = struct.Struct("<BQHIQQ")  # opcode, record length, channel, sequence, 2 times
 _MESSAGE_OPCODE = 0x05
 _MESSAGE_FIXED = 2 + 4 + 8 + 8  # the record's fields before the data
+_INDEX_HEAD = struct.Struct("<BQHI")  # opcode, record length, channel, entries' byte length
+_INDEX_OPCODE = 0x07
 
 
 def _fast_json(message: dict[str, Any]) -> bytes:
@@ -62,6 +65,16 @@ def _fast_json(message: dict[str, Any]) -> bytes:
     except TypeError:
         return _json({k: v.tolist() if isinstance(v, np.ndarray) else v
                       for k, v in message.items()})
+
+
+class _PackedIndex(MessageIndex):
+    """A chunk's message index for one channel, written in two ``struct`` packs (the same bytes
+    as ``MessageIndex.write``, which packs each time and offset on its own)."""
+
+    def write(self, stream: Any) -> None:
+        n = len(self.records)
+        stream.write(_INDEX_HEAD.pack(_INDEX_OPCODE, 2 + 4 + 16 * n, self.channel_id, 16 * n))
+        stream.write(struct.pack(f"<{2 * n}Q", *chain.from_iterable(self.records)))
 
 
 class _FastMessages:
@@ -110,7 +123,7 @@ class _FastMessages:
         offset = buffer.tell()
         index = chunk.message_indices.get(channel_id)
         if not index:
-            index = chunk.message_indices[channel_id] = MessageIndex(
+            index = chunk.message_indices[channel_id] = _PackedIndex(
                 channel_id=channel_id, records=[])
         index.records.append((log_ns, offset))
         chunk.num_messages += 1
