@@ -22,13 +22,12 @@ import json
 import os
 import statistics
 import sys
-import time
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+from decide_time import timed_episode  # scripts/bench/decide_time.py
 
-from swarmpath.planners import Episode
 from swarmpath.world import get_map
 
 SWARM = ("ICOOT", "IHPO", "MFB", "HPSO-MFB")
@@ -37,23 +36,11 @@ SWARM = ("ICOOT", "IHPO", "MFB", "HPSO-MFB")
 def one_run(scenario: Any, planner: str, seed: int,
             params: dict[str, Any] | None = None) -> tuple[float, float, str, Any]:
     """(CPU s, wall s of the decisions, digest, outcome) of run 0 of ``seed``."""
-    ep = Episode(scenario, planner, seed, 0, params)
-    decide = ep.planner.decide
-    spent = [0.0]
-
-    def timed(obs: Any) -> Any:
-        started = time.process_time()
-        try:
-            return decide(obs)
-        finally:
-            spent[0] += time.process_time() - started
-
-    ep.planner.decide = timed  # type: ignore[method-assign]
-    out = ep.run()
+    cpu, out = timed_episode(scenario, planner, seed, params)
     data = out.to_dict()
     data.pop("seconds")
     digest = hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()[:16]
-    return spent[0], out.seconds, digest, out
+    return cpu, out.seconds, digest, out
 
 
 def p90(values: Sequence[float]) -> float:

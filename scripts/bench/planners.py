@@ -39,8 +39,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from decide_time import timed_episode  # scripts/bench/decide_time.py
 
-from swarmpath.planners import Episode, get_planner, list_planners
+from swarmpath.planners import get_planner, list_planners
 from swarmpath.world import get_map
 
 OMPL = ("OMPL-RRTstar", "OMPL-BITstar")
@@ -74,21 +75,9 @@ def run_row(row: Row, scenario: Any, seeds: Sequence[int], budget: float) -> Row
             break
         started = time.perf_counter()
         try:
-            ep = Episode(scenario, row.planner, seed, 0, row.params)
-            decide = ep.planner.decide
-            spent = [0.0]
-
-            def timed(obs: Any, decide: Any = decide, spent: list[float] = spent) -> Any:
-                c = time.process_time()
-                try:
-                    return decide(obs)
-                finally:
-                    spent[0] += time.process_time() - c
-
-            ep.planner.decide = timed  # type: ignore[method-assign]
-            out = ep.run()
+            cpu, out = timed_episode(scenario, row.planner, seed, row.params)
             row.outcomes.append(out)
-            row.cpu.append(spent[0])
+            row.cpu.append(cpu)
             note(f"  {row.label} seed {seed}: {'ok' if out.success else out.reason}, "
                  f"length {out.length:.4f}, planning {out.seconds:.3f} s")
         except Exception as exc:  # reported in the table, never hidden
