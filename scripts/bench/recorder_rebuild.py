@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """The recorder's own speed: write one job's MCAP from its stored results, as the recorder
 process does when it opens a job or catches up (``Store.iter_run_records`` then
-``JobRecorder.add``, /results and /curves messages, 1 MiB zstd chunks).
+``JobRecorder.add``, /results and /curves messages, 1 MiB chunks compressed as
+``$SWARMPATH_MCAP_COMPRESSION`` says: lz4 by default, zstd or none).
 
     .venv/bin/python scripts/bench/recorder_rebuild.py [--runs 20000] [--data /tmp/rec-bench]
 
