@@ -50,7 +50,7 @@ sys.path.insert(0, str(ROOT / "services"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import synthetic  # noqa: E402  (scripts/bench/synthetic.py)
-from service import Up, free_port, note  # noqa: E402  (scripts/bench/service.py)
+from service import Up, note  # noqa: E402  (scripts/bench/service.py)
 
 TABLE2_ALGORITHMS = ["PSO", "SSA", "FDO", "mCOOT", "COOT", "ICOOT"]
 FUNCTIONS = [f"F{i}" for i in range(1, 14)]
@@ -109,7 +109,6 @@ def browser_load(url: str) -> float | None:
 
 
 def pages(runs: int, tmp: Path) -> list[str]:
-    import uvicorn
 
     from swarmpath.service.coordinator import CoordinatorSettings, create_app
     from swarmpath.service.web.live import Dashboard
@@ -118,14 +117,7 @@ def pages(runs: int, tmp: Path) -> list[str]:
             "dims": [30], "runs": runs, "agents": 30, "iterations": 500, "seed": 1}
     app = create_app(CoordinatorSettings(data_dir=tmp / "pages", synchronous="NORMAL"),
                      use_zenoh=False)
-    port = free_port()
-    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning",
-                                           timeout_graceful_shutdown=2))
-    thread = threading.Thread(target=server.run, daemon=True)
-    thread.start()
-    while not server.started:
-        time.sleep(0.05)
-    url = f"http://127.0.0.1:{port}"
+    server, thread, url = synthetic.start_server(app)
     rows = []
     try:
         core = app.state.core

@@ -18,7 +18,6 @@ import argparse
 import platform
 import sys
 import tempfile
-import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -31,7 +30,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import synthetic  # noqa: E402  (scripts/bench/synthetic.py)
 from dashboard import FUNCTIONS, TABLE2_ALGORITHMS  # noqa: E402
-from service import free_port, note  # noqa: E402
+from service import note  # noqa: E402
 
 
 def fill(core: Any, spec: dict[str, Any]) -> str:
@@ -48,7 +47,6 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=100, help="runs per cell")
     args = parser.parse_args()
-    import uvicorn
 
     from swarmpath.ioh import write_ioh
     from swarmpath.service.client import ServiceClient
@@ -59,14 +57,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         app = create_app(CoordinatorSettings(data_dir=Path(tmp) / "d", synchronous="NORMAL"),
                          use_zenoh=False)
-        port = free_port()
-        server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port,
-                                               log_level="warning", timeout_graceful_shutdown=2))
-        thread = threading.Thread(target=server.run, daemon=True)
-        thread.start()
-        while not server.started:
-            time.sleep(0.05)
-        url = f"http://127.0.0.1:{port}"
+        server, thread, url = synthetic.start_server(app)
         rows = []
         try:
             job = fill(app.state.core, spec)

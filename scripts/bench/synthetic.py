@@ -1,6 +1,6 @@
-"""Synthetic benchmark results handed to a coordinator's own result handler, so that the store,
-the aggregates and the exports see the real path without running any optimizer (used by
-dashboard.py and exports.py).
+"""An in-process coordinator (REST only, on a free loopback port) and synthetic benchmark results
+handed to its own result handler, so that the store, the aggregates and the exports see the real
+path without running any optimizer (used by dashboard.py and exports.py).
 
 Each run's curve is a random monotone best-so-far curve (as a worker's), its result encoded and
 proven with its lease's capability, packed into batches as a worker sends them.
@@ -8,11 +8,13 @@ proven with its lease's capability, packed into batches as a worker sends them.
 
 from __future__ import annotations
 
+import threading
 import time
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+from service import free_port  # scripts/bench/service.py
 
 
 def synthetic_results(lease: Any, rng: np.random.Generator, iterations: int,
@@ -71,3 +73,18 @@ def fill(core: Any, spec: dict[str, Any], evaluations: int,
         if on_progress is not None:
             on_progress(done, status.runs_total, time.perf_counter() - t0)
     return status.id, core.store.job_status(status.id)
+
+
+def start_server(app: Any) -> tuple[Any, threading.Thread, str]:
+    """Serve ``app`` with uvicorn on a free 127.0.0.1 port in a daemon thread; (server, thread,
+    base URL) once it is listening. Stop it with ``server.should_exit = True`` and a join."""
+    import uvicorn
+
+    port = free_port()
+    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning",
+                                           timeout_graceful_shutdown=2))
+    thread = threading.Thread(target=server.run, daemon=True)
+    thread.start()
+    while not server.started:
+        time.sleep(0.05)
+    return server, thread, f"http://127.0.0.1:{port}"
