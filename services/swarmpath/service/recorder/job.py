@@ -16,6 +16,7 @@ import numpy as np
 import orjson
 from mcap.records import MessageIndex
 from mcap.writer import CompressionType, IndexType, Writer
+from mcap.writer import __version__ as MCAP_VERSION
 
 from swarmpath.service import foxglove as fg
 from swarmpath.service.protocol import PROTOCOL_VERSION
@@ -81,16 +82,21 @@ class _FastMessages:
     """``Writer.add_message`` of mcap 1.6 in fewer Python steps: the same Message record bytes
     (one ``struct`` pack for its head instead of a record object and five packs and a seek),
     the same message index entry, statistics and chunk cut. It reaches into the writer's private
-    chunk builder and statistics, so :meth:`of` checks that they are there and have the expected
-    shape; without them the recorder calls ``Writer.add_message`` (same bytes, slower)."""
+    chunk builder and statistics, so :meth:`of` checks the mcap version (``VERIFIED``) and that
+    they are there with the expected shape; otherwise the recorder calls ``Writer.add_message``
+    (same bytes, slower)."""
 
     def __init__(self, writer: Writer, chunk: Any, stats: Any, finalize: Callable[[], None],
                  chunk_size: int):
         self.writer, self.chunk, self.stats = writer, chunk, stats
         self.finalize, self.chunk_size = finalize, chunk_size
 
+    VERIFIED = ("1.6.",)  # mcap versions whose writer internals this was checked against
+
     @classmethod
     def of(cls, writer: Writer) -> _FastMessages | None:
+        if not MCAP_VERSION.startswith(cls.VERIFIED):
+            return None  # another writer: its own add_message (the byte test then fails: check)
         chunk = getattr(writer, "_Writer__chunk_builder", None)
         stats = getattr(writer, "_Writer__statistics", None)
         finalize = getattr(writer, "_Writer__maybe_finalize_chunk", None)
