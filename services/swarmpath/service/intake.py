@@ -16,6 +16,7 @@ from typing import Any
 import orjson
 
 from swarmpath.service.capability import drop_proof, result_ok
+from swarmpath.service.frame_head import RecordHead
 from swarmpath.service.incoming import Incoming
 from swarmpath.service.lease_sizer import LeaseSizer
 from swarmpath.service.protocol import (
@@ -33,7 +34,7 @@ from swarmpath.service.protocol import (
 )
 from swarmpath.service.recorder import Recorders
 from swarmpath.service.recorder.process import RecorderProcess
-from swarmpath.service.result_frame import decode_frame, is_frame, record_ok
+from swarmpath.service.result_frame import decode_frame, is_frame, key_ok, proof_key
 from swarmpath.service.settings import CoordinatorSettings
 from swarmpath.service.store import FINAL_STATES, Store
 from swarmpath.service.store.series import raw_series
@@ -133,29 +134,29 @@ class ResultIntake:
         job_id = Keys.last_chunk(key)
         worker, records = decode_frame(payload)
         entries: list[Incoming] = []
-        caps: dict[str, str | None] = {}
+        keys: dict[str, tuple[str, bytes] | None] = {}  # lease -> (capability, its HMAC key)
         foreign = unproven = 0
         for rec in records:
             h = rec.head
-            entry = Incoming(h.lease_id, h.job_id, h.cell, h.run, h.worker, h.status, None, 0.0,
-                             {})
-            entries.append(entry)
             if h.job_id != job_id or h.worker != worker:
                 foreign += 1
+                entries.append(_identity(h))
                 continue
-            if h.lease_id not in caps:
-                caps[h.lease_id] = self._capability(h.lease_id)
-            cap = caps[h.lease_id]
+            if h.lease_id in keys:
+                found = keys[h.lease_id]
+            else:
+                cap = self._capability(h.lease_id)
+                found = keys[h.lease_id] = None if cap is None else (cap, proof_key(cap))
             # no valid proof, no store round trip (a flood of forged results costs no fsync)
-            if cap is None or not record_ok(cap, rec):
+            if found is None or not key_ok(found[1], rec):
                 unproven += 1
+                entries.append(_identity(h))
                 continue
-            entry.failure, entry.seconds, entry.metrics = h.failure, h.seconds, h.metrics
-            entry.curve = rec.arrays.get("curve")
-            entry.best_position = rec.arrays.get("best_position")
-            entry.path = rec.arrays.get("path")
-            entry.capability = cap
-            entry.stored_series = raw_series(h.arrays, rec.raw)
+            arrays = rec.arrays
+            entries.append(Incoming(
+                h.lease_id, h.job_id, h.cell, h.run, h.worker, h.status, h.failure, h.seconds,
+                h.metrics, arrays.get("curve"), arrays.get("best_position"), arrays.get("path"),
+                found[0], raw_series(h.arrays, rec.raw)))
         self._count_foreign(foreign, worker)
         self._count_unproven(unproven)
         return worker, entries
@@ -338,6 +339,11 @@ class ResultIntake:
 def _unproven(r: RunResult) -> Incoming:
     """A result that proved nothing: its identity only (for its ack), never stored."""
     return Incoming(r.lease_id, r.job_id, r.cell, r.run, r.worker, r.status, None, 0.0, {})
+
+
+def _identity(h: RecordHead) -> Incoming:
+    """A frame record that proved nothing: its identity only (for its ack), never stored."""
+    return Incoming(h.lease_id, h.job_id, h.cell, h.run, h.worker, h.status, None, 0.0, {})
 
 
 def _cell(spec: Mapping[str, Any]) -> BenchmarkCell | MapCell:
