@@ -37,7 +37,7 @@ from swarmpath.service.recorder.process import RecorderProcess
 from swarmpath.service.result_frame import decode_frame, is_frame, key_ok, proof_key
 from swarmpath.service.settings import CoordinatorSettings
 from swarmpath.service.store import FINAL_STATES, Store
-from swarmpath.service.store.series import raw_series
+from swarmpath.service.store.series import series_prefix
 from swarmpath.service.util import short as _short
 
 log = logging.getLogger("swarmpath.coordinator")
@@ -136,6 +136,8 @@ class ResultIntake:
         entries: list[Incoming] = []
         keys: dict[str, tuple[str, bytes] | None] = {}  # lease -> (capability, its HMAC key)
         foreign = unproven = 0
+        declared: Any = None  # the last record's array declarations and their series prefix
+        prefix: bytes | None = None
         for rec in records:
             h = rec.head
             if h.job_id != job_id or h.worker != worker:
@@ -152,11 +154,13 @@ class ResultIntake:
                 unproven += 1
                 entries.append(_identity(h))
                 continue
+            if h.arrays != declared:  # records of a lease mostly declare the same arrays
+                declared, prefix = h.arrays, series_prefix(h.arrays)
             arrays = rec.arrays
             entries.append(Incoming(
                 h.lease_id, h.job_id, h.cell, h.run, h.worker, h.status, h.failure, h.seconds,
                 h.metrics, arrays.get("curve"), arrays.get("best_position"), arrays.get("path"),
-                found[0], raw_series(h.arrays, rec.raw)))
+                found[0], None if prefix is None else prefix + rec.raw))
         self._count_foreign(foreign, worker)
         self._count_unproven(unproven)
         return worker, entries

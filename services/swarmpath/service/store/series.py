@@ -50,6 +50,13 @@ def raw_series(shapes: list[tuple[str, str, list[int]]], raw: bytes) -> bytes | 
     """The ``results.series`` value of arrays received as ``raw`` (their float64 LE bytes, one
     after the other, named and shaped by ``shapes``: a result frame's ``[name, dtype, shape]``
     declarations): :func:`encode_series` of the same arrays, without making them first."""
+    prefix = series_prefix(shapes)
+    return None if prefix is None else prefix + raw
+
+
+def series_prefix(shapes: list[tuple[str, str, list[int]]]) -> bytes | None:
+    """What precedes the arrays' bytes in the ``results.series`` value of arrays declared by
+    ``shapes`` (see :func:`raw_series`); None when nothing is declared."""
     if not shapes:
         return None
     key = tuple((name, tuple(shape)) for name, _dtype, shape in shapes)
@@ -59,7 +66,7 @@ def raw_series(shapes: list[tuple[str, str, list[int]]], raw: bytes) -> bytes | 
         head = len(text).to_bytes(4, "little") + text
         if len(_HEADS) < 4096:
             _HEADS[key] = head
-    return b"".join((SERIES_MAGIC, head, raw))
+    return SERIES_MAGIC + head
 
 
 def decode_series(blob: bytes | None, arrays: tuple[str, ...] = ()) -> dict[str, Any]:
