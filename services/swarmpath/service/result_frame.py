@@ -217,52 +217,23 @@ def _record(payload: bytes, pos: int, i: int) -> tuple[FrameRecord, int]:
         head = RecordHead(model.lease_id, model.job_id, model.cell, model.run, model.worker,
                           model.status, model.failure, model.seconds, dict(model.metrics),
                           [(n, d, list(s)) for n, d, s in model.arrays])
-    layout = _layout(i, head.arrays)
+    arrays: dict[str, np.ndarray] = {}
     first = pos
-    pos += 8 * layout[0]
-    if pos > len(payload):
-        name = next(n for n, _lo, hi, _s in layout[1] if first + 8 * hi > len(payload))
-        raise FrameError(f"record {i}: array {name} runs past the frame's end")
+    for name, _dtype, shape in head.arrays:
+        if name in arrays:
+            raise FrameError(f"record {i}: array {name} declared twice")
+        count = _check_shape(i, name, shape)
+        end = pos + 8 * count
+        if end > len(payload):
+            raise FrameError(f"record {i}: array {name} runs past the frame's end")
+        arrays[name] = np.frombuffer(payload, dtype="<f8", count=count,
+                                     offset=pos).reshape(shape)
+        pos = end
     if pos + PROOF_BYTES > len(payload):
         raise FrameError(f"record {i}: no room for its proof")
-    # one read-only view of all the arrays' values, cut into each array's own view
-    values = np.frombuffer(payload, dtype="<f8", count=layout[0], offset=first)
-    arrays = {name: values[lo:hi].reshape(shape) for name, lo, hi, shape in layout[1]}
     rec = FrameRecord(head, arrays, payload[start:pos], payload[pos:pos + PROOF_BYTES],
                       payload[first:pos])
     return rec, pos + PROOF_BYTES
-
-
-#: checked array layouts: declarations (names and shapes) -> (values in all, [(name, first
-#: value, end value, shape)]); bounded (cleared when full)
-_LAYOUTS: dict[tuple[Any, ...], tuple[int, list[tuple[str, int, int, tuple[int, ...]]]]] = {}
-MAX_LAYOUTS = 1024
-
-
-def _layout(
-    i: int, declared: list[tuple[str, str, list[int]]]
-) -> tuple[int, list[tuple[str, int, int, tuple[int, ...]]]]:
-    """The checked layout of a record's declared arrays (the same declarations come run after
-    run: checked once, then looked up); raises :class:`FrameError` like the checks it caches."""
-    key = tuple((name, dtype, *shape) for name, dtype, shape in declared)
-    found = _LAYOUTS.get(key)
-    if found is not None:
-        return found
-    seen: set[str] = set()
-    parts = []
-    total = 0
-    for name, _dtype, shape in declared:
-        if name in seen:
-            raise FrameError(f"record {i}: array {name} declared twice")
-        seen.add(name)
-        count = _check_shape(i, name, shape)
-        parts.append((name, total, total + count, tuple(shape)))
-        total += count
-    found = (total, parts)
-    if len(_LAYOUTS) >= MAX_LAYOUTS:
-        _LAYOUTS.clear()
-    _LAYOUTS[key] = found
-    return found
 
 
 def as_dict(record: FrameRecord) -> dict[str, Any]:
