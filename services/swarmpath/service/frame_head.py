@@ -41,8 +41,9 @@ MAX_ARRAYS = 3
 
 
 @dataclass(slots=True, eq=False)
-class RecordHead:
-    """A checked record head: the fields of a ``RunResultHead`` as plain attributes."""
+class RunFields:
+    """The small fields of one reported run, shared by a record head and an
+    :class:`~swarmpath.service.incoming.Incoming` (same order: both are built positionally)."""
 
     lease_id: str
     job_id: str
@@ -53,6 +54,12 @@ class RecordHead:
     failure: str | None
     seconds: float
     metrics: dict[str, Any]
+
+
+@dataclass(slots=True, eq=False)
+class RecordHead(RunFields):
+    """A checked record head: the fields of a ``RunResultHead`` as plain attributes."""
+
     arrays: list[tuple[str, str, list[int]]]
 
     def fields(self) -> dict[str, Any]:

@@ -11,10 +11,10 @@ result only when that is the secret it holds for the lease.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
+from swarmpath.service.frame_head import RunFields
 from swarmpath.service.protocol import RunResult
 
 #: The series a result may carry, in their wire and store order, with their row widths
@@ -23,18 +23,9 @@ SERIES: dict[str, int | None] = {"curve": None, "best_position": None, "path": 3
 
 
 @dataclass(slots=True, eq=False)
-class Incoming:
+class Incoming(RunFields):
     """One reported run (see the module docstring)."""
 
-    lease_id: str
-    job_id: str
-    cell: str
-    run: int
-    worker: str
-    status: str
-    failure: str | None
-    seconds: float
-    metrics: dict[str, Any]
     curve: np.ndarray | None = None
     best_position: np.ndarray | None = None
     path: np.ndarray | None = None
