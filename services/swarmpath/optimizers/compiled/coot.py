@@ -28,6 +28,7 @@ import numpy as np
 from numba import njit
 
 from swarmpath.optimizers.base import ParameterError
+from swarmpath.optimizers.compiled.best import record_first_min
 from swarmpath.optimizers.compiled.functions import cospi, dot, evaluate
 from swarmpath.optimizers.compiled.registry import Kernel, register_kernel
 from swarmpath.optimizers.compiled.streams import RANDOM, open_stream, take
@@ -78,18 +79,6 @@ def _clip(v, lo, hi):
     if v > hi:
         v = hi
     return v
-
-
-@njit(cache=True)
-def _record(F, X, m, best, best_x):
-    """Optimizer.evaluate's record: the first minimum of F[:m], if below ``best[0]``."""
-    k = 0
-    for i in range(1, m):
-        if F[i] < F[k]:
-            k = i
-    if F[k] < best[0]:
-        best[0] = F[k]
-        best_x[:] = X[k]
 
 
 @njit(cache=True)
@@ -200,7 +189,7 @@ def run(rng, fid, shifted, shift, lb, ub, N, T, params):
                 X[N + i, j] = _clip(lb[j] + ub[j] - X[i, j], lb[j], ub[j])
         evaluate(stream, fid, shifted, shift, lb, ub, X, F, mask, scratch)
         evals += 2 * N
-        _record(F, X, 2 * N, best, best_x)
+        record_first_min(F, X, 2 * N, best, best_x)
         for i in range(N):
             if F[N + i] < F[i]:
                 F[i] = F[N + i]
@@ -208,7 +197,7 @@ def run(rng, fid, shifted, shift, lb, ub, N, T, params):
     else:
         evaluate(stream, fid, shifted, shift, lb, ub, X[:N], F[:N], mask[:N], scratch)
         evals += N
-        _record(F, X, N, best, best_x)
+        record_first_min(F, X, N, best, best_x)
     CP = X[:nc].copy()
     CF = F[:nc].copy()
     LP = X[nc:N].copy()
@@ -316,7 +305,7 @@ def run(rng, fid, shifted, shift, lb, ub, N, T, params):
                     CP[i, j] = _clip((q - x) * w + x, lb[j], ub[j])
         evaluate(stream, fid, shifted, shift, lb, ub, CP, CF, mask[:nc], scratch)
         evals += nc
-        _record(CF, CP, nc, best, best_x)
+        record_first_min(CF, CP, nc, best, best_x)
 
         # ---- mCOOT: generation jumping of the coots with the smallest picks, in their order
         if variant == MCOOT and jumpers:
@@ -342,7 +331,7 @@ def run(rng, fid, shifted, shift, lb, ub, N, T, params):
             evaluate(stream, fid, shifted, shift, lb, ub, opp[:jumpers], F[:jumpers],
                      mask[:jumpers], scratch)
             evals += jumpers
-            _record(F, opp, jumpers, best, best_x)
+            record_first_min(F, opp, jumpers, best, best_x)
             for q in range(jumpers):
                 if F[q] < CF[pick[q]]:
                     CP[pick[q]] = opp[q]
@@ -391,7 +380,7 @@ def run(rng, fid, shifted, shift, lb, ub, N, T, params):
                 temp[k, j] = _clip(v, lb[j], ub[j])
         evaluate(stream, fid, shifted, shift, lb, ub, temp, TF, mask[:nl], scratch)
         evals += nl
-        _record(TF, temp, nl, best, best_x)
+        record_first_min(TF, temp, nl, best, best_x)
         holder = -1  # -1: the gBest of the phase's start
         hf = gf
         for k in range(nl):

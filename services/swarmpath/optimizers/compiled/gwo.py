@@ -7,8 +7,8 @@ from collections.abc import Mapping
 import numpy as np
 from numba import njit
 
+from swarmpath.optimizers.compiled.best import record_first_min
 from swarmpath.optimizers.compiled.functions import evaluate
-from swarmpath.optimizers.compiled.pso import _record
 from swarmpath.optimizers.compiled.registry import Kernel, register_kernel
 from swarmpath.optimizers.compiled.streams import RANDOM, open_stream, take
 from swarmpath.registry import ParamValue
@@ -80,7 +80,7 @@ def run(rng, fid, shifted, shift, lower, upper, agents, iterations, params):
     leaders = np.zeros((3, d))
     evaluate(stream, fid, shifted, shift, lower, upper, X, F, everyone, work)
     evaluations = N
-    _record(F, X, best, best_x)
+    record_first_min(F, X, F.size, best, best_x)
     if elitist:
         _elitist(F, X, scores, leaders)
     else:
@@ -112,7 +112,7 @@ def run(rng, fid, shifted, shift, lower, upper, agents, iterations, params):
                 X[i, j] = min(max(x, lower[j]), upper[j])
         evaluate(stream, fid, shifted, shift, lower, upper, X, F, everyone, work)
         evaluations += N
-        _record(F, X, best, best_x)
+        record_first_min(F, X, F.size, best, best_x)
         if elitist:
             _elitist(F, X, scores, leaders)
         else:

@@ -7,6 +7,7 @@ from collections.abc import Mapping
 import numpy as np
 from numba import njit
 
+from swarmpath.optimizers.compiled.best import record_first_min
 from swarmpath.optimizers.compiled.functions import evaluate
 from swarmpath.optimizers.compiled.registry import Kernel, register_kernel
 from swarmpath.optimizers.compiled.streams import RANDOM, open_stream, take
@@ -22,18 +23,6 @@ def pack(p: Mapping[str, ParamValue]) -> np.ndarray:
         float(_VMAX_MODES.index(str(p["vmax_mode"]))), float(p["vmax_fraction"]),
         float(_BOUNDS.index(str(p["bounds"]))),
     ])
-
-
-@njit(cache=True)
-def _record(F, X, best, best_x):
-    """Optimizer.evaluate's record: the first minimum of F, if below ``best[0]``."""
-    k = 0
-    for i in range(1, F.size):
-        if F[i] < F[k]:
-            k = i
-    if F[k] < best[0]:
-        best[0] = F[k]
-        best_x[:] = X[k]
 
 
 @njit(cache=True)
@@ -61,7 +50,7 @@ def run(rng, fid, shifted, shift, lower, upper, agents, iterations, params):
     curve = np.empty(T)
     evaluate(stream, fid, shifted, shift, lower, upper, X, F, everyone, work)
     evaluations = N
-    _record(F, X, best, best_x)
+    record_first_min(F, X, F.size, best, best_x)
     pbest_f = F.copy()
     pbest = X.copy()
     G = np.empty(d)
@@ -101,7 +90,7 @@ def run(rng, fid, shifted, shift, lower, upper, agents, iterations, params):
         for i in range(N):
             if inside[i]:
                 evaluations += 1
-        _record(F, X, best, best_x)
+        record_first_min(F, X, F.size, best, best_x)
         for i in range(N):
             if F[i] < pbest_f[i]:
                 pbest_f[i] = F[i]
