@@ -38,6 +38,24 @@ def _never() -> bool:
     return False
 
 
+def iteration_hook(
+    progress: Callable[[int], None] | None, cancelled: Callable[[], bool], lease_id: str
+) -> Callable[[object], None]:
+    """An ``on_iteration`` callback: reports the iterations done so far to ``progress`` and
+    raises :class:`Cancelled` (naming ``lease_id``) once ``cancelled()`` is true."""
+    done = 0
+
+    def hook(_optimizer: object) -> None:
+        nonlocal done
+        done += 1
+        if progress is not None:
+            progress(done)
+        if cancelled():
+            raise Cancelled(lease_id)
+
+    return hook
+
+
 def execute_lease(
     lease: Lease,
     cancelled: Callable[[], bool] = _never,
@@ -89,15 +107,7 @@ def _benchmark(
     from swarmpath.optimizers import minimize
 
     out: list[RunResult] = []
-    done = 0
-
-    def hook(_optimizer: object) -> None:
-        nonlocal done
-        done += 1
-        if progress is not None:
-            progress(done)
-        if cancelled():
-            raise Cancelled(lease.lease_id)
+    hook = iteration_hook(progress, cancelled, lease.lease_id)
 
     for batch in benchmark_batches(lease.runs, spec.agents, spec.dim):
         if cancelled():

@@ -30,6 +30,7 @@ from swarmpath.service.protocol import BenchmarkCell, Lease
 from swarmpath.service.worker.execution import (
     Cancelled,
     execute_lease,
+    iteration_hook,
     minimize_options,
     ok_results,
 )
@@ -99,15 +100,7 @@ def execute_stack(
     first = leases[0]
     spec = first.spec
     assert isinstance(spec, BenchmarkCell)
-    done = 0
-
-    def hook(_optimizer: object) -> None:
-        nonlocal done
-        done += 1
-        if progress is not None:
-            progress(done)
-        if all(flag() for flag in cancelled):
-            raise Cancelled(first.lease_id)
+    hook = iteration_hook(progress, lambda: all(flag() for flag in cancelled), first.lease_id)
 
     if all(flag() for flag in cancelled):
         return [Cancelled(lease.lease_id) for lease in leases]
