@@ -31,7 +31,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmpath.optimizers import Problem, RunStreams, create
+from swarmpath.optimizers import RunStreams
 from swarmpath.planners.rfo_geometry import path_length
 from swarmpath.planners.rfo_search import PENALTY, Array, RfoSearch
 from swarmpath.world.geometry import collides
@@ -127,13 +127,7 @@ class RfoRefine(RfoSearch):
             viol = np.maximum(thr - da, 0.0) + np.maximum(thr - db, 0.0)
             return np.where(valid, length, PENALTY + viol).reshape(-1, m)
 
-        seeds = np.asarray(self.rng.integers(0, 2**63, size=int(live.sum())), dtype=np.int64)
-        streams = RunStreams([np.random.Generator(np.random.PCG64(int(s))) for s in seeds])
-        opt = create("GWO", Problem(objective, lower, upper), m,
-                     int(self.p["gwo_iterations"]), streams)
-        opt.initialize()
-        while not opt.done:
-            opt.step()
+        opt = self._run_gwo(objective, lower, upper, m, int(live.sum()))
         now = np.hypot(*(V - A).T) + np.hypot(*(B - V).T)
         gain = opt.best_fitness < now - 1e-9
         idx = np.flatnonzero(live)[gain]

@@ -81,7 +81,7 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmpath.optimizers import Problem, RunStreams, create
+from swarmpath.optimizers import Optimizer, Problem, RunStreams, create
 from swarmpath.planners.base import Planner
 from swarmpath.planners.cost_to_go import CostToGo
 from swarmpath.planners.rfo_geometry import _BoxQuery, _Clearance
@@ -329,13 +329,19 @@ class RfoSearch(Planner):
             fit = np.where(blocked, -dobs, dg)
             return np.where(valid, fit, PENALTY + viol).reshape(F, m)
 
-        # one generator per fox, seeded from the planner's generator
-        seeds = np.asarray(self.rng.integers(0, 2**63, size=F), dtype=np.int64)
+        opt = self._run_gwo(objective, lower, upper, m, F)
+        return opt.best_position.copy(), opt.best_fitness < PENALTY
+
+    def _run_gwo(self, objective: Callable[..., Array], lower: Array, upper: Array, m: int,
+                 runs: int) -> Optimizer:
+        """GWO with ``m`` wolves for ``gwo_iterations`` on ``runs`` independent problems, one
+        generator per run seeded from the planner's generator; returns the finished optimizer."""
+        seeds = np.asarray(self.rng.integers(0, 2**63, size=runs), dtype=np.int64)
         streams = RunStreams([np.random.Generator(np.random.PCG64(int(s))) for s in seeds])
         opt = create("GWO", Problem(objective, lower, upper), m,
                      int(self.p["gwo_iterations"]), streams)
         opt.initialize()
         while not opt.done:
             opt.step()
-        return opt.best_position.copy(), opt.best_fitness < PENALTY
+        return opt
 
