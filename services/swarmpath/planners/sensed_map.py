@@ -33,10 +33,18 @@ from swarmpath.world.optimum import shortest_path
 Array = NDArray[np.float64]
 
 
-def condense(hits: Array, position: Array, reach: float, cell: float) -> Array:
-    """Hits within ``reach`` of ``position``, at most one per ``cell``-sized grid cell."""
+def condense(hits: Array, position: Array, reach: float, cell: float,
+             backend: str = "numpy") -> Array:
+    """Hits within ``reach`` of ``position``, at most one per ``cell``-sized grid cell (``backend
+    = "numba"``: :func:`swarmpath.planners.compiled_aim.condense_kernel`, the same points)."""
     if len(hits) == 0:
         return hits.reshape(0, 2)
+    if backend == "numba":
+        from swarmpath.planners.compiled_aim import condense_kernel
+
+        h = np.ascontiguousarray(hits, dtype=float)
+        return h[condense_kernel(h, float(position[0]), float(position[1]), float(reach),
+                                 float(cell))]
     d = np.hypot(hits[:, 0] - position[0], hits[:, 1] - position[1])
     near = hits[d <= reach]
     if len(near) == 0:
@@ -77,8 +85,19 @@ def _to_surface(points: Array, scan: Array, surface: float,
     The surface is the polyline through consecutive hits of the scan (adjacent rays, in the
     sensor's order) closer than ``surface``, plus every hit as a point.
     """
-    dist, idx = cKDTree(scan).query(points)
+    dist, idx = _nearest(scan, points, backend)
     return _to_surface_from(points, scan, surface, dist, idx, backend)[:2]
+
+
+def _nearest(ref: Array, points: Array, backend: str) -> tuple[Array, NDArray[np.intp]]:
+    """``cKDTree(ref).query(points)`` (``backend = "numba"``: the same by brute force,
+    :func:`swarmpath.planners.compiled_aim.nearest_kernel`)."""
+    if backend == "numba":
+        from swarmpath.planners.compiled_aim import nearest_kernel
+
+        f = np.ascontiguousarray
+        return nearest_kernel(f(ref, dtype=float), f(points, dtype=float))  # type: ignore[no-any-return]
+    return cKDTree(ref).query(points)  # type: ignore[no-any-return]
 
 
 def _to_surface_from(points: Array, scan: Array, surface: float, dist: Array,
@@ -127,7 +146,7 @@ def motion(
     if surface > 0:
         # the nearest previous hit of each current one serves both the surface distance and
         # the check back (one k-d tree query)
-        d0, i0 = cKDTree(previous).query(current)
+        d0, i0 = _nearest(previous, current, backend)
         dist, nearest, idx = _to_surface_from(current, previous, surface, d0, i0, backend)
         back, _ = _to_surface(previous, current, surface, backend)
         dist = np.where(back[idx] >= min_speed * dt, dist, 0.0)
@@ -204,13 +223,18 @@ def group_velocity(points: Array, velocity: Array, link: float, max_speed: float
     return out
 
 
-def has_corner(scan: Array, surface: float, angle_deg: float) -> bool:
+def has_corner(scan: Array, surface: float, angle_deg: float, backend: str = "numpy") -> bool:
     """Whether the sensed surface of one scan (consecutive hits closer than ``surface`` joined)
     turns by more than ``angle_deg`` between two successive pieces: a corner, whose tip may lie
     between two rays and stick out of the sensed points by centimetres (on a circle the
     polyline turns by ~10 degrees per piece and stays within millimetres of the surface)."""
     if len(scan) < 3:
         return False
+    if backend == "numba":
+        from swarmpath.planners.compiled_aim import has_corner_kernel
+
+        return bool(has_corner_kernel(np.ascontiguousarray(scan, dtype=float), float(surface),
+                                      math.cos(math.radians(angle_deg))))
     d = np.diff(scan, axis=0)
     n = np.hypot(*d.T)
     ok = (n < surface) & (n > 1e-9)
@@ -242,14 +266,23 @@ def _hull(points: Array, thickness: float) -> Array | None:
     return np.array([a - normal, b - normal, b + normal, a + normal])
 
 
-def known_obstacles(hits: Array, link: float, thickness: float = 1e-3) -> ObstacleSet:
-    """Hit groups (linked when closer than ``link``) as convex hulls and point circles."""
+def known_obstacles(hits: Array, link: float, thickness: float = 1e-3,
+                    backend: str = "numpy") -> ObstacleSet:
+    """Hit groups (linked when closer than ``link``) as convex hulls and point circles
+    (``backend = "numba"``: the groups by :func:`swarmpath.planners.compiled_aim.groups_kernel`,
+    the same)."""
     if len(hits) == 0:
         return ObstacleSet.empty()
-    pairs = cKDTree(hits).query_pairs(link, output_type="ndarray")
-    n = len(hits)
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-    count, labels = connected_components(graph, directed=False)
+    if backend == "numba":
+        from swarmpath.planners.compiled_aim import groups_kernel
+
+        labels = groups_kernel(np.ascontiguousarray(hits, dtype=float), float(link))
+        count = int(labels.max()) + 1
+    else:
+        pairs = cKDTree(hits).query_pairs(link, output_type="ndarray")
+        n = len(hits)
+        graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+        count, labels = connected_components(graph, directed=False)
     circles, polygons = [], []
     for k in range(count):
         group = hits[labels == k]
@@ -289,9 +322,19 @@ def along(pts: Array, distance: float | Array) -> Array:
     return np.stack([np.interp(s, cum, pts[:, 0]), np.interp(s, cum, pts[:, 1])], axis=-1)
 
 
-def rejoin(pts: Array, position: Array, tolerance: float) -> Array | None:
+def rejoin(pts: Array, position: Array, tolerance: float,
+           backend: str = "numpy") -> Array | None:
     """The rest of the polyline ``pts`` from the robot, starting at ``position``, when the robot
-    is within ``tolerance`` of it (None otherwise)."""
+    is within ``tolerance`` of it (None otherwise; ``backend = "numba"``:
+    :func:`swarmpath.planners.compiled_aim.rejoin_kernel`, the same)."""
+    if backend == "numba":
+        from swarmpath.planners.compiled_aim import rejoin_kernel
+
+        dk, k = rejoin_kernel(np.ascontiguousarray(pts, dtype=float), float(position[0]),
+                              float(position[1]))
+        if dk > tolerance:
+            return None
+        return np.vstack([position[None, :], pts[k + 1:]])
     a, b = pts[:-1], pts[1:]
     u = b - a
     uu = np.einsum("ij,ij->i", u, u)
@@ -323,6 +366,11 @@ def path_clearance(pts: Array, hits: Array, reach: float, backend: str = "numpy"
     it) of its start."""
     if len(hits) == 0 or len(pts) < 2:
         return math.inf
+    if backend == "numba":
+        from swarmpath.planners.compiled_aim import path_clearance_kernel
+
+        f = np.ascontiguousarray
+        return float(path_clearance_kernel(f(pts, dtype=float), f(hits, dtype=float), reach))
     cum = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(pts, axis=0).T))])
     n = int(np.searchsorted(cum, reach, side="right")) + 1
     a, b = pts[: min(n, len(pts) - 1)], pts[1 : min(n, len(pts) - 1) + 1]
@@ -341,8 +389,15 @@ def shortcut(
     straight shortcut (checked against the raw sensed points, not the hulls) is the longest
     feasible chord of the path: the robot drives the path's tangents and cuts its arcs only as
     far as the clearance allows. The first sample (1/``samples`` of the lookahead) is returned
-    when no sample is reachable.
+    when no sample is reachable (``backend = "numba"``:
+    :func:`swarmpath.planners.compiled_aim.shortcut_kernel`, the same point).
     """
+    if backend == "numba":
+        from swarmpath.planners.compiled_aim import shortcut_kernel
+
+        f = np.ascontiguousarray
+        return np.asarray(shortcut_kernel(f(pts, dtype=float), f(hits, dtype=float).reshape(-1, 2),
+                                          float(margin), float(lookahead), int(samples)))
     candidates = along(pts, lookahead * np.arange(1, samples + 1) / samples)
     if len(hits) == 0:
         return np.asarray(candidates[-1], dtype=float)

@@ -50,14 +50,15 @@ class SwarmAim(SwarmSensing):
         obstacles only add to the known map), so it is reused.
         """
         cached = self._path
+        backend = str(self.p["backend"])
         if cached is not None and np.allclose(cached[-1], goal):
-            rest = sensed_map.rejoin(cached, p, float(self.p["rejoin"]))
+            rest = sensed_map.rejoin(cached, p, float(self.p["rejoin"]), backend)
             reach = 2 * (float(self.p["step"]) + 2 * margin)
             if rest is not None and sensed_map.path_clearance(
-                    rest, hits, reach, str(self.p["backend"])) >= margin:
+                    rest, hits, reach, backend) >= margin:
                 return rest
-        coarse = sensed_map.condense(hits, p, np.inf, float(self.p["map_cell"]))
-        known = sensed_map.known_obstacles(coarse, link=2 * margin)
+        coarse = sensed_map.condense(hits, p, np.inf, float(self.p["map_cell"]), backend)
+        known = sensed_map.known_obstacles(coarse, link=2 * margin, backend=backend)
         # The hulls grow as more of an obstacle is seen, so the robot may already be closer to
         # one than ``clearance``: plan with what it has (the candidates still need margin).
         room = float(known.point_clearance(p[None, :])[0])

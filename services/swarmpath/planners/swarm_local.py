@@ -230,10 +230,11 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         goal = np.asarray(obs.goal, dtype=float)
         w, h = obs.world_size
         reach = float(self.p["step"])
+        backend = str(self.p["backend"])
         known_hits = self._known_hits(obs)  # first: this scan may show a corner
         margin = obs.robot_radius + self._safety(obs.time)
         # Only hits that can touch a candidate segment matter, one per HIT_CELL (1 cm) cell.
-        hits = sensed_map.condense(known_hits, p, reach + 2 * margin, HIT_CELL)
+        hits = sensed_map.condense(known_hits, p, reach + 2 * margin, HIT_CELL, backend)
         # Newly seen parts of a static obstacle can put the robot inside its own safety
         # distance; then moves that keep at least the clearance it has are feasible (never
         # closer than now), instead of none. Not when something moved in the last ``memory``
@@ -246,13 +247,13 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         known = known_hits
         if float(self.p["lead"]) > 0 and len(self._moving[0]):
             known = self._plan_hits(p)
-            plan_hits = sensed_map.condense(known, p, reach + 2 * margin, HIT_CELL)
+            plan_hits = sensed_map.condense(known, p, reach + 2 * margin, HIT_CELL, backend)
         # The known path is planned around everything known (sensed within ``memory``, or the
         # map), not only around the hits near enough to touch a candidate (``aim_hits = "near"``):
         # with those alone it ran into obstacles already sensed farther on (icoot-map2, ICOOT,
         # seed 1: 10.2 % above the optimum, 6.4 % with everything known; docs/planners.md).
         if self.p["aim_hits"] == "known":
-            known = sensed_map.condense(known, p, np.inf, float(self.p["map_cell"]))
+            known = sensed_map.condense(known, p, np.inf, float(self.p["map_cell"]), backend)
         else:
             known = plan_hits
         aim = self._aim(p, goal, plan_hits, margin, (0.0, 0.0, float(w), float(h)), known)
@@ -271,7 +272,7 @@ class SwarmLocalPlanner(SwarmMoveLimits):
             safety=self._safety(obs.time),
             lower=lower,
             upper=upper,
-            backend=str(self.p["backend"]),
+            backend=backend,
         )
         duration = float(self.p["replan"])
         # The goal itself is a candidate: when it is within reach and visible, go straight there.
@@ -351,6 +352,10 @@ def _load_kernel() -> None:
     sensed_map.path_clearance(path, hit, 1.0, "numba")
     scan = np.array([[1.0, 0.0], [1.0, 0.1], [1.0, 0.2]])
     sensed_map.motion(scan, scan + 0.01, 0.1, surface=0.2, backend="numba")
+    sensed_map.condense(scan, np.zeros(2), 2.0, 0.1, "numba")
+    sensed_map.has_corner(scan, 0.2, 30.0, "numba")
+    sensed_map.known_obstacles(scan, 0.15, backend="numba")
+    sensed_map.rejoin(path, np.zeros(2), 0.1, "numba")
 
 
 def _preset(name: str, optimizer: str, description: str, reference: str, sensors: str,

@@ -84,7 +84,7 @@ class SwarmSensing(Planner):
             parts.append(sensed_map.extrapolate(current[tracked], whole[tracked], horizons))
         self._last_scan = (obs.time, current)
         if sensed_map.has_corner(current, float(self.p["surface"]) or 0.2,
-                                 float(self.p["corner_angle"])):
+                                 float(self.p["corner_angle"]), str(self.p["backend"])):
             self._corner_until = obs.time + float(self.p["memory"])
         if not parts:
             return np.zeros((0, 2))

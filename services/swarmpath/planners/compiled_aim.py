@@ -1,0 +1,241 @@
+"""Compiled kernels (numba) of the swarm planners' sensing and aim, ``backend = "numba"``.
+
+The per-decision pieces outside the optimizer: merging the known points on a grid
+(:func:`swarmpath.planners.sensed_map.condense`), the nearest previous hit of each hit (motion,
+:func:`sensed_map.motion`), a scan's corners (:func:`sensed_map.has_corner`), the hit groups of
+the known map (:func:`sensed_map.known_obstacles`), and the aim's walk along the known path
+(:func:`sensed_map.shortcut`, ``rejoin``, ``path_clearance``). They run on tens to hundreds of
+points per call, where numpy's cost per call, not the arithmetic, is the time.
+
+Each repeats its numpy reference's operations in order (+ - * /, sqrt, hypot, floor and
+comparisons; no fastmath, so no fused multiply-add; ``math.hypot`` is libm's, as ``np.hypot``),
+so every value is the same double and the episodes are the same
+(``tests/test_planner_compiled_aim.py``). The one choice a reference leaves open: the nearest
+hit of a point equally far from two hits is the first of them here; scipy's k-d tree picks one
+by its traversal order (an exact tie of two float distances; the digests of
+``scripts/bench/plan_time.py`` are the same with either backend).
+
+Imported only by a planner whose ``backend`` is ``"numba"`` (``pip install 'swarmpath[fast]'``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from swarmpath.planners.compiled import segments_clearance_kernel
+
+Array = np.ndarray
+
+
+@njit(cache=True)
+def condense_kernel(hits: Array, px: float, py: float, reach: float, cell: float) -> Array:
+    """Indices of :func:`sensed_map.condense`'s result: the hits within ``reach`` of (px, py)
+    (``np.hypot``), the first of each ``cell`` grid cell (``np.floor(x / cell)``), in order."""
+    n = hits.shape[0]
+    near = np.empty(n, dtype=np.int64)
+    m = 0
+    for i in range(n):
+        if math.hypot(hits[i, 0] - px, hits[i, 1] - py) <= reach:
+            near[m] = i
+            m += 1
+    if m == 0:
+        return near[:0]
+    kx = np.empty(m, dtype=np.int64)
+    ky = np.empty(m, dtype=np.int64)
+    for k in range(m):
+        kx[k] = np.int64(math.floor(hits[near[k], 0] / cell))
+        ky[k] = np.int64(math.floor(hits[near[k], 1] / cell))
+    kx = kx - kx.min()
+    ky = ky - ky.min()
+    cols = ky.max() + 1
+    key = kx * cols + ky
+    order = np.argsort(key, kind="mergesort")  # stable: the first hit of a cell comes first
+    keep = np.zeros(m, dtype=np.bool_)
+    for k in range(m):
+        if k == 0 or key[order[k]] != key[order[k - 1]]:
+            keep[order[k]] = True
+    return near[:m][keep]
+
+
+@njit(cache=True)
+def nearest_kernel(ref: Array, points: Array) -> tuple[Array, Array]:
+    """Distance to and index of the point of ``ref`` nearest each of ``points`` (what
+    ``cKDTree(ref).query(points)`` returns: sqrt of dx * dx + dy * dy; the first on ties)."""
+    n = points.shape[0]
+    dist = np.empty(n)
+    idx = np.zeros(n, dtype=np.intp)
+    for i in range(n):
+        best = math.inf
+        at = 0
+        for j in range(ref.shape[0]):
+            dx = points[i, 0] - ref[j, 0]
+            dy = points[i, 1] - ref[j, 1]
+            d2 = dx * dx + dy * dy
+            if d2 < best:
+                best = d2
+                at = j
+        dist[i] = math.sqrt(best)
+        idx[i] = at
+    return dist, idx
+
+
+@njit(cache=True)
+def has_corner_kernel(scan: Array, surface: float, limit: float) -> bool:
+    """:func:`sensed_map.has_corner` with ``limit`` = cos(angle): two successive pieces of the
+    surface (both shorter than ``surface``, longer than 1e-9) whose cosine is below it."""
+    for i in range(scan.shape[0] - 2):
+        ax = scan[i + 1, 0] - scan[i, 0]
+        ay = scan[i + 1, 1] - scan[i, 1]
+        bx = scan[i + 2, 0] - scan[i + 1, 0]
+        by = scan[i + 2, 1] - scan[i + 1, 1]
+        na = math.hypot(ax, ay)
+        nb = math.hypot(bx, by)
+        if na < surface and na > 1e-9 and nb < surface and nb > 1e-9:
+            if (ax * bx + ay * by) / (na * nb) < limit:
+                return True
+    return False
+
+
+@njit(cache=True)
+def groups_kernel(hits: Array, link: float) -> Array:
+    """Connected components of the hits linked when dx * dx + dy * dy <= link * link (what
+    ``cKDTree.query_pairs`` pairs), labelled in order of their first hit (as scipy's
+    ``connected_components`` numbers them)."""
+    n = hits.shape[0]
+    r2 = link * link
+    parent = np.arange(n)
+    for i in range(n):
+        for j in range(i + 1, n):
+            dx = hits[i, 0] - hits[j, 0]
+            dy = hits[i, 1] - hits[j, 1]
+            if dx * dx + dy * dy <= r2:
+                a = i
+                while parent[a] != a:
+                    a = parent[a]
+                b = j
+                while parent[b] != b:
+                    b = parent[b]
+                if a != b:
+                    if a < b:
+                        parent[b] = a
+                    else:
+                        parent[a] = b
+    labels = np.empty(n, dtype=np.int64)
+    count = 0
+    for i in range(n):
+        a = i
+        while parent[a] != a:
+            a = parent[a]
+        if a == i:
+            labels[i] = count
+            count += 1
+        else:
+            labels[i] = labels[a]
+    return labels
+
+
+@njit(cache=True)
+def _cumulative(pts: Array) -> Array:
+    """Length along the polyline at each vertex (``np.cumsum`` of ``np.hypot`` of the steps)."""
+    cum = np.zeros(pts.shape[0])
+    for i in range(1, pts.shape[0]):
+        cum[i] = cum[i - 1] + math.hypot(pts[i, 0] - pts[i - 1, 0], pts[i, 1] - pts[i - 1, 1])
+    return cum
+
+
+@njit(cache=True)
+def _interp(s: float, cum: Array, f: Array) -> float:
+    """``np.interp(s, cum, f)`` for one s (numpy's rule: the last j with cum[j] <= s; its value
+    where s == cum[j], else the slope of the piece times the offset plus its start)."""
+    n = cum.shape[0]
+    if s < cum[0]:
+        return f[0]
+    if s > cum[n - 1]:
+        return f[n - 1]
+    lo = 0
+    hi = n
+    while hi - lo > 1:  # cum[lo] <= s < cum[hi] (hi = n: beyond the end)
+        mid = (lo + hi) // 2
+        if cum[mid] <= s:
+            lo = mid
+        else:
+            hi = mid
+    j = lo
+    if j == n - 1 or s == cum[j]:
+        return f[j]
+    slope = (f[j + 1] - f[j]) / (cum[j + 1] - cum[j])
+    value = slope * (s - cum[j]) + f[j]
+    if math.isnan(value):
+        value = slope * (s - cum[j + 1]) + f[j + 1]
+        if math.isnan(value) and f[j] == f[j + 1]:
+            value = f[j]
+    return value
+
+
+@njit(cache=True)
+def shortcut_kernel(pts: Array, hits: Array, margin: float, lookahead: float,
+                    samples: int) -> Array:
+    """:func:`sensed_map.shortcut`: the ``samples`` points ``lookahead * k / samples`` along
+    the polyline (``np.interp`` on its cumulative length), the last whose chord from pts[0]
+    keeps ``margin`` from every hit (the first with none)."""
+    cum = _cumulative(pts)
+    cand = np.empty((samples, 2))
+    for k in range(samples):
+        s = lookahead * float(k + 1) / samples
+        if s < 0.0:
+            s = 0.0
+        if s > cum[-1]:
+            s = cum[-1]
+        cand[k, 0] = _interp(s, cum, pts[:, 0])
+        cand[k, 1] = _interp(s, cum, pts[:, 1])
+    if hits.shape[0] == 0:
+        return cand[samples - 1].copy()
+    start = np.empty((samples, 2))
+    start[:, 0] = pts[0, 0]
+    start[:, 1] = pts[0, 1]
+    clear = segments_clearance_kernel(hits, start, cand)
+    best = 0
+    for k in range(samples):
+        if clear[k] >= margin:
+            best = k
+    return cand[best].copy()
+
+
+@njit(cache=True)
+def rejoin_kernel(pts: Array, px: float, py: float) -> tuple[float, int]:
+    """(distance, index) of the segment of the polyline nearest (px, py) (the first on ties),
+    as :func:`sensed_map.rejoin` measures it."""
+    best = math.inf
+    at = 0
+    for i in range(pts.shape[0] - 1):
+        ax = pts[i, 0]
+        ay = pts[i, 1]
+        ux = pts[i + 1, 0] - ax
+        uy = pts[i + 1, 1] - ay
+        uu = ux * ux + uy * uy
+        t = ((px - ax) * ux + (py - ay) * uy) / (uu if uu > 0 else 1.0)
+        if t < 0.0:
+            t = 0.0
+        if t > 1.0:
+            t = 1.0
+        d = math.hypot(px - (ax + t * ux), py - (ay + t * uy))
+        if d < best:
+            best = d
+            at = i
+    return best, at
+
+
+@njit(cache=True)
+def path_clearance_kernel(pts: Array, hits: Array, reach: float) -> float:
+    """:func:`sensed_map.path_clearance`: the least distance from the hits to the segments of
+    the polyline that start within ``reach`` of its start (along it), the first one past it
+    included."""
+    cum = _cumulative(pts)
+    n = 0
+    while n < cum.shape[0] and cum[n] <= reach:  # np.searchsorted(cum, reach, "right")
+        n += 1
+    m = min(n + 1, pts.shape[0] - 1)
+    return segments_clearance_kernel(hits, pts[:m], pts[1 : m + 1]).min()

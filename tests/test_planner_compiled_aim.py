@@ -1,0 +1,105 @@
+"""The swarm planners' sensing and aim with ``backend = "numba"`` (planners.compiled_aim): each
+kernel gives its numpy reference's numbers to the last bit."""
+
+import math
+
+import numpy as np
+import pytest
+
+from swarmpath.planners import sensed_map
+
+
+def _scans(rng):
+    """Scan-like point sets: arcs and walls sampled like rays, with noise, duplicates and
+    repeated points, and random clouds."""
+    out = []
+    for k in range(40):
+        n = int(rng.integers(1, 90))
+        if k % 3 == 0:
+            a = np.sort(rng.uniform(-2, 2, n))
+            pts = np.stack([1.5 + np.cos(a), -0.5 + np.sin(a)], axis=1)
+        elif k % 3 == 1:
+            pts = np.stack([np.full(n, 0.7), np.linspace(-1, 1, n)], axis=1)
+            pts[n // 2:] += [0.05, 0.0]  # a step: a corner
+        else:
+            pts = rng.uniform(-2, 2, (n, 2))
+        pts += rng.normal(0, 0.003, pts.shape) * (k % 2)
+        if n > 3:
+            pts[2] = pts[1]  # a repeated hit
+        out.append(pts)
+    return out
+
+
+def test_condense_equals_numpy():
+    rng = np.random.default_rng(3)
+    for pts in _scans(rng):
+        p = rng.uniform(-1, 1, 2)
+        for reach in (0.5, 1.5, math.inf):
+            for cell in (0.01, 0.1, 0.3):
+                ref = sensed_map.condense(pts, p, reach, cell)
+                got = sensed_map.condense(pts, p, reach, cell, "numba")
+                assert np.array_equal(ref, got) and ref.shape == got.shape
+    empty = np.zeros((0, 2))
+    assert sensed_map.condense(empty, np.zeros(2), 1.0, 0.1, "numba").shape == (0, 2)
+
+
+def test_motion_and_corners_equal_numpy():
+    rng = np.random.default_rng(4)
+    scans = _scans(rng)
+    moved = 0
+    for prev, cur in zip(scans[:-1], scans[1:], strict=True):
+        cur = prev[: len(cur)] + rng.normal(0, 0.02, (min(len(prev), len(cur)), 2))
+        for surface in (0.0, 0.2):
+            a = sensed_map.motion(prev, cur, 0.25, surface=surface)
+            b = sensed_map.motion(prev, cur, 0.25, surface=surface, backend="numba")
+            assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
+            moved += int(a[0].sum())
+        for angle in (10.0, 30.0, 60.0):
+            assert sensed_map.has_corner(cur, 0.2, angle) == sensed_map.has_corner(
+                cur, 0.2, angle, "numba")
+    assert moved > 0
+    corner = np.array([[0.0, 0.0], [0.05, 0.0], [0.1, 0.0], [0.1, 0.05]])
+    assert sensed_map.has_corner(corner, 0.2, 30.0, "numba")
+    assert not sensed_map.has_corner(corner[:3], 0.2, 30.0, "numba")
+
+
+def test_known_obstacles_equal_numpy():
+    rng = np.random.default_rng(5)
+    groups = 0
+    for pts in _scans(rng):
+        for link in (0.05, 0.2, 0.6):
+            a = sensed_map.known_obstacles(pts, link)
+            b = sensed_map.known_obstacles(pts, link, backend="numba")
+            assert np.array_equal(a.circles, b.circles)
+            assert len(a.polygons) == len(b.polygons)
+            assert all(np.array_equal(x, y) for x, y in zip(a.polygons, b.polygons, strict=True))
+            groups += len(a.polygons) + len(a.circles)
+    assert groups > 100
+
+
+@pytest.mark.parametrize("lookahead", [0.3, 1.0, 5.0])
+def test_aim_walk_equals_numpy(lookahead):
+    rng = np.random.default_rng(int(lookahead * 10))
+    found = 0
+    for _ in range(60):
+        n = int(rng.integers(2, 40))
+        pts = np.cumsum(rng.uniform(-0.1, 0.3, (n, 2)), axis=0)
+        if n > 4:
+            pts[3] = pts[2]  # a zero-length piece
+        hits = rng.uniform(-0.5, 3, (int(rng.integers(0, 50)), 2))
+        for margin in (0.05, 0.15):
+            ref = sensed_map.shortcut(pts, hits, margin, lookahead)
+            got = sensed_map.shortcut(pts, hits, margin, lookahead, backend="numba")
+            assert np.array_equal(ref, got)
+        for reach in (0.2, 1.0, 10.0):
+            assert sensed_map.path_clearance(pts, hits, reach) == sensed_map.path_clearance(
+                pts, hits, reach, "numba")
+        p = pts[int(rng.integers(0, n))] + rng.normal(0, 0.03, 2)
+        for tol in (0.01, 0.05):
+            ref_rest = sensed_map.rejoin(pts, p, tol)
+            got_rest = sensed_map.rejoin(pts, p, tol, "numba")
+            assert (ref_rest is None) == (got_rest is None)
+            if ref_rest is not None:
+                found += 1
+                assert np.array_equal(ref_rest, got_rest)
+    assert found > 5
