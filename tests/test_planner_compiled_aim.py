@@ -1,6 +1,7 @@
 """The swarm planners' sensing and aim with ``backend = "numba"`` (planners.compiled_aim): each
 kernel gives its numpy reference's numbers to the last bit."""
 
+import itertools
 import math
 
 import numpy as np
@@ -47,7 +48,7 @@ def test_motion_and_corners_equal_numpy():
     rng = np.random.default_rng(4)
     scans = _scans(rng)
     moved = 0
-    for prev, cur in zip(scans[:-1], scans[1:], strict=True):
+    for prev, cur in itertools.pairwise(scans):
         cur = prev[: len(cur)] + rng.normal(0, 0.02, (min(len(prev), len(cur)), 2))
         for surface in (0.0, 0.2):
             a = sensed_map.motion(prev, cur, 0.25, surface=surface)
