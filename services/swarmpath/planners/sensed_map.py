@@ -96,8 +96,8 @@ def _nearest(ref: Array, points: Array, backend: str) -> tuple[Array, NDArray[np
         from swarmpath.planners.compiled_aim import nearest_kernel
 
         f = np.ascontiguousarray
-        return nearest_kernel(f(ref, dtype=float), f(points, dtype=float))  # type: ignore[no-any-return]
-    return cKDTree(ref).query(points)  # type: ignore[no-any-return]
+        return nearest_kernel(f(ref, dtype=float), f(points, dtype=float))
+    return cKDTree(ref).query(points)
 
 
 def _to_surface_from(points: Array, scan: Array, surface: float, dist: Array,
