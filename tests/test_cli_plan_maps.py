@@ -92,3 +92,19 @@ def test_the_reason_is_printed_when_the_optimum_gives_up() -> None:
     assert "no exact optimum on tb3_sandbox: time budget of 1e-09 s exhausted" in result.stderr
     entry = json.loads(result.stdout)["maps"][0]
     assert entry["optimum"] is None and "time budget" in entry["optimum_reason"]
+
+
+def test_slow_imports_and_optima_report_progress_on_stderr(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Past SLOW seconds an import and an optimum say how far they are (here SLOW < 0, so every
+    step of tb3_sandbox reports); the budget is one no other test uses, so the optimum is computed
+    here, not taken from the process's cache."""
+    from swarmpath.cli import plan_maps
+
+    monkeypatch.setattr(plan_maps, "SLOW", -1.0)
+    result = invoke("-m", str(DATA / "tb3_sandbox.yaml"), "--optimum-budget", "977", "--json")
+    assert result.exit_code == 0, result.stderr
+    err = result.stderr
+    assert "% of the grid turned into polygons" in err and "imported " in err
+    assert "exact optimum of tb3_sandbox: 100% of the disk pairs" in err
+    value = json.loads(result.stdout)["maps"][0]["optimum"]
+    assert f"exact optimum of tb3_sandbox: {value:.4f} m in " in err

