@@ -212,6 +212,38 @@ def test_non_finite_curve_values_are_clamped(store, tmp_path):
     assert curve["best_fitness"][0] > 1e300
 
 
+def _raw_curves(path: Path) -> list[bytes]:
+    with open(path, "rb") as f:
+        return [m.data for _s, c, m in make_reader(f).iter_messages(log_time_order=False)
+                if c.topic == "/curves"]
+
+
+@pytest.mark.parametrize("values", [
+    [0.5, 1e-300, 1.5e30, -2.0, 0.1 + 0.2, 123456.789],  # finite: text straight from the array
+    [float("inf"), 1.0, float("nan"), float("-inf")],  # non-finite: clamped
+])
+def test_a_curve_array_and_the_same_floats_as_a_list_give_the_same_message(
+        store, tmp_path, values):
+    """A store record's curve is a float64 array that orjson writes from its buffer next to the
+    other fields' JSON; the message is byte for byte the one made from a list of the floats,
+    non-finite values clamped either way."""
+    import numpy as np
+
+    job = store.create_job({**SPEC, "runs": 1}, now=T0)
+    drain(store)
+    record = store.run_record(job, 0)
+    assert isinstance(record["curve"], np.ndarray)  # what the fast path gets from the store
+    written = []
+    for curve in (np.array(values), list(values)):
+        rec = JobRecorder(tmp_path / f"{len(written)}.mcap", job, "benchmark", SPEC, T0)
+        rec.add({**record, "curve": curve})
+        written.append(_raw_curves(rec.finish()))
+    assert written[0] == written[1] and len(written[0]) == 1
+    big = 1.7976931348623157e308  # the clamp: -inf -> -big, +inf and nan -> +big
+    expected = [v if np.isfinite(v) else -big if v < 0 else big for v in values]
+    assert json.loads(written[0][0])["best_fitness"] == expected
+
+
 # ------------------------------------------------------------------------------------- flush
 def test_flush_about_once_a_second_and_truncated_file_salvage(store, tmp_path):
     job = store.create_job({**SPEC, "runs": 5}, now=T0)

@@ -54,8 +54,11 @@ def _topic_name(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]", "_", name) or "_"
 
 
+_SCALARS = (bool, str, int)  # (a tuple: isinstance checks it faster than a union type)
+
+
 def _finite_scalar(v: Any) -> bool:
-    if isinstance(v, bool | str | int):
+    if isinstance(v, _SCALARS):
         return True
     return isinstance(v, float) and math.isfinite(v)
 

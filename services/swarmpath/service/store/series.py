@@ -7,7 +7,11 @@ import math
 import zlib
 from typing import Any
 
+import numpy as np
+
 from swarmpath.service.store.base import _dumps
+
+_F8 = np.dtype("<f8")  # the arrays' dtype: float64, little-endian
 
 #: Binary series (see encode_series): this prefix, then (header length as uint32 LE, header
 #: JSON, the arrays' float64 LE bytes in header order), not compressed: compressing cost more
@@ -16,7 +20,6 @@ SERIES_MAGIC = b"SPS2"
 #: The earlier form: the same body, zlib-compressed (still read).
 SERIES_MAGIC_ZLIB = b"SPS1"
 _HEADS: dict[tuple[tuple[str, tuple[int, ...]], ...], bytes] = {}  # header bytes by shapes
-_PARSED: dict[bytes, list[Any]] = {}  # parsed headers by their bytes
 
 
 def encode_series(series: dict[str, Any]) -> bytes | None:
@@ -24,8 +27,6 @@ def encode_series(series: dict[str, Any]) -> bytes | None:
     arrays as float64 bytes, exact and far cheaper to write than JSON text; None if empty.
     (Rows written before this format hold zlib of it, or zlib(JSON); :func:`decode_series`
     reads all three.)"""
-    import numpy as np
-
     shapes: list[tuple[str, tuple[int, ...]]] = []
     parts: list[bytes] = []
     for name, value in series.items():
@@ -71,29 +72,41 @@ def series_prefix(shapes: list[tuple[str, str, list[int]]]) -> bytes | None:
 
 def decode_series(blob: bytes | None, arrays: tuple[str, ...] = ()) -> dict[str, Any]:
     """The series of a ``results.series`` value as lists (curve: floats, path: [x, y, t] rows);
-    those named in ``arrays`` as read-only float64 arrays (no list made)."""
+    those named in ``arrays`` as read-only float64 arrays over ``blob`` (no copy, no list)."""
     if blob is None:
         return {}
-    if blob.startswith(SERIES_MAGIC):
-        body = memoryview(blob)[len(SERIES_MAGIC):]
-    elif blob.startswith(SERIES_MAGIC_ZLIB):
-        body = zlib.decompress(blob[len(SERIES_MAGIC_ZLIB):])
-    else:
+    if not blob.startswith(SERIES_MAGIC):
+        if blob.startswith(SERIES_MAGIC_ZLIB):
+            return decode_series(SERIES_MAGIC + zlib.decompress(blob[len(SERIES_MAGIC_ZLIB):]),
+                                 arrays)
         return dict(json.loads(zlib.decompress(blob)))
-    import numpy as np
-
-    n = int.from_bytes(body[:4], "little")
-    offset = 4 + n
     out: dict[str, Any] = {}
-    text = bytes(body[4:offset])
-    header = _PARSED.get(text)
-    if header is None:
-        header = json.loads(text)
-        if len(_PARSED) < 4096:
-            _PARSED[text] = header
-    for name, shape in header:
-        count = math.prod(shape)
-        arr = np.frombuffer(body, dtype="<f8", count=count, offset=offset).reshape(shape)
-        offset += 8 * count
+    for name, offset, count, shape in _layout(blob):
+        arr = np.frombuffer(blob, _F8, count, offset)  # positional: numpy parses them faster
+        if shape is not None:
+            arr = arr.reshape(shape)
         out[name] = arr if name in arrays else arr.tolist()
     return out
+
+
+_Layout = tuple[tuple[str, int, int, tuple[int, ...] | None], ...]
+_LAYOUTS: dict[bytes, _Layout] = {}  # (name, byte offset, count, shape if not 1-D) by head
+
+
+def _layout(blob: bytes) -> _Layout:
+    """Where each array of an ``SPS2`` value starts, parsed once per distinct header: the
+    series of a job's runs all share a few headers (the recorder reads thousands per second)."""
+    end = len(SERIES_MAGIC) + 4 + int.from_bytes(blob[4:8], "little")
+    head = blob[:end]
+    layout = _LAYOUTS.get(head)
+    if layout is None:
+        entries, offset = [], end
+        for name, shape in json.loads(head[8:]):
+            count = math.prod(shape)
+            entries.append((str(name), offset, count,
+                            None if len(shape) == 1 else tuple(int(n) for n in shape)))
+            offset += 8 * count
+        layout = tuple(entries)
+        if len(_LAYOUTS) < 4096:
+            _LAYOUTS[head] = layout
+    return layout
