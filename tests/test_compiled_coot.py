@@ -130,7 +130,7 @@ def test_the_kernel_cache_is_keyed_by_every_source(tmp_path):
     assert config.CACHE_DIR == compiled.versioned_cache_dir()
     assert find_kernel("ICOOT").run._cache._cache_path.startswith(config.CACHE_DIR)
     source = Path(compiled.__file__).resolve().parents[2]  # services/swarmpath
-    for part in ("optimizers", "functions"):
+    for part in ("optimizers", "functions", "planners"):
         skip = shutil.ignore_patterns("__pycache__")
         shutil.copytree(source / part, tmp_path / part, ignore=skip)
     copy = tmp_path / "optimizers" / "compiled"
@@ -138,4 +138,8 @@ def test_the_kernel_cache_is_keyed_by_every_source(tmp_path):
     assert Path(before).name == Path(config.CACHE_DIR).name  # the same sources, the same name
     trig = tmp_path / "functions" / "trig.py"
     trig.write_text(trig.read_text() + "\n# edited\n")
-    assert compiled.versioned_cache_dir(copy) != before
+    edited = compiled.versioned_cache_dir(copy)
+    assert edited != before
+    score = tmp_path / "planners" / "compiled_score.py"  # the planners' kernels too
+    score.write_text(score.read_text() + "\n# edited\n")
+    assert compiled.versioned_cache_dir(copy) != edited

@@ -304,6 +304,15 @@ def violation(C: Array, ctx: StepContext) -> Array:
 
 def score(C: Array, ctx: StepContext) -> tuple[Array, Array]:
     """(objective to minimise, repaired candidates) for candidates C (..., 2)."""
+    if ctx.backend == "numba":  # the same numbers, compiled (planners.compiled_score)
+        from swarmpath.planners.compiled_score import score_into, setup
+
+        geo, k = setup(ctx)
+        flat = np.ascontiguousarray(C, dtype=float).reshape(-1, 2)
+        F = np.empty(flat.shape[0])
+        fixed = score_into(flat, geo, np.ascontiguousarray(ctx.hits, dtype=float).reshape(-1, 2),
+                           k, F)
+        return F.reshape(C.shape[:-1]), fixed.reshape(C.shape)
     if ctx.repair == "mfb":
         fixed, v = _repair_mfb(C, ctx, 3)
     elif ctx.repair == "grid":

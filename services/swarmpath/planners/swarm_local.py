@@ -46,11 +46,12 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmpath.optimizers import Problem, RunStreams, create, get_optimizer
+from swarmpath.optimizers import RunStreams, get_optimizer
 from swarmpath.optimizers.base import ParameterError
 from swarmpath.planners import local, sensed_map
 from swarmpath.planners.base import Decision, Observation, PlannerError, register
 from swarmpath.planners.swarm_moves import SwarmMoveLimits
+from swarmpath.planners.swarm_search import searcher, warm_search
 from swarmpath.robot.sensors import get_sensor_model
 
 Array = np.ndarray
@@ -154,7 +155,8 @@ class SwarmLocalPlanner(SwarmMoveLimits):
     def __init__(self, scenario, params, rng, static_map=None):
         super().__init__(scenario, params, rng, static_map)
         self._streams = RunStreams([rng])
-        if self.p["backend"] == "numba":
+        backend = str(self.p["backend"])
+        if backend == "numba":
             _load_kernel()  # compiled or loaded from numba's cache here, not in a decision
         # knowledge = "map": the static obstacles' surfaces, sampled like sensor hits, are known
         # for the whole run (as if every static surface had been sensed before the start)
@@ -205,6 +207,11 @@ class SwarmLocalPlanner(SwarmMoveLimits):
             )
         except ParameterError as exc:
             raise PlannerError(str(exc)) from None
+        self._search = searcher(opt_cls.name, self._opt_params, int(self.p["agents"]),
+                                self._streams, backend)
+        if backend == "numba":
+            warm_search(opt_cls.name, self._opt_params, int(self.p["agents"]),
+                        str(self.p["repair"]), str(self.p["objective"]))
 
     # ----------------------------------------------------------------------------- deciding
     def _hold(self, p: Array, aim: Array, ctx: local.StepContext) -> bool:
@@ -286,28 +293,11 @@ class SwarmLocalPlanner(SwarmMoveLimits):
             assert self._held is not None
             return Decision(self._held.copy(), 0, duration)
 
-        def objective(X: Array, streams: RunStreams) -> Array:
-            cost, _ = local.score(X[0], ctx)
-            return cost[None, :]
-
-        # local.score treats every candidate on its own (elementwise arithmetic, per-row
-        # argmin): a candidate's cost does not depend on the batch it is scored in
-        problem = Problem(objective, lower[None, :], upper[None, :], rowwise=True)
-        opt = create(str(self.p["optimizer"]), problem, int(self.p["agents"]),
-                     int(self.p["iterations"]), self._streams, self._opt_params)
-        opt.initialize()
         patience, tol = int(self.p["patience"]), float(self.p["tolerance"])
-        best, stalled = float(opt.best_fitness[0]), 0
-        while not opt.done:
-            opt.step()
-            now = float(opt.best_fitness[0])
-            stalled = stalled + 1 if best - now <= tol * max(1.0, abs(best)) else 0
-            best = now
-            if patience and stalled >= patience and best < local.PENALTY:
-                break  # converged: the last ``patience`` iterations did not improve the best
-        iterations = opt.t
+        best, position, iterations = self._search(ctx, int(self.p["agents"]),
+                                                  int(self.p["iterations"]), patience, tol)
         if best < local.PENALTY:
-            target = local.repair(opt.best_position[0][None, :], ctx)[0]
+            target = local.repair(position[None, :], ctx)[0]
             self._held = target
             return Decision(target, iterations, duration)
         self._held = None

@@ -68,7 +68,8 @@ _PACKAGE = Path(__file__).resolve().parent
 
 def versioned_cache_dir(package: Path = _PACKAGE) -> str:
     """Where numba caches the kernels: a directory named by a hash of the sources they are
-    compiled from (``swarmpath.optimizers`` and ``swarmpath.functions``), under
+    compiled from (``swarmpath.optimizers``, ``swarmpath.functions`` and the planners'
+    ``compiled*.py``), under
     ``NUMBA_CACHE_DIR`` if set, else this package's ``__pycache__``.
 
     numba keys a cached function on its own file only: a kernel that inlines ``evaluate`` (or a
@@ -82,6 +83,11 @@ def versioned_cache_dir(package: Path = _PACKAGE) -> str:
         for path in sorted(folder.rglob("*.py")):
             digest.update(path.relative_to(folder.parent).as_posix().encode())
             digest.update(path.read_bytes())
+    # the planners' kernels call these (and each other) across files
+    planners = package.parent.parent / "planners"
+    for path in sorted(planners.glob("compiled*.py")):
+        digest.update(path.relative_to(planners.parent).as_posix().encode())
+        digest.update(path.read_bytes())
     base = os.environ.get("NUMBA_CACHE_DIR") or str(package / "__pycache__")
     return os.path.join(base, f"swarmpath-{digest.hexdigest()[:16]}")
 
