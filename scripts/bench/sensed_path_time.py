@@ -3,6 +3,7 @@
 
     PYTHONPATH=services .venv/bin/python scripts/bench/sensed_path_time.py \
         [--map mfb-static] [--planners ICOOT,MFB] [--seeds 1] [--repeat 5] [--passes 3]
+        [--backend numba]
 
 Runs each planner (numba backend) once per seed 1..N, records every call the aim makes to
 :func:`swarmpath.world.optimum.shortest_path` (start, goal, known map, margin, box), then plays
@@ -57,8 +58,11 @@ def main(argv: Sequence[str] | None = None) -> None:
     ap.add_argument("--seeds", type=int, default=1)
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--passes", type=int, default=3)
+    ap.add_argument("--backend", default="numba", choices=("numpy", "numba"),
+                    help="shortest_path's backend for the playback (the runs record with numba)")
     args = ap.parse_args(argv)
-    calls = record_calls(args.map, args.planners.split(","), args.seeds)
+    calls = [(a, {**k, "backend": args.backend})
+             for a, k in record_calls(args.map, args.planners.split(","), args.seeds)]
     digest = hashlib.sha256()
     for a, k in calls:
         best = shortest_path(*a, **k)

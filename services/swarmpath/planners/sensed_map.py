@@ -300,13 +300,15 @@ def known_path(
     known: ObstacleSet,
     margin: float,
     world: tuple[float, float, float, float],
+    backend: str = "numpy",
 ) -> Array | None:
     """The shortest path (polyline, arcs sampled) to the goal in the known map; None if there is
-    none (the robot or the goal inside a known inflated obstacle, or no path in the known map)."""
+    none (the robot or the goal inside a known inflated obstacle, or no path in the known map;
+    ``backend`` as in :func:`swarmpath.world.optimum.shortest_path`)."""
     if known.is_empty:
         return np.array([position, goal], dtype=float)
     try:
-        best = shortest_path(position, goal, known, margin, world=world)
+        best = shortest_path(position, goal, known, margin, world=world, backend=backend)
     except ValueError:
         return None
     if not best.exact or not math.isfinite(best.length) or len(best.points) < 2:

@@ -62,7 +62,8 @@ class SwarmAim(SwarmSensing):
         # The hulls grow as more of an obstacle is seen, so the robot may already be closer to
         # one than ``clearance``: plan with what it has (the candidates still need margin).
         room = float(known.point_clearance(p[None, :])[0])
-        path = sensed_map.known_path(p, goal, known, min(clearance, room - 1e-6), world)
+        path = sensed_map.known_path(p, goal, known, min(clearance, room - 1e-6), world,
+                                     backend)
         if path is None:
             self._path = None
             return np.array([p, goal])

@@ -108,6 +108,18 @@ def _sorted_csr(rows: IntArray, cols: IntArray, weights: Array, n: int) -> csr_m
     return csr_matrix((weights, cols, indptr), shape=(n, n))
 
 
+def _compiled(scene: _Scene) -> tuple[np.ndarray, ...]:
+    """The scene's arrays as :mod:`swarmpath.world.optimum_compiled` takes them (box, circles,
+    polygon edges and their grown boxes)."""
+    box = np.zeros(0)
+    if scene.lo is not None and scene.hi is not None:
+        box = np.concatenate([scene.lo - TOL, scene.hi + TOL])
+    f = np.ascontiguousarray
+    return (box, f(scene.circles, dtype=np.float64), f(scene.e0, dtype=np.float64),
+            f(scene.e1, dtype=np.float64), scene.starts, scene.counts,
+            f(scene.bb_lo, dtype=np.float64), f(scene.bb_hi, dtype=np.float64))
+
+
 @dataclass(frozen=True, eq=False)
 class OptimalPath:
     """Result of :func:`shortest_path`.
@@ -137,6 +149,7 @@ def shortest_path(
     budget: float | None = DEFAULT_BUDGET,
     progress: Callable[[float], None] | None = None,
     index: bool | None = None,
+    backend: str = "numpy",
 ) -> OptimalPath:
     """Exact shortest path from start to goal for a disk robot of radius ``margin``.
 
@@ -144,8 +157,10 @@ def shortest_path(
     limits. ``budget``: seconds of wall time after which the search gives up (``None``: no
     limit); ``progress(fraction)`` is called as the tangent pairs are processed; ``index``: use
     the spatial index of :mod:`swarmpath.world.optimum_index` (``None``: when there are more than
-    ``INDEX_ABOVE`` disks; only with margin > 0 and polygons). Raises ValueError if start or
-    goal is outside ``world`` or inside an inflated obstacle.
+    ``INDEX_ABOVE`` disks; only with margin > 0 and polygons); ``backend = "numba"``: the
+    tangents and segment checks of small scenes compiled
+    (:mod:`swarmpath.world.optimum_compiled`, the same path to the last bit). Raises ValueError
+    if start or goal is outside ``world`` or inside an inflated obstacle.
     """
     started = time.perf_counter()
     s = np.asarray(start, dtype=np.float64).reshape(2)
@@ -160,7 +175,14 @@ def shortest_path(
         if who is not None:
             raise ValueError(f"{name} {p.tolist()} is inside the inflated {who}")
 
-    if not scene.segments_blocked(s[None], g[None])[0]:
+    compiled = _compiled(scene) if backend == "numba" and margin > 0.0 else None
+    if compiled is not None:
+        from swarmpath.world.optimum_compiled import segments_blocked_kernel
+
+        direct = not segments_blocked_kernel(s[None], g[None], margin, *compiled)[0]
+    else:
+        direct = not scene.segments_blocked(s[None], g[None])[0]
+    if direct:
         return OptimalPath(float(_norm(g - s)), np.stack([s, g]), True, None)
 
     centres, radii, na, nb = _disks(s, g, obstacles, margin)
@@ -192,6 +214,14 @@ def shortest_path(
     found: list[tuple[IntArray, IntArray, Array, Array]] = []
     done = 0
     i0 = 0
+    if compiled is not None and edge_index is None and n_disks * (n_disks - 1) <= _PAIRS:
+        from swarmpath.world.optimum_compiled import tangents_kernel
+
+        # one chunk (the loop below would take every pair at once), compiled
+        found.append(tangents_kernel(centres, radii, na, nb, margin, *compiled))
+        i0 = n_disks  # skips the loop
+        if progress is not None:
+            progress(1.0)
     while i0 < n_disks - 1:
         if budget is not None and time.perf_counter() - started > budget:
             return OptimalPath(

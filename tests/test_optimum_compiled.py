@@ -1,0 +1,93 @@
+"""The exact shortest path with ``backend = "numba"`` (world.optimum_compiled): the same path and
+length, to the last bit, as the numpy reference."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from swarmpath.planners import sensed_map
+from swarmpath.world import get_map
+from swarmpath.world.geometry import ObstacleSet
+from swarmpath.world.optimum import _compiled, shortest_path
+from swarmpath.world.optimum_compiled import segments_blocked_kernel
+from swarmpath.world.optimum_scene import _Scene
+
+
+def _scene(rng: np.random.Generator, k: int) -> ObstacleSet:
+    """Sensed-map-like obstacles: hulls of random point groups, point circles, a disk."""
+    polys = []
+    for _ in range(k):
+        centre = rng.uniform(1, 7, 2)
+        pts = centre + rng.normal(0, 0.4, (int(rng.integers(3, 12)), 2))
+        polys.append(pts)
+    known = sensed_map.known_obstacles(np.concatenate(polys), link=0.2)
+    circles = np.vstack([known.circles.reshape(-1, 3),
+                         [[*rng.uniform(1, 7, 2), float(rng.uniform(0, 0.5))]]])
+    return ObstacleSet(circles, known.polygons)
+
+
+@pytest.mark.parametrize("seeds", [range(0, 8), range(8, 16)])
+def test_compiled_shortest_path_equals_numpy(seeds: range) -> None:
+    bent = 0
+    for seed in seeds:
+        bent += _compare_paths(seed)
+    assert bent >= 8
+
+
+def _compare_paths(seed: int) -> int:
+    rng = np.random.default_rng(seed)
+    obstacles = _scene(rng, 1 + seed % 3)
+    world = (0.0, 0.0, 8.0, 8.0) if seed % 2 else None
+    bent = 0
+    centres = [p.mean(axis=0) for p in obstacles.polygons]
+    for k in range(8):
+        s, g = rng.uniform(0.2, 7.8, (2, 2))
+        if k % 2 and centres:  # across an obstacle: a bent path
+            u = rng.normal(0, 1, 2)
+            c = centres[k % len(centres)]
+            s, g = np.clip([c + 1.5 * u / np.hypot(*u), c - 1.5 * u / np.hypot(*u)], 0.2, 7.8)
+        margin = float(rng.choice([0.05, 0.15, 0.3]))
+        try:
+            ref = shortest_path(s, g, obstacles, margin, world=world)
+        except ValueError as exc:
+            with pytest.raises(ValueError, match=str(exc).split(" ")[0]):
+                shortest_path(s, g, obstacles, margin, world=world, backend="numba")
+            continue
+        got = shortest_path(s, g, obstacles, margin, world=world, backend="numba")
+        assert repr(ref.length) == repr(got.length) and ref.exact == got.exact
+        assert np.array_equal(ref.points, got.points)
+        bent += len(ref.points) > 2
+    return bent
+
+
+def test_compiled_segment_checks_equal_numpy() -> None:
+    rng = np.random.default_rng(7)
+    blocked = 0
+    for k in range(20):
+        obstacles = _scene(rng, 1 + k % 4)
+        margin = float(rng.uniform(0.01, 0.3))
+        scene = _Scene(obstacles, margin, (0.0, 0.0, 8.0, 8.0) if k % 2 else None)
+        a = rng.uniform(-0.5, 8.5, (300, 2))
+        b = a + rng.normal(0, 2, (300, 2))
+        b[:20] = a[:20]  # points
+        ref = scene.segments_blocked(a, b)
+        got = segments_blocked_kernel(a, b, margin, *_compiled(scene))
+        assert np.array_equal(ref, got)
+        blocked += int(ref.sum())
+    assert 0 < blocked < 20 * 300
+
+
+def test_compiled_planner_paths_on_a_preset() -> None:
+    """The 10 m mfb-static map's obstacles (circles and polygons) as one scene."""
+    scenario = get_map("mfb-static")
+    obstacles = scenario.static_obstacles()
+    rng = np.random.default_rng(1)
+    for _ in range(5):
+        s, g = rng.uniform(0.5, 9.5, (2, 2))
+        try:
+            ref = shortest_path(s, g, obstacles, 0.12)
+        except ValueError:
+            continue
+        got = shortest_path(s, g, obstacles, 0.12, backend="numba")
+        assert repr(ref.length) == repr(got.length) and np.array_equal(ref.points, got.points)
