@@ -19,6 +19,7 @@ from swarmpath.optimizers import minimize
 from swarmpath.service.capability import progress_proof, result_proof
 from swarmpath.service.protocol import Lease, MapJobSpec, RunResult, parse_job_spec
 from swarmpath.service.store import Store, StoreError
+from swarmpath.service.store import base as store_base
 from swarmpath.stats import describe, rank
 
 SPEC = {
@@ -161,6 +162,26 @@ def test_duplicate_results_are_ignored(store):
     assert store.accept_results(results, now=T0) == ["duplicate", "duplicate"]
     assert store.job_status(job).runs_done == 2
     assert store.counters()["duplicates"] == 2
+
+
+def test_the_lease_run_cache_stays_bounded_within_one_job(store, monkeypatch):
+    """Every granted lease's run set is cached for fencing; a job of many leases must not grow
+    the cache past its bound (a lease whose set was dropped is still fenced from its row)."""
+    monkeypatch.setattr(store_base, "LEASE_RUNS_CACHE", 3)
+    store.create_job(SPEC, now=T0)
+    leases = []
+    while (lease := store.lease("w1", 1, now=T0)) is not None:
+        leases.append(lease)
+        assert len(store._lease_runs) <= 3
+    assert len(leases) == 20
+    assert leases[0].lease_id not in store._lease_runs
+    first = execute(leases[0])
+    assert store.accept_results(first, now=T0) == ["accepted"]
+    wrong_run = first[0].model_copy(update={"run": leases[1].runs[0]})
+    assert store.accept_results([signed(leases[0], wrong_run)], now=T0) == ["stale"]
+    for lease in leases[1:]:
+        assert store.accept_results(execute(lease), now=T0) == ["accepted"]
+        assert len(store._lease_runs) <= 3
 
 
 def test_stale_results_are_rejected(store):

@@ -6,7 +6,7 @@ import json
 import math
 import sqlite3
 import threading
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Self
@@ -21,6 +21,7 @@ from swarmpath.service.protocol import (
 SCHEMA_VERSION = 2  # 2: leases.capability, leases.beat
 DB_NAME = "swarmpath.sqlite3"
 CACHE_KIB = 2048  # SQLite page cache of the connection, KiB (bounded; its default is 2,000)
+LEASE_RUNS_CACHE = 50_000  # leases whose run sets are kept in memory (beyond: read again)
 JOB_STATES: tuple[JobState, ...] = ("queued", "running", "done", "failed", "cancelled")
 FINAL_STATES = frozenset({"done", "failed", "cancelled"})
 
@@ -271,10 +272,16 @@ class StoreBase:
     def _runs_of(self, lease_id: str, runs_json: str) -> frozenset[int]:
         cached = self._lease_runs.get(lease_id)
         if cached is None:
-            if len(self._lease_runs) > 50_000:
-                self._lease_runs.clear()
-            cached = frozenset(json.loads(runs_json))
-            self._lease_runs[lease_id] = cached
+            cached = self._remember_runs(lease_id, json.loads(runs_json))
+        return cached
+
+    def _remember_runs(self, lease_id: str, runs: Iterable[int]) -> frozenset[int]:
+        """Cache a lease's run set; at most LEASE_RUNS_CACHE leases (then it starts over: a
+        run set not cached is read from its lease row). A job's end drops its leases' sets
+        (forget_job); the bound holds within one job of many leases too."""
+        if len(self._lease_runs) >= LEASE_RUNS_CACHE:
+            self._lease_runs.clear()
+        cached = self._lease_runs[lease_id] = frozenset(runs)
         return cached
 
     @staticmethod

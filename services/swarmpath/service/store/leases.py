@@ -119,7 +119,7 @@ class LeasesMixin(StoreBase):
                 (lease_id, worker, seq, cell_idx, _dumps(runs), len(runs), now,
                  now + lease_seconds, capability),
             )
-            self._lease_runs[lease_id] = frozenset(runs)
+            self._remember_runs(lease_id, runs)
             return Lease(
                 lease_id=lease_id,
                 worker=worker,
