@@ -4,7 +4,9 @@ completed exactly once; results proven with a wrong key are never accepted."""
 
 from __future__ import annotations
 
+import importlib.util
 import json
+import os
 import sqlite3
 import subprocess
 import sys
@@ -16,6 +18,15 @@ from swarmpath.service.store import Store
 
 ROOT = Path(__file__).resolve().parents[1]
 FARM = ROOT / "scripts" / "bench" / "farm.py"
+
+
+def _farm_memory():
+    spec = importlib.util.spec_from_file_location(
+        "farm_memory", ROOT / "scripts" / "bench" / "farm_memory.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def farm(tmp: Path, *args: str, timeout: float = 120.0) -> tuple[int, dict]:
@@ -83,3 +94,37 @@ def test_map_runs_arrive_with_their_paths(tmp_path):
     # a real run's path (rows x, y, t) and outcome, each run's times its own
     assert all(r["success"] and len(r["path"]) > 10 and len(r["path"][0]) == 3 for r in runs)
     assert len({r["path"][-1][2] for r in runs}) == 6
+
+
+def test_memory_profile_marks_the_quarters_and_the_second_half_slope():
+    fm = _farm_memory()
+    # 0..1000 runs in steps of 100, one sample a second; RSS +2 KB per run in the first half,
+    # flat after it (anonymous = RSS - 50 MB)
+    samples = []
+    for i in range(11):
+        runs = 100 * i
+        rss = 200.0 + min(runs, 500) * 2 / 1024
+        samples.append((float(i), runs, rss, rss - 50.0, 50.0))
+    p = fm.memory_profile(samples, 1000)
+    assert p["rss_at"] == {"0": 200.0, "25": round(200 + 300 * 2 / 1024, 1),
+                           "50": round(200 + 1000 / 1024, 1), "75": round(200 + 1000 / 1024, 1),
+                           "100": round(200 + 1000 / 1024, 1)}
+    assert p["anon_at"]["100"] == round(150 + 1000 / 1024, 1)
+    assert p["second_half_mb"] == 0.0 and p["slope_kb_per_run"] == 0.0
+    assert p["slope_mb_per_s"] == 0.0
+    # growing all along: the slope over the second half is the growth per run and per second
+    growing = [(float(i), 100 * i, 200.0 + 100 * i * 2 / 1024, 150.0, 50.0) for i in range(11)]
+    g = fm.memory_profile(growing, 1000)
+    assert g["slope_kb_per_run"] == 2.0 and g["slope_mb_per_s"] == round(200 / 1024, 4)
+    assert g["second_half_mb"] == round(g["rss_at"]["100"] - g["rss_at"]["50"], 1) > 0.9
+    # a job cancelled before its end has no 100 % mark and no slope
+    cut = fm.memory_profile(growing[:6], 1000)
+    assert "100" not in cut["rss_at"] and cut["slope_kb_per_run"] is None
+    assert "50" in cut["rss_at"] and "75" not in cut["rss_at"]
+    assert "slope 2.0 KB per run" in fm.profile_line(g)
+
+
+def test_proc_memory_splits_the_resident_memory():
+    rss, anon, file = _farm_memory().proc_memory(os.getpid())
+    assert rss > 0 and anon > 0 and file > 0
+    assert abs(rss - anon - file) < 1.0  # VmRSS = RssAnon + RssFile + RssShmem

@@ -4,7 +4,7 @@
     .venv/bin/python scripts/bench/farm.py [--workers K] [--slots S] [--procs P] [--runs N]
         [--cells C] [--iterations I] [--agents A] [--dim D] [--algorithm GWO] [--function F1]
         [--map mfb-static --planner MFB] [--run-ms MS] [--runs-per-lease R] [--max-leases L]
-        [--seconds T] [--json FILE] [--data DIR]
+        [--seconds T] [--jobs N] [--zenoh-config FILE] [--json FILE] [--data DIR]
 
 What runs: ``swarmpath coordinator`` as a subprocess on free loopback ports (HTTP, Zenoh router
 with usrpwd authentication, a fresh data directory: its real SQLite store and MCAP recorder), and
@@ -21,7 +21,9 @@ Reported (markdown on stdout, everything as JSON with ``--json``): accepted runs
 runs over the coordinator's first-lease-to-last-result time), the coordinator process's CPU per
 accepted run (user + system from /proc over the job), ack latency (a worker's put of a result to
 its ack) and lease round trip (query to reply) p50/p99, store bytes per run (SQLite after the
-coordinator closed it) and MCAP bytes per run, the coordinator's RSS over time, the workers the
+coordinator closed it) and MCAP bytes per run, the coordinator's RSS over time (anonymous and
+file-backed; at 0/25/50/75/100 % of each job's runs and its slope over the second half:
+scripts/bench/farm_memory.py), the workers the
 coordinator saw alive, and how the runs were spread over the workers (min/median/max per worker,
 workers with none). The machine is shared: read times next to the load averages reported.
 """
@@ -44,6 +46,7 @@ from pathlib import Path
 from typing import Any
 
 import httpx
+from farm_memory import memory_profile, proc_memory, profile_line  # scripts/bench/farm_memory.py
 from polling import wait_until  # scripts/bench/polling.py
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -145,7 +148,8 @@ class Farm:
              "--http", f"127.0.0.1:{self.http_port}",
              "--zenoh", f"tcp/127.0.0.1:{self.zenoh_port}", "--data", str(self.data / "store"),
              "--auth-dictionary", str(users), "--lease-seconds", str(a.lease_seconds),
-             "--log-level", a.log_level],
+             "--log-level", a.log_level,
+             *(["--zenoh-config", str(a.zenoh_config)] if a.zenoh_config else [])],
             stdout=self.log, stderr=self.log, start_new_session=True,
             env={**tree_env(self.root), "SWARMPATH_TOKEN": self.token})
         self.wait(lambda: self.client.get("/healthz").status_code == 200, 60, "coordinator")
@@ -238,18 +242,21 @@ def store_bytes(store: Path) -> int:
 
 
 def one_job(args: argparse.Namespace, farm: Farm, spec: dict[str, Any], pid: int, t0: float,
-            rss: list[tuple[float, float]]) -> tuple[str, dict[str, Any]]:
+            rss: list[tuple[float, int, float, float, float]]) -> tuple[str, dict[str, Any]]:
     """Submit one job and wait for its end (cancel it after ``args.seconds``), sampling the
-    coordinator's RSS into ``rss``; returns its id and final status."""
+    coordinator's memory into ``rss`` (seconds, runs finished, RSS, anonymous, file MB);
+    returns its id and final status."""
     r = farm.client.post("/jobs", json=spec)
     r.raise_for_status()
     job = r.json()["id"]
     note(f"farm: job {job} ({r.json()['runs_total']} runs) on {args.workers} workers x "
          f"{args.slots} slots")
     status: dict[str, Any] = {}
+    rss.append((round(time.monotonic() - t0, 2), 0, *proc_memory(pid)))
     while True:
         status = farm.client.get(f"/jobs/{job}").json()
-        rss.append((round(time.monotonic() - t0, 2), proc_cpu_rss(pid)[1]))
+        rss.append((round(time.monotonic() - t0, 2),
+                    int(status["runs_done"]) + int(status["runs_failed"]), *proc_memory(pid)))
         if status["state"] in ("done", "failed", "cancelled"):
             break
         if time.monotonic() - t0 > args.seconds:
@@ -280,13 +287,16 @@ def run(args: argparse.Namespace, data: Path, root: Path = ROOT) -> dict[str, An
         rec0 = children_cpu(pid)
         sim0 = farm.sim_cpu()
         t0 = time.monotonic()
-        rss: list[tuple[float, float]] = [(0.0, rss0)]
+        rss: list[tuple[float, int, float, float, float]] = []
         rss_jobs: list[float] = []  # RSS at the end of each successive job
+        profiles: list[dict[str, Any]] = []  # the memory over each job
         finished = last = 0
         span = 0.0
         for _ in range(args.jobs):
+            first = len(rss)
             job, status = one_job(args, farm, spec, pid, t0, rss)
             rss_jobs.append(round(proc_cpu_rss(pid)[1], 1))
+            profiles.append(memory_profile(rss[first:], int(status["runs_total"])))
             last = int(status["runs_done"]) + int(status["runs_failed"])
             finished += last
             span += (float(status["finished"] or time.time()) - float(status["started"] or 0)) \
@@ -321,10 +331,12 @@ def run(args: argparse.Namespace, data: Path, root: Path = ROOT) -> dict[str, An
         "store_bytes_per_run": round((store_bytes(data / "store") - store0) / max(1, done)),
         "mcap_bytes_per_run": round(mcap.stat().st_size / max(1, last)) if mcap.is_file()
         else None,
-        "rss_mb": {"start": round(rss0, 1), "max": round(max(x for _, x in rss), 1),
+        "rss_mb": {"start": round(rss0, 1), "max": round(max([rss0] + [x[2] for x in rss]), 1),
                    "end": round(rss1, 1)},
         "rss_end_of_each_job_mb": rss_jobs,
-        "rss_series": [(t, round(x, 1)) for t, x in rss[:: max(1, len(rss) // 40)]],
+        "memory": profiles,
+        "rss_series": [(t, n, round(x, 1), round(a, 1), round(f, 1))
+                       for t, n, x, a, f in rss[:: max(1, len(rss) // 40)]],
         "alive_seen": alive_before, "table_entries": len(table),
         "runs_per_worker": {"min": per_worker[0] if per_worker else 0,
                             "median": statistics.median(per_worker) if per_worker else 0,
@@ -359,6 +371,9 @@ def markdown(results: list[dict[str, Any]]) -> str:
             lines.append(f"\n(K = {r['workers']}, {r['tree']}: RSS MB at the end of each of "
                          f"{len(r['rss_end_of_each_job_mb'])} successive jobs: "
                          f"{', '.join(map(str, r['rss_end_of_each_job_mb']))})\n")
+        for i, profile in enumerate(r.get("memory", [])):
+            lines.append(f"\n(K = {r['workers']}, {r['tree']}, job {i + 1}: "
+                         f"{profile_line(profile)})\n")
         if r.get("idle_cpu_ms_per_worker_s") is not None:
             lines.append(f"\n(K = {r['workers']}, {r['tree']}: idle, the coordinator and its "
                          f"recorder spent {r['idle_cpu_ms_per_worker_s']} ms of CPU per worker "
@@ -398,6 +413,9 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
                     help="a worker's max_runs per lease (the coordinator sizes below it)")
     ap.add_argument("--max-leases", type=int, default=32, help="leases per bundle at most")
     ap.add_argument("--lease-seconds", type=float, default=30.0)
+    ap.add_argument("--zenoh-config", type=Path,
+                    help="JSON file of extra Zenoh settings for the coordinator (its "
+                    "--zenoh-config), e.g. a smaller transport/link/tx/batch_size")
     ap.add_argument("--seconds", type=float, default=300.0, help="cancel the job after this")
     ap.add_argument("--jobs", type=int, default=1,
                     help="successive jobs on the same coordinator (RSS at the end of each)")
