@@ -104,3 +104,24 @@ def test_aim_walk_equals_numpy(lookahead):
                 found += 1
                 assert np.array_equal(ref_rest, got_rest)
     assert found > 5
+
+
+def test_aim_clearances_equal_numpy():
+    from swarmpath.planners import local
+    from swarmpath.planners.swarm_aim import _line_clearance, _room
+
+    rng = np.random.default_rng(9)
+    inside = 0
+    for pts in _scans(rng):
+        known = sensed_map.known_obstacles(pts, 0.3)
+        for _ in range(10):
+            p, goal = rng.uniform(-2, 3, (2, 2))
+            if _ % 3 == 0 and known.polygons:
+                p = known.polygons[0].mean(axis=0)  # inside a hull
+            ref = float(known.point_clearance(p[None, :])[0])
+            assert _room(p, known, "numba") == ref
+            inside += ref < 0
+            ref = float(local.segment_hit_distance(p, goal[None, :], pts)[0][0])
+            assert _line_clearance(p, goal, pts, "numba") == ref
+            assert _line_clearance(p, goal, pts, "numpy") == ref
+    assert inside > 5

@@ -25,7 +25,8 @@ import math
 import numpy as np
 from numba import njit
 
-from swarmpath.planners.compiled import segments_clearance_kernel
+from swarmpath.planners.compiled import _segment_nearest, segments_clearance_kernel
+from swarmpath.world.optimum_compiled import _point_segment
 
 Array = np.ndarray
 
@@ -239,3 +240,43 @@ def path_clearance_kernel(pts: Array, hits: Array, reach: float) -> float:
         n += 1
     m = min(n + 1, pts.shape[0] - 1)
     return segments_clearance_kernel(hits, pts[:m], pts[1 : m + 1]).min()
+
+
+@njit(cache=True)
+def line_clearance_kernel(px: float, py: float, x: float, y: float, hits: Array) -> float:
+    """``local.segment_hit_distance(p, [(x, y)], hits)[0][0]``: the distance from the segment
+    p -> (x, y) to its nearest hit (the hits taken relative to p, as the reference does)."""
+    wx = np.empty(hits.shape[0])
+    wy = np.empty(hits.shape[0])
+    for j in range(hits.shape[0]):
+        wx[j] = hits[j, 0] - px
+        wy[j] = hits[j, 1] - py
+    best, _ = _segment_nearest(px, py, x, y, wx, wy)
+    return math.sqrt(best)
+
+
+@njit(cache=True)
+def point_clearance_kernel(px: float, py: float, circles: Array, verts: Array,
+                           counts: Array) -> float:
+    """``ObstacleSet.point_clearance`` of one point: the least of the circles' hypot - r and
+    the polygons' edge distances, negative inside a polygon (even-odd ray casting toward +x);
+    ``verts`` are the polygons' vertices one after the other, ``counts`` how many each."""
+    out = math.inf
+    for c in range(circles.shape[0]):
+        out = min(out, math.hypot(px - circles[c, 0], py - circles[c, 1]) - circles[c, 2])
+    start = 0
+    for j in range(counts.shape[0]):
+        d = math.inf
+        crossings = 0
+        for k in range(start, start + counts[j]):
+            nxt = k + 1 if k + 1 < start + counts[j] else start
+            ax, ay, bx, by = verts[k, 0], verts[k, 1], verts[nxt, 0], verts[nxt, 1]
+            d = min(d, _point_segment(px, py, ax, ay, bx, by))
+            if (ay > py) != (by > py):
+                dy = by - ay
+                safe = dy if dy != 0.0 else 1.0
+                if px < ax + (py - ay) * (bx - ax) / safe:
+                    crossings += 1
+        out = min(out, -d if crossings % 2 == 1 else d)
+        start += counts[j]
+    return out

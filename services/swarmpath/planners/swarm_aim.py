@@ -11,6 +11,32 @@ import numpy as np
 
 from swarmpath.planners import local, sensed_map
 from swarmpath.planners.swarm_sensing import Array, SwarmSensing
+from swarmpath.world.geometry import ObstacleSet
+
+
+def _line_clearance(p: Array, goal: Array, hits: Array, backend: str) -> float:
+    """Distance from the segment p -> goal to its nearest hit (``local.segment_hit_distance``;
+    ``backend = "numba"``: :func:`swarmpath.planners.compiled_aim.line_clearance_kernel`)."""
+    if backend == "numba":
+        from swarmpath.planners.compiled_aim import line_clearance_kernel
+
+        return float(line_clearance_kernel(float(p[0]), float(p[1]), float(goal[0]),
+                                           float(goal[1]), np.ascontiguousarray(hits, dtype=float)))
+    return float(local.segment_hit_distance(p, goal[None, :], hits)[0][0])
+
+
+def _room(p: Array, known: ObstacleSet, backend: str) -> float:
+    """Signed clearance of p in the known map (``ObstacleSet.point_clearance``; ``backend =
+    "numba"``: :func:`swarmpath.planners.compiled_aim.point_clearance_kernel`)."""
+    if backend == "numba":
+        from swarmpath.planners.compiled_aim import point_clearance_kernel
+
+        polys = known.polygons
+        verts = np.concatenate(polys) if polys else np.zeros((0, 2))
+        counts = np.array([len(q) for q in polys], dtype=np.int64)
+        return float(point_clearance_kernel(float(p[0]), float(p[1]), known.circles, verts,
+                                            counts))
+    return float(known.point_clearance(p[None, :])[0])
 
 
 class SwarmAim(SwarmSensing):
@@ -33,7 +59,7 @@ class SwarmAim(SwarmSensing):
         path = np.array([p, goal])
         # Nothing known near the straight line to the goal: that line is the known shortest path
         # (the convex hulls are not needed to see it).
-        if len(known) and local.segment_hit_distance(p, goal[None, :], known)[0][0] < clearance:
+        if len(known) and _line_clearance(p, goal, known, str(self.p["backend"])) < clearance:
             path = self._known_path(p, goal, known, margin, clearance, world)
         if self.p["aim"] == "carrot":
             return sensed_map.along(path, lookahead)
@@ -61,7 +87,7 @@ class SwarmAim(SwarmSensing):
         known = sensed_map.known_obstacles(coarse, link=2 * margin, backend=backend)
         # The hulls grow as more of an obstacle is seen, so the robot may already be closer to
         # one than ``clearance``: plan with what it has (the candidates still need margin).
-        room = float(known.point_clearance(p[None, :])[0])
+        room = _room(p, known, backend)
         path = sensed_map.known_path(p, goal, known, min(clearance, room - 1e-6), world,
                                      backend)
         if path is None:

@@ -48,7 +48,7 @@ from numpy.typing import NDArray
 
 from swarmpath.optimizers import RunStreams, get_optimizer
 from swarmpath.optimizers.base import ParameterError
-from swarmpath.planners import local, sensed_map
+from swarmpath.planners import local, sensed_map, swarm_aim
 from swarmpath.planners.base import Decision, Observation, PlannerError, register
 from swarmpath.planners.swarm_moves import SwarmMoveLimits
 from swarmpath.planners.swarm_search import searcher, warm_search
@@ -346,6 +346,12 @@ def _load_kernel() -> None:
     sensed_map.has_corner(scan, 0.2, 30.0, "numba")
     sensed_map.known_obstacles(scan, 0.15, backend="numba")
     sensed_map.rejoin(path, np.zeros(2), 0.1, "numba")
+    square = sensed_map.known_obstacles(np.array([[1.0, -0.1], [1.1, -0.1], [1.1, 0.1],
+                                                  [1.0, 0.1]]), 0.15, backend="numba")
+    sensed_map.known_path(np.zeros(2), np.array([2.0, 0.0]), square, 0.05, (-1, -1, 3, 1),
+                          "numba")
+    swarm_aim._room(np.zeros(2), square, "numba")
+    swarm_aim._line_clearance(np.zeros(2), np.array([2.0, 0.0]), scan, "numba")
 
 
 def _preset(name: str, optimizer: str, description: str, reference: str, sensors: str,
