@@ -91,3 +91,32 @@ def test_compiled_planner_paths_on_a_preset() -> None:
             continue
         got = shortest_path(s, g, obstacles, 0.12, backend="numba")
         assert repr(ref.length) == repr(got.length) and np.array_equal(ref.points, got.points)
+
+
+def test_compiled_arc_checks_equal_numpy() -> None:
+    from swarmpath.world.optimum_base import _in_arc
+    from swarmpath.world.optimum_compiled import _in_arc as in_arc_kernel
+
+    rng = np.random.default_rng(11)
+    phi = np.concatenate([rng.uniform(-10, 10, 500), np.arange(-4, 5) * np.pi,
+                          np.arange(-3, 4) * 2 * np.pi])
+    th0, dth = rng.uniform(-7, 7, len(phi)), rng.uniform(0, 2 * np.pi, len(phi))
+    dth[:20] = np.mod(phi[:20] - th0[:20], 2 * np.pi)  # on the arc's end, exactly
+    ref = _in_arc(phi, th0, dth)
+    assert [in_arc_kernel(*x) for x in zip(phi, th0, dth, strict=True)] == ref.tolist()
+    blocked = 0
+    for k in range(20):
+        obstacles = _scene(rng, 1 + k % 4)
+        margin = float(rng.uniform(0.01, 0.3))
+        ref_scene = _Scene(obstacles, margin, (0.0, 0.0, 8.0, 8.0) if k % 2 else None)
+        fast = _Scene(obstacles, margin, (0.0, 0.0, 8.0, 8.0) if k % 2 else None)
+        fast.backend = "numba"
+        verts = np.concatenate([np.zeros((0, 2)), *obstacles.polygons])
+        c = np.concatenate([verts, rng.uniform(0, 8, (100, 2))])
+        rho = np.concatenate([np.full(len(verts), margin), rng.uniform(0.05, 1.5, 100)])
+        th0 = rng.uniform(0, 2 * np.pi, len(c))
+        dth = rng.uniform(0, 2 * np.pi, len(c))
+        ref = ref_scene.arcs_blocked(c, rho, th0, dth)
+        assert np.array_equal(ref, fast.arcs_blocked(c, rho, th0, dth))
+        blocked += int(ref.sum())
+    assert 0 < blocked < 20 * 150

@@ -53,6 +53,7 @@ from swarmpath.planners.base import Decision, Observation, PlannerError, registe
 from swarmpath.planners.swarm_moves import SwarmMoveLimits
 from swarmpath.planners.swarm_search import searcher, warm_search
 from swarmpath.robot.sensors import get_sensor_model
+from swarmpath.world.optimum import shortest_path
 
 Array = np.ndarray
 # m: sensed points in one cell of this grid are merged (the first one is kept). A merged point
@@ -348,8 +349,8 @@ def _load_kernel() -> None:
     sensed_map.rejoin(path, np.zeros(2), 0.1, "numba")
     square = sensed_map.known_obstacles(np.array([[1.0, -0.1], [1.1, -0.1], [1.1, 0.1],
                                                   [1.0, 0.1]]), 0.15, backend="numba")
-    sensed_map.known_path(np.zeros(2), np.array([2.0, 0.0]), square, 0.05, (-1, -1, 3, 1),
-                          "numba")
+    shortest_path(np.zeros(2), np.array([2.0, 0.0]), square, 0.05, (-1, -1, 3, 1),
+                  backend="numba")
     swarm_aim._room(np.zeros(2), square, "numba")
     swarm_aim._line_clearance(np.zeros(2), np.array([2.0, 0.0]), scan, "numba")
 
