@@ -25,10 +25,61 @@ import math
 import numpy as np
 from numba import njit
 
-from swarmpath.planners.compiled import _segment_nearest, segments_clearance_kernel
+from swarmpath.planners.compiled import (
+    _segment_nearest,
+    segments_clearance_kernel,
+    surface_kernel,
+)
 from swarmpath.world.optimum_compiled import _point_segment
 
 Array = np.ndarray
+_f = np.ascontiguousarray
+
+
+# ------------------------------------------------ sensed_map's backend = "numba", same signatures
+def condense(hits: Array, position: Array, reach: float, cell: float) -> Array:
+    h = _f(hits, dtype=float)
+    return h[condense_kernel(h, float(position[0]), float(position[1]), float(reach),
+                             float(cell))]
+
+
+def nearest(ref: Array, points: Array) -> tuple[Array, Array]:
+    return nearest_kernel(_f(ref, dtype=float), _f(points, dtype=float))
+
+
+def surface(points: Array, scan: Array, link: float, dist: Array,
+            near: Array) -> tuple[Array, Array]:
+    return surface_kernel(_f(points, dtype=float), _f(scan, dtype=float), float(link),
+                          _f(dist, dtype=float), _f(near, dtype=float))
+
+
+def has_corner(scan: Array, surface: float, angle_deg: float) -> bool:
+    return bool(has_corner_kernel(_f(scan, dtype=float), float(surface),
+                                  math.cos(math.radians(angle_deg))))
+
+
+def groups(hits: Array, link: float) -> tuple[int, Array]:
+    labels = groups_kernel(_f(hits, dtype=float), float(link))
+    return int(labels.max()) + 1, labels
+
+
+def rejoin(pts: Array, position: Array, tolerance: float) -> Array | None:
+    dk, k = rejoin_kernel(_f(pts, dtype=float), float(position[0]), float(position[1]))
+    if dk > tolerance:
+        return None
+    return np.vstack([position[None, :], pts[k + 1:]])
+
+
+def path_clearance(pts: Array, hits: Array, reach: float) -> float:
+    return float(path_clearance_kernel(_f(pts, dtype=float), _f(hits, dtype=float), reach))
+
+
+def shortcut(pts: Array, hits: Array, margin: float, lookahead: float, samples: int) -> Array:
+    return np.asarray(shortcut_kernel(_f(pts, dtype=float), _f(hits, dtype=float).reshape(-1, 2),
+                                      float(margin), float(lookahead), int(samples)))
+
+
+# ------------------------------------------------------------------------------------ kernels
 
 
 @njit(cache=True)

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from types import ModuleType
 
 import numpy as np
 from numpy.typing import NDArray
@@ -40,11 +41,7 @@ def condense(hits: Array, position: Array, reach: float, cell: float,
     if len(hits) == 0:
         return hits.reshape(0, 2)
     if backend == "numba":
-        from swarmpath.planners.compiled_aim import condense_kernel
-
-        h = np.ascontiguousarray(hits, dtype=float)
-        return h[condense_kernel(h, float(position[0]), float(position[1]), float(reach),
-                                 float(cell))]
+        return _fast().condense(hits, position, reach, cell)
     d = np.hypot(hits[:, 0] - position[0], hits[:, 1] - position[1])
     near = hits[d <= reach]
     if len(near) == 0:
@@ -59,6 +56,14 @@ def condense(hits: Array, position: Array, reach: float, cell: float,
     else:  # pragma: no cover - a span of over 2e9 cells per axis
         _, first = np.unique(keys, axis=0, return_index=True)
     return near[np.sort(first)]
+
+
+def _fast() -> ModuleType:
+    """:mod:`swarmpath.planners.compiled_aim` (numba), imported by the first ``backend =
+    "numba"`` call: its functions give this module's numbers (its docstring says how)."""
+    from swarmpath.planners import compiled_aim
+
+    return compiled_aim
 
 
 def surface_points(obstacles: ObstacleSet, spacing: float) -> Array:
@@ -93,10 +98,7 @@ def _nearest(ref: Array, points: Array, backend: str) -> tuple[Array, NDArray[np
     """``cKDTree(ref).query(points)`` (``backend = "numba"``: the same by brute force,
     :func:`swarmpath.planners.compiled_aim.nearest_kernel`)."""
     if backend == "numba":
-        from swarmpath.planners.compiled_aim import nearest_kernel
-
-        f = np.ascontiguousarray
-        return nearest_kernel(f(ref, dtype=float), f(points, dtype=float))
+        return _fast().nearest(ref, points)
     return cKDTree(ref).query(points)
 
 
@@ -108,12 +110,7 @@ def _to_surface_from(points: Array, scan: Array, surface: float, dist: Array,
     "numba"``: :func:`swarmpath.planners.compiled.surface_kernel` (the same numbers)."""
     nearest = scan[idx]
     if backend == "numba":
-        from swarmpath.planners.compiled import surface_kernel
-
-        f = np.ascontiguousarray
-        d, near = surface_kernel(f(points, dtype=float), f(scan, dtype=float), float(surface),
-                                 f(dist, dtype=float), f(nearest, dtype=float))
-        return d, near, idx
+        return (*_fast().surface(points, scan, surface, dist, nearest), idx)
     a, b = scan[:-1], scan[1:]
     gap = np.hypot(*(b - a).T)
     joined = (gap < surface) & (gap > 1e-9)
@@ -231,10 +228,7 @@ def has_corner(scan: Array, surface: float, angle_deg: float, backend: str = "nu
     if len(scan) < 3:
         return False
     if backend == "numba":
-        from swarmpath.planners.compiled_aim import has_corner_kernel
-
-        return bool(has_corner_kernel(np.ascontiguousarray(scan, dtype=float), float(surface),
-                                      math.cos(math.radians(angle_deg))))
+        return _fast().has_corner(scan, surface, angle_deg)
     d = np.diff(scan, axis=0)
     n = np.hypot(*d.T)
     ok = (n < surface) & (n > 1e-9)
@@ -274,10 +268,7 @@ def known_obstacles(hits: Array, link: float, thickness: float = 1e-3,
     if len(hits) == 0:
         return ObstacleSet.empty()
     if backend == "numba":
-        from swarmpath.planners.compiled_aim import groups_kernel
-
-        labels = groups_kernel(np.ascontiguousarray(hits, dtype=float), float(link))
-        count = int(labels.max()) + 1
+        count, labels = _fast().groups(hits, link)
     else:
         pairs = cKDTree(hits).query_pairs(link, output_type="ndarray")
         n = len(hits)
@@ -330,13 +321,7 @@ def rejoin(pts: Array, position: Array, tolerance: float,
     is within ``tolerance`` of it (None otherwise; ``backend = "numba"``:
     :func:`swarmpath.planners.compiled_aim.rejoin_kernel`, the same)."""
     if backend == "numba":
-        from swarmpath.planners.compiled_aim import rejoin_kernel
-
-        dk, k = rejoin_kernel(np.ascontiguousarray(pts, dtype=float), float(position[0]),
-                              float(position[1]))
-        if dk > tolerance:
-            return None
-        return np.vstack([position[None, :], pts[k + 1:]])
+        return _fast().rejoin(pts, position, tolerance)
     a, b = pts[:-1], pts[1:]
     u = b - a
     uu = np.einsum("ij,ij->i", u, u)
@@ -349,16 +334,8 @@ def rejoin(pts: Array, position: Array, tolerance: float,
     return np.vstack([position[None, :], pts[k + 1:]])
 
 
-def _segments_clearance(points: Array, a: Array, b: Array, backend: str) -> Array:
-    """Least distance from ``points`` (h, 2) to each segment a -> b (m, 2), (m,); ``backend =
-    "numba"`` runs :func:`swarmpath.planners.compiled.segments_clearance_kernel` (the same
-    numbers)."""
-    if backend == "numba":
-        from swarmpath.planners.compiled import segments_clearance_kernel
-
-        f = np.ascontiguousarray
-        return np.asarray(segments_clearance_kernel(f(points, dtype=float), f(a, dtype=float),
-                                                    f(b, dtype=float)))
+def _segments_clearance(points: Array, a: Array, b: Array) -> Array:
+    """Least distance from ``points`` (h, 2) to each segment a -> b (m, 2), (m,)."""
     return np.asarray(point_segment_distance(points[None, :, :], a[:, None, :],
                                              b[:, None, :]).min(axis=1))
 
@@ -369,14 +346,11 @@ def path_clearance(pts: Array, hits: Array, reach: float, backend: str = "numpy"
     if len(hits) == 0 or len(pts) < 2:
         return math.inf
     if backend == "numba":
-        from swarmpath.planners.compiled_aim import path_clearance_kernel
-
-        f = np.ascontiguousarray
-        return float(path_clearance_kernel(f(pts, dtype=float), f(hits, dtype=float), reach))
+        return _fast().path_clearance(pts, hits, reach)
     cum = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(pts, axis=0).T))])
     n = int(np.searchsorted(cum, reach, side="right")) + 1
     a, b = pts[: min(n, len(pts) - 1)], pts[1 : min(n, len(pts) - 1) + 1]
-    return float(_segments_clearance(hits, a, b, backend).min())
+    return float(_segments_clearance(hits, a, b).min())
 
 
 def shortcut(
@@ -395,16 +369,12 @@ def shortcut(
     :func:`swarmpath.planners.compiled_aim.shortcut_kernel`, the same point).
     """
     if backend == "numba":
-        from swarmpath.planners.compiled_aim import shortcut_kernel
-
-        f = np.ascontiguousarray
-        return np.asarray(shortcut_kernel(f(pts, dtype=float), f(hits, dtype=float).reshape(-1, 2),
-                                          float(margin), float(lookahead), int(samples)))
+        return _fast().shortcut(pts, hits, margin, lookahead, samples)
     candidates = along(pts, lookahead * np.arange(1, samples + 1) / samples)
     if len(hits) == 0:
         return np.asarray(candidates[-1], dtype=float)
     start = np.broadcast_to(np.asarray(pts[0], dtype=float), candidates.shape)
-    clear = _segments_clearance(hits, start, candidates, backend)
+    clear = _segments_clearance(hits, start, candidates)
     ok = np.flatnonzero(clear >= margin)
     return np.asarray(candidates[ok[-1] if ok.size else 0], dtype=float)
 

@@ -17,13 +17,32 @@ Imported only when ``backend = "numba"`` is asked for (``pip install 'swarmpath[
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numba import njit
 
+from swarmpath.world.optimum_base import _on_circle
+
 Array = np.ndarray
 
 TOL = 1e-9  # optimum_base.TOL
+_f = np.ascontiguousarray
+
+
+def arcs_near_polygons(scene: Any, c: Array, rho: Array, th0: Array, dth: Array) -> Array:
+    """The polygon part of ``_Scene.arcs_blocked`` (margin > 0, no index) for the arcs (c,
+    rho, th0, dth): the same pairs and distances as numpy (:func:`_arc_edge`); the arcs' ends
+    and the angles of the in-arc tests come from numpy, computed as there."""
+    E0 = _f(_on_circle(c, rho, th0))
+    E1 = _f(_on_circle(c, rho, th0 + dth))
+    c, rho = _f(c), _f(rho)
+    e0, e1 = _f(scene.e0), _f(scene.e1)
+    arcs, edges, vecs = arcs_pending_kernel(c, rho, E0, E1, scene.m, _f(scene.pc), _f(scene.pr),
+                                            e0, e1, scene.starts, scene.counts)
+    phi = np.arctan2(vecs[..., 0], vecs[..., 1])
+    return np.asarray(arcs_decide_kernel(len(c), arcs, edges, _f(phi), c, rho, _f(th0), _f(dth),
+                                         E0, E1, scene.m, e0, e1))
 
 
 @njit(cache=True)

@@ -334,7 +334,9 @@ class _Scene:
             return blocked
         idx = np.flatnonzero(~blocked)
         if self.backend == "numba" and self.index is None and self.m > 0.0:
-            blocked[idx[self._arcs_near_polygons(c[idx], rho[idx], th0[idx], dth[idx])]] = True
+            from swarmpath.world.optimum_compiled import arcs_near_polygons
+
+            blocked[idx[arcs_near_polygons(self, c[idx], rho[idx], th0[idx], dth[idx])]] = True
             return blocked
         if self.index is not None:
             small = rho[idx] <= self.m + TOL  # vertex disks: the edge buckets around the centre
@@ -370,23 +372,6 @@ class _Scene:
                         c[arc[q]], rho[arc[q]], th0[arc[q]], dth[arc[q]], int(pj[sl][q])
                     )
         return blocked
-
-    def _arcs_near_polygons(self, c: Array, rho: Array, th0: Array, dth: Array) -> BoolArray:
-        """The polygon part of :meth:`arcs_blocked` compiled (margin > 0, no index): the same
-        pairs and distances (:mod:`swarmpath.world.optimum_compiled`), the angles of the in-arc
-        tests and the arcs' ends from numpy, which computes them here as it does there."""
-        from swarmpath.world.optimum_compiled import arcs_decide_kernel, arcs_pending_kernel
-
-        f = np.ascontiguousarray
-        E0 = f(_on_circle(c, rho, th0))
-        E1 = f(_on_circle(c, rho, th0 + dth))
-        c = f(c)
-        arcs, edges, vecs = arcs_pending_kernel(
-            c, f(rho), E0, E1, self.m, f(self.pc), f(self.pr), f(self.e0), f(self.e1),
-            self.starts, self.counts)
-        phi = np.arctan2(vecs[..., 0], vecs[..., 1])
-        return np.asarray(arcs_decide_kernel(len(c), arcs, edges, f(phi), c, f(rho), f(th0),
-                                             f(dth), E0, E1, self.m, f(self.e0), f(self.e1)))
 
     def _arc_enters_polygon(self, c: Array, rho: float, th0: float, dth: float, j: int) -> bool:
         poly = self.polygons[j]
