@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from swarmpath.optimizers import get_optimizer
-from swarmpath.planners import compiled_coot, local
+from swarmpath.planners import compiled_coot, compiled_hpo, local
 from swarmpath.planners.compiled_score import setup
 
 Array = np.ndarray
@@ -36,8 +36,21 @@ def _coot(name: str, p: Mapping[str, Any]) -> Decide | None:
     return decide
 
 
+def _hpo(name: str, p: Mapping[str, Any]) -> Decide | None:
+    params = compiled_hpo.pack(name, p)
+    if params is None:
+        return None
+
+    def decide(rng, ctx, agents, iterations, patience, tol):
+        geo, k = setup(ctx)
+        return compiled_hpo.hpo_decide(rng, geo[4:6].copy(), geo[6:8].copy(), agents,
+                                       iterations, params, geo, _hits(ctx), k, patience, tol)
+
+    return decide
+
+
 _KERNELS: dict[str, Callable[[str, Mapping[str, Any]], Decide | None]] = {
-    "COOT": _coot, "ICOOT": _coot,
+    "COOT": _coot, "ICOOT": _coot, "HPO": _hpo, "IHPO": _hpo,
 }
 
 

@@ -86,6 +86,12 @@ def _unary(cosine: bool, a: Array, out: Array, call: Array) -> None:
 
 
 @njit(cache=True)
+def unary_inplace(cosine: bool, a: Array, call: Array) -> None:
+    """a = sin(a) (or cos(a)) in place with numpy's loop, as ``np.cos(a, out=a)`` calls it."""
+    _unary(cosine, a, a, call)
+
+
+@njit(cache=True)
 def repaired(C: Array, geo: Array, hits: Array, k: Array) -> tuple[Array, Array]:
     """(repaired candidates, remaining violation) of C (m, 2): ``local.score``'s repair."""
     p = geo[0:2]
