@@ -146,24 +146,30 @@ def test_every_chunk_compression_holds_the_same_messages(store, tmp_path, name):
     assert {ci.compression for ci in summary.chunk_indexes} == {"" if name == "none" else name}
 
 
-def test_the_fast_message_path_writes_the_bytes_of_writer_add_message(store, tmp_path):
-    """JobRecorder appends message records itself (_FastMessages); with it switched off the
-    mcap writer's add_message writes them: the two files are identical, byte for byte."""
+@pytest.mark.parametrize("name", COMPRESSIONS)
+def test_the_fast_writer_writes_the_bytes_of_the_mcap_writer(store, tmp_path, name):
+    """JobRecorder writes through FastWriter (its own message records, chunk records and CRCs);
+    with fast=False the mcap package's Writer writes the same job: the files are identical,
+    byte for byte, with every chunk compression."""
+    from swarmpath.service.recorder.fastwriter import FastWriter
+
     job = store.create_job(SPEC, now=T0)
     drain(store)
     records = list(store.iter_run_records(job))
     paths = []
     for fast in (True, False):
         rec = JobRecorder(tmp_path / f"{fast}.mcap", job, "benchmark", SPEC, T0,
-                          flush_interval=1e9, chunk_size=4096)  # several chunk cuts
-        assert rec._fast is not None
-        if not fast:
-            rec._fast = None
-        for record in records:
+                          flush_interval=1e9, chunk_size=4096,  # several chunk cuts
+                          compression=chunk_compression(name), fast=fast)
+        assert isinstance(rec._writer, FastWriter) is fast
+        for i, record in enumerate(records):
+            if i == len(records) // 2:  # a metadata record between chunks
+                rec.note_platform("w1", {"fingerprint": "abc", "cpu": "x"})
             rec.add(record)
         paths.append(rec.finish())
     summary, _meta, _messages = read_all(paths[0])
     assert len(summary.chunk_indexes) > 1
+    check_data_crc(paths[0])
     assert paths[0].read_bytes() == paths[1].read_bytes()
 
 

@@ -52,9 +52,11 @@ collisions, length, its scene and path topics, entity prefix and frame), and
 shipped beside this module (:data:`swarmpath.service.foxglove.LAYOUT_FILE`; ``swarmpath download
 JOB --layout`` writes one with the file's topics) shows the scene in 3D and plots ``/curves``.
 
-The package by concern: :mod:`.job` (the writer of one file), :mod:`.registry` (the coordinator's
-recorders), :mod:`.scene` (how maps and runs are drawn), :mod:`.schemas` (the own topics' JSON
-schemas), :mod:`.salvage` (reading an unfinished file), :mod:`.common` (paths and encoding).
+The package by concern: :mod:`.job` (the writer of one file), :mod:`.fastwriter` (the mcap
+``Writer`` with cheaper messages, chunks and CRCs, same bytes), :mod:`.registry` (the
+coordinator's recorders), :mod:`.scene` (how maps and runs are drawn), :mod:`.schemas` (the own
+topics' JSON schemas), :mod:`.salvage` (reading an unfinished file), :mod:`.common` (paths and
+encoding).
 """
 
 from __future__ import annotations

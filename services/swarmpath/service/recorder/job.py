@@ -5,18 +5,14 @@ from __future__ import annotations
 import json
 import math
 import os
-import struct
 import time
 from collections.abc import Callable
-from itertools import chain
 from pathlib import Path
 from typing import Any, BinaryIO
 
 import numpy as np
 import orjson
-from mcap.records import MessageIndex
 from mcap.writer import CompressionType, IndexType, Writer
-from mcap.writer import __version__ as MCAP_VERSION
 
 from swarmpath.service import foxglove as fg
 from swarmpath.service.protocol import PROTOCOL_VERSION
@@ -29,6 +25,7 @@ from swarmpath.service.recorder.common import (
     chunk_compression,
     clamped,
 )
+from swarmpath.service.recorder.fastwriter import FastWriter, writer_class
 from swarmpath.service.recorder.scene import (
     GOAL_RGBA,
     MAP_GAP,
@@ -51,11 +48,6 @@ MAX_PLATFORM_RECORDS = 1024  # swarmpath.platform metadata records per job
 LAYOUT_VERSION = 2  # 2: a frame per map (/tf), static occupancy, swarmpath.run metadata
 FLUSH_INTERVAL = 1.0
 CHUNK_SIZE = 1024 * 1024
-_MESSAGE_HEAD = struct.Struct("<BQHIQQ")  # opcode, record length, channel, sequence, 2 times
-_MESSAGE_OPCODE = 0x05
-_MESSAGE_FIXED = 2 + 4 + 8 + 8  # the record's fields before the data
-_INDEX_HEAD = struct.Struct("<BQHI")  # opcode, record length, channel, entries' byte length
-_INDEX_OPCODE = 0x07
 _FLOAT64 = np.dtype(np.float64)
 
 
@@ -69,13 +61,14 @@ def _fast_json(message: dict[str, Any]) -> bytes:
                       for k, v in message.items()})
 
 
-def _curve_json(record: dict[str, Any], identity: dict[str, Any], curve: Any) -> bytes:
+def _curve_json(record: dict[str, Any], identity: dict[str, Any], curve: Any) -> tuple[bytes, ...]:
     """The /curves message of a benchmark run: ``best_fitness`` (its last field) holds the
     curve's values, non-finite ones clamped (:func:`clamped`). A C-contiguous float64 array (a
     store record holds one over the stored bytes) is written by orjson straight from its
     buffer (the shortest round-trip decimals: the same text as for a list of the same floats)
     after the other fields' JSON; orjson writes a non-finite float as ``null`` and a number
-    never holds an ``n``, so the clamped values are only made when the array's text has one."""
+    never holds an ``n``, so the clamped values are only made when the array's text has one.
+    The message is returned in parts, to be written one after the other (not joined first)."""
     head = {
         "job_id": record["job_id"], "run_id": int(record["run_id"]), "cell": record["cell"],
         "run": int(record["run"]), "seed": int(record["seed"]), **identity,
@@ -90,78 +83,9 @@ def _curve_json(record: dict[str, Any], identity: dict[str, Any], curve: Any) ->
             pass
         else:
             if b"n" not in values:  # (memchr: a fraction of a microsecond)
-                return b"".join((fields[:-1], b',"best_fitness":', values, b"}"))
-    return _fast_json({**head, "best_fitness": np.ascontiguousarray(clamped(curve,
-                                                                            as_array=True))})
-
-
-class _PackedIndex(MessageIndex):
-    """A chunk's message index for one channel, written in two ``struct`` packs (the same bytes
-    as ``MessageIndex.write``, which packs each time and offset on its own)."""
-
-    def write(self, stream: Any) -> None:
-        n = len(self.records)
-        stream.write(_INDEX_HEAD.pack(_INDEX_OPCODE, 2 + 4 + 16 * n, self.channel_id, 16 * n))
-        stream.write(struct.pack(f"<{2 * n}Q", *chain.from_iterable(self.records)))
-
-
-class _FastMessages:
-    """``Writer.add_message`` of mcap 1.6 in fewer Python steps: the same Message record bytes
-    (one ``struct`` pack for its head instead of a record object and five packs and a seek),
-    the same message index entry, statistics and chunk cut. It reaches into the writer's private
-    chunk builder and statistics, so :meth:`of` checks the mcap version (``VERIFIED``) and that
-    they are there with the expected shape; otherwise the recorder calls ``Writer.add_message``
-    (same bytes, slower)."""
-
-    def __init__(self, writer: Writer, chunk: Any, stats: Any, finalize: Callable[[], None],
-                 chunk_size: int):
-        self.writer, self.chunk, self.stats = writer, chunk, stats
-        self.finalize, self.chunk_size = finalize, chunk_size
-
-    VERIFIED = ("1.6.",)  # mcap versions whose writer internals this was checked against
-
-    @classmethod
-    def of(cls, writer: Writer) -> _FastMessages | None:
-        if not MCAP_VERSION.startswith(cls.VERIFIED):
-            return None  # another writer: its own add_message (the byte test then fails: check)
-        chunk = getattr(writer, "_Writer__chunk_builder", None)
-        stats = getattr(writer, "_Writer__statistics", None)
-        finalize = getattr(writer, "_Writer__maybe_finalize_chunk", None)
-        size = getattr(writer, "_Writer__chunk_size", None)
-        buffer = getattr(getattr(chunk, "record_writer", None), "_buffer", None)
-        if (chunk is None or stats is None or finalize is None or not isinstance(size, int)
-                or buffer is None or not hasattr(chunk, "message_indices")
-                or not hasattr(chunk, "num_messages")
-                or not hasattr(stats, "channel_message_counts")):
-            return None
-        return cls(writer, chunk, stats, finalize, size)
-
-    def add(self, channel_id: int, log_ns: int, data: bytes) -> None:
-        stats, chunk = self.stats, self.chunk
-        if not stats.message_count or log_ns < stats.message_start_time:
-            stats.message_start_time = log_ns
-        if log_ns > stats.message_end_time:
-            stats.message_end_time = log_ns
-        stats.channel_message_counts[channel_id] += 1
-        stats.message_count += 1
-        if not chunk.num_messages or log_ns < chunk.message_start_time:
-            chunk.message_start_time = log_ns
-        if log_ns > chunk.message_end_time:
-            chunk.message_end_time = log_ns
-        buffer = chunk.record_writer._buffer
-        offset = buffer.tell()
-        index = chunk.message_indices.get(channel_id)
-        if not index:
-            index = chunk.message_indices[channel_id] = _PackedIndex(
-                channel_id=channel_id, records=[])
-        index.records.append((log_ns, offset))
-        chunk.num_messages += 1
-        size = len(data)
-        buffer.write(_MESSAGE_HEAD.pack(_MESSAGE_OPCODE, _MESSAGE_FIXED + size,
-                                        channel_id, 0, log_ns, log_ns))
-        buffer.write(data)
-        if offset + 9 + _MESSAGE_FIXED + size > self.chunk_size:
-            self.finalize()
+                return fields[:-1], b',"best_fitness":', values, b"}"
+    return (_fast_json({**head, "best_fitness": np.ascontiguousarray(clamped(curve,
+                                                                             as_array=True))}),)
 
 
 # --------------------------------------------------------------------------------- recorder
@@ -181,7 +105,10 @@ class JobRecorder:
         chunk_size: int = CHUNK_SIZE,
         compression: CompressionType | None = None,
         clock: Callable[[], float] = time.monotonic,
+        fast: bool = True,
     ):
+        """``fast=False``: the plain mcap ``Writer`` instead of :class:`FastWriter` (the same
+        bytes, slower; for the test that compares them)."""
         self.final = Path(path)
         self.part = self.final.with_name(self.final.name + ".part")
         self.job_id = job_id
@@ -201,8 +128,7 @@ class JobRecorder:
         self._last_flush = clock()
         self.final.parent.mkdir(parents=True, exist_ok=True)
         self._file: BinaryIO = open(self.part, "wb")  # closed by finish/close
-        self._writer = Writer(
-            self._file,
+        settings: dict[str, Any] = dict(
             chunk_size=chunk_size,
             compression=chunk_compression() if compression is None else compression,
             index_types=IndexType.ALL,
@@ -214,8 +140,11 @@ class JobRecorder:
             enable_crcs=True,
             enable_data_crcs=True,
         )
+        writer = writer_class()(self._file, **settings) if fast else None
+        self._fast: FastWriter | None = (
+            writer if isinstance(writer, FastWriter) and writer.checked else None)
+        self._writer: Writer = self._fast or Writer(self._file, **settings)
         self._writer.start(profile="", library=f"swarmpath {_version()} (mcap-python)")
-        self._fast = _FastMessages.of(self._writer)
         self._writer.add_metadata(
             "swarmpath.job",
             {
@@ -250,16 +179,21 @@ class JobRecorder:
         return cid
 
     def _put(
-        self, topic: str, schema_name: str, log_ns: int, message: dict[str, Any] | bytes
+        self, topic: str, schema_name: str, log_ns: int,
+        message: dict[str, Any] | bytes | tuple[bytes, ...],
     ) -> None:
+        """One message on ``topic``: a dict (JSON made here), its JSON, or that JSON in parts
+        (written one after the other)."""
         cid = self._channels.get(topic)
         if cid is None:
             cid = self._channel(topic, schema_name)
-        data = message if isinstance(message, bytes) else _json(message)
+        parts = (message,) if isinstance(message, bytes) else (
+            message if isinstance(message, tuple) else (_json(message),))
         if self._fast is not None:
-            self._fast.add(cid, log_ns, data)
+            self._fast.add_parts(cid, log_ns, *parts)
         else:
-            self._writer.add_message(cid, log_time=log_ns, publish_time=log_ns, data=data)
+            self._writer.add_message(cid, log_time=log_ns, publish_time=log_ns,
+                                     data=b"".join(parts))
         self._dirty = True
 
     # ---------------------------------------------------------------------------------- runs
@@ -268,8 +202,9 @@ class JobRecorder:
         Returns False when that run id was already written (nothing is written twice)."""
         if self.closed:
             raise RuntimeError(f"recorder of job {self.job_id} is closed")
-        # also when the run came from the store first
-        self.note_platform(str(record.get("worker") or ""), record.get("platform") or {})
+        platform = record.get("platform")
+        if platform:  # also when the run came from the store first
+            self.note_platform(str(record.get("worker") or ""), platform)
         run_id = int(record["run_id"])
         if run_id in self.written:
             return False
