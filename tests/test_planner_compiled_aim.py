@@ -125,3 +125,14 @@ def test_aim_clearances_equal_numpy():
             assert _line_clearance(p, goal, pts, "numba") == ref
             assert _line_clearance(p, goal, pts, "numpy") == ref
     assert inside > 5
+
+
+def test_nearest_hit_equals_numpy():
+    from swarmpath.planners import local
+    from swarmpath.planners.swarm_aim import nearest_hit
+
+    rng = np.random.default_rng(12)
+    for pts in [*_scans(rng), np.zeros((0, 2))]:
+        for p in rng.uniform(-2, 2, (5, 2)):
+            ref = float(local.point_hit_distance(p[None, :], pts)[0][0])
+            assert nearest_hit(p, pts, "numba") == ref == nearest_hit(p, pts, "numpy")

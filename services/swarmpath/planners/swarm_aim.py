@@ -7,6 +7,8 @@ module docstring describes ``heuristic``, ``aim`` and the known path); the plann
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from swarmpath.planners import local, sensed_map
@@ -25,6 +27,17 @@ def _line_clearance(p: Array, goal: Array, hits: Array, backend: str) -> float:
     return float(local.segment_hit_distance(p, goal[None, :], hits)[0][0])
 
 
+def nearest_hit(p: Array, hits: Array, backend: str) -> float:
+    """Distance from p to its nearest hit (``local.point_hit_distance``; ``backend = "numba"``:
+    :func:`swarmpath.planners.compiled._point_nearest`, the same)."""
+    if backend == "numba":
+        from swarmpath.planners.compiled import _point_nearest
+
+        return math.sqrt(_point_nearest(float(p[0]), float(p[1]),
+                                        np.ascontiguousarray(hits, dtype=float))[0])
+    return float(local.point_hit_distance(p[None, :], hits)[0][0])
+
+
 def _room(p: Array, known: ObstacleSet, backend: str) -> float:
     """Signed clearance of p in the known map (``ObstacleSet.point_clearance``; ``backend =
     "numba"``: :func:`swarmpath.planners.compiled_aim.point_clearance_kernel`)."""
@@ -37,6 +50,29 @@ def _room(p: Array, known: ObstacleSet, backend: str) -> float:
         return float(point_clearance_kernel(float(p[0]), float(p[1]), known.circles, verts,
                                             counts))
     return float(known.point_clearance(p[None, :])[0])
+
+
+def load_kernels() -> None:
+    """Compile, or load from numba's cache, the sensing's and the aim's kernels (one call each
+    on a tiny problem), so that no decision pays for it."""
+    from swarmpath.world.optimum import shortest_path
+
+    hit = np.array([[1.0, 0.0]])
+    path = np.array([[0.0, 0.0], [2.0, 0.0]])
+    sensed_map.shortcut(path, hit, 0.5, 1.0, backend="numba")
+    sensed_map.path_clearance(path, hit, 1.0, "numba")
+    scan = np.array([[1.0, 0.0], [1.0, 0.1], [1.0, 0.2]])
+    sensed_map.motion(scan, scan + 0.01, 0.1, surface=0.2, backend="numba")
+    sensed_map.condense(scan, np.zeros(2), 2.0, 0.1, "numba")
+    sensed_map.has_corner(scan, 0.2, 30.0, "numba")
+    sensed_map.rejoin(path, np.zeros(2), 0.1, "numba")
+    square = sensed_map.known_obstacles(np.array([[1.0, -0.1], [1.1, -0.1], [1.1, 0.1],
+                                                  [1.0, 0.1]]), 0.15, backend="numba")
+    # (not sensed_map.known_path: scripts/bench/sensed_path_time.py records its calls)
+    shortest_path(np.zeros(2), path[1], square, 0.05, (-1, -1, 3, 1), backend="numba")
+    _room(np.zeros(2), square, "numba")
+    _line_clearance(np.zeros(2), path[1], scan, "numba")
+    nearest_hit(np.zeros(2), scan, "numba")
 
 
 class SwarmAim(SwarmSensing):

@@ -53,7 +53,6 @@ from swarmpath.planners.base import Decision, Observation, PlannerError, registe
 from swarmpath.planners.swarm_moves import SwarmMoveLimits
 from swarmpath.planners.swarm_search import searcher, warm_search
 from swarmpath.robot.sensors import get_sensor_model
-from swarmpath.world.optimum import shortest_path
 
 Array = np.ndarray
 # m: sensed points in one cell of this grid are merged (the first one is kept). A merged point
@@ -248,7 +247,7 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         # closer than now), instead of none. Not when something moved in the last ``memory``
         # seconds (the clearance to it shrinks on its own: the gap-vector fallback steps away),
         # nor within the body radius.
-        room = float(local.point_hit_distance(p[None, :], hits)[0][0])
+        room = swarm_aim.nearest_hit(p, hits, backend)
         if obs.time > self._moving_until and obs.robot_radius < room < margin:
             margin = room - 1e-9
         plan_hits = hits
@@ -338,22 +337,7 @@ def _load_kernel() -> None:
                             margin=0.5, repair="grid", backend="numba")
     local.repair_grid(np.array([[0.9, 0.0]]), ctx)
     local.repair_mfb(np.array([[0.9, 0.0]]), ctx)
-    path = np.array([[0.0, 0.0], [2.0, 0.0]])
-    sensed_map.shortcut(path, hit, 0.5, 1.0, backend="numba")
-    sensed_map.path_clearance(path, hit, 1.0, "numba")
-    scan = np.array([[1.0, 0.0], [1.0, 0.1], [1.0, 0.2]])
-    sensed_map.motion(scan, scan + 0.01, 0.1, surface=0.2, backend="numba")
-    sensed_map.condense(scan, np.zeros(2), 2.0, 0.1, "numba")
-    sensed_map.has_corner(scan, 0.2, 30.0, "numba")
-    sensed_map.known_obstacles(scan, 0.15, backend="numba")
-    sensed_map.rejoin(path, np.zeros(2), 0.1, "numba")
-    square = sensed_map.known_obstacles(np.array([[1.0, -0.1], [1.1, -0.1], [1.1, 0.1],
-                                                  [1.0, 0.1]]), 0.15, backend="numba")
-    shortest_path(np.zeros(2), np.array([2.0, 0.0]), square, 0.05, (-1, -1, 3, 1),
-                  backend="numba")
-    swarm_aim._room(np.zeros(2), square, "numba")
-    swarm_aim._line_clearance(np.zeros(2), np.array([2.0, 0.0]), scan, "numba")
-
+    swarm_aim.load_kernels()
 
 def _preset(name: str, optimizer: str, description: str, reference: str, sensors: str,
             settings: dict[str, Any], optimizer_params: dict[str, Any] | None = None) -> type:

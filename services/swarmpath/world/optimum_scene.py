@@ -67,11 +67,24 @@ class _Scene:
         else:
             self.e0 = self.e1 = self.pc = self.bb_lo = self.bb_hi = np.zeros((0, 2))
             self.pr = np.zeros(0)
-        # Fixed pseudo-random visiting order for early elimination (no global RNG state).
-        order_rng = np.random.default_rng(0)
-        self.circle_order = order_rng.permutation(len(self.circles))
         self._build_circle_buckets()
-        self.polygon_order = order_rng.permutation(len(polys))
+        self._orders: tuple[IntArray, IntArray] | None = None
+
+    @property
+    def circle_order(self) -> IntArray:
+        """Fixed pseudo-random visiting order for early elimination (no global RNG state);
+        drawn when first needed (the compiled checks do not need it)."""
+        if self._orders is None:
+            order_rng = np.random.default_rng(0)
+            circles = order_rng.permutation(len(self.circles))
+            self._orders = (circles, order_rng.permutation(len(self.polygons)))
+        return self._orders[0]
+
+    @property
+    def polygon_order(self) -> IntArray:
+        self.circle_order  # noqa: B018 - draws both orders
+        assert self._orders is not None
+        return self._orders[1]
 
     def _build_circle_buckets(self) -> None:
         """Uniform grid: for each cell, up to _BUCKET circles that could block a point in it."""
