@@ -78,3 +78,55 @@ def test_compiled_decision_equals_numpy(setting, patience):
         assert a.random() == b.random()  # the same draws, no more
         stopped += ref[2] < iterations
     assert stopped > 0 if patience else stopped == 0
+
+
+def test_planners_with_compiled_decisions():
+    """ICOOT, IHPO, MFB and HPSO-MFB (the issue's swarm planners) all have one."""
+    assert {s[0] for s in SETTINGS} >= {"ICOOT", "IHPO", "MFB", "HPSO-MFB"}
+
+
+VARIANTS = [
+    ("ICOOT", {"randoms": "vector", "gbest": "any", "random_target": "offset"}),
+    ("ICOOT", {"leader_update": "paper", "mirror": "plus", "counter": "paper", "acc": "one"}),
+    ("COOT", {"randoms": "scalar", "leaders": 3}),
+    ("IHPO", {"alpha_on": "step", "beta_draw": "iteration", "cp_c": "one"}),
+    ("IHPO", {"alpha_on": "displacement", "alpha_branches": "prey", "hunter": "relative"}),
+    ("IHPO", {"alpha_on": "position", "alpha_branches": "hunter", "prey_step": "2Z",
+              "prey_angle": "from_z"}),
+    ("IHPO", {"hunter": "paper", "beta": 0.4}),
+    ("HPO", {"hunter": "centre", "beta": 0.3}),
+    ("MFB", {"beta_time": "literal", "beta_r": "pulse", "velocity": "literal"}),
+    ("MFB", {"beta_time": "uniform", "beta_per": "dimension", "walk_scale": "absolute"}),
+    ("MFB", {"accept": "own", "move": "always", "update": "accept", "beta_per": "dimension"}),
+    ("HPSO-MFB", {"restart": "none", "best": "swarm", "split": "per_particle"}),
+    ("HPSO-MFB", {"split": "divide", "pso_iterations": 2, "particles": 3}),
+]
+
+
+@pytest.mark.parametrize("variant", VARIANTS, ids=[f"{v[0]}-{i}" for i, v in enumerate(VARIANTS)])
+def test_compiled_decision_variants_equal_numpy(variant):
+    """The other parameter values the kernels implement, on harder settings (more agents and
+    iterations, every repair and objective)."""
+    optimizer, settings = variant
+    params = get_optimizer(optimizer).resolve_params(settings)
+    agents, iterations = 12, 9
+    decide = compiled_decide.decider(optimizer, params, agents)
+    assert decide is not None
+    rng = np.random.default_rng(len(str(settings)))
+    for case, (repair, objective) in enumerate(
+            (r, o) for r in REPAIRS for o in OBJECTIVES):
+        ctx = _context(rng, repair, objective, 40 + 10 * case)
+        a, b = np.random.default_rng(case), np.random.default_rng(case)
+        ref = numpy_search(optimizer, params, RunStreams([a]), ctx, agents, iterations, 0, 1e-6)
+        got = decide(b, dataclasses.replace(ctx, backend="numba"), agents, iterations, 0, 1e-6)
+        assert ref[0] == got[0] and np.array_equal(ref[1], got[1]) and ref[2] == got[2]
+        assert a.random() == b.random()
+
+
+def test_unimplemented_settings_run_the_numpy_loop():
+    for optimizer, settings, agents in (("HPO", {"update": "synchronous"}, 10),
+                                        ("IHPO", {"beta_draw": "dimension"}, 10),
+                                        ("HPSO-MFB", {"restart": "cold"}, 10),
+                                        ("HPSO-MFB", {}, 1), ("ICOOT", {"leaders": 4}, 4)):
+        params = get_optimizer(optimizer).resolve_params(settings)
+        assert compiled_decide.decider(optimizer, params, agents) is None

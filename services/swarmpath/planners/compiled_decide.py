@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from swarmpath.optimizers import get_optimizer
-from swarmpath.planners import compiled_coot, compiled_hpo, local
+from swarmpath.planners import compiled_bats, compiled_coot, compiled_hpo, local
 from swarmpath.planners.compiled_score import setup
 
 Array = np.ndarray
@@ -25,7 +25,7 @@ Decide = Callable[[np.random.Generator, local.StepContext, int, int, int, float]
                   tuple[float, Array, int]]
 
 
-def _coot(name: str, p: Mapping[str, Any]) -> Decide | None:
+def _coot(name: str, p: Mapping[str, Any], agents: int) -> Decide | None:
     params = compiled_coot.pack(name, p)
 
     def decide(rng, ctx, agents, iterations, patience, tol):
@@ -36,7 +36,7 @@ def _coot(name: str, p: Mapping[str, Any]) -> Decide | None:
     return decide
 
 
-def _hpo(name: str, p: Mapping[str, Any]) -> Decide | None:
+def _hpo(name: str, p: Mapping[str, Any], agents: int) -> Decide | None:
     params = compiled_hpo.pack(name, p)
     if params is None:
         return None
@@ -49,8 +49,26 @@ def _hpo(name: str, p: Mapping[str, Any]) -> Decide | None:
     return decide
 
 
-_KERNELS: dict[str, Callable[[str, Mapping[str, Any]], Decide | None]] = {
-    "COOT": _coot, "ICOOT": _coot, "HPO": _hpo, "IHPO": _hpo,
+def _bats(name: str, p: Mapping[str, Any], agents: int) -> Decide | None:
+    params = compiled_bats.pack(name, p, agents)
+    if params is None:
+        return None
+    decays: dict[int, Array] = {}
+
+    def decide(rng, ctx, agents, iterations, patience, tol):
+        geo, k = setup(ctx)
+        decay = decays.get(iterations)
+        if decay is None:
+            decay = decays[iterations] = compiled_bats.levels(p, iterations)
+        return compiled_bats.bats_decide(rng, geo[4:6].copy(), geo[6:8].copy(), agents,
+                                         iterations, params, decay, geo, _hits(ctx), k,
+                                         patience, tol)
+
+    return decide
+
+
+_KERNELS: dict[str, Callable[[str, Mapping[str, Any], int], Decide | None]] = {
+    "COOT": _coot, "ICOOT": _coot, "HPO": _hpo, "IHPO": _hpo, "MFB": _bats, "HPSO-MFB": _bats,
 }
 
 
@@ -73,7 +91,7 @@ def decider(optimizer: str, params: Mapping[str, Any], agents: int) -> Decide | 
         leaders = int(params["leaders"]) or math.ceil(float(params["leader_fraction"]) * agents)
         if not 1 <= leaders < agents:
             return None
-    return make(optimizer, params)
+    return make(optimizer, params, agents)
 
 
 def warm(decide: Decide, repair: str, objective: str) -> None:
