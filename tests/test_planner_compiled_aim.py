@@ -136,3 +136,23 @@ def test_nearest_hit_equals_numpy():
         for p in rng.uniform(-2, 2, (5, 2)):
             ref = float(local.point_hit_distance(p[None, :], pts)[0][0])
             assert nearest_hit(p, pts, "numba") == ref == nearest_hit(p, pts, "numpy")
+
+
+def test_hold_clearance_equals_numpy():
+    import dataclasses
+
+    from swarmpath.planners import local
+    from swarmpath.planners.swarm_aim import clear
+
+    rng = np.random.default_rng(13)
+    both = set()
+    for pts in _scans(rng):
+        for margin in (0.05, 0.2):
+            ctx = local.StepContext(position=np.array([0.1, -0.2]), goal=np.array([3.0, 1.0]),
+                                    hits=pts, margin=margin)
+            fast = dataclasses.replace(ctx, backend="numba")
+            for x in rng.uniform(-2, 2, (10, 2)):
+                ref = bool(local.violation(x[None, :], ctx)[0] == 0)
+                assert clear(x, fast) == ref == clear(x, ctx)
+                both.add(ref)
+    assert both == {True, False}

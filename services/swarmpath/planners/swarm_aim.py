@@ -38,6 +38,20 @@ def nearest_hit(p: Array, hits: Array, backend: str) -> float:
     return float(local.point_hit_distance(p[None, :], hits)[0][0])
 
 
+def clear(x: Array, ctx: local.StepContext) -> bool:
+    """Whether the move to x keeps the margin (``local.violation`` is 0; ``backend = "numba"``:
+    its distances by :func:`swarmpath.planners.compiled.distances_kernel`, the same)."""
+    if ctx.backend == "numba" and len(ctx.hits):
+        from swarmpath.planners.compiled import distances_kernel
+
+        f = np.ascontiguousarray
+        d_pt, _, d_seg, _ = distances_kernel(f(x, dtype=float).reshape(1, 2),
+                                             np.asarray(ctx.position, dtype=float),
+                                             f(ctx.hits, dtype=float))
+        return bool(max(ctx.margin - min(d_pt[0], d_seg[0]), 0.0) == 0)
+    return bool(local.violation(x[None, :], ctx)[0] == 0)
+
+
 def _room(p: Array, known: ObstacleSet, backend: str) -> float:
     """Signed clearance of p in the known map (``ObstacleSet.point_clearance``; ``backend =
     "numba"``: :func:`swarmpath.planners.compiled_aim.point_clearance_kernel`)."""

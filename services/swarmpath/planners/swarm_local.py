@@ -227,7 +227,7 @@ class SwarmLocalPlanner(SwarmMoveLimits):
                               to_held @ to_aim))
         if np.degrees(turn) > float(self.p["hold_angle"]):
             return False
-        return bool(local.violation(held[None, :], ctx)[0] == 0)
+        return swarm_aim.clear(held, ctx)
 
     def decide(self, obs: Observation) -> Decision:
         return self._keep_off(obs, self._cut(obs, self._decide(obs)))
