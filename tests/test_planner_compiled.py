@@ -8,6 +8,7 @@ import pytest
 
 from swarmpath.planners import Episode, get_planner, list_planners, local, sensed_map
 from swarmpath.planners.base import PlannerError
+from swarmpath.planners.compiled import segments_clearance_kernel
 from swarmpath.world import get_map
 
 SWARM = [name for name in list_planners() if "backend" in get_planner(name).defaults]
@@ -95,8 +96,8 @@ def test_compiled_segment_clearance_equals_numpy():
             aims.add(tuple(ref))
     assert len(aims) > 3  # the margins and lookaheads pick different samples
     a, b = path[:-1], path[1:]
-    ref = sensed_map._segments_clearance(hits, a, b, "numpy")
-    assert np.array_equal(ref, sensed_map._segments_clearance(hits, a, b, "numba"))
+    ref = sensed_map._segments_clearance(hits, a, b)
+    assert np.array_equal(ref, segments_clearance_kernel(hits, a, b))
 
 
 @pytest.mark.parametrize("surface", [0.05, 0.2, 0.5])
