@@ -58,3 +58,33 @@ def test_plan_prints_the_warning(tmp_path) -> None:
                                       str(p), "--json"])
     assert result.exit_code == 0, result.stderr
     assert "warning: walls: goal_motion: the goal's stated path enters" in result.stderr
+
+
+def test_submit_prints_the_warning_naming_the_map_and_field(tmp_path, monkeypatch) -> None:
+    """`swarmpath submit` checks a map job's inline scenarios on the submitter's machine and
+    warns by field path; the job is submitted all the same (the simulation is well defined)."""
+    from fastapi.testclient import TestClient
+
+    import swarmpath.cli.service as service_cli
+    from swarmpath.service.client import ServiceClient
+    from swarmpath.service.http.app import create_app
+    from swarmpath.service.settings import CoordinatorSettings
+
+    monkeypatch.delenv("SWARMPATH_TOKEN", raising=False)
+    mover = {"shape": "circle", "center": [2, 8], "radius": 0.4, "speed": 0.5, "heading_deg": 0}
+    spec = {"kind": "map", "planners": ["MFB"], "runs": 1,
+            "maps": ["mfb-static", _scenario(obstacles=[WALL, mover]),
+                     _scenario(name="calm")]}
+    assert service_cli.trajectory_notes({**spec, "kind": "benchmark"}) == []
+    p = tmp_path / "spec.json"
+    p.write_text(json.dumps(spec))
+    app_ = create_app(CoordinatorSettings(data_dir=tmp_path / "data"), use_zenoh=False)
+    with TestClient(app_) as c:
+        monkeypatch.setattr(service_cli, "_client",
+                            lambda url: ServiceClient("http://testserver", transport=c._transport))
+        result = CliRunner().invoke(app, ["submit", str(p)])
+    assert result.exit_code == 0, result.stderr
+    warnings = [ln for ln in result.stderr.splitlines() if "warning" in ln]
+    assert warnings == ["swarmpath submit: warning: maps[1].obstacles[1] (walls): its stated "
+                        "path runs into a static obstacle at t = 7.2 s"]
+    assert len(result.stdout.strip()) == 12  # the job id: submitted all the same

@@ -111,6 +111,8 @@ def submit(
         raise InputError("SPEC.json", f"not valid JSON: {exc.msg} (line {exc.lineno})") from None
     if not isinstance(spec, dict):
         raise InputError("SPEC.json", "a job spec is a JSON object")
+    for line in trajectory_notes(spec):
+        typer.echo(f"swarmpath submit: warning: {line}", err=True)
     with _client(url) as client:
         try:
             job = client.submit(spec)
@@ -126,6 +128,32 @@ def submit(
                f"{status['runs_failed']} failed)", err=True)
     if status["state"] != "done":
         raise typer.Exit(1)
+
+
+def trajectory_notes(spec: dict[str, Any]) -> list[str]:
+    """``maps[i].FIELD: message`` for each inline scenario of a map job whose moving goal or
+    moving obstacle has a stated path into a static obstacle
+    (:func:`swarmpath.world.trajectories.trajectory_warnings`, as ``swarmpath plan`` warns).
+    Checked here, on the submitter's machine, not by the coordinator (the check samples the
+    whole episode: work the shared HTTP port should not do for anyone). Entries the coordinator
+    will refuse are left to its 422; presets and uploaded maps state no such paths."""
+    maps = spec.get("maps") if spec.get("kind") == "map" else None
+    if not isinstance(maps, list):
+        return []
+    from swarmpath.world.scenario_io import scenario_from_dict
+    from swarmpath.world.trajectories import trajectory_warnings
+
+    out: list[str] = []
+    for i, entry in enumerate(maps):
+        if not isinstance(entry, dict) or "map" in entry:
+            continue
+        try:
+            scenario = scenario_from_dict(dict(entry))
+        except ValueError:  # ScenarioError: the coordinator's 422 names it
+            continue
+        out += [f"maps[{i}].{field} ({scenario.name}): {message}"
+                for field, message in trajectory_warnings(scenario)]
+    return out
 
 
 def _wait_with_progress(client: Any, job_id: str, total: int) -> dict[str, Any]:
