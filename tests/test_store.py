@@ -654,3 +654,7 @@ def test_run_records_of_interleaved_jobs_in_acceptance_order(store):
         position, before = marks[2]
         tail = [r["run_id"] for r in store.iter_run_records(job, batch=4, after=position)]
         assert tail == order[job][before[job]:] and 0 < len(tail) < 20
+        upto, until = marks[5]  # from one position up to a later one
+        part = [r["run_id"] for r in store.iter_run_records(job, batch=4, after=position,
+                                                             upto=upto)]
+        assert part == order[job][before[job]:until[job]] and 0 < len(part) < len(tail)

@@ -7,7 +7,11 @@ here, several microseconds per run). :class:`FastWriter` is a ``Writer`` whose
 
 * :meth:`FastWriter.add_parts` appends a message record with one ``struct`` pack for its head
   (its data may come in parts, written one after the other), with the statistics, message index
-  entry and chunk cut of ``Writer.add_message``;
+  entry and chunk cut of ``Writer.add_message``. The records are kept as a list of byte strings
+  and joined once when the chunk is cut, instead of being copied into the chunk's growing
+  ``BytesIO`` (which reallocates, and so copies, as it grows); they go into that buffer first
+  only when mcap writes a record of its own into the chunk (a schema or channel registered
+  while the chunk is open), so the records keep their order;
 * chunk finalization and buffer flushing (the ``Writer``'s private ``__finalize_chunk`` and
   ``__flush``, overridden) compute the chunk and data-section CRCs with ISA-L's CRC-32 (the same
   polynomial, the same values, an order of magnitude faster: :mod:`isal.isal_zlib`), write the
@@ -84,6 +88,27 @@ class FastWriter(Writer):
                         and hasattr(getattr(chunk, "record_writer", None), "_buffer")
                         and hasattr(chunk, "message_indices")
                         and hasattr(self._Writer__statistics, "channel_message_counts"))
+        self._pending: list[bytes] = []  # message records of the open chunk, not in its buffer
+        self._pending_size = 0
+
+    def _spill(self) -> None:
+        """The pending message records into the chunk's buffer (before a record of mcap's)."""
+        if self._pending:
+            self._Writer__chunk_builder.record_writer._buffer.write(b"".join(self._pending))
+            self._pending.clear()
+            self._pending_size = 0
+
+    def register_schema(self, *args: Any, **kwargs: Any) -> int:
+        self._spill()
+        return super().register_schema(*args, **kwargs)
+
+    def register_channel(self, *args: Any, **kwargs: Any) -> int:
+        self._spill()
+        return super().register_channel(*args, **kwargs)
+
+    def add_message(self, *args: Any, **kwargs: Any) -> None:
+        self._spill()
+        super().add_message(*args, **kwargs)
 
     # -------------------------------------------------------------------------------- messages
     def add_parts(self, channel_id: int, log_ns: int, *parts: bytes) -> None:
@@ -100,8 +125,7 @@ class FastWriter(Writer):
             chunk.message_start_time = log_ns
         if log_ns > chunk.message_end_time:
             chunk.message_end_time = log_ns
-        buffer = chunk.record_writer._buffer
-        offset = buffer.tell()
+        offset = chunk.record_writer._buffer.tell() + self._pending_size  # in the chunk
         index = chunk.message_indices.get(channel_id)
         if not index:
             index = chunk.message_indices[channel_id] = PackedIndex(
@@ -109,10 +133,11 @@ class FastWriter(Writer):
         index.records.append((log_ns, offset))
         chunk.num_messages += 1
         size = len(parts[0]) if len(parts) == 1 else sum(map(len, parts))
-        buffer.write(_MESSAGE_HEAD.pack(Opcode.MESSAGE, _MESSAGE_FIXED + size, channel_id, 0,
-                                        log_ns, log_ns))
-        for part in parts:
-            buffer.write(part)
+        pending = self._pending
+        pending.append(_MESSAGE_HEAD.pack(Opcode.MESSAGE, _MESSAGE_FIXED + size, channel_id, 0,
+                                          log_ns, log_ns))
+        pending += parts
+        self._pending_size += 9 + _MESSAGE_FIXED + size
         if offset + 9 + _MESSAGE_FIXED + size > self._Writer__chunk_size:
             self._Writer__finalize_chunk()
 
@@ -131,7 +156,13 @@ class FastWriter(Writer):
         if not chunk or chunk.num_messages == 0:
             return  # (records other than messages wait for the next chunk, as in Writer)
         self._Writer__statistics.chunk_count += 1
-        records = chunk.end()
+        if chunk.record_writer._buffer.tell():  # records of mcap's first, then the messages
+            self._spill()
+            records = chunk.end()
+        else:
+            records = b"".join(self._pending)
+            self._pending.clear()
+            self._pending_size = 0
         compression = self._Writer__compression
         if compression == CompressionType.LZ4:
             data = lz4.frame.compress(records)

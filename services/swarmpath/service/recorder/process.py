@@ -166,7 +166,10 @@ def serve(data_dir: str, synchronous: str, conn: Connection, recover: bool = Fal
         newest = store.last_result_rowid()
         if newest > last[job_id]:
             rec = recorders.open(job_id)
-            for i, record in enumerate(store.iter_run_records(job_id, after=last[job_id])):
+            # up to newest: results stored meanwhile wait for the next catch-up (read once,
+            # not now and again from last[job_id] then)
+            for i, record in enumerate(store.iter_run_records(job_id, after=last[job_id],
+                                                              upto=newest)):
                 rec.add(record)  # runs already written are skipped
                 if i % 1000 == 999 and os.getppid() != parent:
                     raise EOFError("the coordinator is gone")

@@ -176,11 +176,12 @@ class RunViewsMixin(StoreBase):
         return int(row[0] or 0)
 
     def iter_run_records(
-        self, job_id: str, batch: int = 2000, after: int = 0
+        self, job_id: str, batch: int = 2000, after: int = 0, upto: int | None = None
     ) -> Iterator[dict[str, Any]]:
-        """Every stored result of a job (those after position ``after``, see
-        :meth:`last_result_rowid`), in acceptance order, as recorder records (raw numbers,
-        series included). Reads in batches without holding the lock in between."""
+        """Every stored result of a job (those after position ``after`` and, with ``upto``, up to
+        that position, see :meth:`last_result_rowid`), in acceptance order, as recorder records
+        (raw numbers, series included). Reads in batches without holding the lock in between
+        (without ``upto`` it also yields results stored while it reads)."""
         with self._read() as db:
             job = self._job_row(db, job_id)
             if job is None:
@@ -206,8 +207,8 @@ class RunViewsMixin(StoreBase):
                 cur.row_factory = None
                 rows = cur.execute(
                     f"SELECT rowid, {', '.join(_RECORD_COLUMNS)} FROM results "
-                    "WHERE +job_seq = ? AND rowid > ? ORDER BY rowid LIMIT ?",
-                    (seq, last, batch),
+                    "WHERE +job_seq = ? AND rowid > ? AND rowid <= ? ORDER BY rowid LIMIT ?",
+                    (seq, last, _MAX_ROWID if upto is None else upto, batch),
                 ).fetchall()
             if not rows:
                 return
@@ -263,6 +264,7 @@ class RunViewsMixin(StoreBase):
         }
 
 
+_MAX_ROWID = 2**63 - 1  # SQLite's largest rowid
 #: The results columns a recorder record is made of, in the order :func:`_record_of` reads them.
 _RECORD_COLUMNS = ("cell_idx", "run", "worker", "lease_id", "status", "failure", "seconds",
                    "metrics", "created", "series")
