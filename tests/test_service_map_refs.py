@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import base64
 import hashlib
-import json
 import sys
 from pathlib import Path
 
@@ -28,7 +27,8 @@ from swarmpath.service.protocol import (
     decode_work_reply,
     encode,
 )
-from swarmpath.service.result_frame import as_dict, decode_frame, decode_record
+from swarmpath.service.result_columns import decode_columns
+from swarmpath.service.result_frame import as_dict, decode_record
 from swarmpath.service.scenarios import (
     ByteLRU,
     ScenarioRefused,
@@ -327,10 +327,12 @@ def test_the_worker_fails_a_lease_whose_scenario_is_refused_and_goes_on(data_dir
         worker._take([wrong])
         assert wrong.lease_id not in worker._active and not worker._queue
         (key, payload), = session.puts
-        batch = json.dumps([as_dict(r) for r in decode_frame(payload)[1]], separators=(",", ":"))
-        assert key.endswith(wrong.job_id) and '"status":"failed"' in batch
-        assert f"map {map_id}: the coordinator did not send scenario" in batch
-        assert "refused: lease" in batch and "has no scenario" in batch
+        head = decode_columns(payload).head
+        assert key.endswith(wrong.job_id) and head.lease_id == wrong.lease_id
+        assert set(head.status) == {"failed"} and head.runs == wrong.runs
+        failure = head.failure[0] or ""
+        assert f"map {map_id}: the coordinator did not send scenario" in failure
+        assert "refused: lease" in failure and "has no scenario" in failure
         worker._take([good])
         (queued,), = worker._queue
         assert isinstance(queued.spec, MapCell) and queued.spec.scenario is not None

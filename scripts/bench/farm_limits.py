@@ -7,14 +7,14 @@
 Results are what farm.py's simulated workers send: Table-2-sized benchmark runs (GWO, 2 dims,
 2 agents, ``--iterations`` points per curve) built from a real run by
 ``farm_workers.simulated_results``, proven with their lease's capability and packed into
-ResultBatch payloads by the worker's own ``pack_batches``; leases come from the coordinator
+columnar result frames by the worker's own ``pack_lease_columns``; leases come from the coordinator
 core's ``handle_lease_request``. No network except in the last row. The coordinator core runs
 in this process on a fresh data directory (SQLite ``synchronous=FULL`` as in production); each
 row times one piece over the same results (CPU seconds of this process per run, and wall):
 
 * decode + proof: the coordinator's decoding of each result frame and the HMAC check of every
   result;
-* SQLite: ``Store.accept_results`` in groups of 64 batches (one transaction and fsync each);
+* SQLite: ``Store.accept_columns`` in groups of 64 frames (one transaction and fsync each);
 * MCAP: the recorder writing each accepted run (``Coordinator._record``: /results and /curves
   messages, 1 MiB zstd chunks);
 * dashboard: the live aggregates (``Dashboard.observe``);
@@ -58,7 +58,7 @@ from swarmpath.service.protocol import (
     decode_work_reply,
     encode,
 )
-from swarmpath.service.worker import pack_batches
+from swarmpath.service.worker import pack_lease_columns
 
 GROUP = 64  # result batches per transaction, as the bridge groups them
 
@@ -84,8 +84,9 @@ def lease_all(core: Coordinator, worker: str) -> list[Lease]:
 
 
 def payloads(leases: list[Lease], worker: str) -> list[bytes]:
-    data = [d for lease in leases for _run, d in simulated_results(lease, 0.003)]
-    return pack_batches(worker, data)
+    data = [(lease.lease_id, lease.capability, d) for lease in leases
+            for _run, d in simulated_results(lease, 0.003)]
+    return pack_lease_columns(worker, data)
 
 
 def coordinator_pieces(
@@ -117,22 +118,24 @@ def coordinator_pieces(
         def decode_all() -> None:
             for p in batches_a:
                 item = core._decode_batch(key_a, p)
-                assert item is not None and all(r.capability for r in item[1])
+                assert item is not None and all(c.capability for c in item[1])
                 decoded.extend(item[1])
 
         rows.append(("decode + proof", *timed(decode_all)))
 
         def store_all() -> None:
-            per = max(1, len(decoded) * GROUP // len(batches_a))
-            for i in range(0, len(decoded), per):
-                statuses = core.store.accept_results(decoded[i:i + per], time.time())
-                assert set(statuses) == {"accepted"}, set(statuses)
+            for i in range(0, len(decoded), GROUP):
+                statuses = core.store.accept_columns(decoded[i:i + GROUP], time.time())
+                assert {s for one in statuses for s in one} == {"accepted"}
 
-        rows.append(("SQLite (accept_results, FULL)", *timed(store_all)))
-        rows.append(("MCAP (recorder)", *timed(lambda: core._record(job_a, decoded,
+        rows.append(("SQLite (accept_columns, FULL)", *timed(store_all)))
+        every = [(c, list(range(len(c.runs)))) for c in decoded]
+        rows.append(("MCAP (recorder)", *timed(lambda: core._record(job_a, every,
                                                                       time.time()))))
         rows.append(("dashboard aggregates", *timed(
-            lambda: core.dashboard.observe(job_a, decoded, time.time()))))
+            lambda: core.dashboard.observe_runs(job_a, [
+                (c.cell, c.runs[k], c.status[k] == "ok", c.metrics[k], c.array("curve", k),
+                 c.array("path", k)) for c, ks in every for k in ks], time.time()))))
 
         def progress_all() -> None:
             for key, payload in messages:

@@ -11,8 +11,9 @@ and cancels honoured) whose slots do not compute: a slot holds a group of leases
 ``run-ms`` per run, then hands back each run's result built from a *template*: a real result of
 the same cell spec computed once by :func:`swarmpath.service.worker.execute_lease` (curve of
 ``iterations`` points, best position and metrics; a map run's path and metrics), with the lease's
-identity put in and encoded and proven (HMAC with the lease's capability) by the worker's own
-:func:`~swarmpath.service.worker.fit_result`. Nothing of the protocol is re-implemented here.
+identity put in and encoded by the worker's own :func:`~swarmpath.service.worker.fit_result`;
+the worker puts them as it puts real ones (columnar frames proven with the lease's capability).
+Nothing of the protocol is re-implemented here.
 
 The process runs until SIGTERM/SIGINT (or ``--seconds``), stops its workers gracefully, and writes
 its measurements as JSON to ``--stats`` (or stdout): per worker the runs and leases done, lease
@@ -235,6 +236,14 @@ class SimWorker(Worker):
             else:
                 self.leases_got += len(reply.leases) if isinstance(reply, LeaseBundle) else 1
         return reply
+
+    def _publish_many(self, items: Sequence[tuple[Lease, list[tuple[int, bytes]]]]) -> None:
+        """With ``wrong_key`` the worker's frames are proven with a made-up capability (its
+        records already are): the negative control reaches the coordinator's frame check."""
+        if self.wrong_key:
+            items = [(lease.model_copy(update={"capability": new_capability()}), results)
+                     for lease, results in items]
+        super()._publish_many(items)
 
     def _on_ack(self, sample: Any) -> None:
         now = time.monotonic()

@@ -52,7 +52,7 @@ def fill(core: Any, spec: dict[str, Any], evaluations: int,
         encode,
         parse_job_spec,
     )
-    from swarmpath.service.worker import pack_batches
+    from swarmpath.service.worker import pack_lease_columns
 
     status = core.submit(parse_job_spec(spec))
     rng = np.random.default_rng(1)
@@ -68,7 +68,9 @@ def fill(core: Any, spec: dict[str, Any], evaluations: int,
         for lease in leases:
             results = synthetic_results(lease, rng, spec["iterations"], evaluations)
             core.handle_result_batches([(f"swarmpath/results/{lease.job_id}", p)
-                                        for p in pack_batches("bench", results)])
+                                        for p in pack_lease_columns(
+                                            "bench", [(lease.lease_id, lease.capability, d)
+                                                      for d in results])])
             done += len(lease.runs)
         if on_progress is not None:
             on_progress(done, status.runs_total, time.perf_counter() - t0)

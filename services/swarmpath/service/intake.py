@@ -17,7 +17,7 @@ import orjson
 
 from swarmpath.service.capability import drop_proof, result_ok
 from swarmpath.service.frame_head import RecordHead
-from swarmpath.service.incoming import Incoming
+from swarmpath.service.incoming import SERIES, Incoming
 from swarmpath.service.lease_sizer import LeaseSizer
 from swarmpath.service.protocol import (
     Ack,
@@ -34,10 +34,12 @@ from swarmpath.service.protocol import (
 )
 from swarmpath.service.recorder import Recorders
 from swarmpath.service.recorder.process import RecorderProcess
+from swarmpath.service.result_columns import columns_key, columns_ok, decode_columns, is_columns
 from swarmpath.service.result_frame import decode_frame, is_frame, key_ok, proof_key
 from swarmpath.service.settings import CoordinatorSettings
 from swarmpath.service.store import FINAL_STATES, Store
-from swarmpath.service.store.series import series_prefix
+from swarmpath.service.store.columns import ResultColumns, from_frame, from_incoming, unproven
+from swarmpath.service.store.series import raw_series
 from swarmpath.service.util import short as _short
 
 log = logging.getLogger("swarmpath.coordinator")
@@ -85,9 +87,10 @@ class ResultIntake:
             self._jobs[job_id] = info
         return info
 
-    def _record(self, job_id: str, results: list[Incoming], now: float) -> None:
-        """Write accepted results to the job's MCAP (the store has them already); a recorder
-        process is told to read them from the store."""
+    def _record(self, job_id: str, accepted: list[tuple[ResultColumns, list[int]]],
+                now: float) -> None:
+        """Write accepted results (columns, the indexes accepted) to the job's MCAP (the store
+        has them already); a recorder process is told to read them from the store."""
         info = self._job_info(job_id)
         if info is None:
             return
@@ -96,39 +99,63 @@ class ResultIntake:
                 return
             self._recording.add(job_id)
             if isinstance(self.recorders, RecorderProcess):
-                self.recorders.poke(job_id, {w: p for w in {r.worker for r in results}
+                self.recorders.poke(job_id, {w: p for w in {c.worker for c, _ in accepted}
                                              if (p := self.worker_table.platform(w))})
                 return
-            for r in results:
-                idx, spec, _parsed = info["cells"][r.cell]
-                record: dict[str, Any] = {
-                    "job_id": job_id, "kind": info["kind"],
-                    "run_id": idx * info["rpc"] + r.run, "cell_index": idx, "cell": r.cell,
-                    "spec": spec, "run": r.run, "seed": info["seed"], "worker": r.worker,
-                    "lease_id": r.lease_id, "status": r.status, "failure": r.failure,
-                    "seconds": r.seconds, "metrics": r.metrics, "created": now,
-                }
-                record.update(r.series())
-                record["platform"] = self.worker_table.platform(r.worker)
-                self.recorders.add(job_id, record)
+            for c, indexes in accepted:
+                idx, spec, _parsed = info["cells"][c.cell]
+                platform = self.worker_table.platform(c.worker)
+                for k in indexes:
+                    run = c.runs[k]
+                    record: dict[str, Any] = {
+                        "job_id": job_id, "kind": info["kind"],
+                        "run_id": idx * info["rpc"] + run, "cell_index": idx, "cell": c.cell,
+                        "spec": spec, "run": run, "seed": info["seed"], "worker": c.worker,
+                        "lease_id": c.lease_id, "status": c.status[k],
+                        "failure": c.failure[k], "seconds": c.seconds[k],
+                        "metrics": c.metrics[k], "created": now,
+                    }
+                    for name in SERIES:
+                        value = c.array(name, k)
+                        if value is not None:
+                            record[name] = value
+                    record["platform"] = platform
+                    self.recorders.add(job_id, record)
 
     def handle_results(self, key: str, payload: bytes, now: float | None = None) -> Ack | None:
-        """A ResultBatch on ``results/<job>``: store (one transaction), record, acknowledge.
-        Malformed batches are logged and dropped (None)."""
+        """A result message on ``results/<job>``: store (one transaction), record, acknowledge.
+        Malformed messages are logged and dropped (None)."""
         return self.handle_result_batches([(key, payload)], now)[0]
 
-    def _decode_batch(self, key: str, payload: bytes) -> tuple[str, list[Incoming]] | None:
-        """A result message (a result frame, or a JSON ResultBatch) as (worker, its results); a
-        result is proven (``capability`` set) when it names this message's job and worker and
-        its proof holds. None: malformed, dropped."""
+    def _decode_batch(self, key: str, payload: bytes) -> tuple[str, list[ResultColumns]] | None:
+        """A result message (a columnar frame, a record frame or a JSON ResultBatch) as (worker,
+        its results as columns); columns are proven (``capability`` set) when they name this
+        message's job and worker and their proof holds. None: malformed, dropped."""
         try:
+            if is_columns(payload):
+                return self._decode_columns(key, payload)
             if is_frame(payload):
-                return self._decode_frame(key, payload)
-            return self._decode_json(key, decode(ResultBatch, payload))
+                worker, entries = self._decode_frame(key, payload)
+            else:
+                worker, entries = self._decode_json(key, decode(ResultBatch, payload))
+            return worker, from_incoming(entries)[0]
         except Exception as exc:
             self.stats["malformed"] += 1
             log.warning("dropped a malformed result batch on %s: %s", key, _short(exc))
             return None
+
+    def _decode_columns(self, key: str, payload: bytes) -> tuple[str, list[ResultColumns]]:
+        frame = decode_columns(payload)
+        h = frame.head
+        if h.job_id != Keys.last_chunk(key):
+            self._count_foreign(len(h.runs), h.worker)
+            return h.worker, [unproven(h)]
+        cap = self._capability(h.lease_id)
+        # no valid proof, no store round trip (a flood of forged frames costs no fsync)
+        if cap is None or not columns_ok(columns_key(cap), frame):
+            self._count_unproven(len(h.runs))
+            return h.worker, [unproven(h)]
+        return h.worker, [from_frame(frame, cap)]
 
     def _decode_frame(self, key: str, payload: bytes) -> tuple[str, list[Incoming]]:
         job_id = Keys.last_chunk(key)
@@ -136,8 +163,6 @@ class ResultIntake:
         entries: list[Incoming] = []
         keys: dict[str, tuple[str, bytes] | None] = {}  # lease -> (capability, its HMAC key)
         foreign = unproven = 0
-        declared: Any = None  # the last record's array declarations and their series prefix
-        prefix: bytes | None = None
         for rec in records:
             h = rec.head
             if h.job_id != job_id or h.worker != worker:
@@ -149,18 +174,15 @@ class ResultIntake:
             else:
                 cap = self._capability(h.lease_id)
                 found = keys[h.lease_id] = None if cap is None else (cap, proof_key(cap))
-            # no valid proof, no store round trip (a flood of forged results costs no fsync)
             if found is None or not key_ok(found[1], rec):
                 unproven += 1
                 entries.append(_identity(h))
                 continue
-            if h.arrays != declared:  # records of a lease mostly declare the same arrays
-                declared, prefix = h.arrays, series_prefix(h.arrays)
             arrays = rec.arrays
             entries.append(Incoming(
                 h.lease_id, h.job_id, h.cell, h.run, h.worker, h.status, h.failure, h.seconds,
                 h.metrics, arrays.get("curve"), arrays.get("best_position"), arrays.get("path"),
-                found[0], None if prefix is None else prefix + rec.raw))
+                found[0], raw_series(h.arrays, rec.raw)))
         self._count_foreign(foreign, worker)
         self._count_unproven(unproven)
         return worker, entries
@@ -208,42 +230,45 @@ class ResultIntake:
         (None: malformed, dropped; all None when ``parse_acks`` is False: the Ack is only put)."""
         now = time.time() if now is None else now
         batches = [self._decode_batch(key, payload) for key, payload in messages]
-        status: dict[int, AckStatus] = {}
-        todo: list[Incoming] = []
+        status: dict[int, list[AckStatus]] = {}  # id(columns) -> statuses run by run
+        todo: list[ResultColumns] = []
         with self._lock:  # re-sent copies of results stored moments ago: no store round trip
             for item in batches:
                 if item is None:
                     continue
                 self._seen(item[0], now)
-                for r in item[1]:
-                    if r.capability is None:
+                for c in item[1]:
+                    if c.capability is None:
                         continue
-                    owner, cap, runs = self._settled.get(r.lease_id, ("", "", ()))
-                    if owner == r.worker and r.run in runs and cap == r.capability:
-                        status[id(r)] = "duplicate"
-                        self.stats["duplicates_fast"] += 1
+                    owner, cap, runs = self._settled.get(c.lease_id, ("", "", ()))
+                    if owner == c.worker and cap == c.capability and runs \
+                            and all(run in runs for run in c.runs):
+                        status[id(c)] = ["duplicate"] * len(c.runs)
+                        self.stats["duplicates_fast"] += len(c.runs)
                     else:
-                        todo.append(r)
-        statuses = self.store.accept_results(todo, now) if todo else []
-        accepted: dict[str, list[Incoming]] = {}
+                        todo.append(c)
+        results = self.store.accept_columns(todo, now) if todo else []
+        accepted: dict[str, list[tuple[ResultColumns, list[int]]]] = {}
         with self._lock:
-            for r, s in zip(todo, statuses, strict=True):
-                status[id(r)] = s
-                if s == "stale":
+            for c, statuses in zip(todo, results, strict=True):
+                status[id(c)] = statuses
+                taken = [run for run, s in zip(c.runs, statuses, strict=True) if s != "stale"]
+                if not taken:
                     continue
-                # the lease exists, is r.worker's and r proved its capability
-                entry = self._settled.get(r.lease_id)
+                # the lease exists, is c.worker's and c proved its capability
+                entry = self._settled.get(c.lease_id)
                 if entry is None:
-                    entry = self._settled[r.lease_id] = (r.worker, r.capability or "", set())
+                    entry = self._settled[c.lease_id] = (c.worker, c.capability or "", set())
                 else:
-                    self._settled.move_to_end(r.lease_id)
-                entry[2].add(r.run)
-                if s == "accepted":
-                    accepted.setdefault(r.job_id, []).append(r)
+                    self._settled.move_to_end(c.lease_id)
+                entry[2].update(taken)
+                new = [k for k, s in enumerate(statuses) if s == "accepted"]
+                if new:
+                    accepted.setdefault(c.job_id, []).append((c, new))
             while len(self._settled) > SETTLED_LEASES:
                 self._settled.popitem(last=False)
-        for job_id, results in accepted.items():
-            self._after_accept(job_id, results, now)
+        for job_id, results_of in accepted.items():
+            self._after_accept(job_id, results_of, now)
         acks: list[Ack | None] = []
         for item in batches:
             if item is None:
@@ -251,11 +276,16 @@ class ResultIntake:
                 continue
             worker, entries = item
             per_lease: dict[str, dict[str, list[int]]] = {}
-            for r in entries:
-                lease = per_lease.get(r.lease_id)
+            for c in entries:
+                lease = per_lease.get(c.lease_id)
                 if lease is None:
-                    lease = per_lease[r.lease_id] = {"accepted": [], "duplicate": [], "stale": []}
-                lease[status.get(id(r), "stale")].append(r.run)
+                    lease = per_lease[c.lease_id] = {"accepted": [], "duplicate": [], "stale": []}
+                statuses = status.get(id(c))
+                if statuses is None:
+                    lease["stale"].extend(c.runs)
+                    continue
+                for run, s in zip(c.runs, statuses, strict=True):
+                    lease[s].append(run)
             payload = orjson.dumps({
                 "worker": worker, "results": [],
                 "leases": [{"lease_id": lease_id, **runs} for lease_id, runs in per_lease.items()],
@@ -281,19 +311,20 @@ class ResultIntake:
             while len(self._caps) > CACHED_CAPABILITIES:
                 self._caps.popitem(last=False)
 
-    def _after_accept(self, job_id: str, accepted: list[Incoming], now: float) -> None:
-        """Learn run costs, write the MCAP, finalize the job when it ended."""
+    def _after_accept(self, job_id: str, accepted: list[tuple[ResultColumns, list[int]]],
+                      now: float) -> None:
+        """Learn run costs, write the MCAP, update the dashboard, finalize the job when it
+        ended (``accepted``: columns and the indexes of their runs just stored)."""
         with self._lock:
-            self._accepted.append((now, len(accepted)))
+            self._accepted.append((now, sum(len(k) for _c, k in accepted)))
         info = self._job_info(job_id)
         if info is not None:
-            by_cell: dict[str, list[float]] = {}
-            for r in accepted:
-                if r.status == "ok" and r.cell in info["cells"]:
-                    by_cell.setdefault(r.cell, []).append(r.seconds)
-            for cell, seconds in by_cell.items():
+            for c, indexes in accepted:
+                if c.cell not in info["cells"]:
+                    continue
+                seconds = [c.seconds[k] for k in indexes if c.status[k] == "ok"]
                 try:
-                    self.sizer.observe_many(info["cells"][cell][2], seconds)
+                    self.sizer.observe_many(info["cells"][c.cell][2], seconds)
                 except Exception:  # pragma: no cover - specs come from the store
                     pass
         try:
@@ -301,7 +332,9 @@ class ResultIntake:
         except Exception:
             log.exception("recording results of job %s in its MCAP failed", job_id)
         try:
-            self.dashboard.observe(job_id, accepted, now)
+            self.dashboard.observe_runs(job_id, [
+                (c.cell, c.runs[k], c.status[k] == "ok", c.metrics[k], c.array("curve", k),
+                 c.array("path", k)) for c, indexes in accepted for k in indexes], now)
         except Exception:
             log.exception("updating the dashboard's aggregates of job %s failed", job_id)
         status = self.store.job_status(job_id)

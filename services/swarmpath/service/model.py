@@ -28,8 +28,9 @@ CANCEL_LEASES = 2000  # lease drops in one Cancel message
 INLINE_SCENARIO_BYTES = 16_000
 MAX_SCENARIO_BYTES = 64 * 1024 * 1024  # a fetched scenario (canonical JSON) at most
 
-PROTOCOL_VERSION = 4  # 2: lease capabilities (swarmpath.service.capability); 3: ScenarioRef;
-# 4: results travel as binary result frames (swarmpath.service.result_frame)
+PROTOCOL_VERSION = 5  # 2: lease capabilities (swarmpath.service.capability); 3: ScenarioRef;
+# 4: results travel as binary result frames (swarmpath.service.result_frame); 5: a lease's
+# results travel as columnar frames, proven once per frame (swarmpath.service.result_columns)
 DEFAULT_PREFIX = "swarmpath"
 
 # Identifiers that appear inside key expressions: one chunk, none of the reserved characters.

@@ -78,6 +78,7 @@ from swarmpath.service.model import (
     Scalar,
     Secret,
 )
+from swarmpath.service.result_columns import ColumnsHead
 from swarmpath.service.result_frame import FrameHead, RunResultHead
 from swarmpath.service.spec_checks import (
     INT64,
@@ -114,6 +115,7 @@ __all__ = [
     "BenchmarkJobSpec",
     "Cancel",
     "CellSpec",
+    "ColumnsHead",
     "FieldProblems",
     "FrameHead",
     "Identifier",
@@ -494,6 +496,7 @@ SCHEMA_MODELS: dict[str, Any] = {
     "result_batch": ResultBatch,
     "result_frame_head": FrameHead,
     "run_result_head": RunResultHead,
+    "result_columns_head": ColumnsHead,
     "ack": Ack,
     "lease_drop": LeaseDrop,
     "lease_ack": LeaseAck,

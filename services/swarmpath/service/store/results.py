@@ -22,7 +22,7 @@ from swarmpath.service.protocol import (
     RunResult,
 )
 from swarmpath.service.store.base import FINAL_STATES, StoreBase, _dumps
-from swarmpath.service.store.series import encode_series
+from swarmpath.service.store.columns import ResultColumns, from_incoming
 
 
 class ResultsMixin(StoreBase):
@@ -42,52 +42,82 @@ class ResultsMixin(StoreBase):
         now = time.time() if now is None else now
         items = list(results)
         out: list[AckStatus] = ["stale"] * len(items)
-        groups: dict[str, list[int]] = {}
-        for i, r in enumerate(items):
-            groups.setdefault(r.lease_id, []).append(i)
         with self._tx() as db:
-            for lease_id, indexes in groups.items():
-                statuses = self._accept_lease(db, lease_id, [items[i] for i in indexes], now)
-                for i, status in zip(indexes, statuses, strict=True):
+            incoming = [r if isinstance(r, Incoming) else self._proven_json(db, r)
+                        for r in items]
+            groups, indexes = from_incoming(incoming)
+            for statuses, where in zip(self._accept_all(db, groups, now), indexes, strict=True):
+                for i, status in zip(where, statuses, strict=True):
                     out[i] = status
-            for status, counter in (
-                ("accepted", "results_accepted"), ("duplicate", "duplicates"), ("stale", "stale")
-            ):
-                n = out.count(status)
-                if n:
-                    self._bump(db, counter, n)
         return out
 
+    def accept_columns(
+        self, batch: Sequence[ResultColumns], now: float | None = None
+    ) -> list[list[AckStatus]]:
+        """Results as columns (one lease each), all in one transaction (one fsync); each one's
+        statuses run by run."""
+        now = time.time() if now is None else now
+        with self._tx() as db:
+            return self._accept_all(db, batch, now)
+
+    def _accept_all(self, db: sqlite3.Connection, batch: Sequence[ResultColumns],
+                    now: float) -> list[list[AckStatus]]:
+        out = [self._accept_lease(db, cols, now) for cols in batch]
+        counts = {"accepted": 0, "duplicate": 0, "stale": 0}
+        for statuses in out:
+            for status in counts:
+                counts[status] += statuses.count(status)  # type: ignore[arg-type]
+        for status, counter in (
+            ("accepted", "results_accepted"), ("duplicate", "duplicates"), ("stale", "stale")
+        ):
+            if counts[status]:
+                self._bump(db, counter, counts[status])
+        return out
+
+    @staticmethod
+    def _proven_json(db: sqlite3.Connection, r: RunResult) -> Incoming:
+        """A JSON result as an Incoming, proven (``capability`` set) when its proof holds for
+        its lease's secret."""
+        row = db.execute("SELECT capability FROM leases WHERE lease_id = ?",
+                         (r.lease_id,)).fetchone()
+        cap = None if row is None or not row["capability"] else str(row["capability"])
+        return Incoming.from_result(r, cap if cap is not None and result_ok(cap, r) else None)
+
     def _accept_lease(
-        self, db: sqlite3.Connection, lease_id: str, rs: Sequence[RunResult | Incoming],
-        now: float,
+        self, db: sqlite3.Connection, c: ResultColumns, now: float,
     ) -> list[AckStatus]:
-        """The results of one lease (all with ``lease_id``), fenced run by run."""
-        out: list[AckStatus] = ["stale"] * len(rs)
+        """One lease's results, fenced run by run."""
+        out: list[AckStatus] = ["stale"] * len(c.runs)
+        lease_id = c.lease_id
+        if c.capability is None:
+            return out
         lease = db.execute(
             "SELECT worker, job_seq, cell_idx, runs, state, capability FROM leases "
             "WHERE lease_id = ?", (lease_id,)).fetchone()
-        if lease is None or lease["state"] == "cancelled" or not lease["capability"]:
+        if lease is None or lease["state"] == "cancelled" or not lease["capability"] \
+                or lease["worker"] != c.worker \
+                or not hmac.compare_digest(c.capability, lease["capability"]):
             return out
         job = db.execute(
             "SELECT id, kind, state FROM jobs WHERE seq = ?", (lease["job_seq"],)
         ).fetchone()
-        if job["state"] == "cancelled":
+        if job["state"] == "cancelled" or job["id"] != c.job_id:
             return out
-        seq, cell_idx, cap = lease["job_seq"], lease["cell_idx"], lease["capability"]
+        seq, cell_idx = lease["job_seq"], lease["cell_idx"]
         key = db.execute(
             "SELECT key FROM cells WHERE job_seq = ? AND idx = ?", (seq, cell_idx)
         ).fetchone()["key"]
+        if c.cell != key:
+            return out
         runs = self._runs_of(lease_id, lease["runs"])
-        fresh: dict[int, int] = {}  # run -> index in rs of its first valid result
-        for k, r in enumerate(rs):
-            if (r.worker != lease["worker"] or r.job_id != job["id"] or r.cell != key
-                    or r.run not in runs or not _proven(cap, r)):
+        fresh: dict[int, int] = {}  # run -> index in the columns of its first valid result
+        for k, run in enumerate(c.runs):
+            if run not in runs:
                 continue
-            if r.run in fresh:
+            if run in fresh:
                 out[k] = "duplicate"
             else:
-                fresh[r.run] = k
+                fresh[run] = k
         if not fresh:
             return out
         lo, hi = min(fresh), max(fresh)
@@ -95,29 +125,15 @@ class ResultsMixin(StoreBase):
             "SELECT run FROM results WHERE job_seq = ? AND cell_idx = ? AND run BETWEEN ? AND ?",
             (seq, cell_idx, lo, hi))}
         benchmark = job["kind"] == "benchmark"
-        rows = []
-        ok_runs: list[int] = []
-        failed = 0
+        new = [k for run, k in fresh.items() if run not in stored]
         for run, k in fresh.items():
-            if run in stored:
-                out[k] = "duplicate"
-                continue
-            out[k] = "accepted"
-            r = rs[k]
-            ok = r.status == "ok"
-            if ok:
-                ok_runs.append(run)
-            else:
-                failed += 1
-            raw = r.metrics.get("best_fitness") if benchmark else None
-            value = float(raw) if isinstance(raw, int | float) and not isinstance(raw, bool) \
-                else None
-            blob = r.stored_series if isinstance(r, Incoming) else None
-            if blob is None:
-                blob = encode_series(
-                    {"curve": r.curve, "best_position": r.best_position, "path": r.path})
-            rows.append((seq, cell_idx, run, lease_id, r.worker, r.status, r.failure, value,
-                         r.seconds, _metrics_json(r.metrics), blob, now))
+            out[k] = "duplicate" if run in stored else "accepted"
+        status, metrics = c.status, c.metrics
+        failed = sum(1 for k in new if status[k] != "ok")
+        worker, failure, seconds, series = c.worker, c.failure, c.seconds, c.series
+        rows = [(seq, cell_idx, c.runs[k], lease_id, worker, status[k], failure[k],
+                 _value(metrics[k]) if benchmark else None, seconds[k],
+                 _metrics_json(metrics[k]), series[k], now) for k in new]
         if not rows:
             return out
         db.executemany(
@@ -132,7 +148,7 @@ class ResultsMixin(StoreBase):
             db.executemany(
                 "DELETE FROM requeue WHERE job_seq = ? AND cell_idx = ? AND run = ?",
                 [(seq, cell_idx, run) for run in requeued])
-        done = len(ok_runs)
+        done = len(rows) - failed
         db.execute("UPDATE cells SET done = done + ?, failed = failed + ? "
                    "WHERE job_seq = ? AND idx = ?", (done, failed, seq, cell_idx))
         # every active lease holding these runs (their own, or the one they were requeued into)
@@ -180,8 +196,7 @@ def _metrics_json(metrics: dict[str, Any]) -> str:
     return orjson.dumps(metrics).decode()
 
 
-def _proven(capability: str, r: RunResult | Incoming) -> bool:
-    """``r`` proved ``capability`` (the lease's secret, never empty here)."""
-    if isinstance(r, Incoming):
-        return r.capability is not None and hmac.compare_digest(r.capability, capability)
-    return result_ok(capability, r)
+def _value(metrics: dict[str, Any]) -> float | None:
+    """The ``value`` column: a benchmark run's best_fitness when it is a number."""
+    raw = metrics.get("best_fitness")
+    return float(raw) if isinstance(raw, int | float) and not isinstance(raw, bool) else None

@@ -19,7 +19,7 @@ import re
 import threading
 import time
 from collections import OrderedDict, deque
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -59,11 +59,16 @@ class Dashboard:
     def observe(self, job_id: str, results: Iterable[Any], now: float | None = None) -> None:
         """Results just accepted for ``job_id`` (``RunResult`` objects): update the job's
         aggregates (created on its first results) and its rate."""
+        self.observe_runs(job_id, [(r.cell, r.run, r.status == "ok", r.metrics, r.curve, r.path)
+                                   for r in results], now)
+
+    def observe_runs(self, job_id: str, runs: Sequence[tuple[str, int, bool, Any, Any, Any]],
+                     now: float | None = None) -> None:
+        """:meth:`observe` of runs given as (cell, run, ok, metrics, curve, path)."""
         now = time.time() if now is None else now
-        results = list(results)
         with self._lock:
             rate = self._rates.setdefault(job_id, deque())
-            rate.append((now, len(results)))
+            rate.append((now, len(runs)))
             while rate and rate[0][0] < now - RATE_WINDOW:
                 rate.popleft()
             if len(self._rates) > 4 * self.max_jobs:  # forget the rates of the oldest jobs
@@ -73,10 +78,11 @@ class Dashboard:
         if job is None:  # result thread, and a job built from the store takes seconds
             return
         entries = []
-        for r in results:
-            index = job.cell_index(r.cell)
+        index_of = job.cell_index
+        for cell, run, ok, metrics, curve, path in runs:
+            index = index_of(cell)
             if index is not None:
-                entries.append((index, r.run, r.status == "ok", r.metrics, r.curve, r.path))
+                entries.append((index, run, ok, metrics, curve, path))
         job.add_many(entries)
 
     def aggregates(self, job_id: str, wait: bool = True) -> JobAggregates | None:

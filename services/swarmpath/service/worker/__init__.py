@@ -25,7 +25,13 @@ from swarmpath.service.worker.execution import (
     load_scenario,
 )
 from swarmpath.service.worker.loop import Worker, _Active, run_worker
-from swarmpath.service.worker.packing import BATCH_BYTES, RESULT_BYTES, fit_result, pack_batches
+from swarmpath.service.worker.packing import (
+    BATCH_BYTES,
+    RESULT_BYTES,
+    fit_result,
+    pack_batches,
+    pack_lease_columns,
+)
 from swarmpath.service.worker.settings import WorkerSettings, default_worker_id
 from swarmpath.service.worker.slots import NotRun, ProcessSlot, Slot, ThreadSlot
 
@@ -47,5 +53,6 @@ __all__ = [
     "fit_result",
     "load_scenario",
     "pack_batches",
+    "pack_lease_columns",
     "run_worker",
 ]

@@ -1,5 +1,7 @@
-"""Results on the wire: one result as a binary record (thinned to fit a message), records packed
-into result frames (:mod:`swarmpath.service.result_frame`, protocol 4)."""
+"""Results on the wire: one result as a binary record (thinned to fit a message); a lease's
+records put as columnar result frames (:mod:`swarmpath.service.result_columns`, protocol 5),
+proven once per frame; records packed into record frames (:mod:`swarmpath.service.result_frame`,
+protocol 4, still accepted)."""
 
 from __future__ import annotations
 
@@ -13,6 +15,7 @@ from swarmpath.service.protocol import (
     MAX_BODY_BYTES,
     RunResult,
 )
+from swarmpath.service.result_columns import pack_columns
 from swarmpath.service.result_frame import RunResultHead, encode_record, pack_frames
 
 log = logging.getLogger("swarmpath.worker")
@@ -74,3 +77,14 @@ def pack_batches(worker: str, results: Sequence[bytes], limit: int = BATCH_BYTES
     """Result frames from records (:func:`fit_result`), each at most ``limit`` bytes when
     possible."""
     return pack_frames(worker, results, limit)
+
+
+def pack_lease_columns(worker: str, results: Sequence[tuple[str, str, bytes]],
+                       limit: int = BATCH_BYTES) -> list[bytes]:
+    """Columnar result frames of (lease id, its capability, record) triples: one lease per frame,
+    each at most about ``limit`` bytes, proven with the lease's capability."""
+    by_lease: dict[str, tuple[str, list[bytes]]] = {}
+    for lease_id, capability, data in results:
+        by_lease.setdefault(lease_id, (capability, []))[1].append(data)
+    return [frame for capability, records in by_lease.values()
+            for frame in pack_columns(worker, capability or None, records, limit)]

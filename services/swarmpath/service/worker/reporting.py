@@ -21,7 +21,7 @@ from swarmpath.service.protocol import (
     decode,
 )
 from swarmpath.service.worker.execution import Cancelled, _result
-from swarmpath.service.worker.packing import fit_result, pack_batches
+from swarmpath.service.worker.packing import fit_result, pack_lease_columns
 from swarmpath.service.worker.settings import WorkerSettings
 from swarmpath.service.worker.slots import NotRun, Outcomes, Slot
 
@@ -144,7 +144,8 @@ class Reporting:
                 e.sent, e.seq = now, self._seq
                 e.attempts += 1
         key = self.keys.results(job_id)
-        for payload in pack_batches(self.id, [e.data for e in entries]):
+        for payload in pack_lease_columns(self.id, [(e.lease_id, e.capability, e.data)
+                                                    for e in entries]):
             self._put(key, payload)
 
     def _put(self, key: str, payload: bytes) -> None:
