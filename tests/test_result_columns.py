@@ -28,6 +28,7 @@ from swarmpath.service.result_columns import (
     columns_ok,
     columns_proof,
     decode_columns,
+    decode_message,
     encode_columns,
 )
 from swarmpath.service.result_frame import FrameError, RunResultHead, encode_record
@@ -114,17 +115,22 @@ def test_one_proof_covers_every_byte_and_needs_the_lease_capability():
     assert changed > len(data) // 2  # most flips decode (in the floats), then fail the proof
 
 
-def test_frames_are_cut_to_their_limit_one_lease_each():
+def test_messages_are_cut_to_their_limit_with_one_lease_per_frame():
     records, _ = uniform_records(40)
     others = [record(i, {"curve": np.ones(50)}, lease_id="L2") for i in range(3)]
-    frames = pack_lease_columns(
-        "w1", [("L1", CAP, r) for r in records] + [("L2", OTHER, r) for r in others],
-        limit=4096 + 2000)
-    heads = [decode_columns(f).head for f in frames]
-    assert len(frames) > 2 and all(len(f) <= 4096 + 2000 for f in frames[:-1])
-    assert [r for h in heads if h.lease_id == "L1" for r in h.runs] == list(range(40))
-    assert [h.lease_id for h in heads][-1] == "L2"
-    assert columns_ok(columns_key(OTHER), decode_columns(frames[-1]))
+    limit = 4096 + 2000
+    messages = pack_lease_columns(
+        "w1", [("L1", CAP, r) for r in records] + [("L2", OTHER, r) for r in others], limit)
+    frames = [f for m in messages for f in decode_message(m)]
+    assert len(messages) > 2 and all(len(m) <= limit for m in messages)
+    assert [r for f in frames if f.head.lease_id == "L1" for r in f.head.runs] == list(range(40))
+    assert [r for f in frames if f.head.lease_id == "L2" for r in f.head.runs] == [0, 1, 2]
+    assert frames[-1].head.lease_id == "L2"
+    assert all(columns_ok(columns_key(CAP if f.head.lease_id == "L1" else OTHER), f)
+               for f in frames)
+    whole = pack_lease_columns("w1", [("L1", CAP, r) for r in records[:2]] +
+                               [("L2", OTHER, r) for r in others])
+    assert len(whole) == 1 and [f.head.lease_id for f in decode_message(whole[0])] == ["L1", "L2"]
 
 
 def hand_made(head: dict, block: bytes = b"", cap: str = CAP) -> bytes:
@@ -143,7 +149,7 @@ def good_head(**changes) -> dict:
 
 
 @pytest.mark.parametrize(("payload", "reason"), [
-    (b"SPR1" + bytes(40), "magic"),
+    (b"SPR1" + bytes(40), "frame 0: not a columnar result frame"),
     (b"SPC1" + b"\x10", "length missing"),
     (b"SPC1" + (10**6).to_bytes(4, "little") + b"{}", "no room for the proof"),
     (COLUMNS_MAGIC + bytes(1_000_001), "exceeds"),
@@ -162,7 +168,8 @@ def good_head(**changes) -> dict:
                                   "rows": [LONGEST["best_position"] + 1, 0]}]),
                bytes(8 * (LONGEST["best_position"] + 1))), "at most"),
     (hand_made(good_head(), bytes(24)), "block of 24 bytes"),
-    (hand_made(good_head(), bytes(40)), "block of 40 bytes"),
+    (hand_made(good_head(), bytes(40)), "frame 1: not a columnar result frame"),
+    (hand_made(good_head(), bytes(32)) * 2 + b"SPC1", "frame 2: columns head: length missing"),
 ])
 def test_hostile_frames_are_refused_with_the_reason(payload, reason):
     with pytest.raises(FrameError, match=reason):
@@ -240,3 +247,15 @@ def test_runs_outside_the_lease_are_stale_and_the_others_accepted(core):
     ack = core.handle_results(core.keys.results(lease.job_id), frame)
     assert ack is not None and ack.leases[0].accepted == lease.runs
     assert ack.leases[0].stale == [99]
+
+
+def test_each_frame_of_a_message_is_proven_by_its_own_lease(core):
+    lease = lease_of(core)
+    records = [data for _run, data in execute_lease(lease)]
+    half = len(records) // 2
+    payload, = pack_lease_columns("w1", [(lease.lease_id, OTHER, r) for r in records[:half]] +
+                                  [("L9", lease.capability, r) for r in records[half:]])
+    assert [f.head.lease_id for f in decode_message(payload)] == [lease.lease_id] * 2
+    ack = core.handle_results(core.keys.results(lease.job_id), payload)
+    assert ack is not None and ack.leases[0].stale == lease.runs[:half]
+    assert ack.leases[0].accepted == lease.runs[half:]

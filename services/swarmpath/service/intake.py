@@ -34,7 +34,7 @@ from swarmpath.service.protocol import (
 )
 from swarmpath.service.recorder import Recorders
 from swarmpath.service.recorder.process import RecorderProcess
-from swarmpath.service.result_columns import columns_key, columns_ok, decode_columns, is_columns
+from swarmpath.service.result_columns import columns_key, columns_ok, decode_message, is_columns
 from swarmpath.service.result_frame import decode_frame, is_frame, key_ok, proof_key
 from swarmpath.service.settings import CoordinatorSettings
 from swarmpath.service.store import FINAL_STATES, Store
@@ -145,17 +145,25 @@ class ResultIntake:
             return None
 
     def _decode_columns(self, key: str, payload: bytes) -> tuple[str, list[ResultColumns]]:
-        frame = decode_columns(payload)
-        h = frame.head
-        if h.job_id != Keys.last_chunk(key):
-            self._count_foreign(len(h.runs), h.worker)
-            return h.worker, [unproven(h)]
-        cap = self._capability(h.lease_id)
-        # no valid proof, no store round trip (a flood of forged frames costs no fsync)
-        if cap is None or not columns_ok(columns_key(cap), frame):
-            self._count_unproven(len(h.runs))
-            return h.worker, [unproven(h)]
-        return h.worker, [from_frame(frame, cap)]
+        """A message of columnar frames: each frame proven alone, by its lease's capability."""
+        frames = decode_message(payload)
+        job_id = Keys.last_chunk(key)
+        worker = frames[0].head.worker
+        out = []
+        for frame in frames:
+            h = frame.head
+            if h.job_id != job_id or h.worker != worker:
+                self._count_foreign(len(h.runs), worker)
+                out.append(unproven(h))
+                continue
+            cap = self._capability(h.lease_id)
+            # no valid proof, no store round trip (a flood of forged frames costs no fsync)
+            if cap is None or not columns_ok(columns_key(cap), frame):
+                self._count_unproven(len(h.runs))
+                out.append(unproven(h))
+                continue
+            out.append(from_frame(frame, cap))
+        return worker, out
 
     def _decode_frame(self, key: str, payload: bytes) -> tuple[str, list[Incoming]]:
         job_id = Keys.last_chunk(key)

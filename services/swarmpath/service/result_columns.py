@@ -1,9 +1,10 @@
 """The columnar result frame (protocol 5): results of one lease as columns, proven once.
 
-A worker puts the finished runs of a lease as one or more of these frames (all integers uint32
-little-endian)::
+A worker puts the finished runs of a lease as one or more of these frames, and one message (a
+put on ``results/<job>``, at most 1 MB) holds one or more frames back to back, of one lease or
+of several (all integers uint32 little-endian)::
 
-    b"SPC1" | H | ColumnsHead JSON (H bytes) | float64 block | proof (32 bytes)
+    frame: b"SPC1" | H | ColumnsHead JSON (H bytes) | float64 block | proof (32 bytes)
 
 :class:`ColumnsHead` names the lease, its job, cell and worker once and holds each run's small
 fields as columns (``runs``, ``status``, ``failure``, ``seconds``, ``metrics``: one entry per
@@ -19,8 +20,9 @@ lease.
 Decoding checks everything before anything is used: the size, the magic, the head against its
 schema (``schemas/result_columns_head.schema.json``: one pydantic validation per frame; the
 error names the field), every column as long as ``runs``, the rows against their bounds, and the
-block's length against the rows declared; any violation rejects the frame with a
-:class:`~swarmpath.service.result_frame.FrameError`. Pure functions, no I/O.
+block's length against the rows declared, and that the frames fill the message exactly; any
+violation rejects the message with a :class:`~swarmpath.service.result_frame.FrameError`.
+Pure functions, no I/O.
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from pydantic import Field, ValidationError
 
+from swarmpath.service.frame_head import RecordHead
 from swarmpath.service.model import (
     MAX_BODY_BYTES,
     MAX_DIM,
@@ -43,11 +46,11 @@ from swarmpath.service.model import (
     Model,
     Scalar,
 )
-from swarmpath.service.result_frame import PROOF_BYTES, FrameError, decode_record
+from swarmpath.service.result_frame import PROOF_BYTES, FrameError, FrameRecord, decode_record
 
 COLUMNS_MAGIC = b"SPC1"
+MAX_FRAMES = 1024  # frames in one message at most
 COLUMNS_DOMAIN = b"result-columns\n"
-MAX_COLUMNS_HEAD = MAX_BODY_BYTES  # bytes of ColumnsHead JSON at most (the frame's bound)
 ARRAY_ORDER = ("curve", "best_position", "path")
 #: values per row, and the most rows one run's array may have
 WIDTHS = {"curve": 1, "best_position": 1, "path": 3}
@@ -141,7 +144,8 @@ def pack_columns(worker: str, capability: str | None, records: Sequence[bytes],
                  limit: int) -> list[bytes]:
     """Columnar frames of the result records (:func:`~swarmpath.service.result_frame.encode_record`
     form, what a worker's slots return) of ONE lease, each at most about ``limit`` bytes (a
-    record larger than that travels alone), proven with the lease's ``capability``."""
+    record larger than that travels alone), proven with the lease's ``capability``; put them
+    with :func:`pack_message`."""
     out: list[bytes] = []
     chunk: list[Any] = []
     size = 0
@@ -154,6 +158,23 @@ def pack_columns(worker: str, capability: str | None, records: Sequence[bytes],
         size += len(data) + 64
     if chunk:
         out.append(_columns_frame(worker, capability, chunk))
+    return out
+
+
+def pack_message(frames: Sequence[bytes], limit: int) -> list[bytes]:
+    """Messages of frames put back to back, each at most ``limit`` bytes when the frames allow
+    it (a frame larger than that travels alone)."""
+    out: list[bytes] = []
+    chunk: list[bytes] = []
+    size = 0
+    for frame in frames:
+        if chunk and (size + len(frame) > limit or len(chunk) == MAX_FRAMES):
+            out.append(b"".join(chunk))
+            chunk, size = [], 0
+        chunk.append(frame)
+        size += len(frame)
+    if chunk:
+        out.append(b"".join(chunk))
     return out
 
 
@@ -173,48 +194,112 @@ def is_columns(payload: bytes) -> bool:
 
 
 def decode_columns(payload: bytes) -> ColumnsFrame:
-    """The frame in ``payload``; raises FrameError naming what is wrong (module docstring)."""
+    """The one frame in ``payload``; raises FrameError naming what is wrong (module docstring)."""
+    frames = decode_message(payload)
+    if len(frames) != 1:
+        raise FrameError(f"{len(frames)} frames where one was expected")
+    return frames[0]
+
+
+def decode_message(payload: bytes) -> list[ColumnsFrame]:
+    """The frames of a message: one or more, back to back, filling it exactly (at most
+    MAX_FRAMES); raises FrameError naming what is wrong (module docstring)."""
     if len(payload) > MAX_BODY_BYTES:
-        raise FrameError(f"frame of {len(payload)} bytes exceeds {MAX_BODY_BYTES}")
-    if not is_columns(payload):
-        raise FrameError("not a columnar result frame (magic)")
-    pos = len(COLUMNS_MAGIC)
+        raise FrameError(f"message of {len(payload)} bytes exceeds {MAX_BODY_BYTES}")
+    frames = []
+    pos = 0
+    view = memoryview(payload)
+    while pos < len(payload):
+        if len(frames) == MAX_FRAMES:
+            raise FrameError(f"more than {MAX_FRAMES} frames in one message")
+        frame, pos = _frame_at(payload, view, pos, len(frames))
+        frames.append(frame)
+    if not frames:
+        raise FrameError("empty message")
+    return frames
+
+
+def _frame_at(payload: bytes, view: memoryview, pos: int, i: int) -> tuple[ColumnsFrame, int]:
+    first = pos
+    if payload[pos:pos + 4] != COLUMNS_MAGIC:
+        raise FrameError(f"frame {i}: not a columnar result frame (magic)")
+    pos += len(COLUMNS_MAGIC)
     if pos + _U32 > len(payload):
-        raise FrameError("columns head: length missing")
+        raise FrameError(f"frame {i}: columns head: length missing")
     n = int.from_bytes(payload[pos:pos + _U32], "little")
     pos += _U32
     if pos + n + PROOF_BYTES > len(payload):
-        raise FrameError(f"columns head: length {n} leaves no room for the proof")
+        raise FrameError(f"frame {i}: columns head: length {n} leaves no room for the proof")
     try:
         head = ColumnsHead.model_validate_json(payload[pos:pos + n])
     except ValidationError as exc:
-        raise FrameError(f"columns head: {_first(exc)}") from None
+        raise FrameError(f"frame {i}: columns head: {_first(exc)}") from None
+    values = _declared_values(head, i)
+    start = pos + n
+    end = start + 8 * values
+    if end + PROOF_BYTES > len(payload):
+        raise FrameError(f"frame {i}: block of {len(payload) - PROOF_BYTES - start} bytes; "
+                         f"the arrays declare {8 * values}")
+    block = np.frombuffer(payload, dtype="<f8", count=values, offset=start)
+    proof = bytes(view[end:end + PROOF_BYTES])
+    return ColumnsFrame(head, block, view[first:end], proof), end + PROOF_BYTES
+
+
+def _declared_values(head: ColumnsHead, i: int) -> int:
+    """How many float64 values the head's arrays declare, after checking the columns."""
     count = len(head.runs)
     for name in ("status", "failure", "seconds", "metrics"):
         if len(getattr(head, name)) != count:
-            raise FrameError(f"columns head: {name} has {len(getattr(head, name))} entries; "
-                             f"runs has {count}")
+            raise FrameError(f"frame {i}: columns head: {name} has "
+                             f"{len(getattr(head, name))} entries; runs has {count}")
     values = 0
     seen = set()
     for arr in head.arrays:
         if arr.name in seen:
-            raise FrameError(f"columns head: array {arr.name} declared twice")
+            raise FrameError(f"frame {i}: columns head: array {arr.name} declared twice")
         seen.add(arr.name)
         if len(arr.rows) != count:
-            raise FrameError(f"columns head: array {arr.name} has {len(arr.rows)} rows entries; "
-                             f"runs has {count}")
+            raise FrameError(f"frame {i}: columns head: array {arr.name} has {len(arr.rows)} "
+                             f"rows entries; runs has {count}")
         longest = max(arr.rows)
         if longest > LONGEST[arr.name]:
-            raise FrameError(f"columns head: array {arr.name} has {longest} rows in a run "
-                             f"(at most {LONGEST[arr.name]})")
+            raise FrameError(f"frame {i}: columns head: array {arr.name} has {longest} rows in "
+                             f"a run (at most {LONGEST[arr.name]})")
         values += WIDTHS[arr.name] * (sum(arr.rows) + arr.rows.count(-1))
-    start = pos + n
-    end = len(payload) - PROOF_BYTES
-    if end - start != 8 * values:
-        raise FrameError(f"block of {end - start} bytes; the arrays declare {8 * values}")
-    block = np.frombuffer(payload, dtype="<f8", count=values, offset=start)
-    view = memoryview(payload)
-    return ColumnsFrame(head, block, view[:end], bytes(view[end:]))
+    return values
+
+
+def column_records(payload: bytes) -> tuple[str, list[FrameRecord]]:
+    """A message of columnar frames as (worker of its first frame, one record per run), the
+    arrays views of the payload; the records have no proof of their own (``signed`` and
+    ``proof`` empty)."""
+    frames = decode_message(payload)
+    records = []
+    for frame in frames:
+        records += _records(frame)
+    return frames[0].head.worker, records
+
+
+def _records(frame: ColumnsFrame) -> list[FrameRecord]:
+    h = frame.head
+    per_run: list[dict[str, np.ndarray]] = [{} for _ in h.runs]
+    offset = 0
+    for a in h.arrays:
+        width = WIDTHS[a.name]
+        for k, rows in enumerate(a.rows):
+            if rows < 0:
+                continue
+            values = frame.block[offset:offset + rows * width]
+            per_run[k][a.name] = values.reshape(rows, width) if width > 1 else values
+            offset += rows * width
+    records = []
+    for k, run in enumerate(h.runs):
+        arrays = per_run[k]
+        shapes = [(name, "<f8", list(v.shape)) for name, v in arrays.items()]
+        head = RecordHead(h.lease_id, h.job_id, h.cell, run, h.worker, h.status[k],
+                          h.failure[k], h.seconds[k], h.metrics[k], shapes)
+        records.append(FrameRecord(head, arrays, b"", b""))
+    return records
 
 
 def _first(exc: ValidationError) -> str:

@@ -173,7 +173,14 @@ def is_frame(payload: bytes) -> bool:
 
 
 def decode_frame(payload: bytes) -> tuple[str, list[FrameRecord]]:
-    """(worker, records) of a frame; raises :class:`FrameError` (see the module docstring)."""
+    """(worker, records) of a frame; raises :class:`FrameError` (see the module docstring).
+    A columnar frame (protocol 5, :mod:`~swarmpath.service.result_columns`) reads as its runs'
+    records too, for tools and tests that read what a worker sends; those records carry no proof
+    of their own (:func:`key_ok` is never true for them)."""
+    if payload[:4] == b"SPC1":
+        from swarmpath.service.result_columns import column_records
+
+        return column_records(payload)
     if len(payload) > MAX_BODY_BYTES:
         raise FrameError(f"frame of {len(payload)} bytes exceeds {MAX_BODY_BYTES}")
     if not is_frame(payload):

@@ -15,7 +15,7 @@ from swarmpath.service.protocol import (
     MAX_BODY_BYTES,
     RunResult,
 )
-from swarmpath.service.result_columns import pack_columns
+from swarmpath.service.result_columns import pack_columns, pack_message
 from swarmpath.service.result_frame import RunResultHead, encode_record, pack_frames
 
 log = logging.getLogger("swarmpath.worker")
@@ -81,10 +81,12 @@ def pack_batches(worker: str, results: Sequence[bytes], limit: int = BATCH_BYTES
 
 def pack_lease_columns(worker: str, results: Sequence[tuple[str, str, bytes]],
                        limit: int = BATCH_BYTES) -> list[bytes]:
-    """Columnar result frames of (lease id, its capability, record) triples: one lease per frame,
-    each at most about ``limit`` bytes, proven with the lease's capability."""
+    """Messages of columnar result frames of (lease id, its capability, record) triples: one
+    lease per frame, proven with the lease's capability, frames back to back in messages of at
+    most about ``limit`` bytes."""
     by_lease: dict[str, tuple[str, list[bytes]]] = {}
     for lease_id, capability, data in results:
         by_lease.setdefault(lease_id, (capability, []))[1].append(data)
-    return [frame for capability, records in by_lease.values()
-            for frame in pack_columns(worker, capability or None, records, limit)]
+    frames = [frame for capability, records in by_lease.values()
+              for frame in pack_columns(worker, capability or None, records, limit)]
+    return pack_message(frames, limit)
