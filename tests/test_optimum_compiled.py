@@ -120,3 +120,39 @@ def test_compiled_arc_checks_equal_numpy() -> None:
         assert np.array_equal(ref, fast.arcs_blocked(c, rho, th0, dth))
         blocked += int(ref.sum())
     assert 0 < blocked < 20 * 150
+
+
+def test_compiled_disks_equal_numpy() -> None:
+    from swarmpath.world.optimum_compiled import disks_kernel
+    from swarmpath.world.optimum_tangents import _disks
+
+    rng = np.random.default_rng(21)
+    covered = 0
+    for k in range(30):
+        obstacles = _scene(rng, 1 + k % 4)
+        polys = list(obstacles.polygons)
+        if k % 3 == 0:  # touching and overlapping axis-aligned rectangles (grid maps)
+            x, y = rng.uniform(1, 6, 2)
+            polys += [np.array([[x, y], [x + 1, y], [x + 1, y + 1], [x, y + 1]]),
+                      np.array([[x + 1, y], [x + 2, y], [x + 2, y + 1], [x + 1, y + 1]]),
+                      np.array([[x + 0.5, y + 0.5], [x + 1.5, y + 0.5], [x + 1.5, y + 2],
+                                [x + 0.5, y + 2]])]
+        obstacles = ObstacleSet(obstacles.circles, tuple(polys))
+        for margin in (0.0, 0.1):
+            s, g = rng.uniform(0, 8, (2, 2))
+            ref = _disks(s, g, obstacles, margin)
+            scene = _Scene(obstacles, margin, None)
+            got = disks_kernel(s, g, scene.circles, scene.e0, scene.counts, margin)
+            for a, b in zip(ref, got, strict=True):
+                assert np.array_equal(a, b)
+            kept = int(np.sum(obstacles.circles[:, 2] + margin > 0.0))
+            vertex_disks = len(ref[0]) - 2 - kept
+            covered += sum(int(np.sum(_convex_count(p))) for p in polys) - vertex_disks
+    assert covered > 0
+
+
+def _convex_count(poly: np.ndarray) -> np.ndarray:
+    prev, nxt = np.roll(poly, 1, axis=0), np.roll(poly, -1, axis=0)
+    d1, d2 = poly - prev, nxt - poly
+    area = np.sum(poly[:, 0] * nxt[:, 1] - poly[:, 1] * nxt[:, 0])
+    return (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]) * np.sign(area) > 0

@@ -187,7 +187,13 @@ def shortest_path(
     if direct:
         return OptimalPath(float(_norm(g - s)), np.stack([s, g]), True, None)
 
-    centres, radii, na, nb = _disks(s, g, obstacles, margin)
+    if compiled is not None:
+        from swarmpath.world.optimum_compiled import disks_kernel
+
+        centres, radii, na, nb = disks_kernel(s, g, compiled[1], compiled[2], compiled[5],
+                                              float(margin))
+    else:
+        centres, radii, na, nb = _disks(s, g, obstacles, margin)
     if len(centres) - 2 > max_disks:
         return OptimalPath(
             math.nan,

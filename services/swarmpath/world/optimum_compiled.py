@@ -374,3 +374,161 @@ def arcs_decide_kernel(n: int, arcs: Array, edges: Array, phi: Array, c: Array, 
         if d < limit:
             out[i] = True
     return out
+
+
+@njit(cache=True)
+def _pairwise_sum(a: Array, lo: int, n: int) -> float:
+    """``np.sum`` of a[lo:lo + n] (contiguous float64): numpy's pairwise summation (plain below
+    8 terms, 8 running sums up to 128, halves above)."""
+    if n < 8:
+        res = 0.0
+        for i in range(n):
+            res += a[lo + i]
+        return res
+    if n <= 128:
+        r = a[lo : lo + 8].copy()
+        i = 8
+        while i < n - (n % 8):
+            for k in range(8):
+                r[k] += a[lo + i + k]
+            i += 8
+        res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
+        while i < n:
+            res += a[lo + i]
+            i += 1
+        return res
+    n2 = n // 2
+    n2 -= n2 % 8
+    return _pairwise_sum(a, lo, n2) + _pairwise_sum(a, lo + n2, n - n2)
+
+
+@njit(cache=True)
+def _signed_polygon(px: float, py: float, verts: Array, start: int, count: int) -> float:
+    """geometry.point_polygon_distance of one point: the least edge distance, negative inside
+    (even-odd ray casting toward +x)."""
+    d = math.inf
+    crossings = 0
+    for k in range(start, start + count):
+        nxt = k + 1 if k + 1 < start + count else start
+        ax, ay, bx, by = verts[k, 0], verts[k, 1], verts[nxt, 0], verts[nxt, 1]
+        d = min(d, _point_segment(px, py, ax, ay, bx, by))
+        if (ay > py) != (by > py):
+            dy = by - ay
+            safe = dy if dy != 0.0 else 1.0
+            if px < ax + (py - ay) * (bx - ax) / safe:
+                crossings += 1
+    return -d if crossings % 2 == 1 else d
+
+
+@njit(cache=True, error_model="numpy")
+def disks_kernel(s: Array, g: Array, circles: Array, verts: Array, counts: Array,
+                 margin: float) -> tuple[Array, Array, Array, Array]:
+    """optimum_tangents._disks: start, goal, the circles inflated by the margin (those with r +
+    margin > 0), the convex polygon vertices (turn of the edges, signed by the polygon's
+    orientation: ``np.sum`` of the edge cross products) that no other polygon covers
+    (_covered_vertices); with the unit vectors to each vertex's neighbours."""
+    n_poly = counts.shape[0]
+    n_v = verts.shape[0]
+    convex = np.zeros(n_v, dtype=np.bool_)
+    owner = np.empty(n_v, dtype=np.intp)
+    ortho = np.zeros(n_poly, dtype=np.bool_)
+    lo = np.empty((n_poly, 2))
+    hi = np.empty((n_poly, 2))
+    cross = np.empty(n_v)
+    start = 0
+    for j in range(n_poly):
+        m = counts[j]
+        ortho[j] = True
+        lo[j, 0] = lo[j, 1] = math.inf
+        hi[j, 0] = hi[j, 1] = -math.inf
+        for i in range(m):
+            k = start + i
+            nx = start + (i + 1) % m
+            cross[k] = verts[k, 0] * verts[nx, 1] - verts[k, 1] * verts[nx, 0]
+            ex = verts[nx, 0] - verts[k, 0]
+            ey = verts[nx, 1] - verts[k, 1]
+            if not (ex == 0.0 or ey == 0.0):
+                ortho[j] = False
+            lo[j, 0] = min(lo[j, 0], verts[k, 0])
+            lo[j, 1] = min(lo[j, 1], verts[k, 1])
+            hi[j, 0] = max(hi[j, 0], verts[k, 0])
+            hi[j, 1] = max(hi[j, 1], verts[k, 1])
+        sign = math.copysign(1.0, _pairwise_sum(cross, start, m))
+        for i in range(m):
+            k = start + i
+            pv = start + (i - 1) % m
+            nx = start + (i + 1) % m
+            d1x = verts[k, 0] - verts[pv, 0]
+            d1y = verts[k, 1] - verts[pv, 1]
+            d2x = verts[nx, 0] - verts[k, 0]
+            d2y = verts[nx, 1] - verts[k, 1]
+            convex[k] = (d1x * d2y - d1y * d2x) * sign > 0.0
+            owner[k] = j
+        lo[j, 0] -= TOL
+        lo[j, 1] -= TOL
+        hi[j, 0] += TOL
+        hi[j, 1] += TOL
+        start += m
+    starts = np.empty(n_poly, dtype=np.intp)
+    start = 0
+    for j in range(n_poly):
+        starts[j] = start
+        start += counts[j]
+    keep = convex.copy()
+    if n_poly >= 2:
+        for k in range(n_v):
+            if not convex[k]:
+                continue
+            px, py = verts[k, 0], verts[k, 1]
+            for j in range(n_poly):
+                if j == owner[k] or not (px >= lo[j, 0] and py >= lo[j, 1] and px <= hi[j, 0]
+                                         and py <= hi[j, 1]):
+                    continue
+                d = _signed_polygon(px, py, verts, starts[j], counts[j])
+                both = ortho[j] and ortho[owner[k]] and margin > 0.0
+                if d < -TOL or (abs(d) <= TOL and both):
+                    keep[k] = False
+                    break
+    n_c = 0
+    for c in range(circles.shape[0]):
+        if circles[c, 2] + margin > 0.0:
+            n_c += 1
+    n = 2 + n_c + int(keep.sum())
+    centres = np.empty((n, 2))
+    radii = np.zeros(n)
+    na = np.zeros((n, 2))
+    nb = np.zeros((n, 2))
+    centres[0] = s
+    centres[1] = g
+    at = 2
+    for c in range(circles.shape[0]):
+        if circles[c, 2] + margin > 0.0:
+            centres[at, 0] = circles[c, 0]
+            centres[at, 1] = circles[c, 1]
+            radii[at] = circles[c, 2] + margin
+            at += 1
+    start = 0
+    for j in range(n_poly):
+        m = counts[j]
+        for i in range(m):
+            k = start + i
+            if not keep[k]:
+                continue
+            pv = start + (i - 1) % m
+            nx = start + (i + 1) % m
+            centres[at, 0] = verts[k, 0]
+            centres[at, 1] = verts[k, 1]
+            radii[at] = margin
+            ux = verts[pv, 0] - verts[k, 0]
+            uy = verts[pv, 1] - verts[k, 1]
+            norm = math.hypot(ux, uy)
+            na[at, 0] = ux / norm
+            na[at, 1] = uy / norm
+            ux = verts[nx, 0] - verts[k, 0]
+            uy = verts[nx, 1] - verts[k, 1]
+            norm = math.hypot(ux, uy)
+            nb[at, 0] = ux / norm
+            nb[at, 1] = uy / norm
+            at += 1
+        start += m
+    return centres, radii, na, nb
