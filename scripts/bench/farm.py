@@ -125,6 +125,7 @@ class Farm:
         self.login = ("farm", secrets.token_urlsafe(24))
         self.http_port, self.zenoh_port = free_port(), free_port()
         self.coordinator: subprocess.Popen[bytes] | None = None
+        self.rss_bare = 0.0
         self.sims: list[tuple[subprocess.Popen[bytes], Path]] = []
         self.client = httpx.Client(base_url=f"http://127.0.0.1:{self.http_port}", timeout=30.0,
                                    headers={"Authorization": f"Bearer {self.token}"})
@@ -153,6 +154,7 @@ class Farm:
             stdout=self.log, stderr=self.log, start_new_session=True,
             env={**tree_env(self.root), "SWARMPATH_TOKEN": self.token})
         self.wait(lambda: self.client.get("/healthz").status_code == 200, 60, "coordinator")
+        self.rss_bare = proc_memory(self.coordinator.pid)[0]  # before any worker connects
         procs = max(1, min(a.procs, a.workers))
         env = {**tree_env(self.root), "SWARMPATH_ZENOH_USER": self.login[0],
                "SWARMPATH_ZENOH_PASSWORD": self.login[1]}
@@ -331,7 +333,8 @@ def run(args: argparse.Namespace, data: Path, root: Path = ROOT) -> dict[str, An
         "store_bytes_per_run": round((store_bytes(data / "store") - store0) / max(1, done)),
         "mcap_bytes_per_run": round(mcap.stat().st_size / max(1, last)) if mcap.is_file()
         else None,
-        "rss_mb": {"start": round(rss0, 1), "max": round(max([rss0] + [x[2] for x in rss]), 1),
+        "rss_mb": {"bare": round(farm.rss_bare, 1), "start": round(rss0, 1),
+                   "max": round(max([rss0] + [x[2] for x in rss]), 1),
                    "end": round(rss1, 1)},
         "rss_end_of_each_job_mb": rss_jobs,
         "memory": profiles,
@@ -371,6 +374,12 @@ def markdown(results: list[dict[str, Any]]) -> str:
             lines.append(f"\n(K = {r['workers']}, {r['tree']}: RSS MB at the end of each of "
                          f"{len(r['rss_end_of_each_job_mb'])} successive jobs: "
                          f"{', '.join(map(str, r['rss_end_of_each_job_mb']))})\n")
+        if r["rss_mb"].get("bare"):
+            per = (r["rss_mb"]["start"] - r["rss_mb"]["bare"]) * 1024 / r["workers"]
+            lines.append(f"\n(K = {r['workers']}, {r['tree']}: coordinator RSS "
+                         f"{r['rss_mb']['bare']} MB before any worker connected, "
+                         f"{r['rss_mb']['start']} MB with them alive: {per:.0f} KB per "
+                         "connected worker)\n")
         for i, profile in enumerate(r.get("memory", [])):
             lines.append(f"\n(K = {r['workers']}, {r['tree']}, job {i + 1}: "
                          f"{profile_line(profile)})\n")
