@@ -155,8 +155,9 @@ def serve(data_dir: str, synchronous: str, conn: Connection, recover: bool = Fal
 
     def catch_up(job_id: str) -> None:
         noted = platforms.pop(job_id, {})
-        if recorders.ready(job_id):  # finished: nothing more goes into it
-            last.pop(job_id, None)
+        # finished: nothing more goes into it (a job followed here is only finished by "finish",
+        # which forgets it: no file look-up per catch-up)
+        if job_id not in last and recorders.ready(job_id):
             return
         for worker, platform in noted.items():
             recorders.open(job_id).note_platform(worker, platform)

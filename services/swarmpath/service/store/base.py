@@ -163,6 +163,8 @@ class StoreBase:
         self._db.execute(f"PRAGMA cache_size=-{CACHE_KIB}")  # page cache: bounded, in KiB
         self._lease_runs: dict[str, frozenset[int]] = {}
         self._cell_specs: dict[tuple[int, int], tuple[str, CellSpec]] = {}
+        # job id -> (seq, runs per cell, kind, seed, cells): see RunViewsMixin.iter_run_records
+        self._record_contexts: dict[str, tuple[int, int, str, int, dict[int, Any]]] = {}
         self._closed = False
         self._migrate()
 

@@ -181,17 +181,22 @@ class RunViewsMixin(StoreBase):
         """Every stored result of a job (those after position ``after`` and, with ``upto``, up to
         that position, see :meth:`last_result_rowid`), in acceptance order, as recorder records
         (raw numbers, series included). Reads in batches without holding the lock in between
-        (without ``upto`` it also yields results stored while it reads)."""
+        (without ``upto`` it may also yield results stored while it reads)."""
         with self._read() as db:
-            job = self._job_row(db, job_id)
-            if job is None:
-                return
-            seq, rpc, kind = job["seq"], job["runs_per_cell"], job["kind"]
-            seed = json.loads(job["spec"])["seed"]
-            cells = {
-                c["idx"]: (c["key"], json.loads(c["spec"]))
-                for c in db.execute("SELECT idx, key, spec FROM cells WHERE job_seq = ?", (seq,))
-            }
+            context = self._record_contexts.get(job_id)
+            if context is None:  # what a job's records share: read once per job and store
+                job = self._job_row(db, job_id)
+                if job is None:
+                    return
+                seq = job["seq"]
+                context = (seq, job["runs_per_cell"], job["kind"],
+                           json.loads(job["spec"])["seed"], {
+                    c["idx"]: (c["key"], json.loads(c["spec"])) for c in db.execute(
+                        "SELECT idx, key, spec FROM cells WHERE job_seq = ?", (seq,))})
+                if len(self._record_contexts) >= 256:  # bounded: a long-lived store
+                    self._record_contexts.clear()
+                self._record_contexts[job_id] = context
+            seq, rpc, kind, seed, cells = context
             if not after:  # from the job's first result (its index entries, no row read)
                 first = db.execute(
                     "SELECT min(rowid) FROM results WHERE job_seq = ?", (seq,)).fetchone()[0]
@@ -210,10 +215,10 @@ class RunViewsMixin(StoreBase):
                     "WHERE +job_seq = ? AND rowid > ? AND rowid <= ? ORDER BY rowid LIMIT ?",
                     (seq, last, _MAX_ROWID if upto is None else upto, batch),
                 ).fetchall()
-            if not rows:
-                return
             for row in rows:
                 yield _record_of(job_id, kind, seed, rpc, row, cells)
+            if len(rows) < batch:  # the last (a catch-up's only) batch: no query for nothing
+                return
             last = rows[-1][0]
 
     def run_record(self, job_id: str, run_id: int) -> dict[str, Any] | None:

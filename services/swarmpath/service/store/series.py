@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import struct
 import zlib
 from typing import Any
 
@@ -81,16 +82,20 @@ def decode_series(blob: bytes | None, arrays: tuple[str, ...] = ()) -> dict[str,
                                  arrays)
         return dict(json.loads(zlib.decompress(blob)))
     out: dict[str, Any] = {}
-    for name, offset, count, shape in _layout(blob):
-        arr = np.frombuffer(blob, _F8, count, offset)  # positional: numpy parses them faster
-        if shape is not None:
-            arr = arr.reshape(shape)
-        out[name] = arr if name in arrays else arr.tolist()
+    for name, offset, count, shape, floats in _layout(blob):
+        if name in arrays or floats is None:
+            arr = np.frombuffer(blob, _F8, count, offset)  # positional: parsed faster
+            if shape is not None:
+                arr = arr.reshape(shape)
+            out[name] = arr if name in arrays else arr.tolist()
+        else:  # a 1-D list (a best position: two floats) without making an array first
+            out[name] = list(floats.unpack_from(blob, offset))
     return out
 
 
-_Layout = tuple[tuple[str, int, int, tuple[int, ...] | None], ...]
-_LAYOUTS: dict[bytes, _Layout] = {}  # (name, byte offset, count, shape if not 1-D) by head
+# (name, byte offset, count, shape if not 1-D, its floats' Struct if 1-D) by header
+_Layout = tuple[tuple[str, int, int, tuple[int, ...] | None, struct.Struct | None], ...]
+_LAYOUTS: dict[bytes, _Layout] = {}
 
 
 def _layout(blob: bytes) -> _Layout:
@@ -103,8 +108,10 @@ def _layout(blob: bytes) -> _Layout:
         entries, offset = [], end
         for name, shape in json.loads(head[8:]):
             count = math.prod(shape)
+            flat = len(shape) == 1
             entries.append((str(name), offset, count,
-                            None if len(shape) == 1 else tuple(int(n) for n in shape)))
+                            None if flat else tuple(int(n) for n in shape),
+                            struct.Struct(f"<{count}d") if flat else None))
             offset += 8 * count
         layout = tuple(entries)
         if len(_LAYOUTS) < 4096:
