@@ -3,18 +3,21 @@
 
     .venv/bin/python scripts/bench/zenoh_memory.py [--clients 500] [--rounds 3]
         [--put-bytes 2000,60000] [--batch-size 65535,16384] [--answer-ms 0,2]
+        [--query-bytes 200]
 
-For each (batch size, put size): a router process (the coordinator's role: a queryable and a
-subscriber, configured by swarmpath.service.zenoh_config.router_config with
+For each (batch size, put size, answer, query size): a router process (the coordinator's role:
+a queryable and a subscriber, configured by swarmpath.service.zenoh_config.router_config with
 ``transport/link/tx/batch_size`` and ``transport/link/rx/buffer_size`` set to the batch size)
 and one process holding ``--clients`` client sessions (the workers' role). Each round, every
-client asks the queryable once (a 200-byte query and a 300-byte reply, like a lease request)
-and puts one message of the put size (like a result frame). ``--answer-ms 0``: the router
-answers in Zenoh's callback; N > 0: the callback queues the query and one thread answers the
-queries in turn, N ms each (what the coordinator's bridge does: a lease costs it about 0.3 ms,
-longer under load). Reported: the router's anonymous resident memory (MB, from
-/proc) alone, with the clients connected, and after each round. Loopback only, free ports,
-scouting off; the processes are stopped at the end.
+client asks the queryable once (a query with a ``--query-bytes`` payload - 0: none, the
+selector's parameters instead - and a 300-byte reply, like a lease request) and puts one
+message of the put size (like a result frame). ``--answer-ms 0``: the router answers in
+Zenoh's callback; N > 0: the callback queues the query and one thread answers the queries in
+turn, N ms each (what the coordinator's bridge does: a lease costs it about 0.3 ms, longer
+under load). Reported: the router's anonymous resident memory (MB, from /proc) alone, with the
+clients connected, and after each round. Loopback only, free ports, scouting off; the
+processes are stopped at the end. The growth is a high-water mark that depends on timing
+(how many messages wait at once): repeat a row before reading much into one number.
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ import sys
 import threading
 import time
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -73,7 +77,7 @@ def router(port: int, batch: int, answer_ms: float) -> None:
     os._exit(0)  # a session with callbacks can hang the interpreter's exit
 
 
-def clients(port: int, count: int, rounds: int, put_bytes: int) -> None:
+def clients(port: int, count: int, rounds: int, put_bytes: int, query_bytes: int) -> None:
     """Open ``count`` sessions; one round of traffic per line read on stdin."""
     import zenoh
 
@@ -84,8 +88,13 @@ def clients(port: int, count: int, rounds: int, put_bytes: int) -> None:
     payload = b"p" * put_bytes
     print("connected", flush=True)
 
+    def ask(i: int) -> Any:
+        if query_bytes:
+            return sessions[i].get("probe/work", payload=b"q" * query_bytes, timeout=30.0)
+        return sessions[i].get("probe/work?worker=w", timeout=30.0)
+
     def one(i: int) -> None:
-        for _reply in sessions[i].get("probe/work", payload=b"q" * 200, timeout=30.0):
+        for _reply in ask(i):
             pass
         sessions[i].put(f"probe/put/{i}", payload,
                         congestion_control=zenoh.CongestionControl.BLOCK)
@@ -108,8 +117,8 @@ def free_port() -> int:
         return int(s.getsockname()[1])
 
 
-def measure(count: int, rounds: int, put_bytes: int, batch: int,
-            answer_ms: float) -> list[float]:
+def measure(count: int, rounds: int, put_bytes: int, batch: int, answer_ms: float,
+            query_bytes: int) -> list[float]:
     """Router anonymous MB: alone, clients connected, after each round."""
     port = free_port()
     env = {**os.environ, "PYTHONPATH": str(ROOT / "services")}
@@ -133,8 +142,8 @@ def measure(count: int, rounds: int, put_bytes: int, batch: int,
         out = [ask("alone")]
         c = subprocess.Popen([*me, "--role", "clients", "--port", str(port), "--clients",
                               str(count), "--rounds", str(rounds), "--put-bytes",
-                              str(put_bytes)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                             text=True, env=env)
+                              str(put_bytes), "--query-bytes", str(query_bytes)],
+                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=env)
         procs.append(c)
         assert c.stdin is not None and c.stdout is not None
         c.stdout.readline()
@@ -158,6 +167,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--put-bytes", default="2000,60000")
     ap.add_argument("--batch-size", default="65535,16384")
     ap.add_argument("--answer-ms", default="0,2")
+    ap.add_argument("--query-bytes", default="200")
     ap.add_argument("--role", choices=["router", "clients"], help=argparse.SUPPRESS)
     ap.add_argument("--port", type=int, help=argparse.SUPPRESS)
     # (the roles' --batch-size and --answer-ms are single numbers)
@@ -166,29 +176,35 @@ def main(argv: list[str] | None = None) -> int:
         router(args.port, int(args.batch_size), float(args.answer_ms))
         return 0
     if args.role == "clients":
-        clients(args.port, args.clients, args.rounds, int(args.put_bytes))
+        clients(args.port, args.clients, args.rounds, int(args.put_bytes),
+                int(args.query_bytes))
         return 0
     try:
         puts = [int(x) for x in args.put_bytes.split(",")]
         batches = [int(x) for x in args.batch_size.split(",")]
         answers = [float(x) for x in args.answer_ms.split(",")]
+        queries = [int(x) for x in args.query_bytes.split(",")]
     except ValueError:
-        ap.error("--put-bytes, --batch-size and --answer-ms are comma lists of numbers")
+        ap.error("--put-bytes, --batch-size, --answer-ms and --query-bytes are comma lists of "
+                 "numbers")
     if args.clients < 1 or args.rounds < 1 or min(puts) < 1 or \
-            not all(512 <= b <= 65535 for b in batches) or min(answers) < 0:
-        ap.error("--clients, --rounds, --put-bytes must be positive, --answer-ms not "
-                 "negative; --batch-size 512-65535")
+            not all(512 <= b <= 65535 for b in batches) or min(answers) < 0 or \
+            min(queries) < 0:
+        ap.error("--clients, --rounds, --put-bytes must be positive, --answer-ms and "
+                 "--query-bytes not negative; --batch-size 512-65535")
     rounds = " | ".join(f"round {i + 1}" for i in range(args.rounds))
-    print(f"| batch B | put B | answer ms | alone | {args.clients} connected | {rounds} | "
-          "growth per client KB |")
-    print("|" + "---:|" * (6 + args.rounds))
+    print(f"| batch B | put B | answer ms | query B | alone | {args.clients} connected | "
+          f"{rounds} | growth per client KB |")
+    print("|" + "---:|" * (7 + args.rounds))
     for batch in batches:
         for put in puts:
             for answer in answers:
-                mb = measure(args.clients, args.rounds, put, batch, answer)
-                growth = (mb[-1] - mb[1]) * 1024 / args.clients
-                print(f"| {batch} | {put} | {answer:g} | " + " | ".join(f"{x:.1f}" for x in mb)
-                      + f" | {growth:.0f} |", flush=True)
+                for query in queries:
+                    mb = measure(args.clients, args.rounds, put, batch, answer, query)
+                    growth = (mb[-1] - mb[1]) * 1024 / args.clients
+                    print(f"| {batch} | {put} | {answer:g} | {query} | "
+                          + " | ".join(f"{x:.1f}" for x in mb) + f" | {growth:.0f} |",
+                          flush=True)
     return 0
 
 
