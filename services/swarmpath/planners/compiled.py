@@ -75,6 +75,51 @@ def _segment_nearest(px: float, py: float, x: float, y: float, wx: Array,
 
 
 @njit(cache=True)
+def _point_clear(x: float, y: float, hits: Array, margin: float) -> bool:
+    """``sqrt(_point_nearest(x, y, hits)[0]) >= margin``, stopping at the first hit that
+    decides it (the running minimum only falls, and sqrt is monotone: the same answer)."""
+    best = math.inf
+    for j in range(hits.shape[0]):
+        dx = x - hits[j, 0]
+        dx = dx * dx
+        dy = y - hits[j, 1]
+        dy = dy * dy
+        d2 = dx + dy
+        if d2 < best:
+            best = d2
+            if not math.sqrt(best) >= margin:
+                return False
+    return math.sqrt(best) >= margin
+
+
+@njit(cache=True)
+def _segment_clear(px: float, py: float, x: float, y: float, wx: Array, wy: Array,
+                   margin: float) -> bool:
+    """``sqrt(_segment_nearest(...)[0]) >= margin``, stopping as :func:`_point_clear` does."""
+    ux = x - px
+    uy = y - py
+    den = ux * ux + uy * uy + 1e-300
+    best = math.inf
+    for j in range(wx.shape[0]):
+        t = ux * wx[j] + uy * wy[j]
+        t = t / den
+        if t < 0.0:
+            t = 0.0
+        if t > 1.0:
+            t = 1.0
+        ex = wx[j] - t * ux
+        ex = ex * ex
+        ey = wy[j] - t * uy
+        ey = ey * ey
+        d2 = ex + ey
+        if d2 < best:
+            best = d2
+            if not math.sqrt(best) >= margin:
+                return False
+    return math.sqrt(best) >= margin
+
+
+@njit(cache=True)
 def _clip(v: float, lo: float, hi: float, bounded: bool) -> float:
     if bounded:
         if v < lo:
@@ -113,9 +158,9 @@ def repair_grid_kernel(flat: Array, p: Array, hits: Array, margin: float, resolu
                 ty = cy + (offset if axis == 1 else 0.0)
                 tx = _clip(tx, lower[0], upper[0], bounded)
                 ty = _clip(ty, lower[1], upper[1], bounded)
-                if not math.sqrt(_point_nearest(tx, ty, hits)[0]) >= margin:
+                if not _point_clear(tx, ty, hits, margin):
                     continue
-                if not math.sqrt(_segment_nearest(px, py, tx, ty, wx, wy)[0]) >= margin:
+                if not _segment_clear(px, py, tx, ty, wx, wy, margin):
                     continue
                 out[i, 0] = tx
                 out[i, 1] = ty

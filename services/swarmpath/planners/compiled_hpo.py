@@ -64,14 +64,7 @@ def _anchor(X: Array, kbest: int, P: Array, mu: Array) -> None:
         for j in range(d):
             diff[j] = X[i, j] - mu[j]
         dist2[i] = dot(diff, diff, d)
-    for i in range(N):
-        rank = 0
-        for m in range(N):
-            if dist2[m] < dist2[i] or (dist2[m] == dist2[i] and m < i):
-                rank += 1
-        if rank == kbest - 1:
-            P[:] = X[i]
-            return
+    P[:] = X[np.argsort(dist2, kind="mergesort")[kbest - 1]]  # stable, as the reference
 
 
 @njit(cache=True)
