@@ -32,6 +32,7 @@ import json
 import os
 import platform
 import statistics
+import subprocess
 import sys
 import time
 from collections.abc import Sequence
@@ -54,6 +55,19 @@ def note(message: str) -> None:
 def load() -> str:
     one, five, fifteen = os.getloadavg()
     return f"{one:.2f} / {five:.2f} / {fifteen:.2f}"
+
+
+def tree() -> str:
+    """The commit measured (short hash), for the table's context line; a dirty tree says so."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    try:
+        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=here, check=True,
+                              capture_output=True, text=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+                               cwd=here, check=True, capture_output=True, text=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown (not a git checkout)"
+    return f"`{head}`" + (" with uncommitted changes" if dirty else "")
 
 
 @dataclass
@@ -150,7 +164,6 @@ def main(argv: Sequence[str] | None = None) -> None:
     for n in names:
         get_planner(n)  # unknown names fail here
     seeds = list(range(1, args.seeds + 1))
-    started = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     load_start = load()
     note(f"{args.map}: {len(names)} planners x {len(seeds)} seeds, load {load_start}")
 
@@ -175,7 +188,7 @@ def main(argv: Sequence[str] | None = None) -> None:
 
     optimum = rows[0].outcomes[0].optimum if rows and rows[0].outcomes else None
     print(f"Map `{args.map}`, exact optimum "
-          f"{_fmt(optimum, '.4f')} m; seeds 1-{args.seeds} (run 0 of each); started {started}; "
+          f"{_fmt(optimum, '.4f')} m; seeds 1-{args.seeds} (run 0 of each); tree {tree()}; "
           f"machine {platform.machine()}, {os.cpu_count()} CPUs, Python "
           f"{platform.python_version()}, numpy {np.__version__}; load average (1/5/15 min) "
           f"at start {load_start}, at the end {load()}.\n")
