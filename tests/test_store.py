@@ -616,6 +616,10 @@ def test_series_are_stored_exactly_and_old_rows_still_read(store):
                 "path": [[0.0, 1.0, 2.0], [3.5, 4.25, 5.0]]}
     assert decode_series(blob) == expected
     assert decode_series(b"SPS1" + zlib.compress(blob[4:], 1)) == expected  # the zlib form
+    other = encode_series({"curve": [1.0, 2.0, 3.0], "best_position": [0.5, -0.5]})
+    for _ in range(2):  # layouts alternately (each read is told by its own header)
+        assert decode_series(other) == {"curve": [1.0, 2.0, 3.0], "best_position": [0.5, -0.5]}
+        assert decode_series(blob) == expected
     assert encode_series({"curve": None}) is None and decode_series(None) == {}
     legacy = zlib.compress(json.dumps({"curve": [1.5, 2.5]}).encode(), 1)
     assert decode_series(legacy) == {"curve": [1.5, 2.5]}

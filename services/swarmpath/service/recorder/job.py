@@ -178,17 +178,18 @@ class JobRecorder:
             self._channels[topic] = cid
         return cid
 
-    def _put(
-        self, topic: str, schema_name: str, log_ns: int,
-        message: dict[str, Any] | bytes | tuple[bytes, ...],
-    ) -> None:
-        """One message on ``topic``: a dict (JSON made here), its JSON, or that JSON in parts
-        (written one after the other)."""
+    def _put(self, topic: str, schema_name: str, log_ns: int,
+             message: dict[str, Any] | bytes) -> None:
+        """One message on ``topic``: a dict (its JSON made here) or its JSON."""
+        self._put_parts(topic, schema_name, log_ns,
+                        (message if isinstance(message, bytes) else _json(message),))
+
+    def _put_parts(self, topic: str, schema_name: str, log_ns: int,
+                   parts: tuple[bytes, ...]) -> None:
+        """One message on ``topic`` whose JSON is ``parts`` one after the other."""
         cid = self._channels.get(topic)
         if cid is None:
             cid = self._channel(topic, schema_name)
-        parts = (message,) if isinstance(message, bytes) else (
-            message if isinstance(message, tuple) else (_json(message),))
         if self._fast is not None:
             self._fast.add_parts(cid, log_ns, *parts)
         else:
@@ -258,12 +259,12 @@ class JobRecorder:
                 identity, {**identity, "backend": spec.get("backend") or "numpy"})
         identity, with_backend = known
         ns = _ns(record["created"])
-        self._put("/results", "swarmpath.BenchmarkRunResult", ns,
-                  _fast_json(self._result_message(record, with_backend)))
+        self._put_parts("/results", "swarmpath.BenchmarkRunResult", ns,
+                        (_fast_json(self._result_message(record, with_backend)),))
         curve = record.get("curve")
         if curve is not None and len(curve):
-            self._put("/curves", "swarmpath.ConvergenceCurve", ns,
-                      _curve_json(record, identity, curve))
+            self._put_parts("/curves", "swarmpath.ConvergenceCurve", ns,
+                            _curve_json(record, identity, curve))
 
     def _map_run(self, record: dict[str, Any]) -> None:
         spec = record["spec"]

@@ -96,11 +96,16 @@ def decode_series(blob: bytes | None, arrays: tuple[str, ...] = ()) -> dict[str,
 # (name, byte offset, count, shape if not 1-D, its floats' Struct if 1-D) by header
 _Layout = tuple[tuple[str, int, int, tuple[int, ...] | None, struct.Struct | None], ...]
 _LAYOUTS: dict[bytes, _Layout] = {}
+_last: tuple[bytes, _Layout] = (b"-", ())  # the last header and its layout (one assignment)
 
 
 def _layout(blob: bytes) -> _Layout:
     """Where each array of an ``SPS2`` value starts, parsed once per distinct header: the
     series of a job's runs all share a few headers (the recorder reads thousands per second)."""
+    global _last
+    last = _last
+    if blob.startswith(last[0]):  # the header of the value before (a run of the same cell)
+        return last[1]
     end = len(SERIES_MAGIC) + 4 + int.from_bytes(blob[4:8], "little")
     head = blob[:end]
     layout = _LAYOUTS.get(head)
@@ -116,4 +121,5 @@ def _layout(blob: bytes) -> _Layout:
         layout = tuple(entries)
         if len(_LAYOUTS) < 4096:
             _LAYOUTS[head] = layout
+    _last = (head, layout)
     return layout
