@@ -21,6 +21,12 @@ from swarmpath.service.protocol import (
 SCHEMA_VERSION = 2  # 2: leases.capability, leases.beat
 DB_NAME = "swarmpath.sqlite3"
 CACHE_KIB = 2048  # SQLite page cache of the connection, KiB (bounded; its default is 2,000)
+#: Page size of a new store file. A result row (a 500-point curve: ~4.3 KB) overflows a 4 KiB
+#: page into a second one, and SQLite writes the WAL page by page: with 32 KiB pages seven rows
+#: share a page and storing a run costs about half the CPU (docs/benchmarks.md, coordinator hot
+#: path); a lease transaction writes its ~10 touched pages whole, so it costs more (ibid.). An
+#: existing file keeps the page size it was made with.
+PAGE_BYTES = 32768
 LEASE_RUNS_CACHE = 50_000  # leases whose run sets are kept in memory (beyond: read again)
 JOB_STATES: tuple[JobState, ...] = ("queued", "running", "done", "failed", "cancelled")
 FINAL_STATES = frozenset({"done", "failed", "cancelled"})
@@ -152,6 +158,7 @@ class StoreBase:
             self.path, timeout=30.0, isolation_level=None, check_same_thread=False
         )
         self._db.row_factory = sqlite3.Row
+        self._db.execute(f"PRAGMA page_size={PAGE_BYTES}")  # a new file only (WAL keeps it)
         mode = self._db.execute("PRAGMA journal_mode=WAL").fetchone()[0]
         if str(mode).lower() != "wal":
             raise StoreError(f"cannot put {self.path} in WAL mode (got {mode})")
