@@ -16,7 +16,8 @@ NOTES: dict[str, str] = {
     "gap_mean": "mean excess of the path length over the exact shortest path, over successful "
                 "runs; blank on maps with moving obstacles or a moving goal (no exact optimum "
                 "exists there), when no run succeeded, and when the exact optimum gave up "
-                "(its time budget, 30 s by default, ran out: swarmpath plan prints why)",
+                "(its time budget, 30 s by default, ran out: swarmpath plan prints why; a "
+                "service job's summary says it in the row's optimum_reason)",
     "length_mean": "mean executed path length of the successful runs (m)",
     "error_mean": "mean final distance to the goal over all runs (m)",
     "seconds_mean": "mean planning wall time per run (s)",

@@ -10,7 +10,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import Field, TypeAdapter, ValidationInfo, field_validator
 
-from swarmpath.service.model import MAX_SCENARIO_BYTES, Model, ParamValue
+from swarmpath.service.model import MAX_OPTIMUM_BUDGET, MAX_SCENARIO_BYTES, Model, ParamValue
 
 
 def _transform(v: str, shifted: bool) -> str:
@@ -82,6 +82,10 @@ class MapCell(Model):
     scenario: dict[str, Any] | None = None
     params: dict[str, Any] = Field(default_factory=dict)
     scenario_ref: ScenarioRef | None = None
+    optimum_budget: float | None = Field(
+        default=None, gt=0, le=MAX_OPTIMUM_BUDGET, allow_inf_nan=False,
+        description="seconds the exact optimum may take before it gives up (null: the "
+        "default, swarmpath.world.optimum.DEFAULT_BUDGET)")
 
     @property
     def key(self) -> str:

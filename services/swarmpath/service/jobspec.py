@@ -31,6 +31,7 @@ from swarmpath.service.model import (
     MAX_AGENTS,
     MAX_DIM,
     MAX_ITERATIONS,
+    MAX_OPTIMUM_BUDGET,
     MAX_RUNS_PER_CELL,
     MAX_SEED,
     Model,
@@ -266,6 +267,12 @@ class MapJobSpec(Model):
         default_factory=dict, description="{planner: {parameter: value}}"
     )
 
+    optimum_budget: float | None = Field(
+        default=None, gt=0, le=MAX_OPTIMUM_BUDGET, allow_inf_nan=False, strict=True,
+        description="seconds of wall time the exact optimum of each map may take before it "
+        "gives up (the summary's optimum_reason says so, with the budget); null: the default "
+        "(30 s, as swarmpath plan --optimum-budget)")
+
     @field_validator("planners")
     @classmethod
     def _known_planners(cls, v: list[str]) -> list[str]:
@@ -381,6 +388,7 @@ def expand_cells(spec: BenchmarkJobSpec | MapJobSpec) -> list[BenchmarkCell | Ma
             map=map_name(m),
             scenario=None if isinstance(m, str) else dict(m),  # type: ignore[arg-type]
             params=dict(spec.params.get(p, {})),
+            optimum_budget=getattr(spec, "optimum_budget", None),
         )
         for p in spec.planners
         for m in spec.maps

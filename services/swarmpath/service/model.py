@@ -27,6 +27,7 @@ CANCEL_LEASES = 2000  # lease drops in one Cancel message
 #: one travels as a ScenarioRef and the worker fetches it (ScenarioRequest on Keys.scenario)
 INLINE_SCENARIO_BYTES = 16_000
 MAX_SCENARIO_BYTES = 64 * 1024 * 1024  # a fetched scenario (canonical JSON) at most
+MAX_OPTIMUM_BUDGET = 3600.0  # s: the largest time budget a map job may give the exact optimum
 
 PROTOCOL_VERSION = 5  # 2: lease capabilities (swarmpath.service.capability); 3: ScenarioRef;
 # 4: results travel as binary result frames (swarmpath.service.result_frame); 5: a lease's

@@ -32,6 +32,7 @@ from pydantic import (
 )
 
 from swarmpath.provenance import clean_platform
+from swarmpath.service.cell_notes import CellNotes
 from swarmpath.service.jobspec import (
     CELL_ADAPTER,
     JOB_SPEC_ADAPTER,
@@ -114,6 +115,7 @@ __all__ = [
     "BenchmarkCell",
     "BenchmarkJobSpec",
     "Cancel",
+    "CellNotes",
     "CellSpec",
     "ColumnsHead",
     "FieldProblems",
@@ -307,7 +309,13 @@ class RunResult(Model):
     status: Literal["ok", "failed"] = "ok"
     failure: str | None = Field(default=None, max_length=20_000)
     seconds: float = Field(ge=0, description="wall seconds of this run (its share of a batch)")
-    metrics: dict[str, Scalar] = Field(default_factory=dict)
+    metrics: dict[str, Scalar] = Field(
+        default_factory=dict,
+        description="map runs may add notes on their map (swarmpath.service.cell_notes; the "
+        "coordinator keeps only strings of at most 300 characters, schema cell_notes): "
+        "'optimum_reason' (only when the run has no exact optimum: why) and "
+        "'warning:goal_motion' / 'warning:obstacles[k]' (a stated path crossing a static "
+        "obstacle, at most 8)")
     curve: list[float] | None = Field(
         default=None, max_length=MAX_ITERATIONS, description="best fitness after each iteration"
     )
@@ -503,4 +511,5 @@ SCHEMA_MODELS: dict[str, Any] = {
     "cancel": Cancel,
     "worker_status": WorkerStatus,
     "job_status": JobStatus,
+    "cell_notes": CellNotes,
 }

@@ -8,6 +8,8 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from swarmpath.service.cell_notes import TrajectoryWarning
+
 Number = float | str | None
 RunState = Literal["queued", "leased", "done", "failed", "cancelled"]
 
@@ -34,6 +36,11 @@ class Summary(_Open):
         default_factory=dict,
         description="what the columns mean (failed, collisions, gap_mean, ...): "
                     "swarmpath.legend, the text under the CLI tables")
+    warnings: list[TrajectoryWarning] | None = Field(
+        None, description="map jobs: moving goals or obstacles whose stated path crosses a "
+        "static obstacle, each naming its field (maps[i].goal_motion, maps[i].obstacles[k]); "
+        "found by the workers (swarmpath.service.cell_notes). Map rows also carry "
+        "optimum_reason: why the cell has no exact optimum (so no gap), null when it has one")
 
 
 class RunItem(_Open):
@@ -58,6 +65,8 @@ class RunItem(_Open):
     gap: Number = None
     seconds: Number = None
     failure: str | None = None
+    optimum_reason: str | None = Field(
+        None, description="map runs without an exact optimum: why (absent when it was found)")
     lease_id: str | None = None
     completed: float | None = Field(None, description="Unix time the result was accepted")
 

@@ -10,6 +10,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from swarmpath.audit import origin_suspect
+from swarmpath.service.cell_notes import CellNotes, cell_notes, job_warnings
 from swarmpath.service.store.base import StoreBase, _safe
 from swarmpath.service.summary_stats import (
     BENCHMARK_TEST_COLUMNS,
@@ -66,6 +67,17 @@ def map_cell_summary(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
         "gap_mean": _mean(_numbers(ok, "gap")),
         **{key: _total(runs, key) for key in ("robot_driven_contacts", "obstacle_driven_contacts")},
     }
+
+
+def _map_indexes(maps: Sequence[Any]) -> dict[str, int]:
+    """Map name -> its index in the job spec's ``maps`` (presets by name, inline scenarios and
+    resolved uploads by their ``name``)."""
+    out: dict[str, int] = {}
+    for i, entry in enumerate(maps):
+        name = entry if isinstance(entry, str) else (entry or {}).get("name")
+        if isinstance(name, str):
+            out.setdefault(name, i)
+    return out
 
 
 def _total(runs: Sequence[dict[str, Any]], key: str) -> int | None:
@@ -125,6 +137,7 @@ class SummariesMixin(StoreBase):
                 ):
                     metrics.setdefault(idx, []).append(json.loads(m))
         rows: list[dict[str, Any]] = []
+        notes: list[CellNotes] = []
         if kind == "benchmark":
             groups: dict[tuple[str, int], dict[str, float]] = {}
             for c in cells:
@@ -157,11 +170,15 @@ class SummariesMixin(StoreBase):
                 job_spec.get("reference"),
             )
         else:
+            where = _map_indexes(job_spec.get("maps") or [])
             for c in cells:
                 spec = json.loads(c["spec"])
+                runs = metrics.get(c["idx"], [])
+                note = cell_notes(runs, where.get(spec["map"]), spec["map"])
+                notes.append(note)
                 rows.append(
                     {"planner": spec["planner"], "map": spec["map"], "failed": c["failed"],
-                     **map_cell_summary(metrics.get(c["idx"], []))}
+                     **map_cell_summary(runs), "optimum_reason": note.optimum_reason}
                 )
             statistics = map_statistics(
                 rows, [metrics.get(c["idx"], []) for c in cells], job_spec["planners"],
@@ -178,6 +195,7 @@ class SummariesMixin(StoreBase):
             "columns": list(BENCHMARK_COLUMNS if kind == "benchmark" else MAP_COLUMNS),
             "rows": [_safe(r) for r in rows],
             "statistics": statistics,
+            **({} if kind == "benchmark" else {"warnings": job_warnings(notes)}),
         }
 
     def summary_csv(self, job_id: str) -> str | None:

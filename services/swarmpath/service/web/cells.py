@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from swarmpath.service.cell_notes import OPTIMUM_REASON, cell_notes
 from swarmpath.service.web.series import (
     _number,
     band,
@@ -114,6 +115,7 @@ class _MapCell:
         self.crashed = 0
         self.collisions = 0  # colliding steps summed over the runs
         self.failures: dict[str, int] = {}
+        self.optimum_reason: str | None = None  # why no exact optimum (cell_notes, checked)
         self.cache: dict[str, Any] | None = None
 
     def add(self, run: int, ok: bool, metrics: Mapping[str, Any], path: Any) -> None:
@@ -123,6 +125,8 @@ class _MapCell:
         if not ok:
             self.crashed += 1
             return
+        if self.optimum_reason is None and OPTIMUM_REASON in metrics:
+            self.optimum_reason = cell_notes([metrics], None, "").optimum_reason
         success = metrics.get("success") is True
         kind = None if success else failure_kind(metrics)
         self.collisions += int(_number(metrics.get("collisions")) or 0)
@@ -150,6 +154,7 @@ class _MapCell:
     def state(self) -> dict[str, Any]:
         data = {name: getattr(self, name) for name in self._FIELDS}
         data["paths"] = list(self.paths.values())
+        data["optimum_reason"] = self.optimum_reason
         return {"json": np.array(json.dumps(data)), "seen": self.seen}
 
     def restore(self, state: Mapping[str, Any]) -> None:
@@ -160,6 +165,7 @@ class _MapCell:
         for name in self._FIELDS:
             setattr(self, name, data[name])
         self.paths = {int(p["run"]): p for p in data["paths"]}
+        self.optimum_reason = cell_notes([data], None, "").optimum_reason  # older saves: none
         self.seen = seen
         self.cache = None
 
@@ -180,6 +186,7 @@ class _MapCell:
                 "collisions": self.collisions,
                 "success_rate": self.succeeded / self.finished if self.finished else None,
                 "failures": dict(self.failures),
+                "optimum_reason": self.optimum_reason,
                 "box": {k: box_stats(v) for k, v in self.values.items()},
                 "paths": [self.paths[k] for k in sorted(self.paths)],
             }

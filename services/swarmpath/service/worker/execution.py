@@ -14,6 +14,7 @@ import traceback
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from swarmpath.service.cell_notes import note_metrics, scenario_warnings
 from swarmpath.service.protocol import (
     BenchmarkCell,
     Lease,
@@ -179,17 +180,22 @@ def _map(
     steps = 0
     try:
         from swarmpath.planners import Episode
+        from swarmpath.planners.episode import optimum_of
+        from swarmpath.world.optimum import DEFAULT_BUDGET
 
         scenario = load_scenario(spec)
     except Exception as exc:
         failure = _failure_text(exc)
         return [_result(lease, r, 0.0, status="failed", failure=failure) for r in lease.runs]
+    budget = DEFAULT_BUDGET if spec.optimum_budget is None else spec.optimum_budget
+    warnings = scenario_warnings(scenario)  # once per scenario and process (cell_notes)
     for r in lease.runs:
         if cancelled():
             raise Cancelled(lease.lease_id)
         started = time.perf_counter()
         try:
-            episode = Episode(scenario, spec.planner, lease.seed, r, spec.params)
+            episode = Episode(scenario, spec.planner, lease.seed, r, spec.params,
+                              optimum_budget=budget)
             while not episode.done:
                 episode.step()
                 steps += 1
@@ -207,6 +213,9 @@ def _map(
         data = outcome.to_dict()
         path = data.pop("path", None) or []
         metrics = {k: v for k, v in data.items() if _scalar(v)}
+        # why there is no optimum (remembered per scenario and budget: no second search)
+        reason = optimum_of(scenario, budget)[1] if data.get("optimum") is None else None
+        metrics.update(note_metrics(reason, warnings))
         out.append(_result(
             lease, r, time.perf_counter() - started, metrics=metrics,
             path=[(float(p[0]), float(p[1]), float(p[2])) for p in path],

@@ -121,7 +121,7 @@
       const mark = (what) => { const m = ((st[what + "_markers"] || {})[g.map] || {})[p]; return m ? `<span class="marker">${m}</span>` : ""; };
       html += `<tr><td class="l">${SP.esc(g.map)}</td><td class="l">${SP.esc(p)}</td><td>${c.runs}</td><td>${c.crashed}</td>
         <td>${c.success_rate === null ? "" : SP.num(c.success_rate, 3)}</td><td>${c.collisions}</td><td>${med(c.box.length)}${mark("length")}</td>
-        <td>${med(c.box.gap)}</td><td>${med(c.box.seconds)}${mark("seconds")}</td>
+        <td${c.box.gap || !c.optimum_reason ? "" : ` class="l note" title="no exact optimum: ${SP.esc(c.optimum_reason)}"`}>${c.box.gap ? med(c.box.gap) : (c.optimum_reason ? `no optimum: ${SP.esc(c.optimum_reason)}` : "")}</td><td>${med(c.box.seconds)}${mark("seconds")}</td>
         <td class="l">${Object.entries(c.failures).map(([k, n]) => `${n} ${k}`).join(", ")}</td></tr>`;
     }
     html += `</tbody></table>`;
