@@ -182,27 +182,28 @@ class RunViewsMixin(StoreBase):
         that position, see :meth:`last_result_rowid`), in acceptance order, as recorder records
         (raw numbers, series included). Reads in batches without holding the lock in between
         (without ``upto`` it may also yield results stored while it reads)."""
-        with self._read() as db:
-            context = self._record_contexts.get(job_id)
-            if context is None:  # what a job's records share: read once per job and store
-                job = self._job_row(db, job_id)
-                if job is None:
-                    return
-                seq = job["seq"]
-                context = (seq, job["runs_per_cell"], job["kind"],
-                           json.loads(job["spec"])["seed"], {
-                    c["idx"]: (c["key"], json.loads(c["spec"])) for c in db.execute(
-                        "SELECT idx, key, spec FROM cells WHERE job_seq = ?", (seq,))})
-                if len(self._record_contexts) >= 256:  # bounded: a long-lived store
-                    self._record_contexts.clear()
-                self._record_contexts[job_id] = context
-            seq, rpc, kind, seed, cells = context
-            if not after:  # from the job's first result (its index entries, no row read)
-                first = db.execute(
-                    "SELECT min(rowid) FROM results WHERE job_seq = ?", (seq,)).fetchone()[0]
-                if first is None:
-                    return
-                after = first - 1
+        context = self._record_contexts.get(job_id)
+        if context is None or not after:  # (a catch-up of a known job: no transaction here)
+            with self._read() as db:
+                if context is None:  # what a job's records share: read once per job and store
+                    job = self._job_row(db, job_id)
+                    if job is None:
+                        return
+                    seq = job["seq"]
+                    context = (seq, job["runs_per_cell"], job["kind"],
+                               json.loads(job["spec"])["seed"], {
+                        c["idx"]: (c["key"], json.loads(c["spec"])) for c in db.execute(
+                            "SELECT idx, key, spec FROM cells WHERE job_seq = ?", (seq,))})
+                    if len(self._record_contexts) >= 256:  # bounded: a long-lived store
+                        self._record_contexts.clear()
+                    self._record_contexts[job_id] = context
+                if not after:  # from the job's first result (its index entries, no row read)
+                    first = db.execute("SELECT min(rowid) FROM results WHERE job_seq = ?",
+                                       (context[0],)).fetchone()[0]
+                    if first is None:
+                        return
+                    after = first - 1
+        seq, rpc, kind, seed, cells = context
         last = after
         # read along the rowid (+job_seq: not the job's index entries, which are in run order
         # and would make every batch sort the job's remaining results); plain tuples, not Rows
