@@ -38,6 +38,8 @@ def test_compiled_shortest_path_equals_numpy(seeds: range) -> None:
 def _compare_paths(seed: int) -> int:
     rng = np.random.default_rng(seed)
     obstacles = _scene(rng, 1 + seed % 3)
+    if seed % 4 < 2:  # polygons only (the sensed maps' usual case)
+        obstacles = ObstacleSet(np.zeros((0, 3)), obstacles.polygons)
     world = (0.0, 0.0, 8.0, 8.0) if seed % 2 else None
     bent = 0
     centres = [p.mean(axis=0) for p in obstacles.polygons]
@@ -95,7 +97,7 @@ def test_compiled_planner_paths_on_a_preset() -> None:
 
 def test_compiled_arc_checks_equal_numpy() -> None:
     from swarmpath.world.optimum_base import _in_arc
-    from swarmpath.world.optimum_compiled import _in_arc as in_arc_kernel
+    from swarmpath.world.optimum_compiled_arcs import _in_arc as in_arc_kernel
 
     rng = np.random.default_rng(11)
     phi = np.concatenate([rng.uniform(-10, 10, 500), np.arange(-4, 5) * np.pi,
@@ -107,6 +109,8 @@ def test_compiled_arc_checks_equal_numpy() -> None:
     blocked = 0
     for k in range(20):
         obstacles = _scene(rng, 1 + k % 4)
+        if k % 4 < 2:  # polygons only (the sensed maps' usual case)
+            obstacles = ObstacleSet(np.zeros((0, 3)), obstacles.polygons)
         margin = float(rng.uniform(0.01, 0.3))
         ref_scene = _Scene(obstacles, margin, (0.0, 0.0, 8.0, 8.0) if k % 2 else None)
         fast = _Scene(obstacles, margin, (0.0, 0.0, 8.0, 8.0) if k % 2 else None)

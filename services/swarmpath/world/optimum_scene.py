@@ -46,7 +46,7 @@ class _Scene:
         index: EdgeIndex | None = None,
     ) -> None:
         self.index = index
-        self.backend = "numpy"  # "numba": arcs_blocked's polygons compiled (margin > 0)
+        self.backend = "numpy"  # "numba": arcs_blocked compiled (margin > 0, no circles)
         self.obstacles = obstacles
         self.circles = obstacles.circles
         self.polygons = obstacles.polygons
@@ -70,21 +70,12 @@ class _Scene:
         self._build_circle_buckets()
         self._orders: tuple[IntArray, IntArray] | None = None
 
-    @property
-    def circle_order(self) -> IntArray:
-        """Fixed pseudo-random visiting order for early elimination (no global RNG state);
-        drawn when first needed (the compiled checks do not need it)."""
+    def _order(self, which: int) -> IntArray:
+        """Fixed random visiting orders (circles, polygons; no global RNG), drawn when needed."""
         if self._orders is None:
-            order_rng = np.random.default_rng(0)
-            circles = order_rng.permutation(len(self.circles))
-            self._orders = (circles, order_rng.permutation(len(self.polygons)))
-        return self._orders[0]
-
-    @property
-    def polygon_order(self) -> IntArray:
-        self.circle_order  # noqa: B018 - draws both orders
-        assert self._orders is not None
-        return self._orders[1]
+            rng = np.random.default_rng(0)
+            self._orders = (rng.permutation(len(self.circles)), rng.permutation(len(self.polygons)))
+        return self._orders[which]
 
     def _build_circle_buckets(self) -> None:
         """Uniform grid: for each cell, up to _BUCKET circles that could block a point in it."""
@@ -171,7 +162,7 @@ class _Scene:
         lo = 0
         while lo < k and len(active):
             width = int(np.clip(_CHUNK // len(active), 8, k))
-            cc = self.circles[self.circle_order[lo : lo + width]]
+            cc = self.circles[self._order(0)[lo : lo + width]]
             lo += width
             hit = np.any(self._circle_hits(A[active], B[active], cc), axis=1)
             blocked[active[hit]] = True
@@ -183,7 +174,7 @@ class _Scene:
         lo = 0
         while lo < p and len(active):
             width = int(np.clip(_CHUNK // len(active), 4, p))
-            pjs = self.polygon_order[lo : lo + width]
+            pjs = self._order(1)[lo : lo + width]
             lo += width
             s_lo = np.minimum(A[active], B[active])[:, None, :]
             s_hi = np.maximum(A[active], B[active])[:, None, :]
@@ -316,6 +307,10 @@ class _Scene:
     def arcs_blocked(self, c: Array, rho: Array, th0: Array, dth: Array) -> BoolArray:
         """True where the arc (centre c, radius rho, from th0 sweeping dth ccw) is not free."""
         n = len(c)
+        if self.backend == "numba" and self.index is None and self.m > 0 and not len(self.circles):
+            from swarmpath.world import optimum_compiled_arcs as compiled
+
+            return compiled.arcs_blocked(self, c, rho, th0, dth)
         blocked = np.zeros(n, dtype=bool)
         if self.lo is not None:
             ends = np.stack([th0, th0 + dth], axis=1)
@@ -346,11 +341,6 @@ class _Scene:
         if not self.polygons:
             return blocked
         idx = np.flatnonzero(~blocked)
-        if self.backend == "numba" and self.index is None and self.m > 0.0:
-            from swarmpath.world.optimum_compiled import arcs_near_polygons
-
-            blocked[idx[arcs_near_polygons(self, c[idx], rho[idx], th0[idx], dth[idx])]] = True
-            return blocked
         if self.index is not None:
             small = rho[idx] <= self.m + TOL  # vertex disks: the edge buckets around the centre
             ii = idx[small]
