@@ -17,6 +17,7 @@ from swarmpath.service.cell_notes import (
     MAX_WARNINGS,
     CellNotes,
     cell_notes,
+    note_lines,
     note_metrics,
 )
 from swarmpath.service.http.app import create_app
@@ -113,6 +114,14 @@ def test_stated_paths_through_walls_are_warned_naming_the_field(client: Any) -> 
     reasons = {r["map"]: r["optimum_reason"] for r in summary["rows"]}
     assert reasons["mfb-static"] is None and reasons["clear"] is None
     assert "moving" in reasons["walls"]
+    lines = note_lines(summary)  # what `swarmpath results JOB` prints under the table
+    assert lines[0] == f"no exact optimum on walls (blank gap): {reasons['walls']}"
+    assert lines[1].startswith("warning: maps[2].goal_motion (walls): the goal's stated path")
+    assert len(lines) == 3
+    data = client.get(f"/ui/jobs/{job.json()['id']}/data").json()  # the dashboard's job page
+    walls = next(g for g in data["groups"] if g["map"] == "walls")["planners"]["OMPL-RRTstar"]
+    assert [f for f, _m in walls["warnings"]] == ["goal_motion", "obstacles[1]"]
+    assert walls["optimum_reason"] == reasons["walls"]
 
 
 @pytest.mark.parametrize("value", [0, -1, 1e9, "soon", True])

@@ -263,6 +263,13 @@ def test_map_job_page_paths_failures_and_boxes(server, jobs, browser):
     assert len(cells) == len(MAP["maps"])
     per_cell = browser.find_elements(By.CSS_SELECTOR, "#cells tbody tr")
     assert len(per_cell) == len(MAP["maps"]) * len(MAP["planners"])
+    gaps = {tuple(texts(r.find_elements(By.TAG_NAME, "td"))[:2]): texts(
+        r.find_elements(By.TAG_NAME, "td"))[7] for r in per_cell}
+    for (name, _planner), gap in gaps.items():  # a blank gap says why (the workers' reason)
+        if name == "mfb-dynamic":
+            assert gap == "no optimum: the map has moving obstacles or a moving goal"
+        elif name == "mfb-static":
+            assert not gap.startswith("no optimum")
     ranks = browser.find_elements(By.CSS_SELECTOR, "#map-ranks tbody tr")
     assert [r.get_attribute("data-planner") for r in ranks] == MAP["planners"]
     header = texts(browser.find_elements(By.CSS_SELECTOR, "#map-ranks thead th"))

@@ -104,7 +104,9 @@ def _summary(client: Any, job: str, format: str) -> None:
     console.print(svc._table(title, summary["columns"], summary["rows"]))
     from swarmpath.service.summary_stats import statistics_lines
 
-    for line in statistics_lines(summary):
+    from swarmpath.service.cell_notes import note_lines
+
+    for line in statistics_lines(summary) + note_lines(summary):
         console.print(line, highlight=False, markup=False)
     console.print(legend_text(summary["columns"]), markup=False, highlight=False)
 

@@ -144,3 +144,18 @@ def job_warnings(cells: Iterable[CellNotes]) -> list[dict[str, Any]]:
             if len(seen) < MAX_JOB_WARNINGS:
                 seen.setdefault(w.field, w.model_dump())
     return list(seen.values())
+
+
+def note_lines(summary: Mapping[str, Any]) -> list[str]:
+    """A map summary's notes as text lines (``swarmpath results`` prints them under the table):
+    each map's reason for having no exact optimum once, then each warning."""
+    lines: list[str] = []
+    seen: set[str] = set()
+    for row in summary.get("rows") or ():
+        reason, name = row.get("optimum_reason"), str(row.get("map"))
+        if isinstance(reason, str) and name not in seen:
+            seen.add(name)
+            lines.append(f"no exact optimum on {name} (blank gap): {reason}")
+    for w in summary.get("warnings") or ():
+        lines.append(f"warning: {w.get('field')} ({w.get('map')}): {w.get('message')}")
+    return lines

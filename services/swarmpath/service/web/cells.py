@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from swarmpath.service.cell_notes import OPTIMUM_REASON, cell_notes
+from swarmpath.service.cell_notes import OPTIMUM_REASON, WARNING_PREFIX, cell_notes
 from swarmpath.service.web.series import (
     _number,
     band,
@@ -116,6 +116,7 @@ class _MapCell:
         self.collisions = 0  # colliding steps summed over the runs
         self.failures: dict[str, int] = {}
         self.optimum_reason: str | None = None  # why no exact optimum (cell_notes, checked)
+        self.warnings: list[list[str]] = []  # [field in the scenario, message] (cell_notes)
         self.cache: dict[str, Any] | None = None
 
     def add(self, run: int, ok: bool, metrics: Mapping[str, Any], path: Any) -> None:
@@ -127,6 +128,8 @@ class _MapCell:
             return
         if self.optimum_reason is None and OPTIMUM_REASON in metrics:
             self.optimum_reason = cell_notes([metrics], None, "").optimum_reason
+        if not self.warnings and any(k.startswith(WARNING_PREFIX) for k in metrics):
+            self.warnings = _warnings(metrics)
         success = metrics.get("success") is True
         kind = None if success else failure_kind(metrics)
         self.collisions += int(_number(metrics.get("collisions")) or 0)
@@ -155,6 +158,7 @@ class _MapCell:
         data = {name: getattr(self, name) for name in self._FIELDS}
         data["paths"] = list(self.paths.values())
         data["optimum_reason"] = self.optimum_reason
+        data["warnings"] = self.warnings
         return {"json": np.array(json.dumps(data)), "seen": self.seen}
 
     def restore(self, state: Mapping[str, Any]) -> None:
@@ -166,6 +170,11 @@ class _MapCell:
             setattr(self, name, data[name])
         self.paths = {int(p["run"]): p for p in data["paths"]}
         self.optimum_reason = cell_notes([data], None, "").optimum_reason  # older saves: none
+        saved = data.get("warnings")
+        self.warnings = _warnings({WARNING_PREFIX + str(f): m for f, m in saved
+                                   } if isinstance(saved, list) and all(
+                                       isinstance(w, list) and len(w) == 2 for w in saved)
+                                  else {})
         self.seen = seen
         self.cache = None
 
@@ -187,10 +196,17 @@ class _MapCell:
                 "success_rate": self.succeeded / self.finished if self.finished else None,
                 "failures": dict(self.failures),
                 "optimum_reason": self.optimum_reason,
+                "warnings": self.warnings,
                 "box": {k: box_stats(v) for k, v in self.values.items()},
                 "paths": [self.paths[k] for k in sorted(self.paths)],
             }
         return self.cache
+
+
+def _warnings(metrics: Mapping[str, Any]) -> list[list[str]]:
+    """[field, message] of a run's valid ``warning:<field>`` notes (cell_notes' checks)."""
+    prefix = len("maps[0].")
+    return [[w.field[prefix:], w.message] for w in cell_notes([metrics], 0, "").warnings]
 
 
 def _f_star(function: str, dim: int) -> float:

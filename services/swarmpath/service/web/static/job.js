@@ -125,6 +125,8 @@
         <td class="l">${Object.entries(c.failures).map(([k, n]) => `${n} ${k}`).join(", ")}</td></tr>`;
     }
     html += `</tbody></table>`;
+    const warned = data.groups.map((g) => [g.map, Object.values(g.planners).find((c) => c && c.warnings && c.warnings.length)]).filter(([, c]) => c);
+    if (warned.length) html += `<ul id="map-warnings" class="legend">` + warned.map(([map, c]) => c.warnings.map(([f, m]) => `<li>warning: ${SP.esc(map)}: ${SP.esc(f)}: ${SP.esc(m)}</li>`).join("")).join("") + `</ul>`;
     if (st.reference) {
       const measures = ["success", "length", "seconds"].filter((w) => st[w === "success" ? "counts" : w + "_counts"]);
       const ranked = Object.keys(st.friedman || {});
