@@ -102,9 +102,8 @@ def _summary(client: Any, job: str, format: str) -> None:
              + (" (partial)" if summary["partial"] else ""))
     console = svc._console()
     console.print(svc._table(title, summary["columns"], summary["rows"]))
-    from swarmpath.service.summary_stats import statistics_lines
-
     from swarmpath.service.cell_notes import note_lines
+    from swarmpath.service.summary_stats import statistics_lines
 
     for line in statistics_lines(summary) + note_lines(summary):
         console.print(line, highlight=False, markup=False)
