@@ -50,6 +50,7 @@ from swarmpath.optimizers import RunStreams, get_optimizer
 from swarmpath.optimizers.base import ParameterError
 from swarmpath.planners import local, sensed_map, swarm_aim
 from swarmpath.planners.base import Decision, Observation, PlannerError, register
+from swarmpath.planners.swarm_escape import Escape
 from swarmpath.planners.swarm_moves import SwarmMoveLimits
 from swarmpath.planners.swarm_search import searcher, warm_search
 from swarmpath.robot.sensors import get_sensor_model
@@ -107,6 +108,10 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         "knowledge": "sensors",  # "map": the static obstacles are known from the start
         "aim_hits": "known",  # the known path avoids: "known" (all remembered) or "near"
         "contact_band": 0.2,  # m beyond the body: no move closes on a sensed point this near
+        # s without getting closer to the goal by ``escape_progress``: then the known path also
+        # avoids every static point sensed since the start (planners.swarm_escape; 0: off)
+        "escape": 5.0,
+        "escape_progress": 0.05,  # m
         # "numba": the repairs, the aim's clearances and sensing's surface distances compiled
         # (planners.compiled; the same numbers, optional dep.)
         "backend": "numpy",
@@ -134,7 +139,8 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         for key in ("w1", "w2", "safety", "corner_safety", "corner_angle", "diff_drive_safety",
                     "memory", "moving_memory", "trail", "lead", "consistency", "track_gap",
                     "track_scans", "predict", "surface", "carrot_clearance", "rejoin", "hold_angle",
-                    "hold_min", "patience", "tolerance", "contact_band"):
+                    "hold_min", "patience", "tolerance", "contact_band", "escape",
+                    "escape_progress"):
             if float(p[key]) < 0:
                 raise PlannerError(f"{cls.name}.{key} must be >= 0")
         try:
@@ -167,6 +173,8 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         self._last_scan: tuple[float, Array] | None = None
         self._scan: tuple[Array, NDArray[np.bool_]] = (np.zeros((0, 2)), np.zeros(0, dtype=bool))
         self._held: Array | None = None  # the last swarm waypoint (see ``hold_angle``)
+        self._escape = Escape(float(self.p["escape"]), float(self.p["escape_progress"]),
+                              float(self.p["map_cell"]))
         self._path: Array | None = None  # the last known path (see ``rejoin``)
         self._moving_until = -np.inf  # motion was sensed in the last ``memory`` seconds
         self._moving: tuple[Array, Array] = (np.zeros((0, 2)), np.zeros((0, 2)))  # this scan's
@@ -239,6 +247,7 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         reach = float(self.p["step"])
         backend = str(self.p["backend"])
         known_hits = self._known_hits(obs)  # first: this scan may show a corner
+        self._escape.remember(*self._scan)
         margin = obs.robot_radius + self._safety(obs.time)
         # Only hits that can touch a candidate segment matter, one per HIT_CELL (1 cm) cell.
         hits = sensed_map.condense(known_hits, p, reach + 2 * margin, HIT_CELL, backend)
@@ -259,7 +268,10 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         # map), not only around the hits near enough to touch a candidate (``aim_hits = "near"``):
         # with those alone it ran into obstacles already sensed farther on (icoot-map2, ICOOT,
         # seed 1: 10.2 % above the optimum, 6.4 % with everything known; docs/planners.md).
-        if self.p["aim_hits"] == "known":
+        escaping = self._escape.stalled(obs.time, float(np.hypot(*(goal - p))))
+        if escaping:  # ``escape``: the path also avoids every static point sensed since the start
+            known = np.concatenate([known, self._escape.points()])
+        if self.p["aim_hits"] == "known" or escaping:
             known = sensed_map.condense(known, p, np.inf, float(self.p["map_cell"]), backend)
         else:
             known = plan_hits
