@@ -13,8 +13,8 @@ from swarmpath.world.scenario_io import load_scenario
 
 THIN_WALL = Path(__file__).parent / "data" / "thin_wall.json"
 #: Simulated seconds per run (the map's default limit is 79 s). Without the guard every swarm
-#: planner but MFB touches the wall within it (first contacts, seed 1: 13-38 s); with it four of
-#: them stall beside the wall until the limit, which is what made this test slow.
+#: planner but MFB touches the wall within it (first contacts, seed 1: 13-38 s); with it and
+#: ``escape = 0`` four of them creep along the wall until the limit (tests/test_planner_escape.py).
 TIME_LIMIT = 40.0
 GUARDED = [n for n in list_planners() if get_planner(n).guarded]
 

@@ -35,6 +35,10 @@ plans around it where it will be when the robot can get there (``lead``; behind 
 obstacle instead of ahead of it) and its remembered trail is forgotten (``moving_memory``,
 ``trail``). Erratic motion (a random walk) is not tracked and is handled as before.
 
+Local minima: when the robot gets no closer to the goal for ``escape`` seconds, the known path
+also avoids every static point sensed since the start, until it is closer than ever before
+(:mod:`swarmpath.planners.swarm_escape`).
+
 The run ends within 0.2 m of the goal, or fails at the episode's step or time limit.
 """
 
