@@ -53,6 +53,12 @@ def surface(points: Array, scan: Array, link: float, dist: Array,
                           _f(dist, dtype=float), _f(near, dtype=float))
 
 
+def motion(previous: Array, current: Array, dt: float, max_speed: float, min_speed: float,
+           surface: float) -> tuple[Array, Array]:
+    return motion_kernel(_f(previous, dtype=float), _f(current, dtype=float), float(dt),
+                         float(max_speed), float(min_speed), float(surface))
+
+
 def has_corner(scan: Array, surface: float, angle_deg: float) -> bool:
     return bool(has_corner_kernel(_f(scan, dtype=float), float(surface),
                                   math.cos(math.radians(angle_deg))))
@@ -331,3 +337,36 @@ def point_clearance_kernel(px: float, py: float, circles: Array, verts: Array,
         out = min(out, -d if crossings % 2 == 1 else d)
         start += counts[j]
     return out
+
+
+@njit(cache=True)
+def _gather(points: Array, idx: Array) -> Array:
+    out = np.empty((idx.shape[0], 2))
+    for k in range(idx.shape[0]):
+        out[k, 0] = points[idx[k], 0]
+        out[k, 1] = points[idx[k], 1]
+    return out
+
+
+@njit(cache=True)
+def motion_kernel(previous: Array, current: Array, dt: float, max_speed: float,
+                  min_speed: float, surface: float) -> tuple[Array, Array]:
+    """:func:`sensed_map.motion` with ``surface`` > 0 (both scans non-empty, dt > 0): each hit's
+    distance to the previous surface (kept where the previous scan's nearest hit is as far from
+    the current surface), its velocity from the surface point it left, moving between the two
+    speeds."""
+    d0, i0 = nearest_kernel(previous, current)
+    dist, near = surface_kernel(current, previous, surface, d0, _gather(previous, i0))
+    d1, i1 = nearest_kernel(current, previous)
+    back, _ = surface_kernel(previous, current, surface, d1, _gather(current, i1))
+    slow = min_speed * dt
+    n = current.shape[0]
+    moving = np.empty(n, dtype=np.bool_)
+    velocity = np.empty((n, 2))
+    for k in range(n):
+        d = dist[k] if back[i0[k]] >= slow else 0.0
+        velocity[k, 0] = (current[k, 0] - near[k, 0]) / dt
+        velocity[k, 1] = (current[k, 1] - near[k, 1]) / dt
+        speed = d / dt
+        moving[k] = speed >= min_speed and speed <= max_speed
+    return moving, velocity

@@ -140,6 +140,8 @@ def motion(
     none = (np.zeros(len(current), dtype=bool), np.zeros((len(current), 2)))
     if len(previous) == 0 or len(current) == 0 or dt <= 0:
         return none
+    if surface > 0 and backend == "numba":
+        return _fast().motion(previous, current, dt, max_speed, min_speed, surface)
     if surface > 0:
         # the nearest previous hit of each current one serves both the surface distance and
         # the check back (one k-d tree query)

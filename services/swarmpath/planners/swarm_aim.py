@@ -81,12 +81,14 @@ def load_kernels() -> None:
     sensed_map.has_corner(scan, 0.2, 30.0, "numba")
     sensed_map.rejoin(path, np.zeros(2), 0.1, "numba")
     square = sensed_map.known_obstacles(np.array([[1.0, -0.1], [1.1, -0.1], [1.1, 0.1],
-                                                  [1.0, 0.1]]), 0.15, backend="numba")
+                                                  [1.0, 0.1]]), 0.25, backend="numba")
     # (not sensed_map.known_path: scripts/bench/sensed_path_time.py records its calls)
     shortest_path(np.zeros(2), path[1], square, 0.05, (-1, -1, 3, 1), backend="numba")
     _room(np.zeros(2), square, "numba")
     _line_clearance(np.zeros(2), path[1], scan, "numba")
     nearest_hit(np.zeros(2), scan, "numba")
+    clear(path[1], local.StepContext(position=np.zeros(2), goal=path[1], hits=scan, margin=0.1,
+                                     backend="numba"))
 
 
 class SwarmAim(SwarmSensing):
