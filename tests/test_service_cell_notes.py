@@ -156,3 +156,25 @@ def test_the_coordinator_trusts_nothing_in_the_metrics() -> None:
     assert {w.field for w in notes.warnings} >= {"maps[4].obstacles[3]"}
     assert cell_notes(runs, None, "m").warnings == []
     CellNotes.model_validate(notes.model_dump())  # within its own schema
+
+
+def test_the_worker_checks_a_scenario_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The trajectory check (0.2-0.5 s) runs once per scenario in a worker process, however many
+    leases of its cells come."""
+    from swarmpath.service import cell_notes as notes
+    from swarmpath.world import trajectories
+    from swarmpath.world.scenario_io import load_scenario
+
+    calls: list[object] = []
+    real = trajectories.trajectory_warnings
+
+    def counted(s: Any) -> list[tuple[str, str]]:
+        calls.append(s)
+        return real(s)
+
+    monkeypatch.setattr(trajectories, "trajectory_warnings", counted)
+    monkeypatch.setattr(notes, "_WARNINGS", type(notes._WARNINGS)())
+    doc = _walls("w", goal_motion={"speed": 0.2, "heading_deg": 0})
+    first = notes.scenario_warnings(load_scenario(doc))
+    again = notes.scenario_warnings(load_scenario(doc))  # an equal scenario, built again
+    assert first == again and [f for f, _m in first] == ["goal_motion"] and len(calls) == 1

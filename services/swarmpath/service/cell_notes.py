@@ -21,6 +21,7 @@ reads a cell's runs back into a :class:`CellNotes` (the schema in
 from __future__ import annotations
 
 import re
+import threading
 from collections import OrderedDict
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
@@ -83,28 +84,28 @@ def note_metrics(optimum_reason: str | None,
 
 
 _WARNINGS: OrderedDict[Any, list[tuple[str, str]]] = OrderedDict()
+_LOCK = threading.Lock()
 
 
 def scenario_warnings(scenario: Any) -> list[tuple[str, str]]:
     """:func:`~swarmpath.world.trajectories.trajectory_warnings` of a scenario, remembered for the
     last few scenarios of this process (a cell's leases share it). A check that fails warns of
     nothing (the run reports its own errors)."""
-    try:
+    with _LOCK:  # thread slots share the process
         found = _WARNINGS.get(scenario)
-    except TypeError:  # pragma: no cover - scenarios are hashable
-        found = None
-    if found is not None:
-        _WARNINGS.move_to_end(scenario)
-        return found
+        if found is not None:
+            _WARNINGS.move_to_end(scenario)
+            return found
     from swarmpath.world.trajectories import trajectory_warnings
 
     try:
         found = trajectory_warnings(scenario)
     except Exception:
         found = []
-    _WARNINGS[scenario] = found
-    while len(_WARNINGS) > _KEPT_SCENARIOS:
-        _WARNINGS.popitem(last=False)
+    with _LOCK:
+        _WARNINGS[scenario] = found
+        while len(_WARNINGS) > _KEPT_SCENARIOS:
+            _WARNINGS.popitem(last=False)
     return found
 
 
