@@ -57,17 +57,19 @@ class _BenchmarkCell:
         length = int(self.grid[-1])
         runs: list[int] = []
         curves: list[Any] = []
+        bests: list[float] = []
         for run, ok, metrics, curve in items:
             if ok and curve is not None and len(curve) == length \
                     and "curve_stride" not in metrics:
-                self.seen[run] = self.ok[run] = True
                 best = _number(metrics.get("best_fitness"))
-                self.best[run] = math.inf if best is None else best
+                bests.append(math.inf if best is None else best)
                 runs.append(run)
                 curves.append(curve)
             else:
                 self.add(run, ok, metrics, curve)
-        if runs:
+        if runs:  # (the runs are distinct: JobAggregates.add_many keeps one entry per run)
+            self.seen[runs] = self.ok[runs] = True
+            self.best[runs] = bests
             self.cache = None
             err = np.asarray(curves, dtype=np.float64)[:, self.grid - 1] - self.f_star
             self.rows[runs] = np.maximum(err, 0.0)
