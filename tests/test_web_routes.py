@@ -293,3 +293,34 @@ def test_closing_the_coordinator_stops_a_running_build_without_an_error(tmp_path
         core.close()
     assert not any(t.is_alive() for t in builds)
     assert not [r for r in caplog.records if r.levelno >= logging.ERROR]
+
+
+def test_a_jobs_first_results_are_not_read_back_from_the_store(client, app, monkeypatch):
+    """The aggregates of a job whose first results were just stored start from those results
+    (nothing read back); a dashboard that lost a running job reads the store again."""
+    core = app.state.core
+    dash = core.dashboard
+    reads: list[str] = []
+    build = dash._build
+
+    def counted(job, *args):  # a build reads the job's finished runs from the store
+        reads.append(job.job_id)
+        return build(job, *args)
+
+    monkeypatch.setattr(dash, "_build", counted)
+    job = client.post("/jobs", json={**BENCH, "runs": 20}).json()["id"]
+    core.worker_alive("w1")
+
+    def one_lease() -> int:
+        lease = decode_work_reply(core.handle_lease_request(
+            encode(LeaseRequest(worker="w1", max_runs=5))))
+        assert isinstance(lease, Lease)
+        for payload in pack_batches("w1", [d for _run, d in execute_lease(lease)]):
+            core.handle_results(f"swarmpath/results/{job}", payload)
+        return len(lease.runs)
+
+    first = one_lease()
+    assert reads == [] and dash.aggregates(job).finished_runs() == first
+    del dash._jobs[job]  # evicted while running: the next batch rebuilds it
+    second = one_lease()
+    assert dash.aggregates(job).finished_runs() == first + second and reads == [job]

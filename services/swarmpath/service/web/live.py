@@ -74,8 +74,10 @@ class Dashboard:
             if len(self._rates) > 4 * self.max_jobs:  # forget the rates of the oldest jobs
                 for old in list(self._rates)[: len(self._rates) - 4 * self.max_jobs]:
                     del self._rates[old]
-        job = self.aggregates(job_id, wait=False)  # never wait here: this is the store's
-        if job is None:  # result thread, and a job built from the store takes seconds
+        # never wait here: this is the store's result thread, and a job built from the store
+        # takes seconds
+        job = self.aggregates(job_id, wait=False, adding=len(runs))
+        if job is None:
             return
         entries = []
         index_of = job.cell_index
@@ -85,11 +87,14 @@ class Dashboard:
                 entries.append((index, run, ok, metrics, curve, path))
         job.add_many(entries)
 
-    def aggregates(self, job_id: str, wait: bool = True) -> JobAggregates | None:
+    def aggregates(self, job_id: str, wait: bool = True,
+                   adding: int = 0) -> JobAggregates | None:
         """The job's aggregates (None: unknown job), built from the store (or its saved
         arrays) the first time. With ``wait`` False a build runs in a background thread and the
         aggregates are returned at once, possibly incomplete (adding to them is safe meanwhile:
-        runs are deduplicated)."""
+        runs are deduplicated). ``adding``: how many finished runs the caller adds right after
+        (:meth:`observe_runs`, just stored); when they are all the store holds of a running job,
+        nothing is read back (a job's first results are not read from the store again)."""
         with self._lock:
             job = self._jobs.get(job_id)
             if job is not None:
@@ -107,6 +112,10 @@ class Dashboard:
                     job = JobAggregates(job_id, status.kind, cells, spec.seed,
                                         getattr(spec, "reference", None))
                     self._jobs[job_id] = job
+                    if adding and status.state not in FINAL_STATES \
+                            and status.runs_done + status.runs_failed == adding:
+                        self._evict()
+                        return job
                     ready = self._ready[job_id] = threading.Event()
                     self._evict()
                     args = (job, status, spec, cells)
