@@ -354,15 +354,20 @@ def test_submit_form_shows_errors_at_fields_then_submits(server, jobs, browser):
     form.find_element(By.CSS_SELECTOR, "input[name=planners][value=MFB]").click()
     form.find_element(By.CSS_SELECTOR, "input[name=maps][value=mfb-static]").click()
     form.find_element(By.NAME, "map_reference").send_keys("NOPE")
+    form.find_element(By.NAME, "optimum_budget").send_keys("0")
     browser.find_element(By.ID, "submit-button").click()
     wait_for(browser, '[data-error="map_reference"]:not(:empty)')
+    wait_for(browser, '[data-error="optimum_budget"]:not(:empty)')
     form.find_element(By.NAME, "map_reference").clear()
+    form.find_element(By.NAME, "optimum_budget").clear()
+    form.find_element(By.NAME, "optimum_budget").send_keys("7.5")
     browser.find_element(By.ID, "submit-button").click()
     WebDriverWait(browser, WAIT, ignored_exceptions=(NoSuchElementException,)).until(
         lambda d: d.find_element(By.ID, "new-job").text not in ("", status.id))
     new = app.state.core.store.job_status(browser.find_element(By.ID, "new-job").text)
     assert new is not None and new.kind == "map"
     assert new.runs_total == 10  # the form's default runs per cell, one cell
+    assert app.state.core.store.job_spec(new.id).optimum_budget == 7.5
 
 
 def test_token_is_asked_for_and_sent(tmp_path, browser, monkeypatch):

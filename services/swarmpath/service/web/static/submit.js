@@ -45,6 +45,7 @@
         <b>maps</b>${checks("maps", cat.maps, (x) => x.description)}
         ${number("map_runs", m.runs, "runs per cell")}${number("map_seed", m.seed, "seed")}
         ${number("map_reference", "", "reference planner for the statistics (empty: the last one)")}
+        ${number("optimum_budget", "", "time budget of each map's exact optimum, s (empty: 30)")}
         ${cat.planners.map((p) => paramInputs("map", p)).join("")}
       </fieldset>
       <div class="err" data-error="_general" id="general-error"></div>
@@ -94,7 +95,8 @@
     const planners = checked(form, "planners");
     return { kind: "map", planners: planners, maps: checked(form, "maps"), runs: asNumber(value(form, "map_runs")),
       seed: asNumber(value(form, "map_seed")), params: params(form, "map", planners),
-      ...(value(form, "map_reference") ? { reference: value(form, "map_reference") } : {}) };
+      ...(value(form, "map_reference") ? { reference: value(form, "map_reference") } : {}),
+      ...(value(form, "optimum_budget") ? { optimum_budget: asNumber(value(form, "optimum_budget")) } : {}) };
   }
 
   /* The form field of an error's loc: ["body", kind?, field, ...]. */
