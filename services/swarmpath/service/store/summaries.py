@@ -107,8 +107,10 @@ class SummariesMixin(StoreBase):
         p_holm (Wilcoxon rank-sum test against the spec's reference, docs/statistics.md).
         map rows: planner, map, runs, failed, success_rate, collisions, length_mean, length_std,
         error_mean, seconds_mean, gap_mean (length and gap over successful runs), and per measure
-        (success, length, seconds) its marker and Holm-adjusted p. ``statistics``: the tests'
-        document (:mod:`swarmpath.service.summary_stats`)."""
+        (success, length, seconds) its marker and Holm-adjusted p, and ``optimum_reason`` (why
+        the cell has no exact optimum; null when it has one); a map summary's ``warnings`` are
+        its stated trajectories through walls (:mod:`swarmpath.service.cell_notes`).
+        ``statistics``: the tests' document (:mod:`swarmpath.service.summary_stats`)."""
         from swarmpath.stats import describe, rank
 
         with self._read() as db:
