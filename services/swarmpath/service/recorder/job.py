@@ -191,7 +191,7 @@ class JobRecorder:
         if cid is None:
             cid = self._channel(topic, schema_name)
         if self._fast is not None:
-            self._fast.add_parts(cid, log_ns, *parts)
+            self._fast.add_parts(cid, log_ns, parts)
         else:
             self._writer.add_message(cid, log_time=log_ns, publish_time=log_ns,
                                      data=b"".join(parts))
