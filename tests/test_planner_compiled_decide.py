@@ -130,3 +130,26 @@ def test_unimplemented_settings_run_the_numpy_loop():
                                         ("HPSO-MFB", {}, 1), ("ICOOT", {"leaders": 4}, 4)):
         params = get_optimizer(optimizer).resolve_params(settings)
         assert compiled_decide.decider(optimizer, params, agents) is None
+
+
+def test_hunter_anchor_is_the_stable_argsorts():
+    """IHPO's prey P (``HPO._hunter_anchor``): the kbest-th agent of the stable argsort of the
+    distances to the mean, ties (repeated agents, rounded coordinates) by index."""
+    from swarmpath.planners.compiled_hpo import _anchor
+
+    rng = np.random.default_rng(3)
+    tied = 0
+    for _ in range(400):
+        n = int(rng.integers(1, 90))
+        X = np.round(rng.uniform(0.0, 1.0, (1, n, 2)), int(rng.integers(1, 4)))
+        X[0, rng.integers(0, n, n // 3)] = X[0, 0]
+        kbest = int(rng.integers(1, n + 1))
+        mu = X.mean(axis=1)
+        diff = X - mu[:, None, :]
+        dist2 = np.einsum("rnd,rnd->rn", diff, diff)[0]
+        ref = X[0, np.argsort(dist2, kind="stable")[kbest - 1]]
+        P, got_mu = np.empty(2), np.empty(2)
+        _anchor(np.ascontiguousarray(X[0]), kbest, P, got_mu)
+        assert np.array_equal(P, ref) and np.array_equal(got_mu, mu[0])
+        tied += int(np.sum(dist2 == dist2[np.argsort(dist2, kind="stable")[kbest - 1]]) > 1)
+    assert tied > 50

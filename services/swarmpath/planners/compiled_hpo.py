@@ -64,7 +64,19 @@ def _anchor(X: Array, kbest: int, P: Array, mu: Array) -> None:
         for j in range(d):
             diff[j] = X[i, j] - mu[j]
         dist2[i] = dot(diff, diff, d)
-    P[:] = X[np.argsort(dist2, kind="mergesort")[kbest - 1]]  # stable, as the reference
+    # the element at kbest - 1 of the stable argsort: the values below the kbest-th smallest
+    # value v come first, then the agents at v in index order
+    v = np.partition(dist2, kbest - 1)[kbest - 1]
+    need = kbest - 1
+    for i in range(N):
+        if dist2[i] < v:
+            need -= 1
+    for i in range(N):
+        if dist2[i] == v:
+            if need == 0:
+                P[:] = X[i]
+                return
+            need -= 1
 
 
 @njit(cache=True)
