@@ -160,3 +160,9 @@ def _convex_count(poly: np.ndarray) -> np.ndarray:
     d1, d2 = poly - prev, nxt - poly
     area = np.sum(poly[:, 0] * nxt[:, 1] - poly[:, 1] * nxt[:, 0])
     return (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]) * np.sign(area) > 0
+
+
+def test_unknown_backend_is_refused() -> None:
+    square = ObstacleSet(polygons=(np.array([[1.0, -1.0], [2.0, -1.0], [2.0, 1.0], [1.0, 1.0]]),))
+    with pytest.raises(ValueError, match="backend"):
+        shortest_path((0.0, 0.0), (3.0, 0.0), square, 0.1, backend="cuda")

@@ -167,6 +167,8 @@ def shortest_path(
     g = np.asarray(goal, dtype=np.float64).reshape(2)
     if not (math.isfinite(margin) and margin >= 0.0):
         raise ValueError(f"margin must be finite and >= 0, got {margin}")
+    if backend not in ("numpy", "numba"):
+        raise ValueError(f"backend must be 'numpy' or 'numba', got {backend!r}")
     scene = _Scene(obstacles, margin, world)
     for name, p in (("start", s), ("goal", g)):
         if not bool(scene.in_box(p)):
