@@ -14,8 +14,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from swarmpath.service.frame_head import RunFields
 from swarmpath.service.protocol import RunResult
+from swarmpath.service.result_frame import RunFields
 
 #: The series a result may carry, in their wire and store order, with their row widths
 #: (curve and best_position are vectors; path rows are [x, y, t]).

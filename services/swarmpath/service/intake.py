@@ -16,7 +16,6 @@ from typing import Any
 import orjson
 
 from swarmpath.service.capability import drop_proof, result_ok
-from swarmpath.service.frame_head import RecordHead
 from swarmpath.service.incoming import SERIES, Incoming
 from swarmpath.service.lease_sizer import LeaseSizer
 from swarmpath.service.protocol import (
@@ -35,7 +34,13 @@ from swarmpath.service.protocol import (
 from swarmpath.service.recorder import Recorders
 from swarmpath.service.recorder.process import RecorderProcess
 from swarmpath.service.result_columns import columns_key, columns_ok, decode_message, is_columns
-from swarmpath.service.result_frame import decode_frame, is_frame, key_ok, proof_key
+from swarmpath.service.result_frame import (
+    RecordHead,
+    decode_frame,
+    is_frame,
+    key_ok,
+    proof_key,
+)
 from swarmpath.service.settings import CoordinatorSettings
 from swarmpath.service.store import FINAL_STATES, Store
 from swarmpath.service.store.columns import ResultColumns, from_frame, from_incoming, unproven

@@ -36,7 +36,6 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from pydantic import Field, ValidationError
 
-from swarmpath.service.frame_head import RecordHead
 from swarmpath.service.model import (
     MAX_BODY_BYTES,
     MAX_DIM,
@@ -46,7 +45,13 @@ from swarmpath.service.model import (
     Model,
     Scalar,
 )
-from swarmpath.service.result_frame import PROOF_BYTES, FrameError, FrameRecord, decode_record
+from swarmpath.service.result_frame import (
+    PROOF_BYTES,
+    FrameError,
+    FrameRecord,
+    RecordHead,
+    decode_record,
+)
 
 COLUMNS_MAGIC = b"SPC1"
 MAX_FRAMES = 1024  # frames in one message at most

@@ -16,10 +16,10 @@ the arrays): the coordinator checks the bytes it received, nothing is re-seriali
 
 Decoding checks everything before anything is used: the magic, every length against what is
 left of the payload, every head against its schema (``schemas/run_result_head.schema.json``:
-plainly valid heads by :mod:`~swarmpath.service.frame_head`, any other by the pydantic model,
-which names what it rejects), dtypes and shapes, and that the last record ends exactly at the
-payload's end; any violation rejects the whole frame with a :class:`FrameError` naming what is
-wrong. The arrays returned are read-only views of the payload (no copy). Pure functions, no I/O.
+the pydantic model, which names what it rejects), dtypes and shapes, and that the last record
+ends exactly at the payload's end; any violation rejects the whole frame with a
+:class:`FrameError` naming what is wrong. The arrays returned are read-only views of the
+payload (no copy). Pure functions, no I/O.
 """
 
 from __future__ import annotations
@@ -34,7 +34,6 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import Field, ValidationError
 
-from swarmpath.service.frame_head import RecordHead, fast_count, fast_head
 from swarmpath.service.model import (
     MAX_BODY_BYTES,
     MAX_DIM,
@@ -84,6 +83,35 @@ class RunResultHead(Model):
         default_factory=list, max_length=3,
         description="[name, dtype, shape] of each array after this JSON, in order",
     )
+
+
+@dataclass(slots=True, eq=False)
+class RunFields:
+    """The small fields of one reported run, shared by a record head and an
+    :class:`~swarmpath.service.incoming.Incoming` (same order: both are built positionally)."""
+
+    lease_id: str
+    job_id: str
+    cell: str
+    run: int
+    worker: str
+    status: str
+    failure: str | None
+    seconds: float
+    metrics: dict[str, Any]
+
+
+@dataclass(slots=True, eq=False)
+class RecordHead(RunFields):
+    """A checked record head: the fields of a ``RunResultHead`` as plain attributes."""
+
+    arrays: list[tuple[str, str, list[int]]]
+
+    def fields(self) -> dict[str, Any]:
+        """The small fields (without ``arrays``), as ``RunResultHead.model_dump`` gives them."""
+        return {"lease_id": self.lease_id, "job_id": self.job_id, "cell": self.cell,
+                "run": self.run, "worker": self.worker, "status": self.status,
+                "failure": self.failure, "seconds": self.seconds, "metrics": dict(self.metrics)}
 
 
 class FrameError(ValueError):
@@ -187,14 +215,11 @@ def decode_frame(payload: bytes) -> tuple[str, list[FrameRecord]]:
         raise FrameError("not a result frame (magic)")
     pos = len(FRAME_MAGIC)
     text, pos = _chunk(payload, pos, MAX_FRAME_HEAD, "frame head")
-    checked = fast_count(text)
-    if checked is None:
-        try:
-            frame = FrameHead.model_validate_json(text)
-        except ValidationError as exc:
-            raise FrameError(f"frame head: {_first(exc)}") from None
-        checked = frame.worker, frame.count
-    worker, count = checked
+    try:
+        frame = FrameHead.model_validate_json(text)
+    except ValidationError as exc:
+        raise FrameError(f"frame head: {_first(exc)}") from None
+    worker, count = frame.worker, frame.count
     records = []
     for i in range(count):
         rec, pos = _record(payload, pos, i)
@@ -215,15 +240,13 @@ def decode_record(data: bytes) -> FrameRecord:
 def _record(payload: bytes, pos: int, i: int) -> tuple[FrameRecord, int]:
     start = pos
     text, pos = _chunk(payload, pos, MAX_RESULT_HEAD, f"record {i} head")
-    head = fast_head(text)
-    if head is None:  # not plainly valid: the model decides, and names the field it rejects
-        try:
-            model = RunResultHead.model_validate_json(text)
-        except ValidationError as exc:
-            raise FrameError(f"record {i}: {_first(exc)}") from None
-        head = RecordHead(model.lease_id, model.job_id, model.cell, model.run, model.worker,
-                          model.status, model.failure, model.seconds, dict(model.metrics),
-                          [(n, d, list(s)) for n, d, s in model.arrays])
+    try:
+        model = RunResultHead.model_validate_json(text)
+    except ValidationError as exc:
+        raise FrameError(f"record {i}: {_first(exc)}") from None
+    head = RecordHead(model.lease_id, model.job_id, model.cell, model.run, model.worker,
+                      model.status, model.failure, model.seconds, dict(model.metrics),
+                      [(n, d, list(s)) for n, d, s in model.arrays])
     arrays: dict[str, np.ndarray] = {}
     first = pos
     for name, _dtype, shape in head.arrays:
