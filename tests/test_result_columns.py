@@ -11,10 +11,12 @@ import pytest
 
 from swarmpath.service.coordinator import Coordinator, CoordinatorSettings
 from swarmpath.service.protocol import (
+    PROTOCOL_VERSION,
     Ack,
     BenchmarkJobSpec,
     Lease,
     LeaseRequest,
+    NoWork,
     decode,
     decode_work_reply,
     encode,
@@ -259,3 +261,11 @@ def test_each_frame_of_a_message_is_proven_by_its_own_lease(core):
     ack = core.handle_results(core.keys.results(lease.job_id), payload)
     assert ack is not None and ack.leases[0].stale == lease.runs[:half]
     assert ack.leases[0].accepted == lease.runs[half:]
+
+
+def test_a_worker_of_an_older_protocol_is_told_to_upgrade(core):
+    lease_of(core)  # a job with work left
+    reply = decode_work_reply(core.handle_lease_request(encode(LeaseRequest(
+        worker="w1", max_runs=100, protocol=PROTOCOL_VERSION - 1))))
+    assert isinstance(reply, NoWork)
+    assert f"protocol {PROTOCOL_VERSION - 1} not supported" in reply.reason
