@@ -156,3 +156,11 @@ def test_hold_clearance_equals_numpy():
                 assert clear(x, fast) == ref == clear(x, ctx)
                 both.add(ref)
     assert both == {True, False}
+
+
+def test_condense_of_a_huge_span_equals_numpy():
+    rng = np.random.default_rng(14)
+    pts = np.vstack([rng.uniform(0, 1e9, (50, 2)), [[5.0, 5.0], [5.001, 5.001]]])
+    ref = sensed_map.condense(pts, np.zeros(2), np.inf, 0.01)
+    assert np.array_equal(sensed_map.condense(pts, np.zeros(2), np.inf, 0.01, "numba"), ref)
+    assert len(ref) == len(pts) - 1  # the two points in one cell merged

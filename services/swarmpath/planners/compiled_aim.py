@@ -39,8 +39,13 @@ _f = np.ascontiguousarray
 # ------------------------------------------------ sensed_map's backend = "numba", same signatures
 def condense(hits: Array, position: Array, reach: float, cell: float) -> Array:
     h = _f(hits, dtype=float)
-    return h[condense_kernel(h, float(position[0]), float(position[1]), float(reach),
-                             float(cell))]
+    idx, ok = condense_kernel(h, float(position[0]), float(position[1]), float(reach),
+                              float(cell))
+    if not ok:  # a span of over 2e9 cells per axis: the numpy reference
+        from swarmpath.planners.sensed_map import condense as reference
+
+        return reference(hits, position, reach, cell)
+    return h[idx]
 
 
 def nearest(ref: Array, points: Array) -> tuple[Array, Array]:
@@ -89,9 +94,11 @@ def shortcut(pts: Array, hits: Array, margin: float, lookahead: float, samples: 
 
 
 @njit(cache=True)
-def condense_kernel(hits: Array, px: float, py: float, reach: float, cell: float) -> Array:
+def condense_kernel(hits: Array, px: float, py: float, reach: float,
+                    cell: float) -> tuple[Array, bool]:
     """Indices of :func:`sensed_map.condense`'s result: the hits within ``reach`` of (px, py)
-    (``np.hypot``), the first of each ``cell`` grid cell (``np.floor(x / cell)``), in order."""
+    (``np.hypot``), the first of each ``cell`` grid cell (``np.floor(x / cell)``), in order;
+    False when the cells spanned are too many for one int64 key each (then none)."""
     n = hits.shape[0]
     near = np.empty(n, dtype=np.int64)
     m = 0
@@ -100,7 +107,7 @@ def condense_kernel(hits: Array, px: float, py: float, reach: float, cell: float
             near[m] = i
             m += 1
     if m == 0:
-        return near[:0]
+        return near[:0], True
     kx = np.empty(m, dtype=np.int64)
     ky = np.empty(m, dtype=np.int64)
     for k in range(m):
@@ -109,13 +116,15 @@ def condense_kernel(hits: Array, px: float, py: float, reach: float, cell: float
     kx = kx - kx.min()
     ky = ky - ky.min()
     cols = ky.max() + 1
+    if float(kx.max() + 1) * float(cols) >= 2.0**62:
+        return near[:0], False
     key = kx * cols + ky
     order = np.argsort(key, kind="mergesort")  # stable: the first hit of a cell comes first
     keep = np.zeros(m, dtype=np.bool_)
     for k in range(m):
         if k == 0 or key[order[k]] != key[order[k - 1]]:
             keep[order[k]] = True
-    return near[:m][keep]
+    return near[:m][keep], True
 
 
 @njit(cache=True)

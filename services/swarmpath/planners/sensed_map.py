@@ -269,7 +269,7 @@ def known_obstacles(hits: Array, link: float, thickness: float = 1e-3,
     the same)."""
     if len(hits) == 0:
         return ObstacleSet.empty()
-    if backend == "numba":
+    if backend == "numba" and len(hits) <= 1000:  # all pairs compiled: O(n^2), same groups
         count, labels = _fast().groups(hits, link)
     else:
         pairs = cKDTree(hits).query_pairs(link, output_type="ndarray")
