@@ -130,7 +130,7 @@ def test_the_kernel_cache_is_keyed_by_every_source(tmp_path):
     assert config.CACHE_DIR == compiled.versioned_cache_dir()
     assert find_kernel("ICOOT").run._cache._cache_path.startswith(config.CACHE_DIR)
     source = Path(compiled.__file__).resolve().parents[2]  # services/swarmpath
-    for part in ("optimizers", "functions", "planners"):
+    for part in ("optimizers", "functions", "planners", "world"):
         skip = shutil.ignore_patterns("__pycache__")
         shutil.copytree(source / part, tmp_path / part, ignore=skip)
     copy = tmp_path / "optimizers" / "compiled"
@@ -142,4 +142,8 @@ def test_the_kernel_cache_is_keyed_by_every_source(tmp_path):
     assert edited != before
     score = tmp_path / "planners" / "compiled_score.py"  # the planners' kernels too
     score.write_text(score.read_text() + "\n# edited\n")
+    assert compiled.versioned_cache_dir(copy) != edited
+    edited = compiled.versioned_cache_dir(copy)
+    path = tmp_path / "world" / "optimum_compiled.py"  # and the shortest path's
+    path.write_text(path.read_text() + "\n# edited\n")
     assert compiled.versioned_cache_dir(copy) != edited

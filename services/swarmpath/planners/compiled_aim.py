@@ -25,6 +25,7 @@ import math
 import numpy as np
 from numba import njit
 
+import swarmpath.optimizers.compiled  # noqa: F401 - first: numba's versioned cache directory
 from swarmpath.planners.compiled import (
     _segment_nearest,
     segments_clearance_kernel,

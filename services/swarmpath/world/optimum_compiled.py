@@ -21,6 +21,8 @@ import math
 import numpy as np
 from numba import njit
 
+import swarmpath.optimizers.compiled  # noqa: F401 - first: numba's versioned cache directory
+
 Array = np.ndarray
 
 TOL = 1e-9  # optimum_base.TOL

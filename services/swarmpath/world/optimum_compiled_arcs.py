@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
+import swarmpath.optimizers.compiled  # noqa: F401 - first: numba's versioned cache directory
 from swarmpath.world.optimum_base import _on_circle
 from swarmpath.world.optimum_compiled import TOL, _point_segment
 

@@ -68,8 +68,8 @@ _PACKAGE = Path(__file__).resolve().parent
 
 def versioned_cache_dir(package: Path = _PACKAGE) -> str:
     """Where numba caches the kernels: a directory named by a hash of the sources they are
-    compiled from (``swarmpath.optimizers``, ``swarmpath.functions`` and the planners'
-    ``compiled*.py``), under
+    compiled from (``swarmpath.optimizers``, ``swarmpath.functions``, the planners'
+    ``compiled*.py`` and ``world/optimum_compiled*.py``), under
     ``NUMBA_CACHE_DIR`` if set, else this package's ``__pycache__``.
 
     numba keys a cached function on its own file only: a kernel that inlines ``evaluate`` (or a
@@ -87,6 +87,11 @@ def versioned_cache_dir(package: Path = _PACKAGE) -> str:
     planners = package.parent.parent / "planners"
     for path in sorted(planners.glob("compiled*.py")):
         digest.update(path.relative_to(planners.parent).as_posix().encode())
+        digest.update(path.read_bytes())
+    # ... and the exact shortest path's (world.optimum_compiled*: the planners' aim calls them)
+    world = package.parent.parent / "world"
+    for path in sorted(world.glob("optimum_compiled*.py")):
+        digest.update(path.relative_to(world.parent).as_posix().encode())
         digest.update(path.read_bytes())
     base = os.environ.get("NUMBA_CACHE_DIR") or str(package / "__pycache__")
     return os.path.join(base, f"swarmpath-{digest.hexdigest()[:16]}")
