@@ -20,8 +20,15 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from swarmpath.optimizers.compiled.coot import _clip, _swarm_terms
-from swarmpath.optimizers.compiled.functions import cospi
+from swarmpath.optimizers.compiled.coot import (
+    accelerate,
+    accept_leaders,
+    move_coots,
+    offsets,
+    propose_leaders,
+    split,
+    swap,
+)
 from swarmpath.planners.compiled_score import score_into
 
 Array = np.ndarray
@@ -91,9 +98,6 @@ def coot_decide(rng: Any, lb: Array, ub: Array, N: int, T: int, params: Array, g
     best_x = np.zeros(d)
     rest_min = np.empty(d)
     call = np.zeros(10, dtype=np.int64)
-    leader_of = np.empty(nc, dtype=np.int64)
-    for i in range(nc):
-        leader_of[i] = (i + 1) % nl
 
     # ---- initialization: N uniform agents, coots first
     X = np.empty((N, d))
@@ -104,25 +108,8 @@ def coot_decide(rng: Any, lb: Array, ub: Array, N: int, T: int, params: Array, g
             X[i, j] = lb[j] + span[j] * draw[i * d + j]
     score_into(X, geo, hits, k, F)
     record(F, X, N, best, best_x)
-    CP = X[:nc].copy()
-    CF = F[:nc].copy()
-    LP = X[nc:N].copy()
-    LF = F[nc:N].copy()
-    g_at = 0
-    for i in range(1, N):
-        if F[i] < F[g_at]:
-            g_at = i
-    g = X[g_at].copy()
-    gf = F[g_at]
-
-    # ---- the layout of an iteration's uniforms (offsets into u)
-    o_follow, o_chain, o_s1, o_s2, o_v1 = nc, 2 * nc, 3 * nc, 4 * nc, 5 * nc
-    o_v2 = o_v1 + nc * d
-    o_lflag = o_v2 + nc * d
-    o_lsign, o_ls1, o_ls2 = o_lflag + nl, o_lflag + 2 * nl, o_lflag + 3 * nl
-    o_lv1 = o_lflag + 4 * nl
-    o_lv2 = o_lv1 + nl * d
-    o_extra = o_lv2 + nl * d
+    CP, CF, LP, LF, g, gf, leader_of = split(X, F, N, nl)
+    o_v1, _, o_lflag, o_lv1, _, o_extra = offsets(nc, nl, d)
     u = np.empty(o_extra + (nc + nl if icoot else 0))
     acc_c = np.ones(nc)
     acc_l = np.ones(nl)
@@ -145,108 +132,18 @@ def coot_decide(rng: Any, lb: Array, ub: Array, N: int, T: int, params: Array, g
         if icoot:  # c_accU, l_accU (one draw when of equal shape: the same numbers)
             _draw(rng, u, o_extra, nc + nl)
         if use_acc:
-            density, free = _swarm_terms(CP, nc, cells, power_, omega, rest_min, call)
-            s = (1.0 - density) + free
-            for i in range(nc):
-                acc_c[i] = abs(s - 2.0 * u[o_extra + i])
-            for i in range(nl):
-                acc_l[i] = abs(s - 2.0 * u[o_extra + nc + i])
-
-        # ---- coots, in order and in place (eqs 12-17, ICOOT 30-31)
-        for i in range(nc):
-            follow = u[o_follow + i] < 0.5
-            vec = u[i] >= 0.5 if randoms == 0 else randoms == 1
-            if not follow and i > 0 and u[o_chain + i] < 0.5:  # eq 15, predecessor moved
-                for j in range(d):
-                    CP[i, j] = (CP[i - 1, j] + CP[i, j]) * 0.5
-                continue
-            if follow:
-                fa = 2.0 * acc_c[i] if use_acc else 2.0
-                lead = leader_of[i]
-                w = cospi(4.0 * u[o_s1 + i]) * u[o_s2 + i] * fa + 1.0
-                for j in range(d):
-                    if vec:
-                        w = cospi(4.0 * u[o_v1 + i * d + j]) * u[o_v2 + i * d + j] * fa + 1.0
-                    x = CP[i, j]
-                    CP[i, j] = _clip((LP[lead, j] - x) * w + x, lb[j], ub[j])
-            else:
-                ra = A * acc_c[i] if use_acc else A
-                w = u[o_s1 + i] * ra
-                for j in range(d):
-                    if vec:
-                        w = u[o_v1 + i * d + j] * ra
-                    x = CP[i, j]
-                    q = u[o_v2 + i * d + j] * span[j] + lb[j]
-                    if icoot:
-                        if target == 0:
-                            q += g[j] - mid[j]
-                        elif target == 1:
-                            q += g[j]
-                        elif target == 2:
-                            q += g[j]
-                            q -= x
-                        else:
-                            q += g[j]
-                            q *= 0.5
-                    CP[i, j] = _clip((q - x) * w + x, lb[j], ub[j])
+            accelerate(CP, cells, power_, omega, rest_min, call, u, acc_c, acc_l)
+        move_coots(CP, LP, leader_of, u, randoms, A, acc_c, use_acc, icoot, target, g, lb, ub,
+                   span, mid)
         score_into(CP, geo, hits, k, CF)
         record(CF, CP, nc, best, best_x)
 
-        # ---- coot/leader swap (COOT.m's sweep, strict <)
-        for i in range(nc):
-            lead = leader_of[i]
-            if CF[i] < LF[lead]:
-                for j in range(d):
-                    v = CP[i, j]
-                    CP[i, j] = LP[lead, j]
-                    LP[lead, j] = v
-                v = CF[i]
-                CF[i] = LF[lead]
-                LF[lead] = v
-        if gbest_any:
-            at = 0
-            for i in range(1, nl):
-                if LF[i] < LF[at]:
-                    at = i
-            if LF[at] < gf:
-                gf = LF[at]
-                g[:] = LP[at]
-
-        # ---- leaders (eq 18, ICOOT 32), all from the gBest at the start of the phase
-        g0[:] = g
-        gain = B * leader_gain
-        for m in range(nl):
-            vec = u[o_lflag + m] >= 0.5 if randoms == 0 else randoms == 1
-            sign = 1.0 if u[o_lsign + m] < 0.5 else -1.0
-            factor = gain * acc_l[m] if use_acc else gain
-            for j in range(d):
-                if vec:
-                    c = cospi(4.0 * u[o_lv1 + m * d + j]) * u[o_lv2 + m * d + j]
-                else:
-                    c = cospi(4.0 * u[o_ls1 + m]) * u[o_ls2 + m]
-                v = (g0[j] - LP[m, j]) * (c * factor)
-                if mirror_minus:
-                    v += sign * g0[j]
-                else:
-                    v += g0[j]
-                temp[m, j] = _clip(v, lb[j], ub[j])
+        gf = swap(CP, CF, LP, LF, leader_of, gbest_any, g, gf)
+        propose_leaders(LP, g, g0, temp, u, nc, randoms, B * leader_gain, acc_l, use_acc,
+                        mirror_minus, lb, ub)
         score_into(temp, geo, hits, k, TF)
         record(TF, temp, nl, best, best_x)
-        holder = -1  # -1: the gBest of the phase's start
-        hf = gf
-        for m in range(nl):
-            if TF[m] < hf:
-                if leader_code:
-                    LP[m] = g0 if holder < 0 else temp[holder]
-                    LF[m] = hf
-                holder = m
-                hf = TF[m]
-            if not leader_code:
-                LP[m] = temp[m]
-                LF[m] = TF[m]
-        if holder >= 0:
-            g[:] = temp[holder]
-            gf = hf
+        gf = accept_leaders(LP, LF, temp, TF, g0, g, gf, leader_code)
         stalled = stalled_after(before, best[0], stalled, tol)
         before = best[0]
         if patience > 0 and stalled >= patience and before < 1e6:

@@ -138,6 +138,176 @@ def _take(stream, size, u, at):
     u[at : at + size] = stream[1][RANDOM][o : o + size]
 
 
+@njit(cache=True)
+def offsets(nc, nl, d):
+    """Where each group of an iteration's uniforms starts in u: per coot flag, follow, chain and
+    two scalars from 0; the coots' two vectors (o_v1, o_v2); per leader flag, sign and two
+    scalars (o_lflag); the leaders' two vectors (o_lv1, o_lv2); the variant's extra draws
+    (o_extra)."""
+    o_v1 = 5 * nc
+    o_v2 = o_v1 + nc * d
+    o_lflag = o_v2 + nc * d
+    o_lv1 = o_lflag + 4 * nl
+    o_lv2 = o_lv1 + nl * d
+    return o_v1, o_v2, o_lflag, o_lv1, o_lv2, o_lv2 + nl * d
+
+
+@njit(cache=True)
+def split(X, F, N, nl):
+    """The swarm after initialization: (coots, their values, leaders, their values, gBest, its
+    value, each coot's leader); the first N - nl agents are the coots."""
+    nc = N - nl
+    k = 0
+    for i in range(1, N):
+        if F[i] < F[k]:
+            k = i
+    leader_of = np.empty(nc, dtype=np.int64)
+    for i in range(nc):
+        leader_of[i] = (i + 1) % nl
+    return (X[:nc].copy(), F[:nc].copy(), X[nc:N].copy(), F[nc:N].copy(), X[k].copy(), F[k],
+            leader_of)
+
+
+@njit(cache=True)
+def accelerate(CP, cells, power_, omega, rest_min, call, u, acc_c, acc_l):
+    """ICOOT's density acceleration of the coots and leaders (from the iteration's extra
+    uniforms)."""
+    nc, nl = acc_c.size, acc_l.size
+    o_extra = offsets(nc, nl, CP.shape[1])[5]
+    density, free = _swarm_terms(CP, nc, cells, power_, omega, rest_min, call)
+    s = (1.0 - density) + free
+    for i in range(nc):
+        acc_c[i] = abs(s - 2.0 * u[o_extra + i])
+    for i in range(nl):
+        acc_l[i] = abs(s - 2.0 * u[o_extra + nc + i])
+
+
+@njit(cache=True)
+def move_coots(CP, LP, leader_of, u, randoms, A, acc_c, use_acc, icoot, target, g, lb, ub,
+               span, mid):
+    """The coots' moves of one iteration, in order and in place (eqs 12-17, ICOOT 30-31);
+    ``span`` is ub - lb and ``mid`` 0.5 * (lb + ub)."""
+    nc, d = CP.shape
+    o_v1, o_v2 = offsets(nc, LP.shape[0], d)[:2]
+    o_follow, o_chain, o_s1, o_s2 = nc, 2 * nc, 3 * nc, 4 * nc
+    for i in range(nc):
+        follow = u[o_follow + i] < 0.5
+        if randoms == 0:
+            vec = u[i] >= 0.5
+        else:
+            vec = randoms == 1
+        if not follow and i > 0 and u[o_chain + i] < 0.5:  # eq 15, predecessor moved
+            for j in range(d):
+                CP[i, j] = (CP[i - 1, j] + CP[i, j]) * 0.5
+            continue
+        if follow:
+            fa = 2.0 * acc_c[i] if use_acc else 2.0
+            lead = leader_of[i]
+            w = cospi(4.0 * u[o_s1 + i]) * u[o_s2 + i] * fa + 1.0
+            for j in range(d):
+                if vec:
+                    w = cospi(4.0 * u[o_v1 + i * d + j]) * u[o_v2 + i * d + j] * fa + 1.0
+                x = CP[i, j]
+                CP[i, j] = _clip((LP[lead, j] - x) * w + x, lb[j], ub[j])
+        else:
+            ra = A * acc_c[i] if use_acc else A
+            w = u[o_s1 + i] * ra
+            for j in range(d):
+                if vec:
+                    w = u[o_v1 + i * d + j] * ra
+                x = CP[i, j]
+                q = u[o_v2 + i * d + j] * span[j] + lb[j]
+                if icoot:
+                    if target == 0:
+                        q += g[j] - mid[j]
+                    elif target == 1:
+                        q += g[j]
+                    elif target == 2:
+                        q += g[j]
+                        q -= x
+                    else:
+                        q += g[j]
+                        q *= 0.5
+                CP[i, j] = _clip((q - x) * w + x, lb[j], ub[j])
+
+
+@njit(cache=True)
+def swap(CP, CF, LP, LF, leader_of, gbest_any, g, gf):
+    """COOT.m's coot/leader swap (strict <); with ``gbest`` "any" the best leader then takes
+    the gBest if it is better. Returns the gBest's value (g is updated in place)."""
+    d = CP.shape[1]
+    for i in range(leader_of.size):
+        lead = leader_of[i]
+        if CF[i] < LF[lead]:
+            for j in range(d):
+                v = CP[i, j]
+                CP[i, j] = LP[lead, j]
+                LP[lead, j] = v
+            v = CF[i]
+            CF[i] = LF[lead]
+            LF[lead] = v
+    if gbest_any:
+        k = 0
+        for i in range(1, LF.size):
+            if LF[i] < LF[k]:
+                k = i
+        if LF[k] < gf:
+            gf = LF[k]
+            g[:] = LP[k]
+    return gf
+
+
+@njit(cache=True)
+def propose_leaders(LP, g, g0, temp, u, nc, randoms, gain, acc_l, use_acc, mirror_minus, lb,
+                    ub):
+    """The leaders' proposals of one iteration into temp (eq 18, ICOOT 32), all from the gBest
+    at the start of the phase (copied to g0)."""
+    nl, d = LP.shape
+    o_lflag, o_lv1, o_lv2 = offsets(nc, nl, d)[2:5]
+    o_lsign, o_ls1, o_ls2 = o_lflag + nl, o_lflag + 2 * nl, o_lflag + 3 * nl
+    g0[:] = g
+    for k in range(nl):
+        if randoms == 0:
+            vec = u[o_lflag + k] >= 0.5
+        else:
+            vec = randoms == 1
+        sign = 1.0 if u[o_lsign + k] < 0.5 else -1.0
+        factor = gain * acc_l[k] if use_acc else gain
+        for j in range(d):
+            if vec:
+                c = cospi(4.0 * u[o_lv1 + k * d + j]) * u[o_lv2 + k * d + j]
+            else:
+                c = cospi(4.0 * u[o_ls1 + k]) * u[o_ls2 + k]
+            v = (g0[j] - LP[k, j]) * (c * factor)
+            if mirror_minus:
+                v += sign * g0[j]
+            else:
+                v += g0[j]
+            temp[k, j] = _clip(v, lb[j], ub[j])
+
+
+@njit(cache=True)
+def accept_leaders(LP, LF, temp, TF, g0, g, gf, leader_code):
+    """The leaders' acceptance sweep of the scored proposals (COOT.m's, strict <). Returns the
+    gBest's value (g is updated in place)."""
+    holder = -1  # -1: the gBest of the phase's start
+    hf = gf
+    for k in range(LP.shape[0]):
+        if TF[k] < hf:
+            if leader_code:
+                LP[k] = g0 if holder < 0 else temp[holder]
+                LF[k] = hf
+            holder = k
+            hf = TF[k]
+        if not leader_code:
+            LP[k] = temp[k]
+            LF[k] = TF[k]
+    if holder >= 0:
+        g[:] = temp[holder]
+        gf = hf
+    return gf
+
+
 def loop(evaluate_, rng, fid, shifted, shift, lb, ub, N, T, params):
     """``run`` with the objective ``evaluate_`` (``functions.evaluate``'s signature), for
     ``scripts/bench/kernels.py``'s fused loop (compiled per objective, not cached)."""
@@ -172,9 +342,6 @@ def run(rng, fid, shifted, shift, lb, ub, N, T, params):
     F = np.empty(2 * N)
     rest_min = np.empty(d)
     call = np.zeros(10, dtype=np.int64)
-    leader_of = np.empty(nc, dtype=np.int64)
-    for i in range(nc):
-        leader_of[i] = (i + 1) % nl
 
     # ---- initialization: N uniform agents (mCOOT: and their opposites, the better kept)
     X = np.empty((2 * N, d))
@@ -198,25 +365,8 @@ def run(rng, fid, shifted, shift, lb, ub, N, T, params):
         evaluate(stream, fid, shifted, shift, lb, ub, X[:N], F[:N], mask[:N], scratch)
         evals += N
         record_first_min(F, X, N, best, best_x)
-    CP = X[:nc].copy()
-    CF = F[:nc].copy()
-    LP = X[nc:N].copy()
-    LF = F[nc:N].copy()
-    k = 0
-    for i in range(1, N):
-        if F[i] < F[k]:
-            k = i
-    g = X[k].copy()
-    gf = F[k]
-
-    # ---- the layout of an iteration's uniforms (offsets into u)
-    o_follow, o_chain, o_s1, o_s2, o_v1 = nc, 2 * nc, 3 * nc, 4 * nc, 5 * nc
-    o_v2 = o_v1 + nc * d
-    o_lflag = o_v2 + nc * d
-    o_lsign, o_ls1, o_ls2 = o_lflag + nl, o_lflag + 2 * nl, o_lflag + 3 * nl
-    o_lv1 = o_lflag + 4 * nl
-    o_lv2 = o_lv1 + nl * d
-    o_extra = o_lv2 + nl * d
+    CP, CF, LP, LF, g, gf, leader_of = split(X, F, N, nl)
+    o_v1, _, o_lflag, o_lv1, _, o_extra = offsets(nc, nl, d)
     size = o_extra
     if variant == MCOOT and jumpers:
         size += nc
@@ -254,55 +404,9 @@ def run(rng, fid, shifted, shift, lb, ub, N, T, params):
             _take(stream, nc, u, o_extra)
             _take(stream, nl, u, o_extra + nc)
         if use_acc:
-            density, free = _swarm_terms(
-                CP, nc, cells, power_, omega, rest_min, call
-            )
-            s = (1.0 - density) + free
-            for i in range(nc):
-                acc_c[i] = abs(s - 2.0 * u[o_extra + i])
-            for i in range(nl):
-                acc_l[i] = abs(s - 2.0 * u[o_extra + nc + i])
-
-        # ---- coots, in order and in place (eqs 12-17, ICOOT 30-31)
-        for i in range(nc):
-            follow = u[o_follow + i] < 0.5
-            if randoms == 0:
-                vec = u[i] >= 0.5
-            else:
-                vec = randoms == 1
-            if not follow and i > 0 and u[o_chain + i] < 0.5:  # eq 15, predecessor moved
-                for j in range(d):
-                    CP[i, j] = (CP[i - 1, j] + CP[i, j]) * 0.5
-                continue
-            if follow:
-                fa = 2.0 * acc_c[i] if use_acc else 2.0
-                lead = leader_of[i]
-                w = cospi(4.0 * u[o_s1 + i]) * u[o_s2 + i] * fa + 1.0
-                for j in range(d):
-                    if vec:
-                        w = cospi(4.0 * u[o_v1 + i * d + j]) * u[o_v2 + i * d + j] * fa + 1.0
-                    x = CP[i, j]
-                    CP[i, j] = _clip((LP[lead, j] - x) * w + x, lb[j], ub[j])
-            else:
-                ra = A * acc_c[i] if use_acc else A
-                w = u[o_s1 + i] * ra
-                for j in range(d):
-                    if vec:
-                        w = u[o_v1 + i * d + j] * ra
-                    x = CP[i, j]
-                    q = u[o_v2 + i * d + j] * span[j] + lb[j]
-                    if variant == ICOOT:
-                        if target == 0:
-                            q += g[j] - mid[j]
-                        elif target == 1:
-                            q += g[j]
-                        elif target == 2:
-                            q += g[j]
-                            q -= x
-                        else:
-                            q += g[j]
-                            q *= 0.5
-                    CP[i, j] = _clip((q - x) * w + x, lb[j], ub[j])
+            accelerate(CP, cells, power_, omega, rest_min, call, u, acc_c, acc_l)
+        move_coots(CP, LP, leader_of, u, randoms, A, acc_c, use_acc, variant == ICOOT, target, g,
+                   lb, ub, span, mid)
         evaluate(stream, fid, shifted, shift, lb, ub, CP, CF, mask[:nc], scratch)
         evals += nc
         record_first_min(CF, CP, nc, best, best_x)
@@ -337,65 +441,13 @@ def run(rng, fid, shifted, shift, lb, ub, N, T, params):
                     CP[pick[q]] = opp[q]
                     CF[pick[q]] = F[q]
 
-        # ---- coot/leader swap (COOT.m's sweep, strict <)
-        for i in range(nc):
-            lead = leader_of[i]
-            if CF[i] < LF[lead]:
-                for j in range(d):
-                    v = CP[i, j]
-                    CP[i, j] = LP[lead, j]
-                    LP[lead, j] = v
-                v = CF[i]
-                CF[i] = LF[lead]
-                LF[lead] = v
-        if gbest_any:
-            k = 0
-            for i in range(1, nl):
-                if LF[i] < LF[k]:
-                    k = i
-            if LF[k] < gf:
-                gf = LF[k]
-                g[:] = LP[k]
-
-        # ---- leaders (eq 18, ICOOT 32), all from the gBest at the start of the phase
-        g0[:] = g
-        gain = B * leader_gain
-        for k in range(nl):
-            if randoms == 0:
-                vec = u[o_lflag + k] >= 0.5
-            else:
-                vec = randoms == 1
-            sign = 1.0 if u[o_lsign + k] < 0.5 else -1.0
-            factor = gain * acc_l[k] if use_acc else gain
-            for j in range(d):
-                if vec:
-                    c = cospi(4.0 * u[o_lv1 + k * d + j]) * u[o_lv2 + k * d + j]
-                else:
-                    c = cospi(4.0 * u[o_ls1 + k]) * u[o_ls2 + k]
-                v = (g0[j] - LP[k, j]) * (c * factor)
-                if mirror_minus:
-                    v += sign * g0[j]
-                else:
-                    v += g0[j]
-                temp[k, j] = _clip(v, lb[j], ub[j])
+        gf = swap(CP, CF, LP, LF, leader_of, gbest_any, g, gf)
+        propose_leaders(LP, g, g0, temp, u, nc, randoms, B * leader_gain, acc_l, use_acc,
+                        mirror_minus, lb, ub)
         evaluate(stream, fid, shifted, shift, lb, ub, temp, TF, mask[:nl], scratch)
         evals += nl
         record_first_min(TF, temp, nl, best, best_x)
-        holder = -1  # -1: the gBest of the phase's start
-        hf = gf
-        for k in range(nl):
-            if TF[k] < hf:
-                if leader_code:
-                    LP[k] = g0 if holder < 0 else temp[holder]
-                    LF[k] = hf
-                holder = k
-                hf = TF[k]
-            if not leader_code:
-                LP[k] = temp[k]
-                LF[k] = TF[k]
-        if holder >= 0:
-            g[:] = temp[holder]
-            gf = hf
+        gf = accept_leaders(LP, LF, temp, TF, g0, g, gf, leader_code)
         curve[t - 1] = best[0]
     return best[0], best_x, curve, evals
 
