@@ -25,6 +25,8 @@ import math
 import numpy as np
 from numba import njit
 
+import swarmpath.optimizers.compiled  # noqa: F401 - first: numba's versioned cache directory
+
 Array = np.ndarray
 
 

@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
+import swarmpath.optimizers.compiled  # noqa: F401 - first: numba's versioned cache directory
 from swarmpath.optimizers.compiled.coot import _clip
 from swarmpath.optimizers.compiled.ufuncs import exp_inplace
 from swarmpath.planners.compiled_coot import record, stalled_after

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
+import swarmpath.optimizers.compiled  # noqa: F401 - first: numba's versioned cache directory
 from swarmpath.optimizers.compiled.coot import (
     accelerate,
     accept_leaders,

@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+import swarmpath.optimizers.compiled  # noqa: F401 - first: numba's versioned cache directory
 from swarmpath.optimizers.compiled.ufuncs import _linked_loop
 from swarmpath.planners.compiled import (
     _hypot,

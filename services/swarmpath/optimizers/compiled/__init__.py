@@ -66,32 +66,42 @@ from numba.core import config as _numba_config
 _PACKAGE = Path(__file__).resolve().parent
 
 
+def compiled_sources(package: Path = _PACKAGE) -> list[Path]:
+    """The files numba's kernels are compiled from (or take constants from): the whole of
+    ``swarmpath.optimizers`` and ``swarmpath.functions``, the planners' ``compiled*.py`` and
+    ``world/optimum_compiled*.py`` (the planners' aim calls the shortest path's kernels), sorted
+    within each group. Every module with an ``@njit(cache=True)`` kernel must be one of them
+    (``tests/test_compiled_cache.py`` checks it)."""
+    root = package.parent.parent  # services/swarmpath (or a copy of it)
+    groups = (
+        sorted((root / "optimizers").rglob("*.py")),
+        sorted((root / "functions").rglob("*.py")),
+        sorted((root / "planners").glob("compiled*.py")),
+        sorted((root / "world").glob("optimum_compiled*.py")),
+    )
+    return [path for group in groups for path in group]
+
+
 def versioned_cache_dir(package: Path = _PACKAGE) -> str:
-    """Where numba caches the kernels: a directory named by a hash of the sources they are
-    compiled from (``swarmpath.optimizers``, ``swarmpath.functions``, the planners'
-    ``compiled*.py`` and ``world/optimum_compiled*.py``), under
-    ``NUMBA_CACHE_DIR`` if set, else this package's ``__pycache__``.
+    """Where numba caches the kernels: a directory named by a hash of
+    :func:`compiled_sources` (names and contents), under ``NUMBA_CACHE_DIR`` if set, else this
+    package's ``__pycache__``.
 
     numba keys a cached function on its own file only: a kernel that inlines ``evaluate`` (or a
     constant such as ``trig.COS``) from another module kept running the old code after that
     module changed (a cached ``run`` of a.py calling b.helper returned the old helper's value
     after b.py was edited). With the directory keyed by every source, any change compiles
     afresh; a worker never runs stale kernels after an update.
+
+    numba picks a kernel's cache directory when the ``@njit`` decorator runs, from the
+    ``CACHE_DIR`` set at that moment: every module defining cached kernels outside this package
+    therefore imports ``swarmpath.optimizers.compiled`` before its first ``@njit`` (else, when
+    imported first, its kernels are cached next to it, keyed on its own file only).
     """
     digest = hashlib.sha256()
-    for folder in (package.parent, package.parent.parent / "functions"):
-        for path in sorted(folder.rglob("*.py")):
-            digest.update(path.relative_to(folder.parent).as_posix().encode())
-            digest.update(path.read_bytes())
-    # the planners' kernels call these (and each other) across files
-    planners = package.parent.parent / "planners"
-    for path in sorted(planners.glob("compiled*.py")):
-        digest.update(path.relative_to(planners.parent).as_posix().encode())
-        digest.update(path.read_bytes())
-    # ... and the exact shortest path's (world.optimum_compiled*: the planners' aim calls them)
-    world = package.parent.parent / "world"
-    for path in sorted(world.glob("optimum_compiled*.py")):
-        digest.update(path.relative_to(world.parent).as_posix().encode())
+    root = package.parent.parent
+    for path in compiled_sources(package):
+        digest.update(path.relative_to(root).as_posix().encode())
         digest.update(path.read_bytes())
     base = os.environ.get("NUMBA_CACHE_DIR") or str(package / "__pycache__")
     return os.path.join(base, f"swarmpath-{digest.hexdigest()[:16]}")
