@@ -74,6 +74,24 @@ def stalled_after(before: float, now: float, stalled: int, tol: float) -> int:
 
 
 @njit(cache=True)
+def initialize(rng: Any, lb: Array, ub: Array, N: int, geo: Array, hits: Array, k: Array,
+               best: Array, best_x: Array) -> tuple[Array, Array]:
+    """``Optimizer.initialize``: N uniform agents in [lb, ub] (one draw of N * d, row by row),
+    scored and recorded; (agents, values)."""
+    d = lb.size
+    span = ub - lb
+    X = np.empty((N, d))
+    F = np.empty(N)
+    draw = rng.random(N * d)
+    for i in range(N):
+        for j in range(d):
+            X[i, j] = lb[j] + span[j] * draw[i * d + j]
+    score_into(X, geo, hits, k, F)
+    record(F, X, N, best, best_x)
+    return X, F
+
+
+@njit(cache=True)
 def _draw(rng: Any, u: Array, at: int, size: int) -> None:
     u[at : at + size] = rng.random(size)
 
@@ -101,14 +119,7 @@ def coot_decide(rng: Any, lb: Array, ub: Array, N: int, T: int, params: Array, g
     call = np.zeros(10, dtype=np.int64)
 
     # ---- initialization: N uniform agents, coots first
-    X = np.empty((N, d))
-    F = np.empty(N)
-    draw = rng.random(N * d)
-    for i in range(N):
-        for j in range(d):
-            X[i, j] = lb[j] + span[j] * draw[i * d + j]
-    score_into(X, geo, hits, k, F)
-    record(F, X, N, best, best_x)
+    X, F = initialize(rng, lb, ub, N, geo, hits, k, best, best_x)
     CP, CF, LP, LF, g, gf, leader_of = split(X, F, N, nl)
     o_v1, _, o_lflag, o_lv1, _, o_extra = offsets(nc, nl, d)
     u = np.empty(o_extra + (nc + nl if icoot else 0))

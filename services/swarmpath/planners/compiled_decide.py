@@ -25,28 +25,24 @@ Decide = Callable[[np.random.Generator, local.StepContext, int, int, int, float]
                   tuple[float, Array, int]]
 
 
-def _coot(name: str, p: Mapping[str, Any], agents: int) -> Decide | None:
-    params = compiled_coot.pack(name, p)
+def _calling(kernel: Callable[..., tuple[float, Array, int]], params: Array) -> Decide:
+    """The decision that calls ``kernel`` (COOT's or HPO's signature) with ``params``."""
 
     def decide(rng, ctx, agents, iterations, patience, tol):
         geo, k = setup(ctx)
-        return compiled_coot.coot_decide(rng, geo[4:6].copy(), geo[6:8].copy(), agents,
-                                         iterations, params, geo, _hits(ctx), k, patience, tol)
+        return kernel(rng, geo[4:6].copy(), geo[6:8].copy(), agents, iterations, params, geo,
+                      _hits(ctx), k, patience, tol)
 
     return decide
+
+
+def _coot(name: str, p: Mapping[str, Any], agents: int) -> Decide | None:
+    return _calling(compiled_coot.coot_decide, compiled_coot.pack(name, p))
 
 
 def _hpo(name: str, p: Mapping[str, Any], agents: int) -> Decide | None:
     params = compiled_hpo.pack(name, p)
-    if params is None:
-        return None
-
-    def decide(rng, ctx, agents, iterations, patience, tol):
-        geo, k = setup(ctx)
-        return compiled_hpo.hpo_decide(rng, geo[4:6].copy(), geo[6:8].copy(), agents,
-                                       iterations, params, geo, _hits(ctx), k, patience, tol)
-
-    return decide
+    return None if params is None else _calling(compiled_hpo.hpo_decide, params)
 
 
 def _bats(name: str, p: Mapping[str, Any], agents: int) -> Decide | None:

@@ -26,7 +26,7 @@ from numba import njit
 import swarmpath.optimizers.compiled  # noqa: F401 - first: numba's versioned cache directory
 from swarmpath.optimizers.compiled.coot import _clip
 from swarmpath.optimizers.compiled.functions import dot
-from swarmpath.planners.compiled_coot import record, stalled_after
+from swarmpath.planners.compiled_coot import initialize, stalled_after
 from swarmpath.planners.compiled_score import score_into, unary_inplace
 
 Array = np.ndarray
@@ -89,17 +89,9 @@ def hpo_decide(rng: Any, lb: Array, ub: Array, N: int, T: int, params: Array, ge
     hunter, on, branches = int(params[4]), int(params[5]), int(params[6])
     per_iteration, cp_hpo = params[7] == 1.0, params[8] == 1.0
     centre = 0.5 * (lb + ub)
-    span = ub - lb
     best = np.full(1, np.inf)
     best_x = np.zeros(d)
-    X = np.empty((N, d))
-    F = np.empty(N)
-    draw = rng.random(N * d)
-    for i in range(N):
-        for j in range(d):
-            X[i, j] = lb[j] + span[j] * draw[i * d + j]
-    score_into(X, geo, hits, k, F)
-    record(F, X, N, best, best_x)
+    X = initialize(rng, lb, ub, N, geo, hits, k, best, best_x)[0]
 
     slabs = 2 if independent else 1
     rows = 3 if ihpo else 2
