@@ -11,6 +11,8 @@ prints ``{"runs": [...], "summary": [...]}`` (the summary from
 nav2 YAML (recognised by its ``image`` key) or MovingAI ``.map`` files (``--resolution`` metres
 per cell, default 1); ``--start`` / ``--goal`` override every map's endpoints, ``--scen`` turns a
 MovingAI map into one map per scenario pair (:mod:`swarmpath.cli.plan_maps`).
+``--backend numpy|numba`` sets the ``backend`` parameter of every selected planner that has
+one (:mod:`swarmpath.cli.plan_backend`).
 """
 
 from __future__ import annotations
@@ -101,8 +103,12 @@ def make_spec(planners: str, maps: str, runs: int = 10, seed: int = 1,
               params: str | None = None, reference: str | None = None,
               map_options: MapOptions | None = None,
               optimum_budget: float | None = DEFAULT_BUDGET,
-              note: Callable[[str], None] | None = None) -> PlanSpec:
-    """Validate the command's options; raises :class:`InputError` naming the bad one."""
+              note: Callable[[str], None] | None = None,
+              backend: str | None = None) -> PlanSpec:
+    """Validate the command's options; raises :class:`InputError` naming the bad one.
+    ``backend``: ``--backend``, set in the params of every planner that has one
+    (:func:`swarmpath.cli.plan_backend.apply_backend`)."""
+    from swarmpath.cli.plan_backend import apply_backend
     from swarmpath.stats import resolve_reference
 
     names = resolve_planners(planners)
@@ -117,8 +123,8 @@ def make_spec(planners: str, maps: str, runs: int = 10, seed: int = 1,
         raise InputError("--runs", f"{runs} is not in [1, {MAX_RUNS}]")
     if seed < 0:
         raise InputError("--seed", f"{seed} is negative")
-    return PlanSpec(names, scenarios, runs, seed, parse_params(params, names), ref,
-                    optimum_budget, octile)
+    by_planner = apply_backend(backend, names, parse_params(params, names))
+    return PlanSpec(names, scenarios, runs, seed, by_planner, ref, optimum_budget, octile)
 
 
 # -------------------------------------------------------------------------------------- running
@@ -326,6 +332,12 @@ def plan(
         int | None, typer.Option("--max-obstacles", help="Most polygons an imported grid map "
                                  "may make (default 5,000).")
     ] = None,
+    backend: Annotated[
+        str | None, typer.Option("--backend", metavar="numpy|numba", help="The backend "
+                                 "parameter of every selected planner that has one (numba: "
+                                 "the 'fast' extra; the same runs); a different one in "
+                                 "--params is refused.")
+    ] = None,
 ) -> None:
     """Run path planners on maps; print the papers' run tables (Run / Distance / Error / Elapsed
     time) with success, collisions and the gap to the exact optimum."""
@@ -344,7 +356,7 @@ def plan(
 
     options = make_options(start, goal, resolution, scen, scen_ids, max_cells, max_obstacles)
     spec = make_spec(planners, maps, runs, seed, params, reference, options, optimum_budget,
-                     note)
+                     note, backend)
     if not 0 <= jobs <= parallel.MAX_JOBS:
         raise InputError("--jobs", f"{jobs} is not in [0, {parallel.MAX_JOBS}]")
     if plot is not None:
