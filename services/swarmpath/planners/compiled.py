@@ -31,17 +31,48 @@ Array = np.ndarray
 
 
 @njit(cache=True)
+def _point_d2(x: float, y: float, hits: Array, j: int) -> float:
+    """Squared distance from (x, y) to hit j."""
+    dx = x - hits[j, 0]
+    dx = dx * dx
+    dy = y - hits[j, 1]
+    dy = dy * dy
+    return dx + dy
+
+
+@njit(cache=True)
+def _direction(px: float, py: float, x: float, y: float) -> tuple[float, float, float]:
+    """(ux, uy, |u|^2 + 1e-300) of the segment from p to (x, y)."""
+    ux = x - px
+    uy = y - py
+    return ux, uy, ux * ux + uy * uy + 1e-300
+
+
+@njit(cache=True)
+def _segment_d2(ux: float, uy: float, den: float, wx: float, wy: float) -> float:
+    """Squared distance from the point (wx, wy) relative to p to the segment from p to p + u
+    (``den`` from :func:`_direction`)."""
+    t = ux * wx + uy * wy
+    t = t / den
+    if t < 0.0:
+        t = 0.0
+    if t > 1.0:
+        t = 1.0
+    ex = wx - t * ux
+    ex = ex * ex
+    ey = wy - t * uy
+    ey = ey * ey
+    return ex + ey
+
+
+@njit(cache=True)
 def _point_nearest(x: float, y: float, hits: Array) -> tuple[float, int]:
     """(squared distance, index) of the hit nearest (x, y) (first index on ties; (inf, 0) with
     no hits)."""
     best = math.inf
     at = 0
     for j in range(hits.shape[0]):
-        dx = x - hits[j, 0]
-        dx = dx * dx
-        dy = y - hits[j, 1]
-        dy = dy * dy
-        d2 = dx + dy
+        d2 = _point_d2(x, y, hits, j)
         if d2 < best:
             best = d2
             at = j
@@ -53,23 +84,11 @@ def _segment_nearest(px: float, py: float, x: float, y: float, wx: Array,
                      wy: Array) -> tuple[float, int]:
     """(squared distance, index) of the hit (wx, wy relative to p) nearest the segment from p to
     (x, y) (first index on ties; (inf, 0) with no hits)."""
-    ux = x - px
-    uy = y - py
-    den = ux * ux + uy * uy + 1e-300
+    ux, uy, den = _direction(px, py, x, y)
     best = math.inf
     at = 0
     for j in range(wx.shape[0]):
-        t = ux * wx[j] + uy * wy[j]
-        t = t / den
-        if t < 0.0:
-            t = 0.0
-        if t > 1.0:
-            t = 1.0
-        ex = wx[j] - t * ux
-        ex = ex * ex
-        ey = wy[j] - t * uy
-        ey = ey * ey
-        d2 = ex + ey
+        d2 = _segment_d2(ux, uy, den, wx[j], wy[j])
         if d2 < best:
             best = d2
             at = j
@@ -82,11 +101,7 @@ def _point_clear(x: float, y: float, hits: Array, margin: float) -> bool:
     decides it (the running minimum only falls, and sqrt is monotone: the same answer)."""
     best = math.inf
     for j in range(hits.shape[0]):
-        dx = x - hits[j, 0]
-        dx = dx * dx
-        dy = y - hits[j, 1]
-        dy = dy * dy
-        d2 = dx + dy
+        d2 = _point_d2(x, y, hits, j)
         if d2 < best:
             best = d2
             if not math.sqrt(best) >= margin:
@@ -98,22 +113,10 @@ def _point_clear(x: float, y: float, hits: Array, margin: float) -> bool:
 def _segment_clear(px: float, py: float, x: float, y: float, wx: Array, wy: Array,
                    margin: float) -> bool:
     """``sqrt(_segment_nearest(...)[0]) >= margin``, stopping as :func:`_point_clear` does."""
-    ux = x - px
-    uy = y - py
-    den = ux * ux + uy * uy + 1e-300
+    ux, uy, den = _direction(px, py, x, y)
     best = math.inf
     for j in range(wx.shape[0]):
-        t = ux * wx[j] + uy * wy[j]
-        t = t / den
-        if t < 0.0:
-            t = 0.0
-        if t > 1.0:
-            t = 1.0
-        ex = wx[j] - t * ux
-        ex = ex * ex
-        ey = wy[j] - t * uy
-        ey = ey * ey
-        d2 = ex + ey
+        d2 = _segment_d2(ux, uy, den, wx[j], wy[j])
         if d2 < best:
             best = d2
             if not math.sqrt(best) >= margin:
