@@ -802,9 +802,21 @@ def test_lease_bundles_and_group_commit(core, client):
     assert isinstance(single, NoWork)
 
 
-def test_worker_prefetches_and_runs_bundles_in_one_slot():
+def test_worker_prefetches_and_runs_bundles_in_one_slot(monkeypatch):
     import threading
 
+    from swarmpath.service.worker import slots as slots_module
+
+    # The slot's thread waits for ``release`` before computing: otherwise a fast thread can
+    # finish the first bundle before the test looks at the slot (a race, not a feature).
+    release = threading.Event()
+    compute = slots_module.stacked_outcomes
+
+    def gated(*args, **kwargs):
+        assert release.wait(60)
+        return compute(*args, **kwargs)
+
+    monkeypatch.setattr(slots_module, "stacked_outcomes", gated)
     w = offline_worker(prefetch=1)
     done = threading.Event()
     original = w._on_slot_done
@@ -823,6 +835,7 @@ def test_worker_prefetches_and_runs_bundles_in_one_slot():
     w._take([make_lease(spec, [2]).model_copy(update={"lease_id": "L3"})])
     assert not w._wants_work() and len(w._queue) == 1
     assert w.heartbeat_due(w._active["L3"].received + 60) == 3  # queued leases renew too
+    release.set()
     assert done.wait(60)
     puts = [frame_results(p) for k, p in w._session.puts if k == "swarmpath/results/j1"]
     assert [[r["lease_id"] for r in p] for p in puts] == [["L1", "L2"], ["L3"]]
