@@ -31,7 +31,7 @@ from swarmpath.planners.compiled import (
     segments_clearance_kernel,
     surface_kernel,
 )
-from swarmpath.world.optimum_compiled import _point_segment
+from swarmpath.world.optimum_compiled import _signed_polygon
 
 Array = np.ndarray
 _f = np.ascontiguousarray
@@ -333,18 +333,7 @@ def point_clearance_kernel(px: float, py: float, circles: Array, verts: Array,
         out = min(out, math.hypot(px - circles[c, 0], py - circles[c, 1]) - circles[c, 2])
     start = 0
     for j in range(counts.shape[0]):
-        d = math.inf
-        crossings = 0
-        for k in range(start, start + counts[j]):
-            nxt = k + 1 if k + 1 < start + counts[j] else start
-            ax, ay, bx, by = verts[k, 0], verts[k, 1], verts[nxt, 0], verts[nxt, 1]
-            d = min(d, _point_segment(px, py, ax, ay, bx, by))
-            if (ay > py) != (by > py):
-                dy = by - ay
-                safe = dy if dy != 0.0 else 1.0
-                if px < ax + (py - ay) * (bx - ax) / safe:
-                    crossings += 1
-        out = min(out, -d if crossings % 2 == 1 else d)
+        out = min(out, _signed_polygon(px, py, verts, start, counts[j]))
         start += counts[j]
     return out
 
