@@ -116,6 +116,8 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         # avoids every static point sensed since the start (planners.swarm_escape; 0: off)
         "escape": 5.0,
         "escape_progress": 0.05,  # m
+        "give_way": 1.5,  # s: moves scored against predicted moving points this far (0: off)
+        "give_way_spread": 1.0,  # an untracked moving point may be this x its speed x t away
         # "numba": the repairs, the aim's clearances and sensing's surface distances compiled
         # (planners.compiled; the same numbers, optional dep.)
         "backend": "numpy",
@@ -144,7 +146,7 @@ class SwarmLocalPlanner(SwarmMoveLimits):
                     "memory", "moving_memory", "trail", "lead", "consistency", "track_gap",
                     "track_scans", "predict", "surface", "carrot_clearance", "rejoin", "hold_angle",
                     "hold_min", "patience", "tolerance", "contact_band", "escape",
-                    "escape_progress"):
+                    "escape_progress", "give_way", "give_way_spread"):
             if float(p[key]) < 0:
                 raise PlannerError(f"{cls.name}.{key} must be >= 0")
         try:
@@ -183,6 +185,11 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         self._moving_until = -np.inf  # motion was sensed in the last ``memory`` seconds
         self._moving: tuple[Array, Array] = (np.zeros((0, 2)), np.zeros((0, 2)))  # this scan's
         self._settled = np.zeros((0, 2))  # the known points but this scan's tracked ones
+        self._threats: tuple[Array, Array, NDArray[np.bool_]] = (
+            np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0, dtype=bool))
+        self._gave: Array | None = None  # the direction the robot last gave way in
+        self._last_moving = np.zeros((0, 2))  # the last scan's moving points
+        self._threat_until = -np.inf  # ``_give_way`` saw moving points in the last ``memory`` s
         # the last scan's moving points, their whole-obstacle velocities and steady scans in a row
         self._tracks: tuple[Array, Array, NDArray[np.int64]] = (
             np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0, dtype=np.int64))
@@ -242,7 +249,7 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         return swarm_aim.clear(held, ctx)
 
     def decide(self, obs: Observation) -> Decision:
-        return self._keep_off(obs, self._cut(obs, self._decide(obs)))
+        return self._keep_off(obs, self._give_way(obs, self._cut(obs, self._decide(obs))))
 
     def _decide(self, obs: Observation) -> Decision:
         p = np.array([obs.pose.x, obs.pose.y])

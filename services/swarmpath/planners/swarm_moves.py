@@ -8,8 +8,9 @@ what the robot touches (:meth:`_keep_off`); the planner's ``__init__`` sets the 
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import NDArray
 
-from swarmpath.planners import local
+from swarmpath.planners import give_way, local, sensed_map
 from swarmpath.planners.base import Decision, Observation
 from swarmpath.planners.swarm_aim import SwarmAim
 from swarmpath.planners.swarm_sensing import Array
@@ -26,7 +27,90 @@ class SwarmMoveLimits(SwarmAim):
     _travel: float
     _range: float
     _ray_gap: float
+    _threats: tuple[Array, Array, NDArray[np.bool_]]
+    _gave: Array | None
+    _scan: tuple[Array, NDArray[np.bool_]]
+    _threat_until: float
+    _prior: Array
 
+    def _give_way(self, obs: Observation, decision: Decision) -> Decision:
+        """Give way to moving obstacles (``give_way`` seconds ahead; 0: off). The decision's
+        move, rolled out with the robot's own drive, is scored against this scan's moving points
+        predicted along their sensed velocities (:mod:`swarmpath.planners.give_way`), and, while
+        such points were sensed in the last ``memory`` seconds, the points the robot touches (a
+        walker that reached the robot is no longer seen moving: its surface is at the body's).
+        If it keeps the safety distance from them it is driven unchanged; otherwise the robot
+        moves out of their way: of staying and 16 straight moves as far as it can drive within
+        the horizon (each as ``_keep_off`` lets it through), the one that keeps the safety
+        distance and ends nearest to the decision's target, or, with none, the one that keeps
+        the largest gap; never closer to a static point of this scan than the safety distance
+        or than the robot is now. Without such a point in reach nothing changes."""
+        horizon = float(self.p["give_way"])
+        if horizon <= 0 or decision.target is None:
+            self._gave = None
+            return decision
+        points, velocity, steady = self._threats
+        scan, moving_now = self._scan
+        p = np.array([obs.pose.x, obs.pose.y])
+        if len(points):
+            self._threat_until = obs.time + float(self.p["memory"])
+        if obs.time <= self._threat_until and len(scan):
+            touch = np.hypot(*(scan - p).T) <= obs.robot_radius + CONTACT
+            points = np.vstack([points, scan[touch]])
+            velocity = np.vstack([velocity, np.zeros((int(touch.sum()), 2))])
+            steady = np.concatenate([steady, np.ones(int(touch.sum()), dtype=bool)])
+        if not len(points):
+            self._gave = None
+            return decision
+        scenario = self.scenario
+        dt, speed = scenario.time_step, float(scenario.robot.linear_speed)
+        spread = float(self.p["give_way_spread"])
+        drive = speed * horizon
+        # only points that can come within the safety distance of any move matter
+        fast = np.hypot(velocity[:, 0], velocity[:, 1]) * (1.0 + spread) * horizon
+        safety = self._safety(obs.time)
+        reach = drive + obs.robot_radius + safety
+        near = np.hypot(*(points - p).T) <= reach + fast
+        if not near.any():
+            self._gave = None
+            return decision
+        steps = max(1, int(np.ceil(horizon / dt - 1e-9)))
+        angles = obs.pose.theta + np.arange(16) * (np.pi / 8)
+        w, h = obs.world_size
+        ends = np.clip(p + drive * np.stack([np.cos(angles), np.sin(angles)], axis=1),
+                       [0.0, 0.0], [w, h])
+        wanted = np.asarray(decision.target, dtype=float)
+        # the way the robot gave way last decision, if it did: kept while it stays safe (a
+        # new choice each decision made a diff drive turn back and forth on the spot)
+        last = [] if self._gave is None else [np.clip(p + drive * self._gave, 0.0, [w, h]) - p]
+        moves = np.vstack([wanted - p, np.zeros(2), *last, ends - p])
+        targets = p + np.array([self._kept(p, m, obs.robot_radius) for m in moves])
+        turn = None if scenario.robot.model == "omni" else float(scenario.robot.angular_speed)
+        centres = give_way.rollout(p, obs.pose.theta, targets, speed, turn, dt, steps)
+        gaps = give_way.moving_gaps(centres, dt, points[near], velocity[near], steady[near],
+                                    spread, obs.robot_radius)
+        still = sensed_map.condense(np.vstack([scan[~moving_now], self._prior]), p, reach,
+                                    CONTACT)
+        clear = give_way.static_gaps(centres, still, obs.robot_radius)
+        now = give_way.static_gaps(p[None, None, :], still, obs.robot_radius)[0]
+        pick = give_way.choose(gaps, clear, float(now), safety, centres[:, -1], wanted,
+                               prefer=2 if last else None)
+        self._gave = None
+        if pick == 0:
+            return decision
+        move = targets[pick] - p
+        if np.hypot(*move) > 1e-9:
+            self._gave = move / np.hypot(*move)
+        self._held = None
+        return Decision(targets[pick], decision.iterations, decision.duration, align=True)
+
+    def _kept(self, p: Array, move: Array, radius: float) -> Array:
+        """The part of ``move`` that ``_keep_off`` lets through (see there)."""
+        points, moving = self._scan
+        if not len(points):
+            return move
+        reach = radius + CONTACT + float(self.p["contact_band"]) * moving.astype(float)
+        return local.keep_off(p, move, points, reach)
 
     def _cut(self, obs: Observation, decision: Decision) -> Decision:
         if decision.target is None:
@@ -52,13 +136,12 @@ class SwarmMoveLimits(SwarmAim):
         and a differential drive turns in place before it drives, so that its path follows the
         kept direction instead of bulging into the obstacle. Without such a point the decision is
         unchanged (runs that come no nearer than that are the same as without the rule)."""
-        points, moving = self._scan
+        points, _ = self._scan
         if decision.target is None or not len(points):
             return decision
         p = np.array([obs.pose.x, obs.pose.y])
         move = np.asarray(decision.target, dtype=float) - p
-        reach = obs.robot_radius + CONTACT + float(self.p["contact_band"]) * moving.astype(float)
-        kept = local.keep_off(p, move, points, reach)
+        kept = self._kept(p, move, obs.robot_radius)
         if np.array_equal(kept, move):
             return decision
         self._held = None

@@ -28,6 +28,8 @@ class SwarmSensing(Planner):
     _moving_until: float
     _moving: tuple[Array, Array]
     _settled: Array
+    _threats: tuple[Array, Array, NDArray[np.bool_]]
+    _last_moving: Array
     _tracks: tuple[Array, Array, NDArray[np.int64]]
     _speed: float
     _diff_drive: bool
@@ -50,6 +52,18 @@ class SwarmSensing(Planner):
         whole = velocity.copy()
         tracked = self._track(current, moving, whole)
         self._moving = (current[tracked], whole[tracked])
+        # for ``_give_way``: this scan's moving points with their velocities (whole-obstacle
+        # when tracked), if another moving point of this scan and one of the last scan lie
+        # within ``track_gap`` (a single ray's motion in a single scan is also what a static
+        # surface shows when a new part of it comes into view: mfb-static, MFB seed 5)
+        seen = current[moving]
+        again = np.zeros(len(seen), dtype=bool)
+        gap = float(self.p["track_gap"])
+        if len(seen) > 1 and len(self._last_moving):
+            again = cKDTree(self._last_moving).query(seen)[0] <= gap
+            again &= cKDTree(seen).query(seen, k=2)[0][:, 1] <= gap
+        self._last_moving = seen
+        self._threats = (seen[again], whole[moving][again], tracked[moving][again])
         if moving.any():
             self._moving_until = obs.time + float(self.p["memory"])
         if tracked.any():
