@@ -81,7 +81,8 @@ def choose(moving: Array, still: Array, still_now: float, need: float, ends: Arr
     closer to a static point than ``need`` or than the robot is now: ``prefer`` (the way the
     robot gave way last time) if it is safe, else the safe move ending nearest to ``wanted``
     (the planner's target). With no safe move, the one with the largest gap to the moving
-    points among those that respect the static points (among all, if none does)."""
+    points among those that respect the static points (among all, if none does), or
+    ``prefer`` if its gap is within ``need`` of that one's."""
     if moving[0] >= need:
         return 0
     static_ok = still >= min(need, still_now) - 1e-9
@@ -93,4 +94,7 @@ def choose(moving: Array, still: Array, still_now: float, need: float, ends: Arr
         miss = np.hypot(*(ends - wanted).T)
         return int(np.argmin(np.where(safe, miss, np.inf)))
     pool = static_ok if static_ok.any() else np.ones(len(moving), dtype=bool)
-    return int(np.argmax(np.where(pool, moving, -np.inf)))
+    best = int(np.argmax(np.where(pool, moving, -np.inf)))
+    if prefer is not None and pool[prefer] and moving[prefer] >= moving[best] - need:
+        return prefer  # nearly as good: keep going that way rather than turn about
+    return best

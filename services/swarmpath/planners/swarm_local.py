@@ -188,6 +188,7 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         self._threats: tuple[Array, Array, NDArray[np.bool_]] = (
             np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0, dtype=bool))
         self._gave: Array | None = None  # the direction the robot last gave way in
+        self._way_out: Array | None = None  # away from the points last seen near the body
         self._last_moving = np.zeros((0, 2))  # the last scan's moving points
         self._threat_until = -np.inf  # ``_give_way`` saw moving points in the last ``memory`` s
         # the last scan's moving points, their whole-obstacle velocities and steady scans in a row

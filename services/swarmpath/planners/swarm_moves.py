@@ -18,6 +18,8 @@ from swarmpath.planners.swarm_sensing import Array
 #: m beyond the body: a sensed point this near is touching (rays hit the surface exactly; the
 #: planner keeps at least 1 cm from every hit, so a run without contact never comes this near).
 CONTACT = 0.002
+#: m beyond the body: untracked moving points farther away are not given way to (``_give_way``).
+ERRATIC_NEAR = 0.5
 
 
 class SwarmMoveLimits(SwarmAim):
@@ -29,6 +31,7 @@ class SwarmMoveLimits(SwarmAim):
     _ray_gap: float
     _threats: tuple[Array, Array, NDArray[np.bool_]]
     _gave: Array | None
+    _way_out: Array | None
     _scan: tuple[Array, NDArray[np.bool_]]
     _threat_until: float
     _prior: Array
@@ -52,10 +55,18 @@ class SwarmMoveLimits(SwarmAim):
         points, velocity, steady = self._threats
         scan, moving_now = self._scan
         p = np.array([obs.pose.x, obs.pose.y])
+        # an untracked moving point counts within ERRATIC_NEAR of the body only (farther, the
+        # robot senses again before a walker gets there; and the static polygons of icoot-map1
+        # showed a few such points 0.7-1.5 m away)
+        keep = steady | (np.hypot(*(points - p).T) <= obs.robot_radius + ERRATIC_NEAR)
+        points, velocity, steady = points[keep], velocity[keep], steady[keep]
         if len(points):
             self._threat_until = obs.time + float(self.p["memory"])
         if obs.time <= self._threat_until and len(scan):
-            touch = np.hypot(*(scan - p).T) <= obs.robot_radius + CONTACT
+            touch = np.hypot(*(scan - p).T) <= obs.robot_radius + float(self.p["contact_band"])
+            away = p - scan[touch].mean(axis=0) if touch.any() else np.zeros(2)
+            if np.hypot(*away) > 1e-9:  # the way out should the walker run over the robot
+                self._way_out = away / np.hypot(*away)
             points = np.vstack([points, scan[touch]])
             velocity = np.vstack([velocity, np.zeros((int(touch.sum()), 2))])
             steady = np.concatenate([steady, np.ones(int(touch.sum()), dtype=bool)])
@@ -107,10 +118,20 @@ class SwarmMoveLimits(SwarmAim):
     def _kept(self, p: Array, move: Array, radius: float) -> Array:
         """The part of ``move`` that ``_keep_off`` lets through (see there)."""
         points, moving = self._scan
-        if not len(points):
+        if not len(points) or self._engulfed(p):
             return move
         reach = radius + CONTACT + float(self.p["contact_band"]) * moving.astype(float)
         return local.keep_off(p, move, points, reach)
+
+    def _engulfed(self, p: Array) -> bool:
+        """With ``give_way`` on: the robot's centre is inside an obstacle (a walker ran over it):
+        every ray reports the centre, so there is no direction to keep off, and stopping (what
+        ``keep_off`` does then) kept the robot under the walker for 20 s (icoot-map4, IHPO seed
+        2). The robot drives away from where the points near it were last seen (the walker's
+        side), one control step at a time (it is blind)."""
+        points = self._scan[0]
+        return (float(self.p["give_way"]) > 0 and len(points) > 0
+                and bool(np.all(np.hypot(*(points - p).T) <= 1e-9)))
 
     def _cut(self, obs: Observation, decision: Decision) -> Decision:
         if decision.target is None:
@@ -140,6 +161,9 @@ class SwarmMoveLimits(SwarmAim):
         if decision.target is None or not len(points):
             return decision
         p = np.array([obs.pose.x, obs.pose.y])
+        if self._engulfed(p):
+            out = p if self._way_out is None else p + self._way_out
+            return Decision(out, decision.iterations, self.scenario.time_step, align=True)
         move = np.asarray(decision.target, dtype=float) - p
         kept = self._kept(p, move, obs.robot_radius)
         if np.array_equal(kept, move):

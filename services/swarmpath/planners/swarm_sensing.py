@@ -16,6 +16,11 @@ from swarmpath.planners.base import Observation, Planner
 from swarmpath.world.geometry import point_segment_distance
 
 Array = np.ndarray
+#: Share of a scan's points within ``track_gap`` of a moving point that must move for it to be
+#: given way to (``_give_way``): icoot-map1's static polygons showed 1-6 moving points among
+#: tens; a random walker shows most of its visible surface moving.
+MOVING_SHARE = 0.5
+MOVING_POINTS = 3
 
 
 class SwarmSensing(Planner):
@@ -53,15 +58,22 @@ class SwarmSensing(Planner):
         tracked = self._track(current, moving, whole)
         self._moving = (current[tracked], whole[tracked])
         # for ``_give_way``: this scan's moving points with their velocities (whole-obstacle
-        # when tracked), if another moving point of this scan and one of the last scan lie
-        # within ``track_gap`` (a single ray's motion in a single scan is also what a static
-        # surface shows when a new part of it comes into view: mfb-static, MFB seed 5)
+        # when tracked), if a moving point of the last scan lies within ``track_gap`` (a
+        # single scan's motion is also what a static surface shows when a new part of it
+        # comes into view: mfb-static, MFB seed 5)
         seen = current[moving]
         again = np.zeros(len(seen), dtype=bool)
         gap = float(self.p["track_gap"])
         if len(seen) > 1 and len(self._last_moving):
             again = cKDTree(self._last_moving).query(seen)[0] <= gap
-            again &= cKDTree(seen).query(seen, k=2)[0][:, 1] <= gap
+            # ... and most of the scan's distinct points around it moved, at least
+            # MOVING_POINTS of them (a moving obstacle's visible surface moves; on a static one
+            # a few rays at a newly seen edge do; rays of several layers hit the same point)
+            every = np.unique(np.round(current, 4), axis=0)
+            distinct = np.unique(np.round(seen, 4), axis=0)
+            around = cKDTree(every).query_ball_point(seen, gap, return_length=True)
+            close = cKDTree(distinct).query_ball_point(seen, gap, return_length=True)
+            again &= (close >= MOVING_POINTS) & (close >= MOVING_SHARE * around)
         self._last_moving = seen
         self._threats = (seen[again], whole[moving][again], tracked[moving][again])
         if moving.any():
