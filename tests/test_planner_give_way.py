@@ -1,8 +1,8 @@
 """Giving way to moving obstacles (docs/planners.md, "Giving way to moving obstacles").
 
-A circle coming down the robot's straight way to its goal, head-on at 0.8 m/s (faster than the
-0.5 m/s diff drive): without ``give_way`` MFB lets it run into the robot; with it the robot
-steps out of its predicted path.
+A circle crossing the robot's straight way to its goal from the side at 0.8 m/s (faster than the
+0.5 m/s diff drive), timed to meet it: without ``give_way`` ICOOT drives into its path and is run
+over; with it the robot keeps out of the circle's predicted path.
 """
 
 import numpy as np
@@ -12,22 +12,23 @@ from swarmpath.planners import Episode, give_way
 from swarmpath.world.scenario import Motion, Obstacle, RobotSpec, Scenario
 
 
-def head_on() -> Scenario:
-    """A 0.3 m circle from (7, 2) toward the robot's start (1, 2) at 0.8 m/s; goal (9, 2)."""
+def crossing() -> Scenario:
+    """Start (1, 5), goal (9, 5); a 0.3 m circle from (4.5, 11.64) straight down at 0.8 m/s,
+    across y = 5 about 8.3 s later, when the robot gets there."""
     return Scenario(
-        name="head-on", size=(10.0, 4.0), start=(1.0, 2.0), goal=(9.0, 2.0),
+        name="crossing", size=(10.0, 16.0), start=(1.0, 5.0), goal=(9.0, 5.0),
         robot=RobotSpec.preset("diff-drive"),
-        obstacles=(Obstacle.circle((7.0, 2.0), 0.3, Motion(0.8, 180.0)),),
+        obstacles=(Obstacle.circle((4.5, 5.0 + 0.8 * 8.3), 0.3, Motion(0.8, 270.0)),),
         sensors="icoot-80",
     )
 
 
-def test_the_robot_gives_way_to_an_obstacle_coming_down_its_path():
-    # MFB, seed 1: run over without giving way (6 colliding steps), no contact with it (least
-    # body gap 0.016 m, 11.50 m). ICOOT is run over both ways here (docs/planners.md, "Open").
-    off = Episode(head_on(), "MFB", seed=1, params={"give_way": 0.0}).run()
+def test_the_robot_gives_way_to_an_obstacle_crossing_its_path():
+    # ICOOT, seed 1: run over without giving way (11 colliding steps, all obstacle-driven), no
+    # contact with it (least body gap 0.144 m)
+    off = Episode(crossing(), "ICOOT", seed=1, params={"give_way": 0.0}).run()
     assert off.obstacle_driven_contacts > 0
-    on = Episode(head_on(), "MFB", seed=1).run()
+    on = Episode(crossing(), "ICOOT", seed=1).run()
     assert on.success and on.collisions == 0 and on.min_clearance > 0
 
 

@@ -98,6 +98,17 @@ class SwarmMoveLimits(SwarmAim):
         targets = p + np.array([self._kept(p, m, obs.robot_radius) for m in moves])
         turn = None if scenario.robot.model == "omni" else float(scenario.robot.angular_speed)
         centres = give_way.rollout(p, obs.pose.theta, targets, speed, turn, dt, steps)
+        # an untracked point may move as fast as the fastest one of them sensed this scan (a
+        # walker's points show 0.1-0.8 m/s in one scan: its own speed is the largest, and the
+        # slowest points' small discs let the robot drive at it: ihpo-map3 ICOOT seed 2)
+        velocity = velocity.copy()
+        erratic = ~steady
+        if erratic.any():
+            speeds = np.hypot(velocity[:, 0], velocity[:, 1])
+            top = float(speeds[erratic].max())
+            scale = top / np.maximum(speeds[erratic], 1e-12)
+            velocity[erratic] = np.where(speeds[erratic, None] > 1e-12,
+                                         velocity[erratic] * scale[:, None], [top, 0.0])
         gaps = give_way.moving_gaps(centres, dt, points[near], velocity[near], steady[near],
                                     spread, obs.robot_radius)
         still = sensed_map.condense(np.vstack([scan[~moving_now], self._prior]), p, reach,
