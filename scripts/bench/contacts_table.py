@@ -6,7 +6,8 @@
 One row per map, one column per planner (in the order first seen); each cell: successes / runs,
 robot-driven / obstacle-driven colliding steps, in how many runs. With ``--before``, each cell
 shows the before file's numbers, then ``->`` and this file's (two trees side by side: run
-``maps.py`` on each checkout with the same arguments).
+``maps.py`` on each checkout with the same arguments). ``--gaps``: instead, the median gap to the
+exact optimum over the successful runs (maps with an optimum only).
 """
 
 from __future__ import annotations
@@ -27,6 +28,10 @@ def load(path: str) -> dict[tuple[str, str], list[dict[str, Any]]]:
     return runs
 
 
+def planners0(runs: dict[tuple[str, str], list[dict[str, Any]]]) -> list[str]:
+    return list(dict.fromkeys(p for _, p in runs))
+
+
 def cell(rows: list[dict[str, Any]]) -> str:
     ok = sum(1 for r in rows if r["success"])
     robot = sum(r["robot"] for r in rows)
@@ -35,23 +40,37 @@ def cell(rows: list[dict[str, Any]]) -> str:
     return f"{ok}/{len(rows)}, {robot} / {obstacle} in {touched}"
 
 
+def gap_cell(rows: list[dict[str, Any]]) -> str:
+    gaps = sorted(100 * r["gap"] for r in rows if r["success"] and r["gap"] is not None)
+    if not gaps:
+        return "-"
+    mid = len(gaps) // 2
+    median = gaps[mid] if len(gaps) % 2 else 0.5 * (gaps[mid - 1] + gaps[mid])
+    return f"{median:.2f} %"
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("runs")
     ap.add_argument("--before", default=None)
+    ap.add_argument("--gaps", action="store_true")
     a = ap.parse_args()
+    fmt = gap_cell if a.gaps else cell
     after = load(a.runs)
     before = load(a.before) if a.before else None
     maps = list(dict.fromkeys(m for m, _ in after))
-    planners = list(dict.fromkeys(p for _, p in after))
+    if a.gaps:
+        maps = [m for m in maps if any(r["gap"] is not None for p in planners0(after)
+                                       for r in after.get((m, p), []))]
+    planners = planners0(after)
     print("| preset | " + " | ".join(planners) + " |")
     print("| --- |" + " --- |" * len(planners))
     for m in maps:
         cells = []
         for p in planners:
-            now = cell(after.get((m, p), []))
+            now = fmt(after.get((m, p), []))
             if before is not None:
-                now = f"{cell(before.get((m, p), []))} -> {now}"
+                now = f"{fmt(before.get((m, p), []))} -> {now}"
             cells.append(now)
         print(f"| {m} | " + " | ".join(cells) + " |")
 

@@ -117,7 +117,7 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         "escape": 5.0,
         "escape_progress": 0.05,  # m
         "give_way": 1.5,  # s: moves scored against predicted moving points this far (0: off)
-        "give_way_spread": 1.0,  # an untracked moving point may be this x its speed x t away
+        "give_way_spread": 1.0,  # an untracked moving point may be this x the top speed x t away
         # "numba": the repairs, the aim's clearances and sensing's surface distances compiled
         # (planners.compiled; the same numbers, optional dep.)
         "backend": "numpy",
