@@ -26,6 +26,7 @@ import numpy as np
 from numba import njit
 
 import swarmpath.optimizers.compiled  # noqa: F401 - first: numba's versioned cache directory
+from swarmpath.world.optimum_compiled import _point_segment
 
 Array = np.ndarray
 
@@ -277,22 +278,10 @@ def segments_clearance_kernel(points: Array, a: Array, b: Array) -> Array:
     m = a.shape[0]
     out = np.empty(m)
     for k in range(m):
-        ax, ay = a[k, 0], a[k, 1]
-        dx = b[k, 0] - ax
-        dy = b[k, 1] - ay
-        dd = dx * dx + dy * dy
-        safe = dd if dd > 0.0 else 1.0
+        ax, ay, bx, by = a[k, 0], a[k, 1], b[k, 0], b[k, 1]
         best = math.inf
         for j in range(points.shape[0]):
-            qx, qy = points[j, 0], points[j, 1]
-            t = ((qx - ax) * dx + (qy - ay) * dy) / safe
-            if t < 0.0:
-                t = 0.0
-            if t > 1.0:
-                t = 1.0
-            if not dd > 0.0:
-                t = 0.0
-            d = _hypot(qx - (ax + t * dx), qy - (ay + t * dy))
+            d = _point_segment(points[j, 0], points[j, 1], ax, ay, bx, by)
             if d < best:
                 best = d
         out[k] = best
