@@ -4,7 +4,8 @@ The reference is the numpy loop of ``SwarmLocalPlanner._decide`` (``create``, ``
 ``step`` until done or ``patience`` stalls) with :class:`~swarmpath.optimizers.icoot.ICOOT`
 (or COOT) on one run whose objective is ``local.score``. The iteration is that of the
 optimizers' own compiled COOT kernel (:mod:`swarmpath.optimizers.compiled.coot`, bit for bit
-the numpy reference's numbers, ``tests/test_compiled_coot.py``) with two changes: the draws go
+the numpy reference's numbers, ``tests/test_compiled_coot.py``; both call the phases of
+:mod:`swarmpath.optimizers.compiled.coot_phases`) with two changes: the draws go
 straight to the planner's generator (its ``RunStreams`` does not buffer), one ``rng.random``
 per draw of the reference, in its order and sizes; and the objective is the compiled score
 (:func:`.compiled_score.score_into`). A decision gives the same best point, value and number
@@ -21,7 +22,7 @@ import numpy as np
 from numba import njit
 
 import swarmpath.optimizers.compiled  # noqa: F401 - first: numba's versioned cache directory
-from swarmpath.optimizers.compiled.coot import (
+from swarmpath.optimizers.compiled.coot_phases import (
     accelerate,
     accept_leaders,
     move_coots,

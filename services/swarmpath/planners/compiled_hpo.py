@@ -24,7 +24,7 @@ import numpy as np
 from numba import njit
 
 import swarmpath.optimizers.compiled  # noqa: F401 - first: numba's versioned cache directory
-from swarmpath.optimizers.compiled.coot import _clip
+from swarmpath.optimizers.compiled.coot_phases import _clip
 from swarmpath.optimizers.compiled.functions import dot
 from swarmpath.planners.compiled_coot import initialize, stalled_after
 from swarmpath.planners.compiled_score import score_into, unary_inplace
