@@ -26,6 +26,7 @@ import numpy as np
 from numba import njit
 
 import swarmpath.optimizers.compiled  # noqa: F401 - first: numba's versioned cache directory
+from swarmpath.optimizers.compiled.coot_phases import _clip as clip
 from swarmpath.world.optimum_compiled import _point_segment
 
 Array = np.ndarray
@@ -127,12 +128,8 @@ def _segment_clear(px: float, py: float, x: float, y: float, wx: Array, wy: Arra
 
 @njit(cache=True)
 def _clip(v: float, lo: float, hi: float, bounded: bool) -> float:
-    if bounded:
-        if v < lo:
-            v = lo
-        if v > hi:
-            v = hi
-    return v
+    """v clipped to [lo, hi] when ``bounded``, else v."""
+    return clip(v, lo, hi) if bounded else v
 
 
 @njit(cache=True)
