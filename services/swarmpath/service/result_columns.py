@@ -50,6 +50,7 @@ from swarmpath.service.result_frame import (
     FrameError,
     FrameRecord,
     RecordHead,
+    _first,
     decode_record,
 )
 
@@ -306,8 +307,3 @@ def _records(frame: ColumnsFrame) -> list[FrameRecord]:
         records.append(FrameRecord(head, arrays, b"", b""))
     return records
 
-
-def _first(exc: ValidationError) -> str:
-    err = exc.errors()[0]
-    loc = ".".join(str(p) for p in err["loc"])
-    return f"{loc}: {err['msg']}" if loc else str(err["msg"])
