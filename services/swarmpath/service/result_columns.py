@@ -286,21 +286,31 @@ def column_records(payload: bytes) -> tuple[str, list[FrameRecord]]:
     return frames[0].head.worker, records
 
 
-def _records(frame: ColumnsFrame) -> list[FrameRecord]:
-    h = frame.head
-    per_run: list[dict[str, np.ndarray]] = [{} for _ in h.runs]
+def column_arrays(frame: ColumnsFrame) -> dict[str, list[np.ndarray | None]]:
+    """Each declared array's value per run (None where a run has none; a path has rows of 3),
+    read-only views of the frame's block."""
+    out: dict[str, list[np.ndarray | None]] = {}
     offset = 0
-    for a in h.arrays:
+    for a in frame.head.arrays:
         width = WIDTHS[a.name]
-        for k, rows in enumerate(a.rows):
+        per_run: list[np.ndarray | None] = []
+        for rows in a.rows:
             if rows < 0:
+                per_run.append(None)
                 continue
             values = frame.block[offset:offset + rows * width]
-            per_run[k][a.name] = values.reshape(rows, width) if width > 1 else values
+            per_run.append(values.reshape(rows, width) if width > 1 else values)
             offset += rows * width
+        out[a.name] = per_run
+    return out
+
+
+def _records(frame: ColumnsFrame) -> list[FrameRecord]:
+    h = frame.head
+    by_name = column_arrays(frame)
     records = []
     for k, run in enumerate(h.runs):
-        arrays = per_run[k]
+        arrays = {name: v[k] for name, v in by_name.items() if v[k] is not None}
         shapes = [(name, "<f8", list(v.shape)) for name, v in arrays.items()]
         head = RecordHead(h.lease_id, h.job_id, h.cell, run, h.worker, h.status[k],
                           h.failure[k], h.seconds[k], h.metrics[k], shapes)

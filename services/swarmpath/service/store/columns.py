@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from swarmpath.service.incoming import Incoming
-from swarmpath.service.result_columns import ColumnsFrame, ColumnsHead
+from swarmpath.service.result_columns import ColumnsFrame, ColumnsHead, column_arrays
 from swarmpath.service.store.series import encode_series, series_prefix
 
 
@@ -98,18 +98,7 @@ def _series(frame: ColumnsFrame) -> tuple[Sequence[Any], dict[str, Sequence[Any]
             col += p.shape[1]
         flat = memoryview(matrix.reshape(-1))
         return [flat[i * width:(i + 1) * width] for i in range(n)], arrays
-    for a in h.arrays:
-        width = 3 if a.name == "path" else 1
-        per_run: list[Any] = []
-        for rows in a.rows:
-            if rows < 0:
-                per_run.append(None)
-                continue
-            size = rows * width
-            values = block[offset:offset + size]
-            per_run.append(values.reshape(rows, 3) if width == 3 else values)
-            offset += size
-        arrays[a.name] = per_run
+    arrays.update(column_arrays(frame))
     series = [encode_series({name: arrays[name][k] for name in arrays}) for k in range(n)]
     return series, arrays
 
