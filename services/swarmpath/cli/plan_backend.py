@@ -11,8 +11,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from swarmpath.cli.core import InputError
-
-BACKENDS = ("numpy", "numba")
+from swarmpath.optimizers.api import BACKENDS  # the registry of backends (re-exported here)
 
 
 def _numba_missing() -> str | None:

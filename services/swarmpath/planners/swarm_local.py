@@ -51,6 +51,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmpath.optimizers import RunStreams, get_optimizer
+from swarmpath.optimizers.api import BACKENDS
 from swarmpath.optimizers.base import ParameterError
 from swarmpath.planners import local, sensed_map, swarm_aim
 from swarmpath.planners.base import Decision, Observation, PlannerError, register
@@ -129,7 +130,7 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         "aim": ("shortcut", "carrot"),
         "knowledge": ("sensors", "map"),
         "aim_hits": ("known", "near"),
-        "backend": ("numpy", "numba"),
+        "backend": BACKENDS,
     }
     #: Optimizer parameters of the preset (e.g. ICOOT's two leaders), merged under user ones.
     optimizer_params: ClassVar[dict[str, Any]] = {}
