@@ -58,7 +58,6 @@ def tree_env(root: Path) -> dict[str, str]:
     env.pop("SWARMPATH_TOKEN", None)
     return env
 CLK_TCK = os.sysconf("SC_CLK_TCK")
-PAGE = os.sysconf("SC_PAGE_SIZE")
 
 
 def note(msg: str) -> None:
@@ -71,13 +70,11 @@ def free_port() -> int:
         return int(s.getsockname()[1])
 
 
-def proc_cpu_rss(pid: int) -> tuple[float, float]:
-    """(CPU seconds user + system, resident MB) of one process, from /proc."""
+def proc_cpu(pid: int) -> float:
+    """CPU seconds (user + system) of one process, from /proc (its memory: proc_memory)."""
     text = Path(f"/proc/{pid}/stat").read_text()
     fields = text[text.rindex(")") + 2:].split()
-    cpu = (int(fields[11]) + int(fields[12])) / CLK_TCK
-    rss = int(Path(f"/proc/{pid}/statm").read_text().split()[1]) * PAGE / 2**20
-    return cpu, rss
+    return (int(fields[11]) + int(fields[12])) / CLK_TCK
 
 
 def children_cpu(pid: int) -> float:
@@ -199,7 +196,7 @@ class Farm:
         total = 0.0
         for proc, _ in self.sims:
             with contextlib.suppress(OSError):
-                total += proc_cpu_rss(proc.pid)[0]
+                total += proc_cpu(proc.pid)
         return total
 
     def stop_sims(self) -> list[dict[str, Any]]:
@@ -280,12 +277,12 @@ def run(args: argparse.Namespace, data: Path, root: Path = ROOT) -> dict[str, An
         farm.wait(lambda: farm.alive() >= args.workers, 60 + args.workers * 0.2,
                   f"{args.workers} workers alive", poll=0.5)
         alive_before = farm.alive()
-        idle0 = proc_cpu_rss(pid)[0] + children_cpu(pid)
+        idle0 = proc_cpu(pid) + children_cpu(pid)
         time.sleep(args.idle_seconds)  # K live workers, nothing to lease: what they cost
-        idle = proc_cpu_rss(pid)[0] + children_cpu(pid) - idle0
+        idle = proc_cpu(pid) + children_cpu(pid) - idle0
         store0 = store_bytes(data / "store")
         load0 = os.getloadavg()[0]
-        cpu0, rss0 = proc_cpu_rss(pid)
+        cpu0, rss0 = proc_cpu(pid), proc_memory(pid)[0]
         rec0 = children_cpu(pid)
         sim0 = farm.sim_cpu()
         t0 = time.monotonic()
@@ -297,13 +294,13 @@ def run(args: argparse.Namespace, data: Path, root: Path = ROOT) -> dict[str, An
         for _ in range(args.jobs):
             first = len(rss)
             job, status = one_job(args, farm, spec, pid, t0, rss)
-            rss_jobs.append(round(proc_cpu_rss(pid)[1], 1))
+            rss_jobs.append(round(proc_memory(pid)[0], 1))
             profiles.append(memory_profile(rss[first:], int(status["runs_total"])))
             last = int(status["runs_done"]) + int(status["runs_failed"])
             finished += last
             span += (float(status["finished"] or time.time()) - float(status["started"] or 0)) \
                 if status.get("started") else float("nan")
-        cpu1, rss1 = proc_cpu_rss(pid)
+        cpu1, rss1 = proc_cpu(pid), proc_memory(pid)[0]
         rec1 = children_cpu(pid)
         sim1 = farm.sim_cpu()
         load1 = os.getloadavg()[0]
