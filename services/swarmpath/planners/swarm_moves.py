@@ -95,7 +95,7 @@ class SwarmMoveLimits(SwarmAim):
         # new choice each decision made a diff drive turn back and forth on the spot)
         last = [] if self._gave is None else [np.clip(p + drive * self._gave, 0.0, [w, h]) - p]
         moves = np.vstack([wanted - p, np.zeros(2), *last, ends - p])
-        targets = p + np.array([self._kept(p, m, obs.robot_radius) for m in moves])
+        targets = p + (moves if self._engulfed(p) else self._kept(p, moves, obs.robot_radius))
         turn = None if scenario.robot.model == "omni" else float(scenario.robot.angular_speed)
         centres = give_way.rollout(p, obs.pose.theta, targets, speed, turn, dt, steps)
         # an untracked point may move as fast as the fastest one of them sensed this scan (a
@@ -126,13 +126,14 @@ class SwarmMoveLimits(SwarmAim):
         self._held = None
         return Decision(targets[pick], decision.iterations, decision.duration, align=True)
 
-    def _kept(self, p: Array, move: Array, radius: float) -> Array:
-        """The part of ``move`` that ``_keep_off`` lets through (see there)."""
+    def _kept(self, p: Array, moves: Array, radius: float) -> Array:
+        """The parts of ``moves`` (n, 2) that ``_keep_off`` lets through when the robot is not
+        engulfed (see there; the callers check :meth:`_engulfed` once per decision)."""
         points, moving = self._scan
-        if not len(points) or self._engulfed(p):
-            return move
+        if not len(points):
+            return moves
         reach = radius + CONTACT + float(self.p["contact_band"]) * moving.astype(float)
-        return local.keep_off(p, move, points, reach)
+        return np.array([local.keep_off(p, m, points, reach) for m in moves])
 
     def _engulfed(self, p: Array) -> bool:
         """With ``give_way`` on: the robot's centre is inside an obstacle (a walker ran over it):
@@ -176,7 +177,7 @@ class SwarmMoveLimits(SwarmAim):
             out = p if self._way_out is None else p + self._way_out
             return Decision(out, decision.iterations, self.scenario.time_step, align=True)
         move = np.asarray(decision.target, dtype=float) - p
-        kept = self._kept(p, move, obs.robot_radius)
+        kept = self._kept(p, move[None, :], obs.robot_radius)[0]
         if np.array_equal(kept, move):
             return decision
         self._held = None
