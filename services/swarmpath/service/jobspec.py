@@ -388,7 +388,7 @@ def expand_cells(spec: BenchmarkJobSpec | MapJobSpec) -> list[BenchmarkCell | Ma
             map=map_name(m),
             scenario=None if isinstance(m, str) else dict(m),  # type: ignore[arg-type]
             params=dict(spec.params.get(p, {})),
-            optimum_budget=getattr(spec, "optimum_budget", None),
+            optimum_budget=spec.optimum_budget,
         )
         for p in spec.planners
         for m in spec.maps
