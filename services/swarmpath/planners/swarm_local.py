@@ -57,7 +57,7 @@ from swarmpath.planners import local, sensed_map, swarm_aim
 from swarmpath.planners.base import Decision, Observation, PlannerError, register
 from swarmpath.planners.swarm_escape import Escape
 from swarmpath.planners.swarm_moves import SwarmMoveLimits
-from swarmpath.planners.swarm_search import searcher, warm_search
+from swarmpath.planners.swarm_search import searcher
 from swarmpath.robot.sensors import get_sensor_model
 
 Array = np.ndarray
@@ -229,10 +229,8 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         except ParameterError as exc:
             raise PlannerError(str(exc)) from None
         self._search = searcher(opt_cls.name, self._opt_params, int(self.p["agents"]),
-                                self._streams, backend)
-        if backend == "numba":
-            warm_search(opt_cls.name, self._opt_params, int(self.p["agents"]),
-                        str(self.p["repair"]), str(self.p["objective"]))
+                                self._streams, backend, str(self.p["repair"]),
+                                str(self.p["objective"]))
 
     # ----------------------------------------------------------------------------- deciding
     def _hold(self, p: Array, aim: Array, ctx: local.StepContext) -> bool:

@@ -23,13 +23,17 @@ Search = Callable[[local.StepContext, int, int, int, float], tuple[float, Array,
 
 
 def searcher(optimizer: str, params: Mapping[str, Any], agents: int, streams: RunStreams,
-             backend: str) -> Search:
-    """The search of one decision: ``search(ctx, agents, iterations, patience, tolerance)``."""
+             backend: str, repair: str, objective: str) -> Search:
+    """The search of one decision: ``search(ctx, agents, iterations, patience, tolerance)``.
+    A compiled decision is compiled, or loaded from numba's cache, here rather than in a
+    decision (a tiny one with the ``repair`` and ``objective`` of the planner, on a generator
+    of its own: the planner's draws are untouched)."""
     if backend == "numba":
         from swarmpath.planners import compiled_decide
 
         decide = compiled_decide.decider(optimizer, params, agents)
         if decide is not None:
+            compiled_decide.warm(decide, repair, objective)
             rng = streams.generators[0]
             return lambda ctx, n, t, patience, tol: decide(rng, ctx, n, t, patience, tol)
 
@@ -38,17 +42,6 @@ def searcher(optimizer: str, params: Mapping[str, Any], agents: int, streams: Ru
         return numpy_search(optimizer, params, streams, ctx, n, iterations, patience, tol)
 
     return search
-
-
-def warm_search(optimizer: str, params: Mapping[str, Any], agents: int, repair: str,
-                objective: str) -> None:
-    """Compile, or load from numba's cache, the compiled decision of ``searcher(...,
-    "numba")`` if there is one (on a generator of its own: the planner's draws are untouched)."""
-    from swarmpath.planners import compiled_decide
-
-    decide = compiled_decide.decider(optimizer, params, agents)
-    if decide is not None:
-        compiled_decide.warm(decide, repair, objective)
 
 
 def numpy_search(optimizer: str, params: Mapping[str, Any], streams: RunStreams,
