@@ -180,7 +180,6 @@ def shortest_path(
     compiled = _compiled(scene) if backend == "numba" and margin > 0.0 else None
     if compiled is not None:
         scene.backend = "numba"
-    if compiled is not None:
         from swarmpath.world.optimum_compiled import segments_blocked_kernel
 
         direct = not segments_blocked_kernel(s[None], g[None], margin, *compiled)[0]
