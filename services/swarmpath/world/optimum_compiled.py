@@ -26,7 +26,6 @@ import swarmpath.optimizers.compiled  # noqa: F401 - first: numba's versioned ca
 Array = np.ndarray
 
 TOL = 1e-9  # optimum_base.TOL
-_f = np.ascontiguousarray
 
 
 @njit(cache=True)
@@ -74,8 +73,7 @@ def segments_blocked_kernel(A: Array, B: Array, m: float, box: Array, circles: A
     box grown by m + TOL overlaps the segment's."""
     n = A.shape[0]
     out = np.zeros(n, dtype=np.bool_)
-    reach_m = m - TOL
-    limit = m - TOL
+    limit = m - TOL  # a circle's reach (radius + m - TOL) and a polygon's least distance
     for s in range(n):
         ax, ay, bx, by = A[s, 0], A[s, 1], B[s, 0], B[s, 1]
         if box.shape[0] == 4:
@@ -98,7 +96,7 @@ def segments_blocked_kernel(A: Array, B: Array, m: float, box: Array, circles: A
                 t = 1.0
             dx = wx - t * ex
             dy = wy - t * ey
-            reach = circles[c, 2] + reach_m
+            reach = circles[c, 2] + limit
             if reach > 0.0 and dx * dx + dy * dy < reach * reach:
                 hit = True
                 break
