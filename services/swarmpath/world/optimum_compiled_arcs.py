@@ -26,13 +26,11 @@ Array = np.ndarray
 _f = np.ascontiguousarray
 
 
-def arcs_near_polygons(scene: Any, c: Array, rho: Array, th0: Array, dth: Array,
-                       ends: tuple[Array, Array] | None = None) -> Array:
+def arcs_near_polygons(scene: Any, c: Array, rho: Array, th0: Array, dth: Array, E0: Array,
+                       E1: Array) -> Array:
     """The polygon part of ``_Scene.arcs_blocked`` (margin > 0, no index) for the arcs (c,
-    rho, th0, dth): the same pairs and distances as numpy (:func:`_arc_edge`); the arcs' ends
-    (``ends``, else computed here) and the angles of the in-arc tests come from numpy, computed
-    as there."""
-    E0, E1 = ends if ends is not None else _ends(c, rho, th0, dth)
+    rho, th0, dth) with ends E0, E1 (:func:`_ends`): the same pairs and distances as numpy
+    (:func:`_arc_edge`); the angles of the in-arc tests come from numpy, computed as there."""
     c, rho = _f(c), _f(rho)
     e0, e1 = _f(scene.e0), _f(scene.e1)
     arcs, edges, vecs = arcs_pending_kernel(c, rho, E0, E1, scene.m, _f(scene.pc), _f(scene.pr),
@@ -54,7 +52,7 @@ def arcs_blocked(scene: Any, c: Array, rho: Array, th0: Array, dth: Array) -> Ar
         blocked = arcs_box_kernel(_f(c), _f(rho), _f(th0), _f(dth), E0, E1, box, axes,
                                   np.cos(axes), np.sin(axes))
     if scene.polygons and len(c):
-        blocked |= arcs_near_polygons(scene, c, rho, th0, dth, (E0, E1))
+        blocked |= arcs_near_polygons(scene, c, rho, th0, dth, E0, E1)
     return blocked
 
 
