@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import statistics
 from collections import defaultdict
 from typing import Any
 
@@ -41,12 +42,8 @@ def cell(rows: list[dict[str, Any]]) -> str:
 
 
 def gap_cell(rows: list[dict[str, Any]]) -> str:
-    gaps = sorted(100 * r["gap"] for r in rows if r["success"] and r["gap"] is not None)
-    if not gaps:
-        return "-"
-    mid = len(gaps) // 2
-    median = gaps[mid] if len(gaps) % 2 else 0.5 * (gaps[mid - 1] + gaps[mid])
-    return f"{median:.2f} %"
+    gaps = [100 * r["gap"] for r in rows if r["success"] and r["gap"] is not None]
+    return f"{statistics.median(gaps):.2f} %" if gaps else "-"
 
 
 def main() -> None:
