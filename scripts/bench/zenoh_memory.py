@@ -33,14 +33,9 @@ import time
 from pathlib import Path
 from typing import Any
 
+from farm_memory import proc_memory  # scripts/bench/farm_memory.py
+
 ROOT = Path(__file__).resolve().parents[2]
-
-
-def anon_mb() -> float:
-    for line in Path("/proc/self/status").read_text().splitlines():
-        if line.startswith("RssAnon:"):
-            return int(line.split()[1]) / 1024
-    raise RuntimeError("no RssAnon in /proc/self/status")
 
 
 def router(port: int, batch: int, answer_ms: float) -> None:
@@ -72,7 +67,8 @@ def router(port: int, batch: int, answer_ms: float) -> None:
     session.declare_subscriber("probe/put/**", lambda _s: got.__setitem__(0, got[0] + 1))
     print("ready", flush=True)
     for line in sys.stdin:
-        print(json.dumps({"at": line.strip(), "anon_mb": round(anon_mb(), 1), "puts": got[0]}),
+        anon = proc_memory(os.getpid())[1]
+        print(json.dumps({"at": line.strip(), "anon_mb": round(anon, 1), "puts": got[0]}),
               flush=True)
     os._exit(0)  # a session with callbacks can hang the interpreter's exit
 
