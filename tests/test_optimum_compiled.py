@@ -166,3 +166,12 @@ def test_unknown_backend_is_refused() -> None:
     square = ObstacleSet(polygons=(np.array([[1.0, -1.0], [2.0, -1.0], [2.0, 1.0], [1.0, 1.0]]),))
     with pytest.raises(ValueError, match="backend"):
         shortest_path((0.0, 0.0), (3.0, 0.0), square, 0.1, backend="cuda")
+
+
+def test_compiled_tolerance_is_the_reference_one() -> None:
+    """The kernels keep their own copy of the geometric tolerance (the numba cache is keyed by
+    the compiled sources only, so an import from optimum_base would not recompile them on a
+    change); the copy must stay the reference's value."""
+    from swarmpath.world import optimum_base, optimum_compiled
+
+    assert optimum_compiled.TOL == optimum_base.TOL
