@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from swarmpath import audit as au
 from swarmpath.cli import app
+from swarmpath.evidence import audit as au
 from swarmpath.functions import get_function, list_functions
 from swarmpath.optimizers import list_optimizers, minimize
 
@@ -101,7 +101,7 @@ def test_bench_flags_origin_suspect_cells_of_untransformed_studies_only():
 ])
 def test_reproduce_tables_flag_origin_suspect_cells(where, dim, runs, flagged):
     from swarmpath.cli import reproduce_output as ro
-    from swarmpath.reproduction import Row
+    from swarmpath.evidence.reproduction import Row
 
     stats = {"avg": float(np.mean(runs)), "median": 0.0, "min": 0.0, "max": 1.0, "std": 0.0}
     row = Row(key=f"t/A/{where}", who="A", where=where, dim=dim, published={}, measured=stats,

@@ -12,8 +12,8 @@ from PIL import Image
 from scipy import stats
 from typer.testing import CliRunner
 
-from swarmpath import compare, report
 from swarmpath.cli import app
+from swarmpath.evidence import compare, report
 from swarmpath.optimizers import list_optimizers
 from test_cli_bench import parse_markers, parse_table
 

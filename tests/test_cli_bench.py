@@ -13,11 +13,11 @@ import pytest
 from rich.console import Console
 from typer.testing import CliRunner
 
-from swarmpath import compare, report
 from swarmpath.cli import app, bench_spec
 from swarmpath.cli import bench as bench_cli
+from swarmpath.evidence import compare, report
+from swarmpath.evidence.stats import describe
 from swarmpath.optimizers import ParameterError, list_optimizers, minimize
-from swarmpath.stats import describe
 
 # GWO and one more of whatever is registered: the command must work for any algorithm.
 ALGOS = ["GWO", *[a for a in list_optimizers() if a != "GWO"][:1]]

@@ -9,7 +9,7 @@ from PIL import Image
 from typer.testing import CliRunner
 
 from swarmpath.cli import app
-from swarmpath.compare_maps import map_statistics
+from swarmpath.evidence.compare_maps import map_statistics
 from swarmpath.planners import list_planners
 from swarmpath.planners.summary import summarize
 from swarmpath.world import list_maps
@@ -226,7 +226,7 @@ def test_plan_of_one_planner_leaves_scipy_stats_unloaded():
             "from swarmpath.cli import main\n"
             "sys.argv = ['swarmpath', 'plan', '-p', 'MFB', '--runs', '1']\n"
             "try:\n    main()\nexcept SystemExit as exc:\n    assert not exc.code, exc.code\n"
-            "print('scipy.stats' in sys.modules, 'swarmpath.compare' in sys.modules)\n")
+            "print('scipy.stats' in sys.modules, 'swarmpath.evidence.compare' in sys.modules)\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          timeout=300, check=True)
     assert out.stdout.strip().splitlines()[-1] == "False False"

@@ -94,7 +94,7 @@ def test_results_and_status_tables_explain_their_columns(service):
 
 
 def test_legend_follows_the_columns_it_is_given():
-    from swarmpath.legend import NOTES, legend
+    from swarmpath.evidence.legend import NOTES, legend
 
     assert [c for c, _ in legend(["planner", "failed", "Gap (%)", "x"])] == ["failed", "Gap (%)"]
     assert legend(["Collisions"]) == [("Collisions", NOTES["collisions"])]
@@ -109,7 +109,7 @@ def rest_runs(http, job):
 def test_runs_export_in_every_format_holds_every_run_with_its_curve(service, tmp_path):
     import pandas as pd
 
-    from swarmpath import exports
+    from swarmpath.evidence import exports
 
     cli, http, _core = service
     job = finished(service, BENCH)
@@ -146,7 +146,7 @@ def test_rest_streams_runs_as_csv_and_parquet(service):
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    from swarmpath import exports
+    from swarmpath.evidence import exports
 
     _cli, http, _core = service
     job = finished(service, MAPS)
@@ -297,7 +297,7 @@ def test_ioh_export_follows_the_iohprofiler_format(service, tmp_path):
 
 
 def test_ioh_evaluation_points_follow_thinned_curves():
-    from swarmpath.ioh import evaluation_points, run_block
+    from swarmpath.evidence.ioh import evaluation_points, run_block
 
     assert evaluation_points(4, 4, 40) == [10, 20, 30, 40]
     assert evaluation_points(3, 9, 90, stride=4) == [10, 50, 90]  # iterations 1, 5, 9
@@ -343,7 +343,7 @@ def test_openapi_describes_summary_runs_and_run(service):
     assert {"curve", "path", "run_id", "state"} <= set(schemas["Run"]["properties"])
     job = finished(service, MAPS)
     summary = http.get(f"/jobs/{job}/summary").json()
-    from swarmpath.legend import NOTES
+    from swarmpath.evidence.legend import NOTES
 
     assert set(summary["legend"]) == set(NOTES) & set(summary["columns"])
     assert {"failed", "collisions", "gap_mean"} <= set(summary["legend"])
@@ -383,7 +383,7 @@ def test_download_layout_shows_the_files_topics_and_plots_curves(service, tmp_pa
 
 
 def test_runs_of_a_job_not_run_yet_export_with_empty_metrics(service, tmp_path):
-    from swarmpath import exports
+    from swarmpath.evidence import exports
 
     cli, http, _core = service
     job = http.post("/jobs", json=BENCH).json()["id"]

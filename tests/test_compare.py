@@ -1,4 +1,4 @@
-"""swarmpath.compare: against scipy's values and small cases worked by hand."""
+"""swarmpath.evidence.compare: against scipy's values and small cases worked by hand."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from swarmpath import compare
+from swarmpath.evidence import compare
 
 
 # ------------------------------------------------------------------------------------- holm

@@ -1,4 +1,4 @@
-"""swarmpath.compare_maps and the comparison under `swarmpath plan`'s tables."""
+"""swarmpath.evidence.compare_maps and the comparison under `swarmpath plan`'s tables."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from scipy import stats
 from typer.testing import CliRunner
 
 from swarmpath.cli import app
-from swarmpath.compare_maps import MEASURES, map_statistics
+from swarmpath.evidence.compare_maps import MEASURES, map_statistics
 
 runner = CliRunner()
 

@@ -201,9 +201,9 @@ def test_bench_with_the_numba_backend_gives_the_reference_tables_numbers():
 
 
 def test_reproduce_puts_the_backend_in_the_setting():
-    from swarmpath import reference
     from swarmpath.cli import reproduce
     from swarmpath.cli.core import InputError
+    from swarmpath.evidence import reference
 
     table = next(t for t in map(reference.load, reference.TABLES)
                  if isinstance(t, reference.BenchmarkTable))

@@ -46,7 +46,7 @@ F8_REL = 0.25
 # tolerance (+1: we are worse, -1: we are better). See docs/algorithms.md.
 EXCEPTIONS = {
     # No PSO setting reproduces the seeds' 30-D sphere-like F1/F6 together with their F7
-    # (docs/algorithms.md, PSO; services/swarmpath/reference/reasons.yaml).
+    # (docs/algorithms.md, PSO; services/swarmpath/evidence/reference/reasons.yaml).
     ("PSO", "F1"): +1,
     ("PSO", "F6"): +1,
     # Velocity clamped to 0.1 of the box lets PSO search F8's wide box better than the seeds'

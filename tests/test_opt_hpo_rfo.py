@@ -30,7 +30,7 @@ PUBLISHED_HPO = {
 }
 # Same order of magnitude as published (a factor 10 either way), or both exactly 0 / <= 1e-15.
 REPRODUCED = ["F1", "F5", "F7", "F8", "F9", "F10", "F11", "F13"]
-# Exceptions (docs: "HPO against Table 2"; services/swarmpath/reference/reasons.yaml):
+# Exceptions (docs: "HPO against Table 2"; services/swarmpath/evidence/reference/reasons.yaml):
 # * F2-F4: published 1e-153 .. 1e-293; every run of ours is astronomically small too, with
 #   other exponents (the collapse onto the origin keeps going; the exponent is not quality).
 # * F6, F12: heavy tails. Most runs reach the published order or better (median <= published

@@ -1,10 +1,11 @@
-"""swarmpath.plots: what the figures draw (medians, bands, colours, failure marks), file names."""
+"""swarmpath.evidence.plots: what the figures draw (medians, bands, colours, failure marks), file
+names."""
 
 import numpy as np
 import pytest
 from matplotlib.colors import to_hex
 
-from swarmpath import plots
+from swarmpath.evidence import plots
 from swarmpath.world.presets import get_map
 from swarmpath.world.scenario_io import scenario_from_dict
 

@@ -1,5 +1,5 @@
-"""The transcribed tables of the seed papers (swarmpath.reference): integrity, the facts about
-the prints that the files' notes state, and the reasons file."""
+"""The transcribed tables of the seed papers (swarmpath.evidence.reference): integrity, the facts
+about the prints that the files' notes state, and the reasons file."""
 
 from __future__ import annotations
 
@@ -8,11 +8,11 @@ from importlib import resources
 
 import pytest
 
-from swarmpath import reference
+from swarmpath.evidence import reference
+from swarmpath.evidence.reference import BenchmarkTable, MapTable
 from swarmpath.functions import get_function
 from swarmpath.optimizers import list_optimizers
 from swarmpath.planners import list_planners
-from swarmpath.reference import BenchmarkTable, MapTable
 from swarmpath.world import list_maps
 
 BENCH = [n for n in reference.TABLES if isinstance(reference.load(n), BenchmarkTable)]
@@ -22,7 +22,7 @@ MAPS = [n for n in reference.TABLES if isinstance(reference.load(n), MapTable)]
 def test_every_table_file_is_listed_and_every_listed_table_has_a_file():
     files = {
         p.name.removesuffix(".yaml")
-        for p in resources.files("swarmpath.reference").iterdir()
+        for p in resources.files("swarmpath.evidence.reference").iterdir()
         if p.name.endswith(".yaml") and p.name != reference.REASONS_FILE
     }
     assert files == set(reference.TABLES)

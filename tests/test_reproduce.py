@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from swarmpath import reference, reproduction
 from swarmpath.cli import app
 from swarmpath.cli import reproduce as cli
+from swarmpath.evidence import reference, reproduction
+from swarmpath.evidence.reference import Reason
+from swarmpath.evidence.reproduction import BETTER, MATCHES, NOT_COMPARABLE, WORSE
 from swarmpath.optimizers import minimize
-from swarmpath.reference import Reason
-from swarmpath.reproduction import BETTER, MATCHES, NOT_COMPARABLE, WORSE
 from swarmpath.world import get_map
 
 runner = CliRunner()

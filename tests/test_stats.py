@@ -1,4 +1,4 @@
-"""swarmpath.stats: the papers' summary statistics and ranks."""
+"""swarmpath.evidence.stats: the papers' summary statistics and ranks."""
 
 import math
 import warnings
@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.stats import rankdata
 
-from swarmpath.stats import describe, rank
+from swarmpath.evidence.stats import describe, rank
 
 finite = st.floats(min_value=-1e150, max_value=1e150, allow_nan=False, allow_infinity=False)
 

@@ -15,12 +15,12 @@ from pathlib import Path
 
 import pytest
 
+from swarmpath.evidence.stats import describe, rank
 from swarmpath.optimizers import minimize
 from swarmpath.service.capability import progress_proof, result_proof
 from swarmpath.service.protocol import Lease, MapJobSpec, RunResult, parse_job_spec
 from swarmpath.service.store import Store, StoreError
 from swarmpath.service.store import base as store_base
-from swarmpath.stats import describe, rank
 
 SPEC = {
     "kind": "benchmark", "algorithms": ["GWO", "PSO"], "functions": ["F1", "F9"], "dims": [4],

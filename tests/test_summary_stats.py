@@ -8,8 +8,8 @@ import pytest
 from pydantic import ValidationError
 from scipy import stats
 
-from swarmpath import report
-from swarmpath.compare_maps import map_statistics as map_tests
+from swarmpath.evidence import report
+from swarmpath.evidence.compare_maps import map_statistics as map_tests
 from swarmpath.service.protocol import parse_job_spec
 from swarmpath.service.summary_stats import (
     MAP_TEST_COLUMNS,

@@ -175,7 +175,7 @@ def test_scene_and_motion_of_a_dynamic_preset():
 
 @pytest.mark.parametrize("reference", [None, "GWO"])
 def test_statistics_are_compare_on_the_runs_best_values(reference):
-    from swarmpath.compare import compare_samples, friedman
+    from swarmpath.evidence.compare import compare_samples, friedman
 
     job = agg.JobAggregates("j3", "benchmark", _bench_cells(runs=8), reference=reference)
     rng = np.random.default_rng(5)
@@ -211,7 +211,7 @@ def test_a_young_view_is_shared_until_max_age():
 
 
 def test_map_statistics_are_compare_on_the_runs():
-    from swarmpath.compare import compare_samples, compare_success
+    from swarmpath.evidence.compare import compare_samples, compare_success
 
     cells = [{"index": i, "key": f"{p}/m1", "runs": 12,
               "spec": {"kind": "map", "planner": p, "map": "m1", "scenario": None}}
@@ -242,7 +242,7 @@ def test_map_statistics_are_compare_on_the_runs():
         assert st[f"{name}_markers"]["m1"]["MFB"] == expected
     assert st["length_markers"]["m1"]["MFB"] == "-"  # every MFB path is longer
     # the +/=/- counts and Friedman mean ranks are those swarmpath plan / results print
-    from swarmpath.compare_maps import map_statistics
+    from swarmpath.evidence.compare_maps import map_statistics
 
     cli = map_statistics(runs, ["MFB", "ICOOT"])
     for name in ("length", "seconds"):

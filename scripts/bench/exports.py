@@ -48,7 +48,7 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=100, help="runs per cell")
     args = parser.parse_args()
 
-    from swarmpath.ioh import write_ioh
+    from swarmpath.evidence.ioh import write_ioh
     from swarmpath.service.client import ServiceClient
     from swarmpath.service.coordinator import CoordinatorSettings, create_app
 

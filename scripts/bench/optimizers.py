@@ -43,9 +43,9 @@ from typing import Any
 
 import numpy as np
 
+from swarmpath.evidence.stats import describe
 from swarmpath.functions import get_function
 from swarmpath.optimizers import list_optimizers, minimize, minimize_many
-from swarmpath.stats import describe
 
 # swarmpath name -> (mealpy module, class): the original variant of each algorithm.
 MEALPY_CLASSES = {

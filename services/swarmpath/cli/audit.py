@@ -1,8 +1,8 @@
 """``swarmpath audit``: how much each optimizer owes to optima at the origin.
 
 Every optimizer runs every function plain, shifted and shifted+rotated (the same runs and seeds,
-through :func:`swarmpath.cli.bench.run_bench`); :func:`swarmpath.audit.audit` turns the best
-values into decades lost per optimizer. The table is what docs/algorithms.md shows.
+through :func:`swarmpath.cli.bench.run_bench`); :func:`swarmpath.evidence.audit.audit` turns the
+best values into decades lost per optimizer. The table is what docs/algorithms.md shows.
 """
 
 from __future__ import annotations
@@ -17,7 +17,6 @@ import typer
 from rich.console import Console
 
 from swarmpath import __version__
-from swarmpath.audit import AUDIT_TRANSFORMS, AuditRow, Key, audit
 from swarmpath.cli import parallel
 from swarmpath.cli.bench import run_bench
 from swarmpath.cli.bench_spec import check_range, make_spec
@@ -30,6 +29,7 @@ from swarmpath.cli.study_options import (
     IterationsOpt,
     SeedOpt,
 )
+from swarmpath.evidence.audit import AUDIT_TRANSFORMS, AuditRow, Key, audit
 from swarmpath.optimizers import ParameterError
 
 FORMATS = ("table", "markdown")

@@ -4,8 +4,8 @@ The command is a thin shell over pure functions: :func:`~swarmpath.cli.bench_spe
 validates the options into a :class:`BenchSpec` (raising :class:`InputError` naming the option),
 :func:`run_bench` runs the
 cells through :func:`swarmpath.optimizers.minimize_many` (stacked per algorithm and dimension,
-in one process per CPU: :mod:`swarmpath.cli.parallel`), and :mod:`swarmpath.report` builds the table
-and the JSON document.
+in one process per CPU: :mod:`swarmpath.cli.parallel`), and :mod:`swarmpath.evidence.report` builds
+the table and the JSON document.
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from rich.console import Console
 from rich.measure import Measurement
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-from swarmpath import __version__, audit, report
+from swarmpath import __version__
 from swarmpath.cli import parallel
 from swarmpath.cli.bench_spec import BenchSpec, check_range, make_spec
 from swarmpath.cli.core import InputError, app, plot_dir
@@ -36,6 +36,7 @@ from swarmpath.cli.study_options import (
     IterationsOpt,
     SeedOpt,
 )
+from swarmpath.evidence import audit, report
 from swarmpath.functions import get_function
 from swarmpath.optimizers import ParameterError, minimize_many
 from swarmpath.provenance import numeric_platform
@@ -285,8 +286,8 @@ def bench(
     seconds = time.perf_counter() - started
     tests = report.statistics(cells, spec.algorithms, spec.reference)
     if plot is not None:
-        from swarmpath import plots
-        from swarmpath.cli.cdplot import draw_cd
+        from swarmpath.evidence import plots
+        from swarmpath.evidence.cdplot import draw_cd
 
         for out in plots.write_benchmark_plots(report.plot_runs(cells), plot):
             stderr.print(f"wrote {out}", highlight=False)

@@ -119,7 +119,7 @@ def make_spec(
     """Validate the command's options; raises :class:`InputError` naming the bad one."""
     kind = resolve_transform_option(shifted, transform)
     algos = resolve_algorithms(algorithms)
-    from swarmpath.stats import resolve_reference
+    from swarmpath.evidence.stats import resolve_reference
 
     try:
         ref = resolve_reference(algos, reference)

@@ -5,7 +5,7 @@ any machine, see :mod:`swarmpath.planners.episode`) and prints Run / Distance / 
 time plus success, collisions and the gap to the exact optimum, with a Mean row. ``--json``
 prints ``{"runs": [...], "summary": [...]}`` (the summary from
 :func:`swarmpath.planners.summary.summarize`), ``--plot DIR`` writes one PNG per planner x map
-(:mod:`swarmpath.plots`) and box plots of length, gap and time per map.
+(:mod:`swarmpath.evidence.plots`) and box plots of length, gap and time per map.
 
 ``--maps`` takes preset names (``--list-maps``) and paths: scenario JSON/YAML, ROS map_server /
 nav2 YAML (recognised by its ``image`` key) or MovingAI ``.map`` files (``--resolution`` metres
@@ -109,7 +109,7 @@ def make_spec(planners: str, maps: str, runs: int = 10, seed: int = 1,
     ``backend``: ``--backend``, set in the params of every planner that has one
     (:func:`swarmpath.cli.plan_backend.apply_backend`)."""
     from swarmpath.cli.plan_backend import apply_backend
-    from swarmpath.stats import resolve_reference
+    from swarmpath.evidence.stats import resolve_reference
 
     names = resolve_planners(planners)
     try:
@@ -182,9 +182,10 @@ def simulated_world(scenario: Any, seed: int, run: int) -> Any:
 def document(cells: Sequence[CellResult], reference: str | None = None,
              spec: PlanSpec | None = None) -> dict[str, Any]:
     """The ``--json`` document: exactly {"runs": [...], "summary": [...], "statistics": {...},
-    "maps": [...]} (statistics: :meth:`swarmpath.compare_maps.MapStatistics.to_json`; maps: per
-    map its exact optimum, the reason when there is none, and the .scen octile optimum)."""
-    from swarmpath.compare_maps import map_statistics
+    "maps": [...]} (statistics: :meth:`swarmpath.evidence.compare_maps.MapStatistics.to_json`;
+    maps: per map its exact optimum, the reason when there is none, and the .scen octile
+    optimum)."""
+    from swarmpath.evidence.compare_maps import map_statistics
     from swarmpath.planners.summary import summarize
 
     runs = [r for c in cells for r in c.runs]
@@ -207,8 +208,8 @@ def document(cells: Sequence[CellResult], reference: str | None = None,
 # ---------------------------------------------------------------------------------------- plots
 def write_plots(cells: Sequence[CellResult], directory: Path) -> list[Path]:
     """One PNG per planner x map (every run's path on the map) and one per map (box plots of
-    length, gap and planning time): :func:`swarmpath.plots.write_map_plots`."""
-    from swarmpath import plots
+    length, gap and planning time): :func:`swarmpath.evidence.plots.write_map_plots`."""
+    from swarmpath.evidence import plots
 
     scenarios = {c.scenario.name: c.scenario for c in cells}
     seeds = {c.scenario.name: c.seed for c in cells}

@@ -1,4 +1,5 @@
-"""The comparison table under ``swarmpath plan``'s run tables (:mod:`swarmpath.compare_maps`).
+"""The comparison table under ``swarmpath plan``'s run tables
+(:mod:`swarmpath.evidence.compare_maps`).
 
 One row per map and planner: success rate, mean length (successful runs) and mean planning time,
 each followed by its marker against the reference planner; then the +/=/- counts per planner and
@@ -13,7 +14,7 @@ from typing import Any
 from rich import box
 from rich.table import Table
 
-from swarmpath.compare_maps import MEASURES, MapStatistics
+from swarmpath.evidence.compare_maps import MEASURES, MapStatistics
 
 LABELS = {"success": "success", "length": "length", "seconds": "time"}
 

@@ -12,7 +12,7 @@ from rich.console import Console
 from rich.measure import Measurement
 from rich.table import Table
 
-from swarmpath.legend import legend_text
+from swarmpath.evidence.legend import legend_text
 
 if TYPE_CHECKING:
     from swarmpath.cli.plan import CellResult, PlanSpec
@@ -96,7 +96,7 @@ def print_tables(cells: Sequence[CellResult], spec: PlanSpec, seconds: float) ->
     console.print(legend_text(["Collisions", "Gap (%)"]), markup=False, highlight=False)
     if len(spec.planners) > 1:
         from swarmpath.cli import plan_stats
-        from swarmpath.compare_maps import map_statistics
+        from swarmpath.evidence.compare_maps import map_statistics
 
         runs = [r for c in cells for r in c.runs]
         tests = map_statistics(runs, spec.planners, spec.reference)

@@ -1,5 +1,6 @@
 """``swarmpath reproduce``: run a seed paper's table at the paper's setting and set it beside
-the published one (:mod:`swarmpath.reference` holds the tables, :mod:`swarmpath.reproduction`
+the published one (:mod:`swarmpath.evidence.reference` holds the tables,
+:mod:`swarmpath.evidence.reproduction`
 the verdicts).
 
 Benchmark tables run through ``swarmpath bench``'s own functions (same spec, same seed, same
@@ -20,10 +21,11 @@ from typing import Annotated, Any
 import typer
 from rich.console import Console
 
-from swarmpath import __version__, reference, report, reproduction
+from swarmpath import __version__
 from swarmpath.cli import parallel
 from swarmpath.cli.core import InputError, app
 from swarmpath.cli.study_options import BackendOpt
+from swarmpath.evidence import reference, report, reproduction
 from swarmpath.provenance import numeric_platform
 
 FORMATS = ("table", "markdown", "csv")
@@ -185,7 +187,7 @@ def judge(table: reference.Table, setting: dict[str, Any], measured: Sequence[An
         scenarios = {m: get_map(m) for m in table.maps}
         rows = reproduction.map_rows(table, grouped, reasons, scenarios)
         if len(table.planners) > 1:
-            from swarmpath import compare
+            from swarmpath.evidence import compare
 
             samples: dict[str, dict[str, list[float]]] = {r.where: {} for r in rows}
             for r in rows:

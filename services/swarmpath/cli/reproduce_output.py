@@ -13,9 +13,9 @@ from rich.console import Console
 from rich.measure import Measurement
 from rich.table import Table
 
-from swarmpath import audit, reference, reproduction
-from swarmpath.report import format_value
-from swarmpath.reproduction import Row
+from swarmpath.evidence import audit, reference, reproduction
+from swarmpath.evidence.report import format_value
+from swarmpath.evidence.reproduction import Row
 
 Markers = Mapping[str, str | None]
 
@@ -150,13 +150,14 @@ def markdown_header(command: str, version: str, judged_from: str | None = None) 
         "the published mean distance, `matches` within 10 %. `not comparable`: the published "
         "value is illegible, contradicts itself, is in other units, or cannot be a path "
         "length. A cell beyond the tolerance is explained by a reviewed reason "
-        "(`services/swarmpath/reference/reasons.yaml`, with the command showing the evidence) "
+        "(`services/swarmpath/evidence/reference/reasons.yaml`, with the command showing the "
+        "evidence) "
         "or, for a benchmark cell, by every measured run lying inside the published [min, "
         "max]; otherwise it is counted as unexplained. +/=/- beside a measured mean: "
         "Wilcoxon rank-sum test against the last algorithm or planner listed (the paper's "
         "proposed one), Holm-corrected over the table, alpha 0.05 (docs/statistics.md). The "
         "published tables and the notes on their prints are in "
-        "`services/swarmpath/reference/*.yaml`.", "", "",
+        "`services/swarmpath/evidence/reference/*.yaml`.", "", "",
     ])
 
 

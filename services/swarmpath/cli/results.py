@@ -12,7 +12,7 @@ import typer
 
 from swarmpath.cli import service as svc
 from swarmpath.cli.core import InputError, app, plot_dir
-from swarmpath.legend import legend_text
+from swarmpath.evidence.legend import legend_text
 
 SUMMARY_FORMATS = ("table", "json", "csv")
 RUN_FORMATS = ("csv", "json", "parquet")
@@ -111,7 +111,7 @@ def _summary(client: Any, job: str, format: str) -> None:
 
 
 def _runs(client: Any, job: str, format: str, output: Path | None) -> None:
-    from swarmpath import exports
+    from swarmpath.evidence import exports
 
     if format in ("csv", "parquet") and output is not None:
         path = _call(client.download_runs, job, format, output)
@@ -132,7 +132,7 @@ def _runs(client: Any, job: str, format: str, output: Path | None) -> None:
 
 
 def _ioh(client: Any, job: str, directory: Path) -> None:
-    from swarmpath.ioh import write_ioh
+    from swarmpath.evidence.ioh import write_ioh
 
     if _call(client.job, job)["kind"] != "benchmark":
         raise InputError("--format", "ioh holds optimizer curves: JOB must be a benchmark job")
@@ -144,8 +144,8 @@ def _ioh(client: Any, job: str, directory: Path) -> None:
 
 def _cd_plots(summary: dict[str, Any], directory: Path) -> list[Path]:
     """A critical-difference diagram per dimension from the summary's Friedman tests."""
-    from swarmpath.cli.cdplot import draw_cd
-    from swarmpath.compare import Friedman
+    from swarmpath.evidence.cdplot import draw_cd
+    from swarmpath.evidence.compare import Friedman
 
     out = []
     for doc in (summary.get("statistics") or {}).get("friedman", []):
@@ -157,7 +157,7 @@ def _cd_plots(summary: dict[str, Any], directory: Path) -> list[Path]:
 
 
 def _plots(client: Any, job: str, directory: Path) -> list[Path]:
-    from swarmpath import plots
+    from swarmpath.evidence import plots
 
     items = [i for i in _call(client.iter_runs, job) if i.get("state") == "done"]
     if not items:

@@ -17,7 +17,7 @@ from typing import Annotated, Any
 import typer
 
 from swarmpath.cli.core import CommandFailed, InputError, InputErrors, app
-from swarmpath.legend import legend_text
+from swarmpath.evidence.legend import legend_text
 
 UrlOpt = Annotated[
     str | None,

@@ -9,7 +9,7 @@ keys), shared by ``swarmpath plan`` and the REST service. Rules:
 * ``length_*``, ``gap_*`` and ``smoothness_mean`` are over the **successful** runs only (a failed
   run's length measures how far it got, not a path), and are ``None`` when no run succeeded;
 * ``std`` is the sample standard deviation (ddof=1, 0 for one value), as in
-  :func:`swarmpath.stats.describe`;
+  :func:`swarmpath.evidence.stats.describe`;
 * ``min_clearance`` is the smallest over all runs; every value is JSON-safe (no NaN or inf:
   ``None`` instead).
 
@@ -22,7 +22,7 @@ import math
 from collections.abc import Iterable, Mapping
 from typing import Any
 
-from swarmpath.stats import describe
+from swarmpath.evidence.stats import describe
 
 __all__ = ["finite_or_none", "json_safe", "summarize", "summarize_cell"]
 

@@ -192,7 +192,7 @@ def _reference(v: str | None, members: list[str] | None) -> str | None:
     """A reference among the job's members (case-insensitive, stored as registered)."""
     if v is None or members is None:  # no reference, or the members failed their validation
         return v
-    from swarmpath.stats import resolve_reference
+    from swarmpath.evidence.stats import resolve_reference
 
     return resolve_reference(members, v)
 

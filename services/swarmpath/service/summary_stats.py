@@ -12,9 +12,9 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from swarmpath import report
-from swarmpath.compare_maps import MEASURES
-from swarmpath.compare_maps import map_statistics as map_tests
+from swarmpath.evidence import report
+from swarmpath.evidence.compare_maps import MEASURES
+from swarmpath.evidence.compare_maps import map_statistics as map_tests
 
 #: Columns added to the benchmark rows, after the existing ones.
 BENCHMARK_TEST_COLUMNS = ("marker", "p", "p_holm")
@@ -85,7 +85,7 @@ def _friedman_line(label: str, f: Mapping[str, Any]) -> str:
 
 def statistics_lines(summary: Mapping[str, Any]) -> list[str]:
     """The summary's +/=/- counts and Friedman tests as text lines (``swarmpath results`` prints
-    them under the table; :mod:`swarmpath.legend` explains the marker columns)."""
+    them under the table; :mod:`swarmpath.evidence.legend` explains the marker columns)."""
     st = summary.get("statistics")
     if not st:
         return []

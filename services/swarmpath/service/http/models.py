@@ -35,7 +35,7 @@ class Summary(_Open):
     legend: dict[str, str] = Field(
         default_factory=dict,
         description="what the columns mean (failed, collisions, gap_mean, ...): "
-                    "swarmpath.legend, the text under the CLI tables")
+                    "swarmpath.evidence.legend, the text under the CLI tables")
     warnings: list[TrajectoryWarning] | None = Field(
         None, description="map jobs: moving goals or obstacles whose stated path crosses a "
         "static obstacle, each naming its field (maps[i].goal_motion, maps[i].obstacles[k]); "

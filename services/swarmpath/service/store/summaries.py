@@ -9,7 +9,7 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
-from swarmpath.audit import origin_suspect
+from swarmpath.evidence.audit import origin_suspect
 from swarmpath.service.cell_notes import CellNotes, cell_notes, job_warnings
 from swarmpath.service.store.base import StoreBase, _safe
 from swarmpath.service.summary_stats import (
@@ -50,7 +50,7 @@ def map_cell_summary(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
     runs; error, seconds and collisions over all runs, the collisions also by cause
     (``robot_driven_contacts``, ``obstacle_driven_contacts``: :func:`swarmpath.metrics.
     contact_causes`). Missing values are left out; None when no run has the value."""
-    from swarmpath.stats import describe
+    from swarmpath.evidence.stats import describe
 
     ok = [m for m in runs if m.get("success") is True]
     lengths = _numbers(ok, "length")
@@ -111,7 +111,7 @@ class SummariesMixin(StoreBase):
         the cell has no exact optimum; null when it has one); a map summary's ``warnings`` are
         its stated trajectories through walls (:mod:`swarmpath.service.cell_notes`).
         ``statistics``: the tests' document (:mod:`swarmpath.service.summary_stats`)."""
-        from swarmpath.stats import describe, rank
+        from swarmpath.evidence.stats import describe, rank
 
         with self._read() as db:
             job = self._job_row(db, job_id)

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from swarmpath.legend import legend
+from swarmpath.evidence.legend import legend
 from swarmpath.service.web.cells import _BenchmarkCell, _f_star, _MapCell
 from swarmpath.service.web.series import (
     GRID_POINTS,
@@ -53,7 +53,7 @@ __all__ = [
 ]
 
 SAVE_FORMAT = "swarmpath-dashboard-1"
-#: Columns of the job page whose meaning is shown under it (swarmpath.legend).
+#: Columns of the job page whose meaning is shown under it (swarmpath.evidence.legend).
 BENCHMARK_LEGEND = ("failed", "rank", "marker")
 MAP_LEGEND = ("failed", "success_rate", "success_marker", "collisions", "length_mean",
               "length_marker", "gap_mean", "seconds_mean", "seconds_marker")

@@ -76,7 +76,7 @@ class _BenchmarkCell:
 
     def view(self) -> dict[str, Any]:
         if self.cache is None:
-            from swarmpath.stats import describe
+            from swarmpath.evidence.stats import describe
 
             rows = self.rows[self.ok]
             best = self.best[self.ok]

@@ -234,7 +234,7 @@ class Dashboard:
 
         def run() -> None:
             try:
-                import swarmpath.compare  # noqa: F401
+                import swarmpath.evidence.compare  # noqa: F401
                 for job_id in ids:
                     if self._closing.is_set():
                         break

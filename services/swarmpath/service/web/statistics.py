@@ -1,5 +1,6 @@
 """The dashboard's statistics of a job, from its aggregates: +/=/- markers against the job's
-reference and Friedman mean ranks (:mod:`swarmpath.compare`, imported on first use: scipy)."""
+reference and Friedman mean ranks (:mod:`swarmpath.evidence.compare`, imported on first use:
+scipy)."""
 
 from __future__ import annotations
 
@@ -17,10 +18,10 @@ def benchmark_statistics(
 ) -> dict[str, Any] | None:
     """+/=/- of every algorithm against ``reference`` (default: the last one listed) per
     function x dim (Wilcoxon rank-sum, Holm over the table) and Friedman mean ranks per dimension
-    (:mod:`swarmpath.compare`). None with fewer than two algorithms."""
+    (:mod:`swarmpath.evidence.compare`). None with fewer than two algorithms."""
     if len(algorithms) < 2:
         return None
-    from swarmpath.compare import compare_samples, friedman
+    from swarmpath.evidence.compare import compare_samples, friedman
 
     comparison = compare_samples(samples, algorithms, reference)
     markers: dict[str, dict[str, str]] = {}
@@ -46,15 +47,16 @@ def map_statistics(
     samples: Mapping[str, Mapping[str, Mapping[str, Sequence[float]]]] | None = None,
 ) -> dict[str, Any] | None:
     """Every planner against ``reference`` (default: the last one) per map, each test Holm over
-    its table (:mod:`swarmpath.compare`): success rates (Fisher's exact test, ``markers``) and,
-    from ``samples`` (metric -> map -> planner -> values), path lengths of successful runs and
+    its table (:mod:`swarmpath.evidence.compare`): success rates (Fisher's exact test, ``markers``)
+    and, from ``samples`` (metric -> map -> planner -> values), path lengths of successful runs and
     planning times (Wilcoxon rank-sum, lower is better: ``length_markers``,
     ``seconds_markers``, their +/=/- ``length_counts``, ``seconds_counts``) and the Friedman mean
     ranks of the planners' means over the maps (``friedman``: metric -> ranks), as
-    ``swarmpath plan`` and ``swarmpath results`` print them (:mod:`swarmpath.compare_maps`)."""
+    ``swarmpath plan`` and ``swarmpath results`` print them
+    (:mod:`swarmpath.evidence.compare_maps`)."""
     if len(planners) < 2:
         return None
-    from swarmpath.compare import compare_samples, compare_success, friedman
+    from swarmpath.evidence.compare import compare_samples, compare_success, friedman
 
     counts = {name: {p: (v["succeeded"], v["runs"] - v["crashed"])
                      for p, v in g["planners"].items()} for name, g in groups.items()}

@@ -6,7 +6,7 @@ import pydantic_core
 from fastapi import APIRouter, HTTPException
 from fastapi.responses import FileResponse, PlainTextResponse, StreamingResponse
 
-from swarmpath.legend import legend
+from swarmpath.evidence.legend import legend
 from swarmpath.service.http.deps import CoreDep, Limit, Offset, RunId, status_or_404
 from swarmpath.service.http.models import Run, RunsPage, Summary
 from swarmpath.service.util import json_safe
@@ -43,8 +43,8 @@ def job_runs(
     format: Literal["json", "csv", "parquet", "jsonl"] = "json",
 ) -> Any:
     """One item per run (finished or not), in run_id order: a page of JSON items, or every
-    run streamed as CSV or Parquet (one row per run, :mod:`swarmpath.exports` columns) or as
-    JSON lines (each item with its cell ``spec`` and series: curve and best position, or path).
+    run streamed as CSV or Parquet (one row per run, :mod:`swarmpath.evidence.exports` columns) or
+    as JSON lines (each item with its cell ``spec`` and series: curve and best position, or path).
     """
     status = status_or_404(core, job_id)
     if format == "json":
@@ -55,7 +55,7 @@ def job_runs(
 
 
 def _stream(core: Any, job_id: str, kind: str, format: str) -> StreamingResponse:
-    from swarmpath import exports
+    from swarmpath.evidence import exports
 
     items = core.store.iter_runs(job_id, series=True)
     name = f"{job_id}-runs.{format}"

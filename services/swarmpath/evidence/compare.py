@@ -46,7 +46,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import stats
 
-from swarmpath.stats import ALPHA, resolve_reference
+from swarmpath.evidence.stats import ALPHA, resolve_reference
 
 __all__ = [
     "ALPHA", "BETTER", "MARKERS", "SAME", "WORSE", "Comparison", "Friedman", "PairTest",

@@ -1,4 +1,5 @@
-"""Statistics of a map study (planners x maps), as :mod:`swarmpath.compare` does for benchmarks.
+"""Statistics of a map study (planners x maps), as :mod:`swarmpath.evidence.compare` does for
+benchmarks.
 
 Pure functions over run records (``RunOutcome.to_dict()`` dicts, or any mapping with the keys
 ``planner``, ``map``, ``success``, ``length``, ``seconds``), shared by ``swarmpath plan`` and the
@@ -22,8 +23,8 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from swarmpath.compare import ALPHA, Comparison, Friedman, compare_samples, compare_success
-from swarmpath.compare import friedman as friedman_test
+from swarmpath.evidence.compare import ALPHA, Comparison, Friedman, compare_samples, compare_success
+from swarmpath.evidence.compare import friedman as friedman_test
 
 __all__ = ["MEASURES", "MapStatistics", "map_statistics"]
 

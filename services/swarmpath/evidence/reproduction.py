@@ -1,8 +1,8 @@
 """A published table beside the measured one: verdict per cell, counts, the JSON document.
 
-Pure functions over :mod:`swarmpath.reference` (the published tables and the reviewed reasons)
-and measured runs (per-run best values of a benchmark cell; per-run outcomes of a map cell).
-``swarmpath reproduce`` runs the study and calls these.
+Pure functions over :mod:`swarmpath.evidence.reference` (the published tables and the reviewed
+reasons) and measured runs (per-run best values of a benchmark cell; per-run outcomes of a map
+cell). ``swarmpath reproduce`` runs the study and calls these.
 
 Benchmark cells compare the measured mean with the published avg on a log scale:
 ``log10(measured / published)``, computed on ``f - f_min`` (so F8, whose minimum is
@@ -32,9 +32,9 @@ from typing import Any
 
 import numpy as np
 
+from swarmpath.evidence.reference import BenchmarkTable, MapTable, Reason, cell_key
+from swarmpath.evidence.stats import describe
 from swarmpath.functions import get_function
-from swarmpath.reference import BenchmarkTable, MapTable, Reason, cell_key
-from swarmpath.stats import describe
 
 DECADE = 1.0
 MAP_TOLERANCE = 0.10

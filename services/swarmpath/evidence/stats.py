@@ -18,8 +18,8 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-#: Significance level of the statistical tests (:mod:`swarmpath.compare`); here so that modules
-#: which only name it do not load scipy.stats.
+#: Significance level of the statistical tests (:mod:`swarmpath.evidence.compare`); here so
+#: that modules which only name it do not load scipy.stats.
 ALPHA = 0.05
 
 __all__ = ["describe", "rank", "resolve_reference"]

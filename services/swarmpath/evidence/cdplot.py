@@ -1,8 +1,8 @@
 """Critical-difference diagrams (Demsar, JMLR 7 (2006) 1-30, Fig. 1) as PNG files.
 
-The mean ranks of a Friedman test (:class:`swarmpath.compare.Friedman`) on an axis from 1 (best,
-left) to k; each algorithm hangs from its rank to a label on the left (the better half) or the
-right; the Nemenyi critical difference is drawn above the axis, and a thick bar below it joins
+The mean ranks of a Friedman test (:class:`swarmpath.evidence.compare.Friedman`) on an axis from 1
+(best, left) to k; each algorithm hangs from its rank to a label on the left (the better half) or
+the right; the Nemenyi critical difference is drawn above the axis, and a thick bar below it joins
 every group of algorithms whose mean ranks differ by less than that (no significant difference).
 Drawn on a bare :class:`matplotlib.figure.Figure` (no pyplot state).
 """
@@ -13,7 +13,7 @@ from pathlib import Path
 
 from matplotlib.figure import Figure
 
-from swarmpath.compare import Friedman, cliques
+from swarmpath.evidence.compare import Friedman, cliques
 
 
 def draw_cd(f: Friedman, path: Path, title: str = "") -> Path | None:

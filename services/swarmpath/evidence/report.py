@@ -18,11 +18,12 @@ from rich import box
 from rich.table import Table
 from rich.text import Text
 
-from swarmpath import audit
-from swarmpath.stats import ALPHA, describe, rank
+from swarmpath.evidence import audit
+from swarmpath.evidence.stats import ALPHA, describe, rank
 
-if TYPE_CHECKING:  # swarmpath.compare loads scipy.stats (~0.8 s): only when statistics are run
-    from swarmpath import compare
+# swarmpath.evidence.compare loads scipy.stats (~0.8 s): only when statistics are run
+if TYPE_CHECKING:
+    from swarmpath.evidence import compare
 
 #: Rows of the table, in the papers' order.
 TABLE_STATS = ("min", "max", "avg", "std")
@@ -64,8 +65,8 @@ def assign_ranks(cells: Iterable[Cell]) -> None:
 
 @dataclass(frozen=True)
 class Statistics:
-    """The study's tests (:mod:`swarmpath.compare`): every algorithm against the reference in
-    every (function, dim) cell, one Holm family over the whole table, and per dimension the
+    """The study's tests (:mod:`swarmpath.evidence.compare`): every algorithm against the reference
+    in every (function, dim) cell, one Holm family over the whole table, and per dimension the
     Friedman test over the functions on the cells' average best fitness."""
 
     comparison: compare.Comparison
@@ -108,7 +109,7 @@ def benchmark_tests(
         kept = arr[~np.isnan(arr)]
         avg = describe(kept)["avg"] if kept.size else math.nan
         averages.setdefault(dim, {}).setdefault(function, {})[algorithm] = avg
-    from swarmpath import compare
+    from swarmpath.evidence import compare
 
     comparison = compare.compare_samples(samples, algorithms, reference, alpha)
     ref = comparison.reference
@@ -315,7 +316,7 @@ def tests_to_json(tests: Statistics) -> dict[str, Any]:
 
 def plot_runs(cells: Iterable[Cell]) -> list[dict[str, Any]]:
     """One dict per run (algorithm, function, dim, run, best_fitness, curve): what
-    :func:`swarmpath.plots.write_benchmark_plots` draws."""
+    :func:`swarmpath.evidence.plots.write_benchmark_plots` draws."""
     return [
         {"algorithm": c.algorithm, "function": c.function, "dim": c.dim, "run": run,
          "best_fitness": value, "curve": c.curves[i] if i < len(c.curves) else None}
