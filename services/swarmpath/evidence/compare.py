@@ -39,13 +39,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Hashable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy import stats
 
+from swarmpath.evidence.effect import Shift, a12_from_u, a12_magnitude, hodges_lehmann
 from swarmpath.evidence.friedman import Friedman, cliques, friedman, nemenyi_cd
 from swarmpath.evidence.markers import ALPHA, BETTER, MARKERS, SAME, WORSE, holm
 from swarmpath.evidence.stats import resolve_reference
@@ -123,6 +124,10 @@ class PairTest:
     p: float | None  # two-sided, unadjusted
     p_holm: float | None = None
     marker: str | None = None  # "+", "=", "-"; None when not tested
+    #: Vargha-Delaney A12: P(algorithm's run beats the reference's), ties half (effect.py)
+    a12: float | None = None
+    #: Hodges-Lehmann shift (algorithm - reference) with its 95 % interval; None for success
+    shift: Shift | None = None
 
 
 @dataclass(frozen=True)
@@ -171,10 +176,19 @@ class Comparison:
             "tests": [
                 {**key_dict(t.key), "algorithm": t.algorithm, "n": t.n,
                  "n_reference": t.n_reference, "statistic": _finite(t.statistic), "p": t.p,
-                 "p_holm": t.p_holm, "marker": t.marker}
+                 "p_holm": t.p_holm, "marker": t.marker, **effect_json(t)}
                 for t in self.tests
             ],
         }
+
+
+def effect_json(t: PairTest) -> dict[str, Any]:
+    """A test's effect sizes as JSON fields: a12, a12_magnitude and, for samples, the shift
+    with its interval (shift, shift_low, shift_high)."""
+    out: dict[str, Any] = {"a12": t.a12, "a12_magnitude": a12_magnitude(t.a12) or None}
+    if t.shift is not None:
+        out.update(shift=t.shift.estimate, shift_low=t.shift.low, shift_high=t.shift.high)
+    return out
 
 
 def _finite(v: float | None) -> float | None:
@@ -191,8 +205,7 @@ def _adjust(
     for i, q in zip(tested, adjusted, strict=True):
         q = float(q)
         marker = SAME if q >= alpha else (BETTER if direction[i] > 0 else WORSE)
-        t = raw[i]
-        out[i] = PairTest(t.key, t.algorithm, t.n, t.n_reference, t.statistic, t.p, q, marker)
+        out[i] = replace(raw[i], p_holm=q, marker=marker)
     return tuple(out)
 
 
@@ -202,9 +215,12 @@ def compare_samples(
     reference: str | None = None,
     alpha: float = ALPHA,
     lower_is_better: bool = True,
+    effects: bool = True,
 ) -> Comparison:
     """Rank-sum tests of every algorithm against ``reference`` in every cell of ``samples``
-    (cell key -> algorithm -> values of its runs), Holm-adjusted over the whole table."""
+    (cell key -> algorithm -> values of its runs), Holm-adjusted over the whole table; with
+    ``effects`` each test carries A12 and the Hodges-Lehmann shift with its 1 - ``alpha``
+    interval (:mod:`swarmpath.evidence.effect`)."""
     algos = tuple(algorithms)
     ref = resolve_reference(algos, reference) if algos else ""
     entries: list[tuple[K, str, np.ndarray, np.ndarray]] = []
@@ -224,7 +240,9 @@ def compare_samples(
         u, p = res
         leans_lower = u < x.size * y.size / 2.0
         direction[len(raw)] = 1 if leans_lower == lower_is_better else -1
-        raw.append(PairTest(cell, a, x.size, y.size, u, p))
+        a12 = a12_from_u(u, x.size, y.size, lower_is_better)
+        shift = hodges_lehmann(x, y, alpha) if effects else None
+        raw.append(PairTest(cell, a, x.size, y.size, u, p, a12=a12, shift=shift))
     return Comparison("wilcoxon rank-sum", algos, ref, alpha, lower_is_better,
                       _adjust(raw, alpha, direction))
 
@@ -256,5 +274,8 @@ def compare_success(
                 continue
             res = stats.fisher_exact([[s, n - s], [rs, rn - rs]], alternative="two-sided")
             direction[len(raw)] = 1 if s * rn > rs * n else -1
-            raw.append(PairTest(key, a, n, rn, float(res.statistic), float(res.pvalue)))
+            pa, pr = s / n, rs / rn  # A12 of the success indicators, higher better
+            a12 = pa * (1 - pr) + 0.5 * (pa * pr + (1 - pa) * (1 - pr))
+            raw.append(PairTest(key, a, n, rn, float(res.statistic), float(res.pvalue),
+                                a12=a12))
     return Comparison("fisher exact", algos, ref, alpha, False, _adjust(raw, alpha, direction))
