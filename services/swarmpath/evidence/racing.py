@@ -1,0 +1,193 @@
+"""Racing: how many runs each cell of a benchmark study gets, decided from the runs themselves.
+
+A block is one (function, dimension) of a study: the cells of its algorithms are raced against
+each other. Runs are scheduled in rounds: in round k every cell still racing may have
+``a_k = min(min_runs + k * batch, max_runs)`` runs. When every racing cell of a block has its
+``a_k`` runs, the block's comparisons (every algorithm against the reference, or every pair) are
+updated with :func:`swarmpath.evidence.sequential.decide`; a comparison decided (different, or
+equivalent within the margin) stays decided; a cell stops when every comparison it is part of is
+decided, or at ``max_runs``; the others go on to round k + 1.
+
+Everything here is a pure function of the runs' values in run order: :func:`race_block` replays a
+block from round 0, so a coordinator that restarts (or a second one reading the same store) finds
+the same rounds and decisions, and a study extended later with a larger ``max_runs`` continues
+from the runs it has. Run r of a cell is the run r of the unraced study (the same streams); racing
+only decides how many of them are computed.
+
+The error rate: each comparison's confidence sequence holds at level ``alpha / m`` where m is the
+number of comparisons of the whole study (Bonferroni), so the probability that any comparison of
+the study declares a difference between algorithms that do not differ (theta = 1/2), or an
+equivalence between algorithms that differ by more than the margin, is at most ``alpha``,
+whenever the race stops. See docs/statistics.md, "Racing".
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from swarmpath.evidence.sequential import PairDecision, decide, pair_scores
+
+PAIRS = ("reference", "all")
+
+__all__ = ["PAIRS", "BlockRace", "Duel", "RaceSettings", "comparisons_per_block", "race_block"]
+
+
+@dataclass(frozen=True)
+class RaceSettings:
+    """A race's parameters. ``margin`` is on the scale of theta (the probability that one
+    algorithm's run beats the other's): 0 means differences only, no equivalence decisions."""
+
+    max_runs: int
+    alpha: float = 0.05
+    min_runs: int = 10
+    batch: int = 10
+    pairs: str = "reference"
+    margin: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.alpha < 1.0:
+            raise ValueError(f"alpha must be in (0, 1), got {self.alpha}")
+        if self.min_runs < 1:
+            raise ValueError(f"min_runs must be >= 1, got {self.min_runs}")
+        if self.max_runs < self.min_runs:
+            raise ValueError(f"max_runs ({self.max_runs}) must be >= min_runs ({self.min_runs})")
+        if self.batch < 1:
+            raise ValueError(f"batch must be >= 1, got {self.batch}")
+        if self.pairs not in PAIRS:
+            raise ValueError(f"pairs must be one of {', '.join(PAIRS)}, got {self.pairs!r}")
+        if not 0.0 <= self.margin < 0.5:
+            raise ValueError(f"margin must be in [0, 0.5), got {self.margin}")
+
+    def allowance(self, round_: int) -> int:
+        """Runs a racing cell may have in round ``round_`` (0-based)."""
+        return min(self.min_runs + round_ * self.batch, self.max_runs)
+
+    @property
+    def rounds(self) -> int:
+        """The number of rounds of a cell that never stops early."""
+        return 1 + -(-(self.max_runs - self.min_runs) // self.batch)
+
+    def to_json(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+def comparisons_per_block(algorithms: Sequence[str], pairs: str) -> list[tuple[str, str]]:
+    """The block's comparisons as (algorithm, other): against the reference (the last name of
+    ``algorithms``: order them so) or every pair, in table order."""
+    if pairs == "all":
+        return list(itertools.combinations(algorithms, 2))
+    *others, ref = algorithms
+    return [(a, ref) for a in others]
+
+
+@dataclass(frozen=True)
+class Duel:
+    """One comparison of a block: ``a`` against ``b``, its latest :class:`PairDecision`, and the
+    round that decided it (None while open or when it ran out of runs)."""
+
+    a: str
+    b: str
+    result: PairDecision
+    round: int | None
+
+    @property
+    def marker(self) -> str:
+        """+, = or - for ``a`` against ``b`` (the table's markers): + a better, - a worse, =
+        equivalent or undecided."""
+        if self.result.decision == "different":
+            return "+" if self.result.better == "a" else "-"
+        return "="
+
+    def to_json(self) -> dict[str, Any]:
+        r = self.result
+        return {"a": self.a, "b": self.b, "decision": r.decision, "better":
+                None if r.better is None else (self.a if r.better == "a" else self.b),
+                "marker": self.marker, "round": self.round, "pairs": r.n, "decided_after": r.at,
+                "theta": r.theta, "low": r.low, "high": r.high}
+
+
+@dataclass(frozen=True)
+class BlockRace:
+    """A block's race after the runs given: rounds completed, each cell's allowance (the runs it
+    may have now), whether it still races, the round it stopped in and why, and the duels."""
+
+    rounds: int
+    allowance: dict[str, int]
+    racing: dict[str, bool]
+    stopped_round: dict[str, int | None]
+    stop_reason: dict[str, str | None]
+    duels: list[Duel]
+
+    @property
+    def finished(self) -> bool:
+        return not any(self.racing.values())
+
+    def runs_used(self) -> int:
+        return sum(self.allowance.values())
+
+
+def race_block(
+    values: Mapping[str, ArrayLike],
+    algorithms: Sequence[str],
+    settings: RaceSettings,
+    comparisons: int,
+) -> BlockRace:
+    """Replay a block's race over the values available: ``values[name]`` holds the best values
+    of that cell's runs 0, 1, ... in run order (NaN for a run that failed; only runs with a
+    result, contiguous from run 0). ``algorithms`` are the block's names with the reference last
+    (for ``pairs="reference"``); ``comparisons`` is the number of comparisons of the whole study
+    (the Bonferroni divisor)."""
+    level = settings.alpha / max(comparisons, 1)
+    arrays = {name: np.asarray(values.get(name, ()), dtype=float) for name in algorithms}
+    pairs = comparisons_per_block(algorithms, settings.pairs)
+    mine = {name: [p for p in pairs if name in p] for name in algorithms}
+    decided: dict[tuple[str, str], Duel] = {}
+    racing = {name: True for name in algorithms}
+    stopped: dict[str, int | None] = {name: None for name in algorithms}
+    reason: dict[str, str | None] = {name: None for name in algorithms}
+    allowance = {name: settings.allowance(0) for name in algorithms}
+    round_ = 0
+    while any(racing.values()):
+        need = settings.allowance(round_)
+        active = [name for name in algorithms if racing[name]]
+        for name in active:
+            allowance[name] = need
+        if any(arrays[name].size < need for name in active):
+            break  # the round is not complete: its missing runs are what may be leased now
+        for a, b in pairs:
+            if (a, b) not in decided and (racing[a] or racing[b]):
+                z = pair_scores(arrays[a][:need], arrays[b][:need])
+                result = decide(z, level, settings.margin, interval=False)
+                if result.decision != "open":
+                    decided[(a, b)] = Duel(a, b, result, round_)
+        for name in active:
+            if mine[name] and all(p in decided for p in mine[name]):
+                racing[name], stopped[name], reason[name] = False, round_, "decided"
+            elif need >= settings.max_runs:
+                racing[name], stopped[name], reason[name] = False, round_, "max_runs"
+        round_ += 1
+    duels = []
+    for a, b in pairs:
+        # the reported interval and score use every pair the two cells have so far
+        n = min(allowance[a], allowance[b], arrays[a].size, arrays[b].size)
+        result = decide(pair_scores(arrays[a][:n], arrays[b][:n]), level, settings.margin)
+        if (a, b) in decided:
+            d = decided[(a, b)].result
+            result = PairDecision(result.n, d.decision, d.better, d.at, result.theta,
+                                  result.low, result.high)
+            duels.append(Duel(a, b, result, decided[(a, b)].round))
+        else:  # a crossing inside an incomplete round waits for the round's end
+            duels.append(Duel(a, b, _open(result), None))
+    return BlockRace(round_, allowance, racing, stopped, reason, duels)
+
+
+def _open(result: PairDecision) -> PairDecision:
+    if result.decision == "open":
+        return result
+    return PairDecision(result.n, "open", None, 0, result.theta, result.low, result.high)
