@@ -81,6 +81,14 @@ class BenchmarkFunction:
             value = value + rng.random(value.shape)
         return np.asarray(value, dtype=float)
 
+    def check_study(self, dim: int, transform: str) -> None:
+        """ValueError naming what this function cannot run (a suite function: a dimension its
+        suite does not define, a transform on top of its instance)."""
+
+    def report(self, values: ArrayLike) -> Array:
+        """The values as reported in results (a CEC function floors errors below 1e-8 to 0)."""
+        return np.asarray(values, dtype=float)
+
     def shifted(self, shift: ArrayLike) -> BenchmarkFunction:
         """This function with its optimum moved by ``shift`` (bounds unchanged)."""
         o = np.asarray(shift, dtype=float)
@@ -131,22 +139,123 @@ _FUNCTIONS: dict[str, BenchmarkFunction] = {
 }
 
 
-def list_functions() -> list[str]:
-    """Registered names, in table order (F1..F13, with F6-floor after F6)."""
-    return list(_FUNCTIONS)
+@dataclass(frozen=True)
+class Suite:
+    """A named family of registered functions (``bbob``, ``cec2017``, a plugin's suite).
+
+    ``functions``: its members in table order, named ``<suite>:<name>``. ``members``: the names
+    the suite's name and its ranges expand to (a member left out, such as CEC 2017's F2 that the
+    organisers excluded, is still registered and can be named on its own).
+    """
+
+    name: str
+    functions: tuple[BenchmarkFunction, ...]
+    members: tuple[str, ...]
+    description: str = ""
 
 
-def get_function(name: str) -> BenchmarkFunction:
+_SUITES: dict[str, Suite] = {}
+_SUITE_FUNCTIONS: dict[str, BenchmarkFunction] = {}
+_suites_loaded = False
+
+
+def register_suite(suite: Suite) -> Suite:
+    """Register a suite and its functions (ValueError if a name is taken)."""
+    if suite.name in _SUITES or suite.name in _FUNCTIONS:
+        raise ValueError(f"suite {suite.name!r} is already registered")
+    names = [f.name for f in suite.functions]
+    for name in names:
+        if not name.startswith(f"{suite.name}:"):
+            raise ValueError(f"{name!r}: a function of suite {suite.name!r} is named "
+                             f"'{suite.name}:<name>'")
+        if name in _FUNCTIONS or name in _SUITE_FUNCTIONS:
+            raise ValueError(f"function {name!r} is already registered")
+    unknown = set(suite.members) - set(names)
+    if unknown:
+        raise ValueError(f"suite {suite.name!r} lists members it does not have: {sorted(unknown)}")
+    _SUITES[suite.name] = suite
+    _SUITE_FUNCTIONS.update({f.name: f for f in suite.functions})
+    return suite
+
+
+def _load_suites() -> None:
+    """Import the built-in suites (they register themselves) on first use."""
+    global _suites_loaded
+    if not _suites_loaded:
+        _suites_loaded = True
+        import swarmpath.functions.suites  # noqa: F401 - registers bbob, cec2017, cec2022
+
+
+def list_suites() -> list[str]:
+    """Registered suite names."""
+    _load_suites()
+    return list(_SUITES)
+
+
+def get_suite(name: str) -> Suite:
+    _load_suites()
     try:
-        return _FUNCTIONS[name]
+        return _SUITES[name]
     except KeyError:
         from swarmpath.names import unknown
 
-        raise KeyError(unknown("function", name, _FUNCTIONS)) from None
+        raise KeyError(unknown("suite", name, _SUITES)) from None
+
+
+def list_functions(suite: str | None = None) -> list[str]:
+    """Registered names in table order: without ``suite`` the stand-alone functions (F1..F13,
+    with F6-floor after F6), else that suite's functions (all of them, its excluded members
+    too)."""
+    if suite is None:
+        return list(_FUNCTIONS)
+    return [f.name for f in get_suite(suite).functions]
+
+
+def get_function(name: str) -> BenchmarkFunction:
+    """The function registered as ``name``; a suite function's instance k is
+    ``<suite>:<name>@i<k>`` (instance 1 without the suffix)."""
+    if name in _FUNCTIONS:
+        return _FUNCTIONS[name]
+    _load_suites()
+    if name in _SUITE_FUNCTIONS:
+        return _SUITE_FUNCTIONS[name]
+    base, sep, instance = name.rpartition("@i")
+    if sep and base in _SUITE_FUNCTIONS and instance.isdigit():
+        with_instance = getattr(_SUITE_FUNCTIONS[base], "with_instance", None)
+        if with_instance is not None:
+            try:
+                return with_instance(int(instance))
+            except ValueError as exc:
+                raise KeyError(f"function {name!r}: {exc}") from None
+    from swarmpath.names import unknown
+
+    raise KeyError(unknown("function", name, {**_FUNCTIONS, **_SUITE_FUNCTIONS, **_SUITES}))
+
+
+def _suite_range(part: str) -> list[str] | None:
+    """'bbob:f1-f5', 'cec2017:F3-F10' -> the suite's members numbered in the range (inclusive);
+    None if ``part`` is not such a range."""
+    suite_name, colon, span = part.partition(":")
+    lo, dash, hi = span.partition("-")
+    if not (colon and dash) or suite_name not in _SUITES:
+        return None
+    suite = _SUITES[suite_name]
+    prefix = f"{suite_name}:"
+    first = get_function(prefix + lo) if prefix + lo in _SUITE_FUNCTIONS else None
+    last = get_function(prefix + hi) if prefix + hi in _SUITE_FUNCTIONS else None
+    if first is None or last is None:
+        return None
+    names = [f.name for f in suite.functions]
+    a, b = names.index(first.name), names.index(last.name)
+    if a > b:
+        raise KeyError(f"function range {part!r} runs backwards")
+    return [n for n in names[a:b + 1] if n in suite.members]
 
 
 def expand_function_names(spec: str) -> list[str]:
-    """Parse 'F1-F13', 'F1,F5,F9' or mixtures ('F1-F4,F6-floor') into registered names."""
+    """Parse 'F1-F13', 'F1,F5,F9', a suite name ('bbob': its members), a suite range
+    ('bbob:f1-f5', 'cec2017:F1-F10': the suite's members in it) or mixtures into registered
+    names."""
     names: list[str] = []
     for part in (p.strip() for p in spec.split(",")):
         if not part:
@@ -163,5 +272,14 @@ def expand_function_names(spec: str) -> list[str]:
             if 1 <= a <= b <= 13:
                 names.extend(f"F{i}" for i in range(a, b + 1))
                 continue
+        _load_suites()
+        if part in _SUITES:
+            names.extend(_SUITES[part].members)
+            continue
+        expanded = _suite_range(part)
+        if expanded is not None:
+            names.extend(expanded)
+            continue
         get_function(part)  # raises with the list of valid names
+        names.append(part)
     return names

@@ -162,6 +162,11 @@ def minimize_many(
     if not fns:
         raise ParameterError("functions must name at least one function")
     _check_sizes(dim, agents, iterations)
+    for fn in fns:
+        try:
+            fn.check_study(dim, kind)
+        except ValueError as exc:
+            raise ParameterError(str(exc)) from None
     if function_runs is None:
         ids = list(range(runs)) if run_ids is None else [int(r) for r in run_ids]
         cell_ids = [ids] * len(fns)
@@ -231,9 +236,9 @@ def minimize_many(
                 iterations=iterations,
                 seed=int(seed),
                 run_ids=list(ids),
-                best_fitness=best[rows].copy(),
+                best_fitness=fn.report(best[rows]),
                 best_position=position[rows].copy(),
-                curve=curve[rows].copy(),
+                curve=fn.report(curve[rows]),
                 evaluations=evaluations[rows].copy(),
                 seconds=seconds * len(ids) / total,
                 shifts=None if shifts is None else shifts[rows].copy(),

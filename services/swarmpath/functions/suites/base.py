@@ -1,0 +1,171 @@
+"""Functions of the standard suites (BBOB, CEC 2017, CEC 2022) as registered functions.
+
+A suite function is one test function of a suite bound to one instance: its optimum, its offset
+and its rotations come from the instance (BBOB: COCO's generator; CEC: the organisers' data
+files), for any dimension the suite defines. It is a :class:`BenchmarkFunction` whose
+``kernel`` returns the **error** f(x) - f_opt, so that every table, curve and statistic of a
+study reports errors as the field does (COCO's "precision", the CEC competitions' error values);
+:meth:`SuiteFunction.value` gives f(x) itself (what the golden values compare).
+
+Names: ``<suite>:<function>`` is instance 1 (``bbob:f3``, ``cec2017:F5``), and
+``<suite>:<function>@i<k>`` instance k (``bbob:f3@i7``). A study's ``instances`` expand a suite
+function into its instances; the instance is part of the function's name from there on, so the
+job spec, the cells, the results, the store and the MCAP files carry it unchanged.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from swarmpath.functions.registry import BenchmarkFunction
+
+Array = NDArray[np.float64]
+
+#: (X (..., d), dim, instance) -> f (...,): the suite's values, f_opt included.
+Values = Callable[[Array, int], Array]
+#: (dim, instance) -> (x_opt (d,), f_opt)
+Optimum = Callable[[int, int], tuple[Array, float]]
+
+INSTANCE_SEPARATOR = "@i"
+_INSTANCE = re.compile(r"^(?P<base>.+)@i(?P<instance>[0-9]+)$")
+
+
+def split_instance(name: str) -> tuple[str, int | None]:
+    """('bbob:f3', 7) for 'bbob:f3@i7'; (name, None) for a name without an instance."""
+    m = _INSTANCE.match(name)
+    if m is None:
+        return name, None
+    return m["base"], int(m["instance"])
+
+
+def instance_name(base: str, instance: int) -> str:
+    """The registered name of instance ``instance`` of suite function ``base``."""
+    return f"{base}{INSTANCE_SEPARATOR}{int(instance)}"
+
+
+@dataclass(frozen=True)
+class SuiteError:
+    """The kernel of a suite function: f(x) - f_opt for the instance, per dimension."""
+
+    values: Callable[[Array, int, int], Array]
+    optimum: Callable[[int, int], tuple[Array, float]]
+    instance: int
+    check: Callable[[int], None]
+
+    def __call__(self, x: Array) -> Array:
+        d = int(x.shape[-1])
+        self.check(d)
+        return np.asarray(self.values(x, d, self.instance) - self.optimum(d, self.instance)[1])
+
+
+@dataclass(frozen=True)
+class SuiteFunction(BenchmarkFunction):
+    """One function of a suite, bound to one instance (see the module docstring).
+
+    ``dimensions``: the dimensions the suite defines (None: any d >= ``min_dim``);
+    ``instances``: the instance ids it defines (None: any k >= 1). ``number`` is the function's
+    number within its suite. ``error_floor``: errors below it are reported as 0 (CEC's 1e-8 rule;
+    0.0: none), applied to reported values only, never to what an optimizer compares.
+    """
+
+    suite: str = ""
+    number: int = 0
+    instance: int = 1
+    dimensions: tuple[int, ...] | None = None
+    min_dim: int = 2
+    instances: tuple[int, ...] | None = None
+    error_floor: float = 0.0
+    values_of: Callable[[Array, int, int], Array] | None = field(default=None, compare=False)
+    optimum_of: Callable[[int, int], tuple[Array, float]] | None = field(
+        default=None, compare=False)
+
+    @property
+    def base_name(self) -> str:
+        return split_instance(self.name)[0]
+
+    def check_dim(self, dim: int) -> None:
+        if self.dimensions is not None and dim not in self.dimensions:
+            raise ValueError(f"{self.base_name} is defined for dim in "
+                             f"{', '.join(map(str, self.dimensions))}, got {dim}")
+        if dim < self.min_dim:
+            raise ValueError(f"{self.base_name} needs dim >= {self.min_dim}, got {dim}")
+
+    def check_instance(self, instance: int) -> None:
+        if isinstance(instance, bool) or not isinstance(instance, int | np.integer) or (
+                instance < 1):
+            raise ValueError(f"instance of {self.base_name} must be an integer >= 1, "
+                             f"got {instance!r}")
+        if self.instances is not None and instance not in self.instances:
+            raise ValueError(f"{self.suite} has instances {', '.join(map(str, self.instances))}"
+                             f" (the official data), got {instance}")
+
+    def with_instance(self, instance: int) -> SuiteFunction:
+        """This function on instance ``instance`` (ValueError if the suite has no such one)."""
+        self.check_instance(instance)
+        assert self.values_of is not None and self.optimum_of is not None
+        name = self.base_name if instance == 1 else instance_name(self.base_name, instance)
+        kernel = SuiteError(self.values_of, self.optimum_of, int(instance), self.check_dim)
+        return replace(self, name=name, instance=int(instance), kernel=kernel)
+
+    def value(self, X: ArrayLike) -> Array:
+        """f(X) itself (f_opt included) for X of shape (..., d): the reference's number."""
+        x = np.asarray(X, dtype=float)
+        d = int(x.shape[-1])
+        self.check_dim(d)
+        assert self.values_of is not None
+        return np.asarray(self.values_of(x, d, self.instance), dtype=float)
+
+    def f_opt(self, dim: int) -> float:
+        self.check_dim(dim)
+        assert self.optimum_of is not None
+        return float(self.optimum_of(dim, self.instance)[1])
+
+    def x_opt(self, dim: int) -> Array:
+        self.check_dim(dim)
+        assert self.optimum_of is not None
+        return np.array(self.optimum_of(dim, self.instance)[0], dtype=float)
+
+    # BenchmarkFunction's view: the kernel is the error, so the minimum is 0 at x_opt.
+    def f_min_for(self, dim: int) -> float:
+        return 0.0
+
+    def optimum(self, dim: int) -> Array:
+        return self.x_opt(dim)
+
+    def check_study(self, dim: int, transform: str) -> None:
+        self.check_dim(dim)
+        if transform != "none":
+            raise ValueError(f"{self.base_name} is shifted and rotated by its instance; "
+                             f"transform must be 'none', got {transform!r}")
+
+    def report(self, errors: ArrayLike) -> Array:
+        """Errors as reported: below ``error_floor`` they count as 0 (CEC's rule)."""
+        e = np.array(errors, dtype=float)
+        if self.error_floor > 0.0:
+            e[e < self.error_floor] = 0.0
+        return e
+
+
+def make_suite_function(
+    suite: str, number: int, label: str, bound: float, description: str,
+    values_of: Callable[[Array, int, int], Array],
+    optimum_of: Callable[[int, int], tuple[Array, float]],
+    dimensions: tuple[int, ...] | None = None, instances: tuple[int, ...] | None = None,
+    error_floor: float = 0.0,
+) -> SuiteFunction:
+    """Instance 1 of a suite function on the box [-bound, bound]^d, named ``suite:label``."""
+    base = SuiteFunction(
+        name=f"{suite}:{label}", kernel=_unbound, lower=-bound, upper=bound,
+        optimum_coordinate=float("nan"), description=description, suite=suite, number=number,
+        dimensions=dimensions, instances=instances, error_floor=error_floor,
+        values_of=values_of, optimum_of=optimum_of)
+    return base.with_instance(1)
+
+
+def _unbound(x: Array) -> Array:  # replaced by with_instance
+    raise RuntimeError("suite function without an instance")
