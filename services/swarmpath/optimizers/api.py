@@ -129,6 +129,7 @@ def minimize_many(
     backend: str = "numpy",
     *,
     function_runs: Sequence[Sequence[int]] | None = None,
+    max_evaluations: int | None = None,
 ) -> list[Result]:
     """``minimize`` for several functions at once: one :class:`Result` per function, in order.
 
@@ -154,6 +155,9 @@ def minimize_many(
     may then name a function more than once), instead of the same ``runs``/``run_ids`` for all;
     a service worker stacks the leases of several cells this way. Each result's runs are still
     those of ``minimize(algorithm, function, ..., run_ids=its runs)``, number for number.
+
+    ``max_evaluations``: no run counts an evaluation past this many (the field's budget:
+    :mod:`swarmpath.optimizers.budget` picks the iterations that spend it); numpy only.
     """
     if backend not in BACKENDS:
         raise ParameterError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
@@ -183,6 +187,8 @@ def minimize_many(
     if isinstance(elements, bool) or not isinstance(elements, int | np.integer) or elements < 0:
         raise ParameterError(f"chunk_elements must be an integer >= 0, got {elements!r}")
     cls = get_optimizer(algorithm)
+    if max_evaluations is not None and backend != "numpy":
+        raise ParameterError("an evaluation budget (budget_evals) runs on backend 'numpy' only")
     if backend == "numba":  # run by run: one call per distinct run list, progress spread
         if all(ids == cell_ids[0] for ids in cell_ids):
             groups = [(fns, cell_ids[0])]
@@ -209,6 +215,7 @@ def minimize_many(
     spans = [slice(int(a), int(b)) for a, b in itertools.pairwise(bounds)]
     curve = np.empty((int(bounds[-1]), iterations))
     for opt in opts:
+        opt.max_evaluations = max_evaluations
         opt.initialize()
     for i in range(iterations):
         for opt, span in zip(opts, spans, strict=True):

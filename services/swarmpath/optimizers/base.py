@@ -72,6 +72,10 @@ class Optimizer(ABC):
         self._full_bounds: dict[int, tuple[Array, Array]] = {}
         #: True once a masked evaluation happened (some computed points were not used).
         self.masked_evaluation = False
+        #: Evaluations each run may count (None: no limit): points past it, in row order, count
+        #: as not evaluated (+inf, not counted, never the best), so a run's record is that of
+        #: its first ``max_evaluations`` evaluations (``--budget-evals``; optimizers.budget).
+        self.max_evaluations: int | None = None
 
     # ----------------------------------------------------------------------------------- params
     @classmethod
@@ -123,6 +127,8 @@ class Optimizer(ABC):
     def record(self, X: Array, F: Array, mask: NDArray[np.bool_] | None = None) -> Array:
         """The bookkeeping of :meth:`evaluate` for values ``F`` (R, m) already computed at X:
         count them and update the best ever evaluated (first index wins ties)."""
+        if self.max_evaluations is not None:
+            mask = self._within_budget(X.shape[1], mask)
         if mask is not None:
             self.masked_evaluation = True
             F = np.where(mask, F, np.inf)
@@ -140,6 +146,16 @@ class Optimizer(ABC):
             self.best_fitness = np.where(better, cand, self.best_fitness)
             self.best_position = np.where(better[:, None], X[rows, idx], self.best_position)
         return F
+
+    def _within_budget(self, m: int, mask: NDArray[np.bool_] | None) -> NDArray[np.bool_] | None:
+        """``mask`` narrowed to the points that still fit ``max_evaluations`` (None: all do)."""
+        assert self.max_evaluations is not None
+        counted = np.ones((self.R, m), dtype=bool) if mask is None else np.asarray(mask)
+        remaining = self.max_evaluations - self.evaluations
+        allowed = counted & (np.cumsum(counted, axis=1) <= remaining[:, None])
+        if mask is None and allowed.all():
+            return None
+        return allowed
 
     def clip(self, X: Array) -> Array:
         return np.clip(X, self.lb, self.ub)

@@ -1,0 +1,50 @@
+"""Budgets in the field's units: a number of function evaluations per run (COCO, CEC: 10000 D).
+
+A study given ``budget_evals`` N runs each algorithm for the iterations that spend N (or just
+under it), and counts no evaluation past N: the reported best and curve are those of the first N
+evaluations of every run (:attr:`Optimizer.max_evaluations`).
+
+The iterations come from the algorithm itself: its evaluations after 1 and 2 iterations, on the
+study's agents, dimension and parameters, give e(T) = e0 + T e1 (every registered algorithm
+spends a fixed number per iteration, except FDO, whose extra evaluations vary by run: it gets
+the iterations of its probe run, and the cap ends it at N). T = max(1, floor((N - e0) / e1)).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from functools import lru_cache
+from typing import Any
+
+from swarmpath.optimizers.base import ParameterError
+
+#: CEC's budget: 10000 evaluations per dimension.
+CEC_EVALUATIONS_PER_DIM = 10_000
+
+
+def iterations_for_budget(algorithm: str, budget: int, agents: int, dim: int,
+                          params: Mapping[str, Any] | None = None) -> int:
+    """The iterations of ``algorithm`` that spend at most ``budget`` evaluations per run
+    (ParameterError if even its initialization and one iteration do not fit)."""
+    if isinstance(budget, bool) or not isinstance(budget, int) or budget < 1:
+        raise ParameterError(f"budget_evals must be a positive integer, got {budget!r}")
+    key = tuple(sorted((params or {}).items()))
+    first, per_iteration = _probe(algorithm, agents, dim, key)
+    if first + per_iteration > budget:
+        raise ParameterError(
+            f"budget_evals {budget} is less than {algorithm}'s {first + per_iteration} "
+            f"evaluations for its initialization and one iteration with {agents} agents")
+    return max(1, (budget - first) // max(per_iteration, 1))
+
+
+@lru_cache(maxsize=256)
+def _probe(algorithm: str, agents: int, dim: int, params: tuple[tuple[str, Any], ...]) -> tuple[
+    int, int
+]:
+    """(e0, e1): evaluations of one run before the first iteration and per iteration."""
+    from swarmpath.optimizers.api import minimize
+
+    counts = [int(minimize(algorithm, "F1", dim=dim, agents=agents, iterations=t, runs=1,
+                           seed=0, params=dict(params)).evaluations[0]) for t in (1, 2)]
+    per_iteration = counts[1] - counts[0]
+    return counts[0] - per_iteration, per_iteration
