@@ -31,8 +31,10 @@ from swarmpath.cli.study_options import (
     AgentsOpt,
     AlgorithmsOpt,
     BackendOpt,
+    BudgetOpt,
     DimsOpt,
     FunctionsOpt,
+    InstancesOpt,
     IterationsOpt,
     SeedOpt,
 )
@@ -82,7 +84,7 @@ def plan_tasks(spec: BenchSpec, cells: Sequence[tuple[str, int, str]] | None = N
         noisy = [f for f in functions if get_function(f).noisy]
         stacks = [[f for f in functions if f not in noisy], *[[f] for f in noisy]]
         for stack in filter(None, stacks):
-            per_row = max(spec.agents * dim, spec.iterations)
+            per_row = max(spec.agents * dim, spec.iterations_for(algorithm, dim))
             size = max(1, min(spec.runs, BATCH_ELEMENTS // (len(stack) * per_row)))
             for start in range(0, spec.runs, size):
                 ids = tuple(range(start, min(start + size, spec.runs)))
@@ -131,9 +133,10 @@ def _compute(job: tuple[BenchSpec, Task], report_rows: Callable[[int], None]) ->
 
     return minimize_many(
         task.algorithm, list(task.functions), dim=task.dim, agents=spec.agents,
-        iterations=spec.iterations, seed=spec.seed, params=spec.params.get(task.algorithm),
-        transform=spec.transform, run_ids=list(task.run_ids), on_iteration=hook,
-        backend=spec.backend,
+        iterations=spec.iterations_for(task.algorithm, task.dim), seed=spec.seed,
+        params=spec.params.get(task.algorithm), transform=spec.transform,
+        run_ids=list(task.run_ids), on_iteration=hook, backend=spec.backend,
+        max_evaluations=spec.evaluations(task.dim),
     )
 
 
@@ -178,16 +181,38 @@ def run_cell(
 def caption(spec: BenchSpec, seconds: float) -> str:
     moved = "" if spec.transform == "none" else f", transform {spec.transform}"
     backend = "" if spec.backend == "numpy" else f", backend {spec.backend}"
+    length = (f"{spec.iterations} iterations" if spec.budget_evals is None else
+              f"budget {spec.budget_evals.replace('xD', ' x D')} evaluations per run")
+    suites = [f for f in spec.functions if getattr(get_function(f), "suite", "")]
+    errors = ""
+    if suites:
+        floor = any(getattr(get_function(f), "error_floor", 0.0) for f in suites)
+        errors = "; suite functions: errors f - f_opt" + (" (CEC: < 1e-8 as 0)" if floor else "")
+        if spec.instances is not None:
+            errors += (f", instances {_ranges(spec.instances)}"
+                       + (" pooled" if spec.pool_instances else ""))
     return (
-        f"{spec.runs} runs, {spec.agents} agents, {spec.iterations} iterations, seed {spec.seed}"
-        f"{moved}{backend}; {report.BEST_MARK} best avg; {seconds:.1f} s"
+        f"{spec.runs} runs, {spec.agents} agents, {length}, seed {spec.seed}"
+        f"{moved}{backend}{errors}; {report.BEST_MARK} best avg; {seconds:.1f} s"
     )
+
+
+def _ranges(ids: Sequence[int]) -> str:
+    """[1, 2, 3, 7] -> '1-3,7'."""
+    out: list[str] = []
+    for i in ids:
+        if out and out[-1].split("-")[-1] == str(i - 1):
+            out[-1] = f"{out[-1].split('-')[0]}-{i}"
+        else:
+            out.append(str(i))
+    return ",".join(out)
 
 
 # -------------------------------------------------------------------------------------- command
 def _run_with_progress(spec: BenchSpec, stderr: Console, jobs: int) -> list[report.Cell]:
     keys = spec.cells()
     total_runs = len(keys) * spec.runs
+    steps = sum(spec.runs * spec.iterations_for(a, d) for _, d, a in keys)
     columns = (
         TextColumn("{task.description:<16}"),
         BarColumn(),
@@ -197,7 +222,7 @@ def _run_with_progress(spec: BenchSpec, stderr: Console, jobs: int) -> list[repo
     )
     with Progress(*columns, console=stderr, transient=stderr.is_terminal) as progress:
         task = progress.add_task(
-            f"bench x{jobs}", total=total_runs * spec.iterations, cells=0, n_cells=len(keys),
+            f"bench x{jobs}", total=steps, cells=0, n_cells=len(keys),
             runs=0, n_runs=total_runs,
         )
         done = 0  # run-iterations
@@ -213,7 +238,7 @@ def _run_with_progress(spec: BenchSpec, stderr: Console, jobs: int) -> list[repo
         def on_step(rows: int) -> None:
             nonlocal done
             done += rows
-            progress.update(task, completed=done, runs=done // spec.iterations)
+            progress.update(task, completed=done, runs=done * total_runs // max(steps, 1))
 
         cells = run_bench(spec, on_step, jobs, on_done=on_done)
         progress.update(task, description="done", cells=len(keys), runs=total_runs)
@@ -269,11 +294,18 @@ def bench(
                      "dimension."),
     ] = None,
     backend: BackendOpt = "numpy",
+    instances: InstancesOpt = None,
+    budget_evals: BudgetOpt = None,
+    pool_instances: Annotated[
+        bool, typer.Option("--pool-instances",
+                           help="One row per function with the runs of all its instances "
+                           "(COCO's practice); default: a row per instance.")
+    ] = False,
 ) -> None:
     """Run optimizers on benchmark functions; print min/max/avg/std per function and dimension,
     with Wilcoxon rank-sum markers against a reference and Friedman mean ranks."""
     spec = make_spec(algorithms, functions, dims, runs, agents, iterations, seed, shifted, params,
-                     reference, transform, backend)
+                     reference, transform, backend, instances, budget_evals, pool_instances)
     check_range("--jobs", jobs, 0, parallel.MAX_JOBS)
     if plot is not None:
         plot = plot_dir(plot, "--plot")
@@ -283,6 +315,10 @@ def bench(
         cells = _run_with_progress(spec, stderr, jobs or auto_jobs(spec))
     except ParameterError as exc:  # a check only the optimizer's constructor makes
         raise InputError("--params", str(exc)) from None
+    if spec.pool_instances:
+        from swarmpath.evidence.instances import pool_instances as pool
+
+        cells = pool(cells)
     seconds = time.perf_counter() - started
     tests = report.statistics(cells, spec.algorithms, spec.reference)
     if plot is not None:

@@ -25,6 +25,8 @@ from swarmpath.optimizers.api import (
 )
 
 MAX_RUNS = 10_000
+#: the largest instance id a study may name (COCO's ids are small; 1e6 keeps seeds in range)
+MAX_INSTANCE = 1_000_000
 
 @dataclass(frozen=True)
 class BenchSpec:
@@ -43,10 +45,30 @@ class BenchSpec:
     transform: str = "none"
     #: numpy (the reference) or numba (swarmpath.optimizers.api.BACKENDS)
     backend: str = "numpy"
+    #: suite instances of the study (None: instance 1); ``functions`` already lists them
+    instances: list[int] | None = None
+    #: evaluations per run: "N" or "NxD" (N times the dimension); None: agents x iterations
+    budget_evals: str | None = None
+    #: pool the instances of each function into one cell (evidence.instances)
+    pool_instances: bool = False
 
     def cells(self) -> list[tuple[str, int, str]]:
         """(function, dim, algorithm) in table order."""
         return [(f, d, a) for f in self.functions for d in self.dims for a in self.algorithms]
+
+    def evaluations(self, dim: int) -> int | None:
+        """The evaluation budget of one run at ``dim`` (None: no budget)."""
+        return budget_at(self.budget_evals, dim)
+
+    def iterations_for(self, algorithm: str, dim: int) -> int:
+        """Iterations of ``algorithm`` at ``dim``: ``iterations``, or those spending the budget."""
+        budget = self.evaluations(dim)
+        if budget is None:
+            return self.iterations
+        from swarmpath.optimizers.budget import iterations_for_budget
+
+        return iterations_for_budget(algorithm, budget, self.agents, dim,
+                                     self.params.get(algorithm))
 
     def settings(self) -> dict[str, Any]:
         return asdict(self)
@@ -88,6 +110,72 @@ def parse_dims(spec: str) -> list[int]:
     return dims
 
 
+def budget_at(spec: str | None, dim: int) -> int | None:
+    """'100000' -> 100000; '10000xD' -> 10000 * dim; None -> None."""
+    if spec is None:
+        return None
+    number, _, per_dim = spec.partition("x")
+    return int(number) * (dim if per_dim else 1)
+
+
+def parse_budget(spec: str | None) -> str | None:
+    """``--budget-evals``: a positive integer N, or NxD (N times the dimension: CEC's 10000xD)."""
+    if spec is None:
+        return None
+    text = spec.strip().replace("*", "x")
+    number, sep, per_dim = text.partition("x")
+    if (sep and per_dim.strip().upper() != "D") or not number.strip().isdigit() or int(
+            number) < 1:
+        raise InputError("--budget-evals", f"{spec!r} is not a positive integer N or NxD "
+                         "(N times the dimension, e.g. 10000xD)")
+    return f"{int(number)}xD" if sep else str(int(number))
+
+
+def parse_instances(spec: str | None) -> list[int] | None:
+    """``--instances``: '1-15', '1,3,5', '1-5,71-80' -> instance ids (each >= 1)."""
+    if spec is None:
+        return None
+    out: list[int] = []
+    for part in _names(spec):
+        lo, dash, hi = part.partition("-")
+        try:
+            a, b = (int(lo), int(hi)) if dash else (int(part), int(part))
+        except ValueError:
+            raise InputError("--instances", f"{part!r} is not an instance or a range a-b") from None
+        if not 1 <= a <= b <= MAX_INSTANCE:
+            raise InputError("--instances", f"{part!r}: instances are 1..{MAX_INSTANCE}, "
+                             "ranges run upwards")
+        out.extend(i for i in range(a, b + 1) if i not in out)
+    if not out:
+        raise InputError("--instances", "no instance given")
+    return out
+
+
+def with_instances(functions: list[str], instances: list[int] | None) -> list[str]:
+    """Each suite function once per instance (``bbob:f3``, ``bbob:f3@i2``, ...); the other
+    functions once. InputError naming ``--instances`` if a suite lacks one of them or no
+    function of the study has instances."""
+    if instances is None:
+        return functions
+    out: list[str] = []
+    suites = 0
+    for name in functions:
+        fn = get_function(name)
+        if not hasattr(fn, "with_instance"):
+            out.append(name)
+            continue
+        suites += 1
+        for i in instances:
+            try:
+                out.append(fn.with_instance(i).name)
+            except ValueError as exc:
+                raise InputError("--instances", str(exc)) from None
+    if not suites:
+        raise InputError("--instances", "only suite functions (bbob:..., cec2017:..., "
+                         "cec2022:...) have instances")
+    return list(dict.fromkeys(out))
+
+
 def check_range(option: str, value: int, low: int, high: int) -> int:
     if not low <= value <= high:
         raise InputError(option, f"{value} is not in [{low}, {high}]")
@@ -115,6 +203,9 @@ def make_spec(
     reference: str | None = None,
     transform: str | None = None,
     backend: str = "numpy",
+    instances: str | None = None,
+    budget_evals: str | None = None,
+    pool_instances: bool = False,
 ) -> BenchSpec:
     """Validate the command's options; raises :class:`InputError` naming the bad one."""
     kind = resolve_transform_option(shifted, transform)
@@ -125,7 +216,11 @@ def make_spec(
         ref = resolve_reference(algos, reference)
     except ValueError as exc:
         raise InputError("--reference", str(exc)) from None
-    fns = resolve_functions(functions)
+    ids = parse_instances(instances)
+    fns = with_instances(resolve_functions(functions), ids)
+    if pool_instances and ids is None:
+        raise InputError("--pool-instances", "needs --instances")
+    budget = parse_budget(budget_evals)
     ds = parse_dims(dims)
     check_range("--runs", runs, 1, MAX_RUNS)
     check_range("--agents", agents, 1, MAX_AGENTS)
@@ -139,14 +234,28 @@ def make_spec(
     for f in fns:  # e.g. F5, F12, F13 need 2 dimensions: ask the function itself
         for d in ds:
             try:
+                get_function(f).check_study(d, kind)
                 get_function(f).evaluate(np.zeros((1, d)))
             except ValueError as exc:
-                raise InputError("--dims", f"{d}: {exc}") from None
+                option = "--transform" if "transform" in str(exc) else "--dims"
+                raise InputError(option, f"{d}: {exc}") from None
     checked = parse_params(params, algos)
     try:
         check_backend(backend, algos, kind, checked)
+        if budget is not None and backend != "numpy":
+            raise ParameterError("--budget-evals runs on backend 'numpy' only")
     except ParameterError as exc:
         raise InputError("--backend", str(exc)) from None
+    if budget is not None:
+        from swarmpath.optimizers.budget import iterations_for_budget
+
+        for a in algos:
+            for d in ds:
+                try:
+                    iterations_for_budget(a, budget_at(budget, d) or 0, agents, d,
+                                          checked.get(a))
+                except ParameterError as exc:
+                    raise InputError("--budget-evals", str(exc)) from None
     return BenchSpec(
         algorithms=algos,
         functions=fns,
@@ -160,6 +269,9 @@ def make_spec(
         reference=ref,
         transform=kind,
         backend=backend,
+        instances=ids,
+        budget_evals=budget,
+        pool_instances=pool_instances,
     )
 
 

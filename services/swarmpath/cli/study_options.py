@@ -11,7 +11,21 @@ AlgorithmsOpt = Annotated[
     str, typer.Option("--algorithms", "-a", help="Comma-separated names, or 'all'.")
 ]
 FunctionsOpt = Annotated[
-    str, typer.Option("--functions", "-f", help="Names and ranges: F1-F13, F1,F5,F6-floor.")
+    str, typer.Option("--functions", "-f", help="Names, ranges and suites: F1-F13, F1,F5,"
+                      "F6-floor, bbob, bbob:f1-f5, cec2017, cec2022:F1-F4.")
+]
+InstancesOpt = Annotated[
+    str | None,
+    typer.Option("--instances", metavar="1-15",
+                 help="Suite instances, each its own cell (bbob: COCO's instance ids; CEC: 1, "
+                 "the official data). Default: instance 1."),
+]
+BudgetOpt = Annotated[
+    str | None,
+    typer.Option("--budget-evals", metavar="N|NxD",
+                 help="Evaluations per run instead of --iterations (NxD: N times the dimension, "
+                 "CEC's 10000xD); each algorithm gets the iterations that spend it, and no "
+                 "evaluation past it counts."),
 ]
 DimsOpt = Annotated[str, typer.Option("--dims", "-d", help="Comma-separated dimensions.")]
 AgentsOpt = Annotated[int, typer.Option(help="Population size.")]
