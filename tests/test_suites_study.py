@@ -1,0 +1,149 @@
+"""The suites in a study: names and expansion, errors f - f_opt, instances, budgets, the CLI."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from swarmpath.cli import app
+from swarmpath.evidence import report
+from swarmpath.evidence.instances import pool_instances
+from swarmpath.functions import expand_function_names, get_function, list_functions
+from swarmpath.optimizers import ParameterError, minimize
+from swarmpath.optimizers.api import minimize_many
+from swarmpath.optimizers.budget import iterations_for_budget
+
+runner = CliRunner()
+
+
+def test_suite_names_ranges_and_the_excluded_cec2017_f2():
+    assert expand_function_names("bbob") == [f"bbob:f{k}" for k in range(1, 25)]
+    assert len(list_functions("cec2017")) == 30
+    assert expand_function_names("cec2017") == [f"cec2017:F{k}" for k in range(1, 31) if k != 2]
+    assert expand_function_names("cec2017:F1-F3") == ["cec2017:F1", "cec2017:F3"]
+    assert expand_function_names("cec2017:F2") == ["cec2017:F2"]
+    assert expand_function_names("cec2022:F11-F12,F1") == ["cec2022:F11", "cec2022:F12", "F1"]
+    assert expand_function_names("bbob:f23-f24") == ["bbob:f23", "bbob:f24"]
+    for bad in ("bbob:f25", "bbob:f5-f3", "cec2022:F13", "cec2017:F1@i2", "bbob:f1@i0"):
+        with pytest.raises(KeyError):
+            expand_function_names(bad)
+
+
+def test_instances_are_cocos_and_named():
+    f = get_function("bbob:f3@i7")
+    assert (f.name, f.instance) == ("bbob:f3@i7", 7)
+    assert get_function("bbob:f3@i1").name == "bbob:f3"
+    assert f.f_opt(10) != get_function("bbob:f3").f_opt(10)
+    x = f.x_opt(10)
+    assert f.evaluate(x[None])[0] == pytest.approx(0.0, abs=1e-12)
+    assert f.value(x[None])[0] == pytest.approx(f.f_opt(10))
+
+
+def test_a_suite_study_reports_errors_from_its_instance():
+    res = minimize("GWO", "bbob:f1@i2", dim=5, agents=10, iterations=30, runs=3, seed=2)
+    fn = get_function("bbob:f1@i2")
+    assert np.all(res.best_fitness >= 0.0)
+    assert np.allclose(fn.value(res.best_position) - fn.f_opt(5), res.best_fitness)
+    np.testing.assert_array_equal(res.curve[:, -1], res.best_fitness)
+
+
+def test_cec_errors_below_1e8_are_reported_as_zero():
+    fn = get_function("cec2022:F1")
+    assert fn.report([5e-9, 1e-8, 2.0]).tolist() == [0.0, 1e-8, 2.0]
+    assert get_function("bbob:f1").report([5e-9]).tolist() == [5e-9]
+
+
+@pytest.mark.parametrize(("name", "dim", "transform", "says"), [
+    ("cec2017:F1", 12, "none", "dim in 10, 30, 50, 100"),
+    ("cec2022:F1", 30, "none", "dim in 10, 20"),
+    ("bbob:f1", 1, "none", "dim >= 2"),
+    ("bbob:f1", 5, "shift", "transform must be 'none'"),
+])
+def test_suite_studies_refuse_what_the_suite_does_not_define(name, dim, transform, says):
+    with pytest.raises(ParameterError, match=says):
+        minimize("GWO", name, dim=dim, agents=10, iterations=2, runs=1, transform=transform)
+
+
+def test_the_budget_counts_no_evaluation_past_it():
+    """A run capped at e0 + k e1 evaluations reports what the uncapped run had after k
+    iterations, and nothing after (its curve stays flat)."""
+    free = minimize("GWO", "bbob:f3", dim=4, agents=10, iterations=20, runs=3, seed=5)
+    e0, e1 = 10, 10
+    k = 7
+    capped = minimize_many("GWO", ["bbob:f3"], dim=4, agents=10, iterations=20, runs=3, seed=5,
+                           max_evaluations=e0 + k * e1)[0]
+    assert capped.evaluations.tolist() == [e0 + k * e1] * 3
+    np.testing.assert_array_equal(capped.best_fitness, free.curve[:, k - 1])
+    np.testing.assert_array_equal(capped.curve[:, k - 1:], capped.curve[:, -1:].repeat(
+        20 - k + 1, axis=1))
+    assert np.all(free.best_fitness <= capped.best_fitness)
+
+
+@pytest.mark.parametrize("algorithm", ["GWO", "mCOOT", "RFO", "FDO"])
+def test_budget_iterations_spend_the_budget(algorithm):
+    budget = 2000
+    t = iterations_for_budget(algorithm, budget, 20, 5)
+    res = minimize_many(algorithm, ["bbob:f1"], dim=5, agents=20, iterations=t, runs=2,
+                        max_evaluations=budget)[0]
+    assert np.all(res.evaluations <= budget)
+    assert np.all(res.evaluations > budget - 60)  # within one iteration of it
+    with pytest.raises(ParameterError, match="budget_evals 30"):
+        iterations_for_budget(algorithm, 30, 20, 5)
+
+
+def _bench(*args: str):
+    return runner.invoke(app, ["bench", "-a", "GWO,PSO", "--agents", "8", "--runs", "3",
+                               "--seed", "3", *args])
+
+
+def test_bench_runs_a_cell_per_instance_and_pools_them_on_request():
+    apart = _bench("-f", "bbob:f1,bbob:f6", "-d", "3", "--instances", "1-2",
+                   "--iterations", "10", "--json")
+    assert apart.exit_code == 0, apart.output
+    doc = json.loads(apart.stdout)
+    assert sorted({c["function"] for c in doc["cells"]}) == [
+        "bbob:f1", "bbob:f1@i2", "bbob:f6", "bbob:f6@i2"]
+    pooled = _bench("-f", "bbob:f1,bbob:f6", "-d", "3", "--instances", "1-2",
+                    "--iterations", "10", "--json", "--pool-instances")
+    assert pooled.exit_code == 0, pooled.output
+    cells = json.loads(pooled.stdout)["cells"]
+    assert sorted({c["function"] for c in cells}) == ["bbob:f1", "bbob:f6"]
+    by = {(c["algorithm"], c["function"]): c for c in doc["cells"]}
+    for c in cells:  # the pooled values are the instances' values, in instance order
+        assert c["best_fitness"] == (by[(c["algorithm"], c["function"])]["best_fitness"]
+                                     + by[(c["algorithm"], c["function"] + "@i2")]["best_fitness"])
+
+
+def test_bench_budget_in_evaluations_per_dimension():
+    out = _bench("-f", "cec2022:F1", "-d", "10", "--budget-evals", "50xD", "--json")
+    assert out.exit_code == 0, out.output
+    for c in json.loads(out.stdout)["cells"]:
+        assert max(c["run_evaluations"]) <= 500
+    table = _bench("-f", "cec2022:F1", "-d", "10", "--budget-evals", "50xD")
+    assert "budget 50 x D evaluations per run" in table.stdout
+    assert "errors f - f_opt (CEC: < 1e-8 as 0)" in table.stdout.replace("\n", " ")
+
+
+@pytest.mark.parametrize(("args", "option"), [
+    (["-f", "F1", "--instances", "1-2"], "--instances"),
+    (["-f", "cec2017:F1", "-d", "10", "--instances", "2"], "--instances"),
+    (["-f", "bbob:f1", "--instances", "3-1"], "--instances"),
+    (["-f", "bbob:f1", "--pool-instances"], "--pool-instances"),
+    (["-f", "bbob:f1", "--budget-evals", "10xN"], "--budget-evals"),
+    (["-f", "bbob:f1", "-d", "5", "--budget-evals", "10"], "--budget-evals"),
+    (["-f", "cec2017", "-d", "20"], "--dims"),
+    (["-f", "bbob:f2", "-d", "5", "--transform", "rotate"], "--transform"),
+])
+def test_bench_names_the_bad_option(args, option):
+    out = _bench(*args)
+    assert out.exit_code == 2
+    assert option in out.output
+
+
+def test_pooling_keeps_cells_without_instances():
+    cell = report.Cell("GWO", "F1", 5, [0, 1], [1.0, 2.0], [10, 10], 0.1)
+    (same,) = pool_instances([cell])
+    assert same is cell
