@@ -81,6 +81,17 @@ def test_bad_values_exit_2_naming_the_option(args: tuple[str, ...], option: str)
     assert option in result.stderr and "error" in result.stderr
 
 
+def test_a_start_on_an_obstacle_says_where_it_is_never_clearance_minus_0() -> None:
+    """``--start 0,0`` on tb3_sandbox said "clearance -0 <= 0.105" (issue 25)."""
+    result = invoke("-m", str(DATA / "tb3_sandbox.yaml"), "--start", "0,0")
+    assert result.exit_code == 2
+    err = " ".join(result.stderr.split())
+    assert "--start" in err and "(0, 0) lies on an obstacle's edge: the robot collides" in err
+    assert "-0" not in err
+    inside = invoke("-m", "mfb-static", "--start", "2,2.3")
+    assert "lies inside an obstacle" in " ".join(inside.stderr.split())
+
+
 def test_limit_errors_say_how_to_raise_them() -> None:
     result = invoke("-m", ARENA, "--max-obstacles", "3")
     assert "max_obstacles=3" in result.stderr and "--max-obstacles" in result.stderr

@@ -5,7 +5,24 @@ the scenario reader and by the coordinator's 422 answers; pure (works on the dic
 from __future__ import annotations
 
 import re
+import reprlib
 from typing import Any
+
+_BRIEF = reprlib.Repr()
+_BRIEF.maxlevel = 2
+_BRIEF.maxlist = _BRIEF.maxtuple = _BRIEF.maxdict = _BRIEF.maxset = 4
+_BRIEF.maxstring = _BRIEF.maxother = _BRIEF.maxlong = 60
+
+
+def brief(value: Any, limit: int = 80) -> str:
+    """``repr`` of a value a user sent, bounded whatever it is: two levels of nesting, four items
+    per container, ``limit`` characters. A plain ``{value!r}`` of a YAML document's shared
+    aliases expands all of them (issue 25: 2 KB of YAML, 10 GB of memory)."""
+    try:
+        text = _BRIEF.repr(value)
+    except Exception:  # an int of more than 4,300 digits, a repr that raises
+        text = f"<a {type(value).__name__} too long to show>"
+    return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
 def _g(v: Any) -> str:

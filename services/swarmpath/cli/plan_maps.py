@@ -112,6 +112,7 @@ def _load_file(path: Path, opts: MapOptions,
     import yaml
 
     from swarmpath.world.importers import load_movingai_map, load_ros_map
+    from swarmpath.world.safe_yaml import load_yaml
     from swarmpath.world.scenario_io import load_scenario, scenario_from_dict
 
     ends = {"start": opts.start, "goal": opts.goal}
@@ -121,7 +122,7 @@ def _load_file(path: Path, opts: MapOptions,
                                  progress=progress, **_limits(opts)).scenario, True
     if suffix in (".yaml", ".yml"):
         try:
-            doc = yaml.safe_load(path.read_text(encoding="utf-8"))
+            doc = load_yaml(path.read_text(encoding="utf-8"))
         except yaml.YAMLError as exc:
             raise InputError("--maps", f"{path}: not valid YAML ({exc})") from None
         if isinstance(doc, dict) and "image" in doc:

@@ -14,16 +14,24 @@ from swarmpath.cli.core import InputError, app
 from swarmpath.cli.service import UrlOpt, _client, _fail
 
 
+def _text(path: Path) -> str:
+    try:
+        return path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise InputError("FILE", f"{path}: not a text file (UTF-8)") from None
+
+
 def upload_body(path: Path, name: str | None, resolution: float | None) -> dict[str, Any]:
     """The POST /maps body for a file; raises InputError naming the argument at fault."""
     import yaml
+
+    from swarmpath.world.safe_yaml import load_yaml
 
     if not path.is_file():
         raise InputError("FILE", f"no such file {str(path)!r}")
     stem = name or path.stem
     if path.suffix.lower() == ".map":
-        body: dict[str, Any] = {"name": stem, "format": "movingai",
-                                "map": path.read_text(encoding="utf-8")}
+        body: dict[str, Any] = {"name": stem, "format": "movingai", "map": _text(path)}
         if resolution is not None:
             body["resolution"] = resolution
         return body
@@ -31,9 +39,9 @@ def upload_body(path: Path, name: str | None, resolution: float | None) -> dict[
         raise InputError("FILE", "a nav2 map .yaml (with its image) or a MovingAI .map")
     if resolution is not None:
         raise InputError("--resolution", "applies to MovingAI .map files only")
-    text = path.read_text(encoding="utf-8")
+    text = _text(path)
     try:
-        doc = yaml.safe_load(text)
+        doc = load_yaml(text)
     except yaml.YAMLError as exc:
         raise InputError("FILE", f"{path}: not valid YAML ({exc})") from None
     if not isinstance(doc, dict) or not isinstance(doc.get("image"), str):
@@ -73,5 +81,10 @@ def upload_map(
             raise
     typer.echo(info["id"])
     typer.echo(f"map {info['id']}: {info['name']}, {info['size'][0]:g} x {info['size'][1]:g} m, "
-               f"{info['obstacles']} obstacles, default start {info['start']} goal "
-               f"{info['goal']}", err=True)
+               f"{info['obstacles']} obstacles, default start {_point(info['start'])} goal "
+               f"{_point(info['goal'])}", err=True)
+
+
+def _point(xy: Any) -> str:
+    """(x, y) in metres as a user reads them: 10.975, not 10.975000000000001."""
+    return f"({float(xy[0]):.6g}, {float(xy[1]):.6g})"

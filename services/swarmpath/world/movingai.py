@@ -64,19 +64,27 @@ def parse_movingai_map(
             f"{source}: {width} x {height} = {height * width:,} cells exceed "
             f"max_cells={max_cells:,} (raise it with max_cells= / --max-cells)"
         )
-    grid = [ln.rstrip("\r\n") for ln in lines[i : i + height]]
+    grid = [ln.rstrip() for ln in lines[i : i + height]]  # trailing blanks are no terrain
     if len(grid) < height:
-        raise MapImportError(f"{source}: expected {height} grid lines, found {len(grid)}")
+        raise MapImportError(
+            f"{source}: the header says height {height} but the grid has {len(grid)} lines")
     for r, row in enumerate(grid):
-        if len(row) < width:
+        if len(row) != width:
             raise MapImportError(
-                f"{source}: line {i + r + 1}: expected {width} characters, got {len(row)}"
+                f"{source}: line {i + r + 1}: {len(row)} characters, but the header says "
+                f"width {width}: the header and the grid disagree"
             )
-    raw = "".join(row[:width] for row in grid).encode("utf-8", errors="replace")
+    extra = next((k for k in range(i + height, len(lines)) if lines[k].strip()), None)
+    if extra is not None:
+        raise MapImportError(
+            f"{source}: line {extra + 1}: more grid lines than the header's height {height}: "
+            "the header and the grid disagree"
+        )
+    raw = "".join(grid).encode("utf-8", errors="replace")
     codes = np.frombuffer(raw, dtype=np.uint8)
     if len(codes) != height * width:  # a multi-byte character somewhere: find it
         for r, row in enumerate(grid):
-            for c, ch in enumerate(row[:width]):
+            for c, ch in enumerate(row):
                 if ch not in MOVINGAI_BLOCKED and ch not in MOVINGAI_PASSABLE:
                     raise MapImportError(
                         f"{source}: line {i + r + 1}, column {c + 1}: unknown terrain {ch!r}"

@@ -3,6 +3,7 @@ defaults and limits: :mod:`swarmpath.world.importers`)."""
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -13,6 +14,7 @@ import yaml
 from numpy.typing import NDArray
 from PIL import Image
 
+from swarmpath.errors import brief
 from swarmpath.world.grid_import import (
     ENDPOINT_MARGIN,
     MAX_CELLS,
@@ -24,27 +26,67 @@ from swarmpath.world.grid_import import (
     _build,
 )
 from swarmpath.world.raster import FREE, OCCUPIED, UNKNOWN
+from swarmpath.world.safe_yaml import load_yaml
 from swarmpath.world.scenario import (
     RobotSpec,
 )
 
+#: The image formats read (nav2's common ones); anything else is refused before a decoder runs.
+IMAGE_FORMATS = ("PPM", "PNG", "BMP")
+
+
+def _truncated(im: Image.Image, path: Path, name: str) -> str:
+    """Why an image's pixel data ended early, in the header's terms where it has them (PGM/PPM:
+    width x height x bytes per sample from the header, against the bytes after it)."""
+    w, h = im.size
+    tile = getattr(im, "tile", None)  # an ImageFile's decoder list: (codec, box, offset, args)
+    if im.format == "PPM" and tile and tile[0][0] == "raw":
+        offset = int(tile[0][2])
+        per_pixel = {"1": 1, "L": 1, "I": 2, "I;16": 2, "I;16B": 2, "RGB": 3}.get(im.mode)
+        have = path.stat().st_size - offset
+        if per_pixel is not None:
+            need = w * h * per_pixel
+            return (f"{name}: the header says {w} x {h} pixels ({need:,} bytes of pixel "
+                    f"data) but the file has {have:,} bytes after the header: the header and "
+                    "the data disagree (a truncated file?)")
+    return (f"{name}: the pixel data ends before the {w} x {h} pixels its header announces "
+            "(a truncated file, or a header that does not match the data)")
+
 
 def _image_shade(
-    path: Path, with_alpha: bool, max_cells: int = MAX_CELLS
+    path: Path, with_alpha: bool, max_cells: int = MAX_CELLS, name: str | None = None
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
-    """Per-pixel shade in [0, 1] (image order, row 0 = top) and an 'is opaque' mask."""
+    """Per-pixel shade in [0, 1] (image order, row 0 = top) and an 'is opaque' mask. ``name``:
+    the image as the user calls it in messages (default: its path)."""
+    name = name or str(path)
+    # A crafted file can make a decoder raise nearly anything (ValueError for a PGM maxval
+    # over 65535, SyntaxError, struct.error, ...): every failure is the file's, said as such.
     try:
-        im_ctx = Image.open(path)
-    except (OSError, Image.DecompressionBombError) as e:
-        raise MapImportError(f"{path}: cannot read the image: {e}") from None
+        im_ctx = Image.open(path, formats=IMAGE_FORMATS)
+    except Image.DecompressionBombError as e:
+        raise MapLimitError(f"{name}: {e}") from None
+    except MemoryError:
+        raise
+    except Exception as e:
+        raise MapImportError(f"{name}: cannot read the image (PGM, PNG or BMP): "
+                             f"{_reason(e)}") from None
     with im_ctx as im:
         w, h = im.size
         if w * h > max_cells:
             raise MapLimitError(
-                f"{path}: {w} x {h} = {w * h:,} cells exceed max_cells={max_cells:,} "
+                f"{name}: {w} x {h} = {w * h:,} cells exceed max_cells={max_cells:,} "
                 "(raise it with max_cells= / --max-cells)"
             )
-        im.load()
+        try:
+            im.load()
+        except MemoryError:
+            raise
+        except OSError as e:
+            if "truncated" in str(e):
+                raise MapImportError(_truncated(im, path, name)) from None
+            raise MapImportError(f"{name}: cannot read the pixels: {_reason(e)}") from None
+        except Exception as e:
+            raise MapImportError(f"{name}: cannot read the pixels: {_reason(e)}") from None
         has_alpha = im.mode in ("LA", "RGBA", "PA", "La", "RGBa") or (
             im.mode == "P" and "transparency" in im.info
         )
@@ -59,6 +101,11 @@ def _image_shade(
         channels.append(alpha)
     shade = np.mean(channels, axis=0) / 255.0
     return shade, alpha >= 255.0
+
+
+def _reason(e: BaseException) -> str:
+    text = " ".join(str(e).split())[:200]
+    return text or type(e).__name__
 
 
 def ros_occupancy(
@@ -91,8 +138,8 @@ def _number(doc: dict[str, Any], key: str, src: str, default: float | None = Non
             raise MapImportError(f"{src}: {key}: required")
         return default
     v = doc[key]
-    if isinstance(v, bool) or not isinstance(v, int | float):
-        raise MapImportError(f"{src}: {key}: must be a number, got {v!r}")
+    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+        raise MapImportError(f"{src}: {key}: must be a finite number, got {brief(v)}")
     return float(v)
 
 
@@ -110,22 +157,28 @@ def load_ros_map(
     max_obstacles: int = MAX_OBSTACLES,
     endpoint_margin: float = ENDPOINT_MARGIN,
     progress: Callable[[float], None] | None = None,
+    image_name: str | None = None,
 ) -> ImportedMap:
     """Import a ROS map_server / nav2 map (YAML + PGM/PNG/BMP image).
 
     ``start``/``goal`` in the scenario frame (metres from the map's lower-left corner); defaults
     as in the module docstring. ``robot`` defaults to the ``turtlebot3-burger`` preset.
+    ``image_name``: what messages call the image (default: its path).
     """
     ypath = Path(yaml_path)
     src = str(ypath)
     try:
-        doc = yaml.safe_load(ypath.read_text(encoding="utf-8"))
+        doc = load_yaml(ypath.read_text(encoding="utf-8"))
+    except UnicodeDecodeError:
+        raise MapImportError(f"{src}: not a text file (UTF-8)") from None
     except yaml.YAMLError as e:
         raise MapImportError(f"{src}: cannot parse YAML: {e}") from None
     if not isinstance(doc, dict):
         raise MapImportError(f"{src}: expected a YAML mapping")
     if not isinstance(doc.get("image"), str) or not doc["image"]:
         raise MapImportError(f"{src}: image: required (path of the map image)")
+    if "\0" in doc["image"]:
+        raise MapImportError(f"{src}: image: not a file name: {brief(doc['image'])}")
     image = Path(doc["image"])
     if not image.is_absolute():
         image = ypath.parent / image
@@ -136,9 +189,10 @@ def load_ros_map(
     if (
         not isinstance(origin, list | tuple)
         or len(origin) != 3
-        or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in origin)
+        or not all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+                   for v in origin)
     ):
-        raise MapImportError(f"{src}: origin: must be [x, y, yaw]")
+        raise MapImportError(f"{src}: origin: must be [x, y, yaw] (three finite numbers)")
     occ_t = _number(doc, "occupied_thresh", src, 0.65)
     free_t = _number(doc, "free_thresh", src, 0.25)
     if not (0.0 <= free_t < occ_t <= 1.0):
@@ -148,12 +202,14 @@ def load_ros_map(
     neg = doc.get("negate", 0)
     if neg not in (0, 1, True, False):
         raise MapImportError(f"{src}: negate: must be 0 or 1")
-    mode = str(doc.get("mode", "trinary")).lower()
-    if mode not in ("trinary", "scale", "raw"):
-        raise MapImportError(f"{src}: mode: must be trinary, scale or raw, got {mode!r}")
+    mode = doc.get("mode", "trinary")
+    if not isinstance(mode, str) or mode.lower() not in ("trinary", "scale", "raw"):
+        raise MapImportError(f"{src}: mode: must be trinary, scale or raw, got {brief(mode)}")
+    mode = mode.lower()
     if not image.is_file():
         raise MapImportError(f"{src}: image: file not found: {image}")
-    shade, opaque = _image_shade(image, with_alpha=(mode == "trinary"), max_cells=max_cells)
+    shade, opaque = _image_shade(image, with_alpha=(mode == "trinary"), max_cells=max_cells,
+                                 name=image_name)
     values = ros_occupancy(shade, opaque, mode, bool(neg), occ_t, free_t)
     data = values[::-1]  # image row 0 is the top of the map; grid row 0 is the bottom
     occ = shade if neg else 1.0 - shade

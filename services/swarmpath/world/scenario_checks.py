@@ -144,10 +144,9 @@ def scenario_problems(s: Scenario) -> list[tuple[str, str]]:
         elif robot_ok and not obs.is_empty:
             c = float(obs.point_clearance(np.array(pt)))
             if collides(c, r.radius):
-                out.append((
-                    label,
-                    f"({x:g}, {y:g}) collides with an obstacle inflated by the robot radius "
-                    f"{r.radius:g} (clearance {c:.3g} <= {r.radius:g})",
-                ))
+                where = (f"lies inside an obstacle ({-c:.3g} m deep)" if c < 0 else
+                         "lies on an obstacle's edge" if c == 0 else
+                         f"is {c:.3g} m from an obstacle, within the robot radius {r.radius:g}")
+                out.append((label, f"({x:g}, {y:g}) {where}: the robot collides there"))
     return out
 

@@ -30,6 +30,7 @@ from typing import Annotated, Any, Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
+from swarmpath.world.safe_yaml import load_yaml
 from swarmpath.world.scenario import (
     DEFAULT_RANDOM_MAX_SPEED,
     DEFAULT_TIME_STEP,
@@ -309,12 +310,17 @@ def load_scenario(path_or_dict: str | os.PathLike[str] | Mapping[str, Any]) -> S
     if isinstance(path_or_dict, Mapping):
         return scenario_from_dict(path_or_dict)
     path = Path(path_or_dict)
-    text = path.read_text(encoding="utf-8")
     try:
+        text = path.read_text(encoding="utf-8")
         if path.suffix.lower() in (".yaml", ".yml"):
-            data = yaml.safe_load(text)
+            data = load_yaml(text)
         else:
             data = json.loads(text)
+    except UnicodeDecodeError:
+        raise ScenarioError([("", "not a text file (UTF-8)")], str(path)) from None
+    except RecursionError:
+        raise ScenarioError([("", "cannot parse: the JSON nests too deeply")], str(path)
+                            ) from None
     except (json.JSONDecodeError, yaml.YAMLError) as e:
         raise ScenarioError([("", f"cannot parse: {e}")], str(path)) from None
     return scenario_from_dict(data, str(path))
