@@ -203,6 +203,13 @@ def test_upload_map_command_bodies_and_the_client(data_dir: Path, tmp_path: Path
         client = ServiceClient("http://testserver", transport=c._transport)
         info = client.upload_map(grid)
         assert info["size"] == [12.25, 12.25] and client.maps()[0]["id"] == info["id"]
+        nav_info = client.upload_map(nav)
+    # the command's summary prints metres as a user reads them (it printed 10.975000000000001)
+    from swarmpath.cli.upload import _point
+
+    assert _point(nav_info["start"]) == \
+        f"({nav_info['start'][0]:.6g}, {nav_info['start'][1]:.6g})"
+    assert _point([0.47500000000000003, 10.975000000000001]) == "(0.475, 10.975)"
 
 
 def test_the_grid_limits_are_coordinator_settings_named_in_the_413(data_dir: Path) -> None:

@@ -23,10 +23,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from swarmpath.service import memdebug
+from swarmpath.service.bounded import BoundedRunner
 from swarmpath.service.capability import drop_proof
 from swarmpath.service.catalog import build_catalog
 from swarmpath.service.intake import ResultIntake
 from swarmpath.service.lease_sizer import LeaseSizer
+from swarmpath.service.maps import warm_importer
 from swarmpath.service.metrics import metrics_text
 from swarmpath.service.protocol import (
     CANCEL_LEASES,
@@ -101,6 +103,10 @@ class Coordinator(ResultIntake):
         self._lock = threading.Lock()
         self._final_lock = threading.RLock()
         self.worker_table = WorkerTable(settings.max_workers, settings.forget_workers_seconds)
+        # uploads are parsed here, never in this process (started at the first upload)
+        self.map_importer = BoundedRunner(settings.max_map_import_bytes,
+                                          settings.max_map_import_seconds,
+                                          name="swarmpath-map-import", warm=warm_importer)
         self._accepted: deque[tuple[float, int]] = deque()
         self._jobs: dict[str, dict[str, Any]] = {}  # job id -> what records need (cache)
         self._recording: set[str] = set()  # jobs whose MCAP is open
@@ -134,6 +140,7 @@ class Coordinator(ResultIntake):
     def close(self) -> None:
         self.accepting = False
         try:
+            self.map_importer.close()
             self.dashboard.close()  # its build threads read the store
             self.recorders.close()
         finally:

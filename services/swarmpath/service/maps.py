@@ -3,7 +3,8 @@ the stored scenario in place of ``{"map": id, "start"?, "goal"?}`` entries of a 
 
 Plain functions (no HTTP): the ``/maps`` router and the ``/jobs`` router call them. Errors are
 :class:`MapUploadError` with the body field and an HTTP status: 413 for a size limit (the message
-names the limit), 422 for anything else.
+names the limit), 422 for anything else. The coordinator parses uploads in a child process
+bounded in memory and time (:func:`import_bounded`, :mod:`swarmpath.service.bounded`).
 """
 
 from __future__ import annotations
@@ -11,14 +12,22 @@ from __future__ import annotations
 import base64
 import binascii
 import json
+import re
 import tempfile
 from collections.abc import Callable
 from pathlib import Path, PurePath
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import yaml
 from pydantic import Field
 
+from swarmpath.service.bounded import (
+    BoundedRunner,
+    CallDied,
+    CallOutOfMemory,
+    CallTimedOut,
+    RunnerBusy,
+)
 from swarmpath.service.protocol import (
     ID_PATTERN,
     MAX_SCENARIO_BYTES,
@@ -28,30 +37,54 @@ from swarmpath.service.protocol import (
     Model,
 )
 
+#: A nav2 map YAML is a dozen lines; anything longer is not one.
+MAX_NAV2_YAML_CHARS = 65_536
+_UPLOAD_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,99}")
 
-class MapUpload(Model):
-    """``POST /maps`` body. nav2: ``yaml`` (the map_server YAML text) and ``image`` (the image
-    file, base64); MovingAI: ``map`` (the .map text) and ``resolution`` (metres per cell)."""
+
+class Nav2Upload(Model):
+    """``POST /maps`` body of a nav2 map: the map_server YAML text and the image file."""
 
     name: str = Field(pattern=ID_PATTERN, max_length=64)
-    format: Literal["nav2", "movingai"]
-    yaml: str | None = None
-    image: str | None = Field(default=None, description="base64 of the PGM/PNG/BMP file")
-    map: str | None = None
-    resolution: float = Field(default=1.0, gt=0, description="MovingAI: metres per cell")
+    format: Literal["nav2"]
+    yaml: str = Field(max_length=MAX_NAV2_YAML_CHARS, description="the map_server YAML text")
+    image: str = Field(description="base64 of the PGM/PNG/BMP file the YAML names")
+
+
+class MovingAIUpload(Model):
+    """``POST /maps`` body of a MovingAI grid: the .map text and its cell size."""
+
+    name: str = Field(pattern=ID_PATTERN, max_length=64)
+    format: Literal["movingai"]
+    map: str = Field(description="the .map text")
+    resolution: float = Field(default=1.0, gt=0, allow_inf_nan=False,
+                              description="metres per cell")
+
+
+#: The ``POST /maps`` body: one of the two, told apart by ``format``.
+MapUpload = Annotated[Nav2Upload | MovingAIUpload, Field(discriminator="format")]
 
 
 class MapUploadError(ValueError):
-    def __init__(self, status: int, field: str, message: str):
+    def __init__(self, status: int, field: str, message: str, kind: str | None = None):
         super().__init__(message)
         self.status = status
         self.field = field
+        self.kind = kind or ("map_too_large" if status == 413 else "map_invalid")
+
+    def __reduce__(self) -> tuple[Any, ...]:  # crosses the import process's pipe
+        return (MapUploadError, (self.status, self.field, str(self), self.kind))
 
 
-def import_upload(up: MapUpload, max_cells: int | None = None,
+def _image_field(up: Nav2Upload | MovingAIUpload) -> str:
+    return "map" if isinstance(up, MovingAIUpload) else "image"
+
+
+def import_upload(up: Nav2Upload | MovingAIUpload, max_cells: int | None = None,
                   max_obstacles: int | None = None) -> dict[str, Any]:
     """The scenario (JSON object) of an upload; raises :class:`MapUploadError`. The grid limits
-    default to the importer's (the coordinator's ``max_map_cells`` / ``max_map_obstacles``)."""
+    default to the importer's (the coordinator's ``max_map_cells`` / ``max_map_obstacles``).
+    The coordinator calls it in a bounded process (:func:`import_bounded`)."""
     from swarmpath.world.importers import (  # the grid limits are the CLI's
         MAX_CELLS,
         MAX_OBSTACLES,
@@ -63,46 +96,49 @@ def import_upload(up: MapUpload, max_cells: int | None = None,
     from swarmpath.world.scenario_io import ScenarioError, scenario_to_dict
 
     limits = {"max_cells": max_cells or MAX_CELLS, "max_obstacles": max_obstacles or MAX_OBSTACLES}
+    grid_field = _image_field(up)
     with tempfile.TemporaryDirectory(prefix="swarmpath-map-") as tmp:
         d = Path(tmp)
         try:
-            if up.format == "movingai":
-                if not up.map:
-                    raise MapUploadError(422, "map", "required for format 'movingai'")
+            if isinstance(up, MovingAIUpload):
                 path = d / f"{up.name}.map"
                 path.write_text(up.map, encoding="utf-8")
                 imported = load_movingai_map(path, resolution=up.resolution, name=up.name,
                                              **limits)
             else:
-                path = _write_nav2(d, up)
-                imported = load_ros_map(path, name=up.name, **limits)
+                path, image_name = _write_nav2(d, up)
+                imported = load_ros_map(path, name=up.name, image_name=image_name, **limits)
         except MapLimitError as exc:
-            raise MapUploadError(413, "map" if up.format == "movingai" else "image",
-                                 _service_hint(_strip(str(exc), d))) from None
+            raise MapUploadError(413, grid_field, _service_hint(_strip(str(exc), d))) from None
         except ScenarioError as exc:
-            raise MapUploadError(422, "map" if up.format == "movingai" else "image",
-                                 _strip(str(exc), d)) from None
+            raise MapUploadError(422, grid_field, _strip(str(exc), d)) from None
         except MapImportError as exc:
-            raise MapUploadError(422, "map" if up.format == "movingai" else "yaml",
-                                 _strip(str(exc), d)) from None
+            text = _strip(str(exc), d)
+            field = "image" if _about_image(text, up) else ("map" if grid_field == "map"
+                                                             else "yaml")
+            raise MapUploadError(422, field, text) from None
     scenario = scenario_to_dict(imported.scenario)
     size = len(json.dumps(scenario))
     if size > MAX_SCENARIO_BYTES:  # leases name it by hash; a worker fetches it in one reply
-        raise MapUploadError(413, "map" if up.format == "movingai" else "image",
+        raise MapUploadError(413, grid_field,
                              f"the imported scenario is {size:,} bytes of JSON, over "
                              f"MAX_SCENARIO_BYTES={MAX_SCENARIO_BYTES:,}: upload a smaller or "
                              "coarser map")
     return scenario
 
 
+def _about_image(text: str, up: Nav2Upload | MovingAIUpload) -> bool:
+    """Whether an importer's message is about the upload's image (not about its YAML, whose
+    messages start with the YAML's name)."""
+    return isinstance(up, Nav2Upload) and not text.startswith(f"{up.name}.yaml")
+
+
 def _service_hint(text: str) -> str:
     """The importer's "how to raise it" names its keyword and CLI flag; a coordinator has a
     setting (and an environment variable) for each."""
     for name in ("max_cells", "max_obstacles"):
-        setting = f"max_map_{name[4:]}"
-        text = text.replace(f"(raise it with {name}= / --{name.replace('_', '-')})",
-                            f"(raise it with the coordinator setting {setting}, environment "
-                            f"SWARMPATH_{setting.upper()})")
+        text = text.replace(f" (raise it with {name}= / --{name.replace('_', '-')})",
+                            _raise_hint(f"max_map_{name[4:]}"))
     return text
 
 
@@ -110,29 +146,74 @@ def _strip(text: str, d: Path) -> str:
     return text.replace(str(d) + "/", "")
 
 
-def _write_nav2(d: Path, up: MapUpload) -> Path:
-    if not up.yaml:
-        raise MapUploadError(422, "yaml", "required for format 'nav2' (the map_server YAML)")
-    if not up.image:
-        raise MapUploadError(422, "image", "required for format 'nav2' (base64 image file)")
+def _write_nav2(d: Path, up: Nav2Upload) -> tuple[Path, str]:
+    """The upload's YAML and image written into ``d`` (the image under the base name the YAML
+    gives it, so messages name the user's file; never a path outside ``d``); returns the YAML's
+    path and the image's name."""
+    from swarmpath.errors import brief
+    from swarmpath.world.safe_yaml import load_yaml
+
     try:
-        doc = yaml.safe_load(up.yaml)
+        doc = load_yaml(up.yaml)
     except yaml.YAMLError as exc:
         raise MapUploadError(422, "yaml", f"cannot parse YAML: {exc}") from None
     if not isinstance(doc, dict) or not isinstance(doc.get("image"), str):
-        raise MapUploadError(422, "yaml", "expected a mapping with an 'image' key")
+        raise MapUploadError(422, "yaml", "expected a mapping with an 'image' key (the image's "
+                             "file name)")
     try:
         data = base64.b64decode(up.image, validate=True)
     except (binascii.Error, ValueError):
         raise MapUploadError(422, "image", "not valid base64") from None
-    suffix = PurePath(doc["image"]).suffix.lower() or ".pgm"
+    given = PurePath(doc["image"].replace("\\", "/")).name
+    suffix = PurePath(given).suffix.lower() or ".pgm"
     if suffix not in (".pgm", ".png", ".bmp"):
-        raise MapUploadError(422, "yaml", f"image: {suffix} files are not read (pgm, png, bmp)")
-    (d / f"image{suffix}").write_bytes(data)
-    doc["image"] = f"image{suffix}"  # never a path outside the upload's directory
+        raise MapUploadError(422, "yaml", f"image: {brief(given)}: {brief(suffix)} files are "
+                             "not read (pgm, png, bmp)")
+    name = given if _UPLOAD_NAME.fullmatch(given) and given != f"{up.name}.yaml" else \
+        f"image{suffix}"
+    (d / name).write_bytes(data)
+    doc["image"] = name
     path = d / f"{up.name}.yaml"
     path.write_text(yaml.safe_dump(doc), encoding="utf-8")
-    return path
+    return path, name
+
+
+def warm_importer() -> None:
+    """The import process's imports, paid before its first upload's time starts."""
+    import swarmpath.world.importers
+    import swarmpath.world.scenario_io  # noqa: F401
+
+
+def _raise_hint(setting: str) -> str:
+    return (f" (raise it with the coordinator setting {setting}, environment "
+            f"SWARMPATH_{setting.upper()})")
+
+
+def import_bounded(runner: BoundedRunner, up: Nav2Upload | MovingAIUpload,
+                   max_cells: int | None = None, max_obstacles: int | None = None
+                   ) -> dict[str, Any]:
+    """:func:`import_upload` in ``runner``'s child process (bounded memory and time); the
+    bounds' refusals as :class:`MapUploadError` (413 naming the limit and the setting that
+    raises it; 503 while too many uploads wait)."""
+    field = _image_field(up)
+    try:
+        scenario: dict[str, Any] = runner.call(import_upload, up, max_cells, max_obstacles)
+        return scenario
+    except CallTimedOut:
+        raise MapUploadError(413, field, f"importing this map took longer than "
+                             f"{runner.seconds:g} s{_raise_hint('max_map_import_seconds')}",
+                             "map_import_timeout") from None
+    except CallOutOfMemory:
+        raise MapUploadError(413, field, f"importing this map needed more than "
+                             f"{runner.memory_bytes / 2**20:,.0f} MiB of memory"
+                             f"{_raise_hint('max_map_import_bytes')}",
+                             "map_import_memory") from None
+    except CallDied as exc:
+        raise MapUploadError(422, field, f"the map could not be imported: {exc}",
+                             "map_import_died") from None
+    except RunnerBusy:
+        raise MapUploadError(503, "", "too many map uploads are being imported; retry in a "
+                             "few seconds", "busy") from None
 
 
 def resolve_refs(spec: MapJobSpec,

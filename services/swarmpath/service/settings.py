@@ -13,6 +13,11 @@ from swarmpath.service.zenoh_config import DEFAULT_ZENOH, router_config
 
 DEFAULT_HTTP = "127.0.0.1:8000"
 DEFAULT_MAX_MAP_UPLOAD_BYTES = 32 * 1024 * 1024
+#: An upload is parsed in a child process with these bounds (service/bounded.py). The largest
+#: map within the grid limits (2048 x 2048 cells, 4,800 obstacles) took 28 s and 0.6 GB of
+#: address space on a loaded 2-core machine.
+DEFAULT_MAX_MAP_IMPORT_SECONDS = 120.0
+DEFAULT_MAX_MAP_IMPORT_BYTES = 2 * 1024**3
 
 
 def _env_number(name: str, default: float) -> float:
@@ -68,6 +73,11 @@ class CoordinatorSettings:
     max_map_cells: int = field(default_factory=lambda: _env_count("SWARMPATH_MAX_MAP_CELLS"))
     max_map_obstacles: int = field(
         default_factory=lambda: _env_count("SWARMPATH_MAX_MAP_OBSTACLES"))
+    # the child process parsing an upload: wall-clock seconds and address space (bytes)
+    max_map_import_seconds: float = field(default_factory=lambda: _env_number(
+        "SWARMPATH_MAX_MAP_IMPORT_SECONDS", DEFAULT_MAX_MAP_IMPORT_SECONDS))
+    max_map_import_bytes: int = field(default_factory=lambda: int(_env_number(
+        "SWARMPATH_MAX_MAP_IMPORT_BYTES", DEFAULT_MAX_MAP_IMPORT_BYTES)))
 
     def zenoh_config(self) -> dict[str, Any]:
         return router_config(

@@ -9,8 +9,9 @@ from typing import Any
 from swarmpath.errors import plain_message
 from swarmpath.service.protocol import BenchmarkJobSpec, FieldProblems, MapJobSpec
 
-#: Tags of the job-spec union (pydantic puts them in ``loc``; they are not fields of the body).
-_UNION_TAGS = ("benchmark", "map")
+#: Tags of the body unions (job specs, map uploads): pydantic puts them in ``loc``; they are not
+#: fields of the body.
+_UNION_TAGS = ("benchmark", "map", "nav2", "movingai")
 
 
 def _spec_fields() -> list[str]:
@@ -18,7 +19,8 @@ def _spec_fields() -> list[str]:
 
 
 def clean_loc(loc: Any) -> list[Any]:
-    """Drop what is not a field: the job kind's union tag and the member labels of unions
+    """Drop what is not a field: the body's union tag (job kind, upload format) and the member
+    labels of unions
     (``str``, ``dict[str,any]``)."""
     parts = list(loc)
     out: list[Any] = []
@@ -44,7 +46,8 @@ def validation_detail(errors: list[dict[str, Any]]) -> list[dict[str, Any]]:
                       for sub, msg in problem.problems]
             continue
         if kind in ("union_tag_invalid", "union_tag_not_found") and loc == ["body"]:
-            loc = ["body", "kind"]
+            tag = str((e.get("ctx") or {}).get("discriminator", "kind")).strip("'")
+            loc = ["body", tag]
         items.append({"loc": loc, "msg": plain_message(e, _spec_fields()), "type": kind})
     merged: dict[tuple[str, ...], dict[str, Any]] = {}
     for n, item in enumerate(items):  # a union's members fail at the same place: "a or b"

@@ -2,29 +2,39 @@
 :mod:`swarmpath.service.maps`)."""
 
 import asyncio
-from typing import Any
+from typing import Annotated, Any
 
-from fastapi import APIRouter, Depends, HTTPException
+from fastapi import APIRouter, Body, Depends, HTTPException
 
 from swarmpath.service.http.deps import CoreDep, Limit, Offset, authorized
-from swarmpath.service.maps import MapUpload, MapUploadError, import_upload
+from swarmpath.service.maps import (
+    MapUploadError,
+    MovingAIUpload,
+    Nav2Upload,
+    import_bounded,
+)
 
 router = APIRouter(tags=["maps"])
 
 
 @router.post("/maps", status_code=201, dependencies=[Depends(authorized)])
-async def upload_map(up: MapUpload, core: CoreDep) -> dict[str, Any]:
+async def upload_map(
+    up: Annotated[Nav2Upload | MovingAIUpload, Body(discriminator="format")], core: CoreDep,
+) -> dict[str, Any]:
     """Import a nav2 YAML + base64 image or a MovingAI .map; 201 with the map id (name it in a
     map job: ``{"map": id, "start": [x, y], "goal": [x, y]}``). 413 when the map is over a size
-    limit (named in the message), 422 when it cannot be imported."""
+    limit, or its import over the time or memory limit (named in the message), 422 when it
+    cannot be imported. The import runs in a child process bounded in memory and time."""
+    settings = core.settings
     try:
-        settings = core.settings
-        scenario = await asyncio.to_thread(import_upload, up, settings.max_map_cells,
-                                           settings.max_map_obstacles)
+        scenario = await asyncio.to_thread(
+            import_bounded, core.map_importer, up, settings.max_map_cells,
+            settings.max_map_obstacles)
     except MapUploadError as exc:
-        raise HTTPException(exc.status, [{"loc": ["body", exc.field], "msg": str(exc),
-                                          "type": "map_too_large" if exc.status == 413
-                                          else "map_invalid"}]) from None
+        loc = ["body", exc.field] if exc.field else ["body"]
+        raise HTTPException(exc.status, [{"loc": loc, "msg": str(exc), "type": exc.kind}],
+                            headers={"Retry-After": "5"} if exc.status == 503 else None
+                            ) from None
     source = up.model_dump()
     map_id = await asyncio.to_thread(core.store.add_map, up.name, up.format, source, scenario)
     info = core.store.map_info(map_id)
