@@ -11,6 +11,7 @@ from typer.testing import CliRunner
 from swarmpath.cli import app
 from swarmpath.evidence.compare_maps import map_statistics
 from swarmpath.planners import list_planners
+from swarmpath.planners.episode import TIMING_FIELDS
 from swarmpath.planners.summary import summarize
 from swarmpath.world import list_maps
 
@@ -19,7 +20,7 @@ runner = CliRunner()
 
 def fast(*planners: str) -> str:
     """--params giving each planner a 0.1 s budget (params may name only --planners)."""
-    return json.dumps({p: {"time": 0.1} for p in planners})
+    return json.dumps({p: {"iterations": 1000} for p in planners})
 
 RUN_FIELDS = {"planner", "map", "run", "seed", "success", "collisions", "length", "error",
               "smoothness", "min_clearance", "steps", "iterations", "seconds", "optimum", "gap",
@@ -44,15 +45,24 @@ def test_table_has_the_papers_columns_and_a_mean_row():
     out = result.stdout
     assert "OMPL-RRTstar on mfb-static" in out and "exact optimum" in out
     header = next(line for line in out.splitlines() if line.split()[:1] == ["Run"])
-    for column in ("Distance", "Error", "Elapsed time", "Success", "Collisions",
+    for column in ("Distance", "Error", "Elapsed time", "CPU time", "Success", "Collisions",
                    "Robot/obstacle-driven", "Gap", "Planned"):
         assert column in header
+    assert header.index("Elapsed time") < header.index("CPU time") < header.index("Success")
     lines = [line.split() for line in out.splitlines()]
     at = next(i for i, r in enumerate(lines) if r[:1] == ["Mean"])  # the caption comes after
     assert [r[0] for r in lines[: at + 1] if r and r[0] in {"1", "2", "Mean"}] == [
         "1", "2", "Mean"]
     mean = lines[at]
-    assert mean[4] == "2/2"
+    assert mean[5] == "2/2"
+    # the field's path metrics, one row per planner x map
+    quality = next(i for i, r in enumerate(lines) if r[:2] == ["Path", "quality"])
+    head = out.splitlines()[quality + 2]
+    for column in ("Clearance min", "Clearance mean", "Curvature max", "Cusps", "In danger",
+                   "Travel time", "Velocity smoothness", "Angular smoothness", "Jerk"):
+        assert column in head
+    row = next(r for r in lines[quality:] if r[:2] == ["mfb-static", "OMPL-RRTstar"])
+    assert len(row) == 2 + 10 and all(v != "-" for v in row[2:])
 
 
 def test_json_document_has_exactly_runs_summary_statistics_and_maps():
@@ -158,7 +168,8 @@ def test_processes_do_not_change_the_runs():
     assert [(r["planner"], r["run"]) for r in two] == [
         (p, r) for p in ("MFB", "RFO-GWO-EA") for r in (0, 1)]
     for a, b in zip(one, two, strict=True):
-        a.pop("seconds"), b.pop("seconds")  # wall time: the only field allowed to differ
+        for key in TIMING_FIELDS:  # wall and CPU time: the only fields allowed to differ
+            a.pop(key), b.pop(key)
         assert a == b
 
 

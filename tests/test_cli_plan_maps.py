@@ -15,7 +15,7 @@ runner = CliRunner()
 DATA = Path(__file__).parent / "data"
 ARENA = str(DATA / "arena.map")
 SCEN = str(DATA / "arena.map.scen")
-FAST = json.dumps({"OMPL-RRTstar": {"time": 0.1}})
+FAST = json.dumps({"OMPL-RRTstar": {"iterations": 1000}})
 
 
 def invoke(*args: str):

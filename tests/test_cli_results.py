@@ -22,7 +22,7 @@ BENCH = {
     "runs": 3, "agents": 6, "iterations": 10, "seed": 4,
 }
 MAPS = {"kind": "map", "planners": ["OMPL-RRTstar"], "maps": ["mfb-static"], "runs": 2,
-        "seed": 2, "params": {"OMPL-RRTstar": {"time": 0.1}}}
+        "seed": 2, "params": {"OMPL-RRTstar": {"iterations": 1000}}}
 
 
 @pytest.fixture

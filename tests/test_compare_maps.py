@@ -69,13 +69,14 @@ def test_friedman_over_maps_by_hand() -> None:
 
 
 def test_plan_prints_the_comparison_and_rejects_a_bad_reference() -> None:
-    params = json.dumps({p: {"time": 0.1} for p in ("OMPL-RRTstar", "OMPL-BITstar")})
+    params = json.dumps({p: {"iterations": 1000} for p in ("OMPL-RRTstar", "OMPL-BITstar")})
     args = ["plan", "-j", "1", "-p", "OMPL-RRTstar,OMPL-BITstar", "-m", "mfb-static", "--runs",
             "2", "--params", params]
     result = runner.invoke(app, [*args, "--reference", "ompl-rrtstar"])
     assert result.exit_code == 0, result.stderr
     assert "Planners against OMPL-RRTstar" in result.stdout
-    row = next(ln.split() for ln in result.stdout.splitlines()
+    comparison = result.stdout[result.stdout.index("Planners against"):]
+    row = next(ln.split() for ln in comparison.splitlines()
                if ln.split()[:2] == ["mfb-static", "OMPL-RRTstar"])
     assert row[2] == "2/2"  # the reference: no marker
     *_, counts = (ln.split() for ln in result.stdout.splitlines()

@@ -34,7 +34,7 @@ def tight_goal():
 @pytest.mark.slow  # every planner on tb3_sandbox: about 100 s on a loaded machine
 @pytest.mark.parametrize("planner", list_planners())
 def test_no_success_short_of_a_static_goal(tight_goal, planner: str) -> None:
-    params = {"time": 0.5} if planner.startswith("OMPL") else None
+    params = {"iterations": 3000} if planner.startswith("OMPL") else None
     out = Episode(tight_goal, planner, 1, 0, params).run()
     assert out.optimum is not None
     if out.success:

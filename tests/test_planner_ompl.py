@@ -1,7 +1,9 @@
 """OMPL baselines: solved static maps, exact re-check, failures with reasons, determinism."""
 
+import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -12,11 +14,13 @@ from swarmpath.planners import ompl_baselines as ompl_mod
 from swarmpath.planners.ompl_checks import FastChecker
 from swarmpath.world import Obstacle, RobotSpec, Scenario, get_map
 from swarmpath.world.geometry import ObstacleSet, collides
+from swarmpath.world.importers import load_ros_map
 from swarmpath.world.scenario_io import load_scenario, scenario_from_dict
 
 BASELINES = [n for n in list_planners() if issubclass(get_planner(n), ompl_mod.OmplPlanner)]
-TWO_WALLS = Path(__file__).parent / "data" / "two_walls.json"
-FAST = {"time": 0.2}
+DATA = Path(__file__).parent / "data"
+TWO_WALLS = DATA / "two_walls.json"
+FAST = {"iterations": 2000}
 
 
 def planned_length(path: np.ndarray) -> float:
@@ -42,7 +46,8 @@ def test_registered_as_global_planners_given_the_static_map():
         cls = get_planner(name)
         assert cls.kind == "global"
         assert "static map" in cls.description
-        assert cls.defaults["time"] == 1.0
+        assert cls.defaults["budget"] == "iterations"  # the same result on any machine
+        assert cls.defaults["iterations"] >= 10_000
 
 
 @pytest.mark.parametrize("name", BASELINES)
@@ -80,7 +85,7 @@ def test_diff_drive_robot_reaches_the_goal():
 
 @pytest.mark.parametrize("name", BASELINES)
 def test_walled_in_goal_is_a_failure_with_a_reason(name):
-    out = Episode(walled_goal(), name, seed=1, run=0, params={"time": 0.1}).run()
+    out = Episode(walled_goal(), name, seed=1, run=0, params={"iterations": 1000}).run()
     assert not out.success
     assert out.collisions == 0
     assert name in out.reason and "no path" in out.reason
@@ -139,7 +144,8 @@ def test_plan_path_rejects_start_inside_an_inflated_obstacle():
 def test_discrete_motion_checking_also_passes_the_exact_recheck():
     scenario = get_map("mfb-static")
     ep = Episode(scenario, "OMPL-RRTstar", seed=2, run=0,
-                 params={"time": 0.2, "motion_check": "discrete", "simplify": "none"})
+                 params={"iterations": 2000, "motion_check": "discrete",
+                         "simplify": "none"})
     out = ep.run()
     assert out.success, out.reason
     assert out.collisions == 0
@@ -164,12 +170,19 @@ def test_iteration_budget_is_deterministic_and_runs_differ():
 
 def test_parameters_are_checked():
     cls = get_planner("OMPL-RRTstar")
-    for bad in ({"time": 0}, {"time": -1.0}, {"iterations": -1}, {"margin": -0.1},
+    for bad in ({"budget": "wall", "time": 0}, {"budget": "cpu", "time": -1.0},
+                {"iterations": -1}, {"iterations": 0}, {"margin": -0.1},
                 {"resolution": 0.0}, {"simplify": "yes"}, {"motion_check": "maybe"},
-                {"budget": 1.0}):
+                {"budget": 1.0}, {"budget": "seconds"}):
         with pytest.raises(PlannerError):
             cls.resolve_params(bad)
-    assert cls.resolve_params({"time": 2, "iterations": 10})["time"] == 2.0
+    assert cls.resolve_params({"budget": "cpu", "time": 2})["time"] == 2.0
+    assert cls.resolve_params({"iterations": 10})["iterations"] == 10
+    # a budget the planner would silently ignore is refused, naming the parameter
+    with pytest.raises(PlannerError, match=r"OMPL-RRTstar\.time applies to budget 'cpu' or 'wall'"):
+        cls.resolve_params({"time": 0.5})
+    with pytest.raises(PlannerError, match=r"OMPL-RRTstar\.iterations applies to budget"):
+        cls.resolve_params({"budget": "wall", "iterations": 100})
 
 
 @pytest.mark.parametrize("map_name", ["mfb-static", "rfogwo-map2"])
@@ -194,7 +207,7 @@ def test_no_nanobind_leak_report_at_exit():
     code = (
         "from swarmpath.planners import Episode\n"
         "from swarmpath.world import get_map\n"
-        "o = Episode(get_map('mfb-static'), 'OMPL-BITstar', 1, 0, {'time': 0.05}).run()\n"
+        "o = Episode(get_map('mfb-static'), 'OMPL-BITstar', 1, 0, {'iterations': 500}).run()\n"
         "print(o.success)\n"
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
@@ -214,3 +227,42 @@ def test_contacts_are_counted_by_cause():
     assert out.collisions > 0 and not out.success
     assert out.robot_driven_contacts == 0
     assert out.obstacle_driven_contacts == out.collisions
+
+
+def _busy_processes(n: int) -> list[subprocess.Popen]:
+    """``n`` processes spinning on the CPU (each in its own process group, bounded to 300 s)."""
+    code = "import time\nend = time.time() + 300\nwhile time.time() < end:\n    pass\n"
+    return [subprocess.Popen([sys.executable, "-c", code], start_new_session=True)
+            for _ in range(n)]
+
+
+@pytest.mark.parametrize("name", BASELINES)
+def test_the_default_budget_gives_the_same_result_under_load_and_quiet(name):
+    # the issue's failure: 1 s of wall clock found no path under load in 1 of 3 runs; the default
+    # budget counts iterations, so a loaded worker plans exactly what a quiet one plans
+    scenario = load_ros_map(DATA / "tb3_sandbox.yaml").scenario
+
+    def run() -> tuple[list, int, bool]:
+        out = Episode(scenario, name, seed=4, run=1).run()
+        return out.path, out.iterations, out.success
+
+    quiet = run()
+    busy = _busy_processes(2 * (os.cpu_count() or 2))
+    try:
+        loaded = run()
+    finally:
+        for p in busy:
+            p.kill()
+            p.wait()
+    assert quiet[2], "the default budget solves tb3_sandbox"
+    assert loaded == quiet
+    assert quiet[1] == get_planner(name).defaults["iterations"]
+
+
+def test_cpu_budget_ends_on_this_threads_cpu_time():
+    params = {**ompl_mod.OmplPlanner.defaults, "budget": "cpu", "time": 0.2}
+    started = time.thread_time()
+    res = ompl_mod.plan_path("RRTstar", walled_goal().static_obstacles(), np.array([1.0, 1.0]),
+                             np.array([5.0, 5.0]), 0.2, (10.0, 10.0), params, seed=2)
+    assert time.thread_time() - started >= 0.2
+    assert res.path is None and "the budget of 0.2 s of CPU time" in res.reason

@@ -28,7 +28,7 @@ from swarmpath.service.worker import execute_lease, pack_lease_columns
 DATA = Path(__file__).parent / "data"
 ARENA = (DATA / "arena.map").read_text()
 WALL = {"shape": "polygon", "points": [[6, 0], [6.5, 0], [6.5, 10], [6, 10]]}
-RRT = {"OMPL-RRTstar": {"time": 0.1}}
+RRT = {"OMPL-RRTstar": {"iterations": 1000}}
 
 
 @pytest.fixture

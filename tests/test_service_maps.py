@@ -154,7 +154,7 @@ def test_a_job_on_an_uploaded_map_is_worked_off(data_dir: Path) -> None:
                                            "map": ARENA}).json()
         job = client.post("/jobs", json={
             "kind": "map", "planners": ["OMPL-RRTstar"], "runs": 2, "seed": 3,
-            "params": {"OMPL-RRTstar": {"time": 0.2}}, "maps": [{"map": arena["id"]}],
+            "params": {"OMPL-RRTstar": {"iterations": 2000}}, "maps": [{"map": arena["id"]}],
         }).json()
         core = client.app.state.core  # type: ignore[attr-defined]
         core.publish = lambda key, payload: None

@@ -54,7 +54,7 @@ def test_plan_prints_the_warning(tmp_path) -> None:
     p = tmp_path / "walls.json"
     p.write_text(json.dumps(_scenario(goal_motion={"speed": 0.2, "heading_deg": 0})))
     result = CliRunner().invoke(app, ["plan", "-j", "1", "-p", "OMPL-RRTstar", "--runs", "1",
-                                      "--params", '{"OMPL-RRTstar": {"time": 0.1}}', "-m",
+                                      "--params", '{"OMPL-RRTstar": {"iterations": 1000}}', "-m",
                                       str(p), "--json"])
     assert result.exit_code == 0, result.stderr
     assert "warning: walls: goal_motion: the goal's stated path enters" in result.stderr

@@ -270,6 +270,18 @@ def test_map_job_page_paths_failures_and_boxes(server, jobs, browser):
             assert gap == "no optimum: the map has moving obstacles or a moving goal"
         elif name == "mfb-static":
             assert not gap.startswith("no optimum")
+    header = texts(browser.find_elements(By.CSS_SELECTOR, "#cells thead th"))
+    assert header[8:10] == ["planning s (median)", "CPU s (median)"]
+    for row in per_cell:  # every cell has a CPU time beside its wall time
+        assert float(texts(row.find_elements(By.TAG_NAME, "td"))[9]) >= 0.0
+    quality = browser.find_elements(By.CSS_SELECTOR, "#quality tbody tr")
+    assert len(quality) == len(MAP["maps"]) * len(MAP["planners"])
+    head = texts(browser.find_elements(By.CSS_SELECTOR, "#quality thead th"))
+    assert head[2:5] == ["clearance mean (m)", "curvature max (1/m)", "curvature mean (1/m)"]
+    for row in quality:  # a cell with a successful run shows its path metrics
+        tds = texts(row.find_elements(By.TAG_NAME, "td"))
+        cell = next(g for g in view["groups"] if g["map"] == tds[0])["planners"][tds[1]]
+        assert (tds[2] != "") == (cell["succeeded"] > 0)
     ranks = browser.find_elements(By.CSS_SELECTOR, "#map-ranks tbody tr")
     assert [r.get_attribute("data-planner") for r in ranks] == MAP["planners"]
     header = texts(browser.find_elements(By.CSS_SELECTOR, "#map-ranks thead th"))

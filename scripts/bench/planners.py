@@ -2,7 +2,7 @@
 """Path planning speed and quality on one map (mfb-static by default), every registered planner.
 
     .venv/bin/python scripts/bench/planners.py [--map mfb-static] [--seeds 10] [--planners all]
-        [--budget 120] [--ompl-time 1.0] [--no-same-budget] [--params JSON]
+        [--budget 120] [--no-same-budget] [--params JSON]
 
 Each planner runs once per seed 1..N (run 0 of each seed) through :class:`Episode`, exactly as
 ``swarmpath plan`` does. Reported per planner: runs done, success, collisions, median planning
@@ -12,10 +12,10 @@ median and best executed length, and the gap to the exact optimum: ``gap`` = len
 as the episode reports it, and ``gap+err`` = (length + final error) / optimum - 1, which also
 counts the last <= 0.2 m the robot does not drive (the episode ends within 0.2 m of the goal).
 
-The OMPL baselines run at their default budget (``--ompl-time``, 1 s) and, unless
-``--no-same-budget``, again with ``time`` = the median planning wall time of the other planners'
-medians ("the same budget"). OMPL's budget is wall clock, so their CPU seconds shrink on a
-loaded machine while the wall seconds do not.
+The OMPL baselines run at their default budget (an iteration count: the same paths on any
+machine and load) and, unless ``--no-same-budget``, again with a CPU-time budget equal to the
+median planning CPU time of the other planners' medians ("the same budget": CPU seconds, which
+other processes' load does not shrink as it shrinks wall-clock seconds).
 
 ``--params`` takes the JSON of ``swarmpath plan --params`` (parameters per planner name, checked by
 the planner), e.g. ``'{"MFB": {"knowledge": "map"}}'``; a row with parameters says so in its label.
@@ -146,7 +146,6 @@ def main(argv: Sequence[str] | None = None) -> None:
     ap.add_argument("--planners", default="all", help="comma-separated names, or 'all'")
     ap.add_argument("--budget", type=float, default=120.0,
                     help="wall seconds per planner row before it stops taking seeds")
-    ap.add_argument("--ompl-time", type=float, default=1.0)
     ap.add_argument("--no-same-budget", action="store_true")
     ap.add_argument("--params", default="{}", help="JSON: parameters per planner name")
     args = ap.parse_args(argv)
@@ -175,16 +174,18 @@ def main(argv: Sequence[str] | None = None) -> None:
         rows.append(run_row(Row(label, name, mine), scenario, seeds, args.budget))
     for name in [n for n in names if n in OMPL]:
         note(name)
-        rows.append(run_row(Row(f"{name} ({args.ompl_time:g} s)", name,
-                                {"time": args.ompl_time}), scenario, seeds, args.budget))
-    swarm_medians = [statistics.median([o.seconds for o in r.outcomes])
+        iterations = get_planner(name).defaults["iterations"]
+        rows.append(run_row(Row(f"{name} ({iterations} iterations)", name, {}), scenario,
+                            seeds, args.budget))
+    swarm_medians = [statistics.median(r.cpu)
                      for r in rows if r.planner not in OMPL and r.outcomes]
     if not args.no_same_budget and swarm_medians:
         same = round(statistics.median(swarm_medians), 3)
         for name in [n for n in names if n in OMPL]:
-            note(f"{name} at {same} s")
-            rows.append(run_row(Row(f"{name} ({same:g} s)", name, {"time": same}), scenario,
-                                seeds, args.budget))
+            note(f"{name} at {same} s of CPU time")
+            rows.append(run_row(Row(f"{name} ({same:g} s CPU)", name,
+                                    {"budget": "cpu", "time": same}), scenario, seeds,
+                                args.budget))
 
     optimum = rows[0].outcomes[0].optimum if rows and rows[0].outcomes else None
     print(f"Map `{args.map}`, exact optimum "

@@ -37,7 +37,7 @@ def render_cell(cell: CellResult, row: dict[str, Any], reason: str | None = None
               else f" (no exact optimum: {reason or 'see the runs'}")
     title += f"; octile optimum {octile:.4f} m)" if octile is not None else ")"
     table = Table(title=title, box=box.SIMPLE_HEAD, pad_edge=False)
-    for name in ("Run", "Distance (m)", "Error (m)", "Elapsed time (s)", "Success",
+    for name in ("Run", "Distance (m)", "Error (m)", "Elapsed time (s)", "CPU time (s)", "Success",
                  "Collisions", "Robot/obstacle-driven", "Gap (%)", "Steps", "Iterations"):
         table.add_column(name, justify="left" if name == "Success" else "right", no_wrap=True)
     planned = any(r.get("planned_length") is not None for r in cell.runs)
@@ -49,23 +49,56 @@ def render_cell(cell: CellResult, row: dict[str, Any], reason: str | None = None
     for r in cell.runs:
         gap = None if r["gap"] is None else 100.0 * r["gap"]
         cols = [str(r["run"] + 1), _num(r["length"]), _num(r["error"]), _num(r["seconds"], 3),
-                "yes" if r["success"] else "no", str(r["collisions"]), _causes(r), _num(gap, 2),
-                str(r["steps"]), str(r["iterations"])]
+                _num(r.get("cpu_seconds"), 3), "yes" if r["success"] else "no",
+                str(r["collisions"]), _causes(r), _num(gap, 2), str(r["steps"]),
+                str(r["iterations"])]
         if planned:
             cols.append(_num(r.get("planned_length")))
         if failed:
             cols.append("" if r["success"] else str(r["reason"]))
         table.add_row(*cols)
     gap_mean = None if row["gap_mean"] is None else 100.0 * row["gap_mean"]
-    mean = ["Mean", _num(row["length_mean"]), _num(row["error_mean"]), _num(row["seconds_mean"], 3),
+    mean = ["Mean", _num(row["length_mean"]), _num(row["error_mean"]),
+            _num(row["seconds_mean"], 3), _num(row["cpu_seconds_mean"], 3),
             f"{row['successes']}/{row['runs']}", str(row["collisions"]), _causes(row),
-            _num(gap_mean, 2),
-            f"{row['steps_mean']:.1f}", f"{row['iterations_mean']:.0f}"]
+            _num(gap_mean, 2), f"{row['steps_mean']:.1f}", f"{row['iterations_mean']:.0f}"]
     if planned:
         mean.append("")
     if failed:
         mean.append("")
     table.add_row(*mean, style="bold", end_section=True)
+    return table
+
+
+#: The path-quality table: (header, summary key, digits, scale).
+QUALITY_COLUMNS = (
+    ("Clearance min (m)", "min_clearance", 3, 1.0),
+    ("Clearance mean (m)", "clearance_mean", 3, 1.0),
+    ("Curvature max (1/m)", "curvature_max", 2, 1.0),
+    ("Curvature mean (1/m)", "curvature_mean", 3, 1.0),
+    ("Cusps", "cusps", 1, 1.0),
+    ("In danger (%)", "danger_share", 1, 100.0),
+    ("Travel time (s)", "travel_time_mean", 1, 1.0),
+    ("Velocity smoothness (m/s2)", "velocity_smoothness", 3, 1.0),
+    ("Angular smoothness (rad/s2)", "angular_smoothness", 2, 1.0),
+    ("Jerk (m/s3)", "jerk", 2, 1.0),
+)
+
+
+def render_quality(rows: Sequence[dict[str, Any]]) -> Table:
+    """The field's path metrics per planner x map (summary rows: means over successful runs;
+    the least clearance over all runs)."""
+    table = Table(title="Path quality (means over the successful runs)", box=box.SIMPLE_HEAD,
+                  pad_edge=False)
+    for name in ("Map", "Planner", *(c[0] for c in QUALITY_COLUMNS)):
+        table.add_column(name, justify="left" if name in ("Map", "Planner") else "right",
+                         no_wrap=True)
+    for row in rows:
+        cells = []
+        for _, key, digits, scale in QUALITY_COLUMNS:
+            v = row.get(key)
+            cells.append(_num(None if v is None else scale * float(v), digits))
+        table.add_row(str(row["map"]), str(row["planner"]), *cells)
     return table
 
 
@@ -78,9 +111,10 @@ def print_tables(cells: Sequence[CellResult], spec: PlanSpec, seconds: float) ->
         reason = spec.optima.get(cell.scenario.name, (None, None))[1]
         tables.append(render_cell(cell, summarize(cell.runs)[0], reason,
                                   spec.octile.get(cell.scenario.name)))
+    quality = render_quality(summarize([r for c in cells for r in c.runs]))
     if not console.is_terminal:  # pipes and files: never squeeze the numbers
         widest = max(Measurement.get(console, console.options.update(width=100_000), t).maximum
-                     for t in tables)
+                     for t in [*tables, quality])
         console = Console(width=max(80, widest))
     for t in tables:
         console.print(t)
@@ -88,12 +122,16 @@ def print_tables(cells: Sequence[CellResult], spec: PlanSpec, seconds: float) ->
         f"{spec.runs} runs per planner x map, seed {spec.seed}; Distance = executed path length "
         "(Planned: the global planner's plan), Robot/obstacle-driven = colliding steps where the "
         "robot moved into the obstacle / a moving obstacle reached a still or retreating robot, "
-        "Error = final distance to the goal, Elapsed time = "
-        "planning wall time; the Mean row averages Distance and Gap over successful runs; "
+        "Error = final distance to the goal, Elapsed time = planning wall time, CPU time = the "
+        "planner's CPU time (other processes' load inflates wall time, not CPU time); the Mean "
+        "row averages Distance and Gap over successful runs; "
         f"{seconds:.1f} s",
         highlight=False,
     )
-    console.print(legend_text(["Collisions", "Gap (%)"]), markup=False, highlight=False)
+    console.print(quality)
+    console.print(legend_text(["Collisions", "Gap (%)", "CPU time (s)", "clearance_mean",
+                               "curvature_max", "cusps", "danger_share", "velocity_smoothness",
+                               "angular_smoothness", "jerk"]), markup=False, highlight=False)
     if len(spec.planners) > 1:
         from swarmpath.cli import plan_stats
         from swarmpath.evidence.compare_maps import map_statistics

@@ -21,6 +21,25 @@ NOTES: dict[str, str] = {
     "length_mean": "mean executed path length of the successful runs (m)",
     "error_mean": "mean final distance to the goal over all runs (m)",
     "seconds_mean": "mean planning wall time per run (s)",
+    "cpu_seconds_mean": "mean CPU time of the planner per run (s): unlike the wall time, not "
+                        "inflated by other processes sharing the machine",
+    "travel_time_mean": "mean simulated time from start to goal of the successful runs (s)",
+    "clearance_mean": "mean body gap (clearance minus robot radius) sampled every 5 cm along "
+                      "the path, mean over successful runs (m; Bench-MR, OMPL)",
+    "curvature_max": "largest curvature of the circles through three path points 0.3 m apart "
+                     "(1/m; Bench-MR), mean over successful runs",
+    "curvature_mean": "mean of the same curvature along the path (1/m), mean over successful "
+                      "runs",
+    "cusps": "vertices of the path turning by more than 60 degrees (Bench-MR), mean over "
+             "successful runs",
+    "danger_share": "share of the travel time spent within 0.1 m (body gap) of an obstacle "
+                    "(MRPB's safety), mean over successful runs",
+    "velocity_smoothness": "mean |change of speed| per second (m/s^2; MRPB), mean over "
+                           "successful runs",
+    "angular_smoothness": "mean |change of the turn rate of the direction of travel| per "
+                          "second (rad/s^2), mean over successful runs",
+    "jerk": "mean magnitude of the jerk, the rate of change of acceleration (m/s^3), mean over "
+            "successful runs",
     "rank": "rank of avg among the algorithms on this function and dimension (1 = best)",
     "origin_suspect": "true when runs reached exact zeros or values below 1e-100 on a function "
                       "whose optimum is at the origin (usually a move that scales positions "
@@ -38,7 +57,8 @@ NOTES: dict[str, str] = {
     "seconds_marker": "+/=/- against the reference planner's planning times (Wilcoxon "
                       "rank-sum test, Holm-adjusted over the table, alpha 0.05)",
 }
-ALIASES = {"gap": "gap_mean", "gap (%)": "gap_mean", "collision": "collisions"}
+ALIASES = {"gap": "gap_mean", "gap (%)": "gap_mean", "collision": "collisions",
+           "cpu time (s)": "cpu_seconds_mean"}
 
 
 def legend(columns: Iterable[str]) -> list[tuple[str, str]]:

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from swarmpath import metrics
+from swarmpath import metrics, path_metrics
 from swarmpath.optimizers.streams import OPTIMIZER, SIMULATION, run_generator
 from swarmpath.planners.base import Planner, get_planner
 from swarmpath.planners.simulator import Simulator
@@ -34,6 +34,9 @@ DEFAULT_STEP_LIMIT = 2000
 #: optimum's own tolerance, so no successful path can end short of the goal and be shorter than
 #: the optimum (a path ending d from the goal can be up to d shorter).
 FINISH_TOLERANCE = 1e-9
+#: RunOutcome fields measured on the host (wall and CPU time): the only ones that may differ
+#: between two executions of the same run.
+TIMING_FIELDS = ("seconds", "cpu_seconds")
 DEFAULT_TIME_FACTOR = 6.0  # time limit: this many times the straight-line travel time, plus 60 s
 
 
@@ -64,6 +67,21 @@ class RunOutcome:
     #: the obstacle, or it was still / moving away and a moving obstacle reached it.
     robot_driven_contacts: int = 0
     obstacle_driven_contacts: int = 0
+    #: CPU time of the planner's decisions (s; this thread's, :func:`time.thread_time`): beside
+    #: the wall time ``seconds``, which other processes' load inflates.
+    cpu_seconds: float = 0.0
+    #: The field's path metrics (:mod:`swarmpath.path_metrics`, docs/metrics.md): mean body gap
+    #: along the path (m), Bench-MR's curvature (1/m) and cusps, MRPB's share of the travel time
+    #: within DANGER_DISTANCE of an obstacle, MRPB's velocity smoothness (m/s^2), its angular
+    #: counterpart (rad/s^2) and the mean jerk (m/s^3).
+    clearance_mean: float | None = None
+    curvature_max: float | None = None
+    curvature_mean: float | None = None
+    cusps: int = 0
+    danger_share: float | None = None
+    velocity_smoothness: float | None = None
+    angular_smoothness: float | None = None
+    jerk: float | None = None
     path: list[list[float]] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
@@ -158,6 +176,7 @@ class Episode:
         self.steps = 0
         self.iterations = 0
         self.planning_seconds = 0.0
+        self.planning_cpu_seconds = 0.0
         self.reason: str | None = None
 
     @property
@@ -168,9 +187,10 @@ class Episode:
         if self.done:
             return
         obs = self.sim.observe()
-        started = time.perf_counter()
+        started, cpu_started = time.perf_counter(), time.thread_time()
         decision = self.planner.decide(obs)
         self.planning_seconds += time.perf_counter() - started
+        self.planning_cpu_seconds += time.thread_time() - cpu_started
         self.steps += 1
         self.iterations += decision.iterations
         if decision.target is None:
@@ -228,6 +248,7 @@ class Episode:
         reason = self.reason or "not finished"
         if reached and collisions:
             reason = f"collided {collisions} times"
+        quality = path_metrics.path_quality(path, world.obstacles_at, self.sim.radius)
         optimum = scenario_optimum(self.scenario, self.optimum_budget)
         gap = metrics.gap(length, optimum) if (success and optimum) else None
         return RunOutcome(
@@ -252,5 +273,7 @@ class Episode:
             planned_length=self.planner.planned_length,
             robot_driven_contacts=causes.robot_driven,
             obstacle_driven_contacts=causes.obstacle_driven,
+            cpu_seconds=self.planning_cpu_seconds,
+            **quality._asdict(),
             path=[[float(x), float(y), float(t)] for x, y, t in path],
         )

@@ -15,9 +15,12 @@ not known to them and the goal is the one observed at the first decision). The p
   every ``resolution`` metres (expressed to OMPL as a fraction of the world's extent);
 * objective: ``PathLengthOptimizationObjective``; planners ``og.RRTstar`` / ``og.BITstar`` with
   OMPL's default settings;
-* termination: a wall-clock budget of ``time`` seconds (default 1 s), or, when ``iterations`` > 0,
-  after exactly that many planner iterations (a ``PlannerTerminationCondition`` built on a Python
-  counter: OMPL 2.0.1 has no iteration condition of its own);
+* termination (``budget``): ``"iterations"`` (default) stops after exactly ``iterations`` planner
+  iterations (a ``PlannerTerminationCondition`` on a Python counter: OMPL 2.0.1 has no iteration
+  condition of its own), the same on any machine and under any load; ``"cpu"`` after ``time``
+  seconds of this thread's CPU time (independent of other processes' load, not of the machine's
+  speed); ``"wall"`` after ``time`` seconds of wall clock (the issue's original 1 s; depends on
+  the load);
 * ``simplify``: what OMPL's ``PathSimplifier`` does to the found path. ``"shortcut"`` (default):
   ``reduceVertices`` and ``collapseCloseVertices`` until nothing changes (at most 5 rounds), which
   drops redundant vertices and keeps straight segments; ``"max"``: ``simplifyMax`` (also shortcuts
@@ -42,11 +45,11 @@ same samples, in any order, in a fresh process or after other plans). Before eac
 module therefore re-seeds OMPL's generator with a seed drawn from the planner's own stream (seed,
 run), with OMPL's logging silenced around the call. Consequences:
 
-* ``iterations > 0`` (deterministic mode): same (scenario, params, seed, run) -> same path,
-  exactly, in any process and order;
-* ``iterations = 0`` (the default, the issue's 1 s budget): the *sampling sequence* is seeded, but
-  how far the planner gets in ``time`` seconds depends on the machine and its load, so paths are
-  not reproducible. Use ``{"iterations": N}`` when a study needs exact repeatability;
+* ``budget = "iterations"`` (the default): same (scenario, params, seed, run) -> same path,
+  exactly, in any process and order, on a loaded or a quiet machine;
+* ``budget = "cpu"`` or ``"wall"``: the *sampling sequence* is seeded, but how far the planner
+  gets in ``time`` seconds depends on the machine (and, for wall clock, on its load), so paths
+  are not reproducible run by run;
 * the generator is process-wide state: two OMPL plans must not run concurrently in threads of one
   process (the worker hosts one planner at a time).
 
@@ -88,6 +91,9 @@ OMPL_REFERENCE = (
 )
 MAX_TIME = 600.0  # s: the largest accepted budget
 MAX_ITERATIONS = 10_000_000
+#: What ends a plan: an iteration count (the default: the same on any machine), CPU time of the
+#: planning thread, or wall clock.
+BUDGETS = ("iterations", "cpu", "wall")
 
 
 # ----------------------------------------------------------------------------------- planning
@@ -225,9 +231,10 @@ def _solve(
     ss.setPlanner(planner)
     ss.setup()
 
-    budget = int(params["iterations"])
-    if budget > 0:
-        ptc = ob.PlannerTerminationCondition(_IterationBudget(budget))
+    if params["budget"] == "iterations":
+        ptc = ob.PlannerTerminationCondition(_IterationBudget(int(params["iterations"])))
+    elif params["budget"] == "cpu":
+        ptc = ob.PlannerTerminationCondition(_CpuBudget(float(params["time"])))
     else:
         ptc = ob.timedPlannerTerminationCondition(float(params["time"]))
     status = ss.solve(ptc)
@@ -240,8 +247,8 @@ def _solve(
         last = path.getState(path.getStateCount() - 1)
         gap = math.hypot(last[0] - goal[0], last[1] - goal[1])
         return None, iterations, (
-            f"no path to the goal found ({iterations} iterations; the best approximate path "
-            f"ends {gap:.2f} m from it)"
+            f"no path to the goal found within {budget_text(params)} ({iterations} iterations "
+            f"done; the best approximate path ends {gap:.2f} m from it)"
         )
     mode = params["simplify"]
     if mode != "none":
@@ -262,8 +269,7 @@ def _solve(
 def _no_path_reason(status: str, iterations: int, params: Mapping[str, Any]) -> str:
     """Why OMPL returned no path, in words (OMPL's status alone said "Timeout, 0 iterations"
     for a start it considered invalid)."""
-    budget = int(params["iterations"])
-    limit = f"{budget} iterations" if budget > 0 else f"the {float(params['time']):g} s budget"
+    limit = budget_text(params)
     if status == "Invalid start":
         return (f"no path found: OMPL rejected the start state (clearance within the planner's "
                 f"margin {float(params['margin']):g} m of the inflated obstacles)")
@@ -274,6 +280,25 @@ def _no_path_reason(status: str, iterations: int, params: Mapping[str, Any]) -> 
         return (f"no path found within {limit} ({iterations} iterations done); a larger budget "
                 "may find one, or the goal is unreachable at this clearance")
     return f"no path found (OMPL status {status!r}, {iterations} iterations done)"
+
+
+def budget_text(params: Mapping[str, Any]) -> str:
+    """The plan's budget in words ("10000 iterations", "1 s of CPU time", "1 s of wall clock")."""
+    if params["budget"] == "iterations":
+        return f"{int(params['iterations'])} iterations"
+    clock = "CPU time" if params["budget"] == "cpu" else "wall clock"
+    return f"the budget of {float(params['time']):g} s of {clock}"
+
+
+class _CpuBudget:
+    """Termination after ``seconds`` of the calling thread's CPU time (OMPL evaluates the
+    condition in the planning thread; other processes' load does not count)."""
+
+    def __init__(self, seconds: float):
+        self.end = time.thread_time() + seconds
+
+    def __call__(self) -> bool:
+        return time.thread_time() >= self.end
 
 
 class _IterationBudget:
@@ -311,24 +336,44 @@ class OmplPlanner(Planner):
     reference = OMPL_REFERENCE
     algorithm: ClassVar[str] = "RRTstar"
     defaults: ClassVar[dict[str, Any]] = {
-        "time": 1.0,  # s of wall clock (used when iterations == 0)
-        "iterations": 0,  # > 0: stop after this many iterations instead (deterministic)
+        "budget": "iterations",  # what stops the planner: iterations, cpu or wall (time)
+        "iterations": 10_000,  # planner iterations (budget "iterations"; deterministic)
+        "time": 1.0,  # s of CPU time or wall clock (budget "cpu" / "wall")
         "margin": 0.02,  # m of clearance kept beyond the robot radius
         "motion_check": "exact",
         "resolution": 0.01,  # m between checked states (motion_check = "discrete")
         "simplify": "shortcut",
     }
     choices: ClassVar[dict[str, tuple[str, ...]]] = {
+        "budget": BUDGETS,
         "motion_check": ("exact", "discrete"),
         "simplify": ("none", "shortcut", "max"),
     }
 
     @classmethod
+    def resolve_params(cls, params):
+        """The planner's parameters; ``time`` and ``iterations`` are refused where the budget
+        does not use them (a silently ignored budget would mislead a study)."""
+        merged = super().resolve_params(params)
+        given = dict(params or {})
+        budget = merged["budget"]
+        if "time" in given and budget == "iterations":
+            raise PlannerError(
+                f"{cls.name}.time applies to budget 'cpu' or 'wall' only; the budget is "
+                f"'iterations' ({int(merged['iterations'])}): add \"budget\": \"cpu\" (CPU "
+                "seconds, independent of the load) or \"wall\" (wall clock), or give "
+                "iterations")
+        if "iterations" in given and budget != "iterations":
+            raise PlannerError(f"{cls.name}.iterations applies to budget 'iterations' only; "
+                               f"the budget is {budget!r} (time {float(merged['time']):g} s)")
+        return merged
+
+    @classmethod
     def check_params(cls, p):
         if not 0.0 < float(p["time"]) <= MAX_TIME:
             raise PlannerError(f"{cls.name}.time must be in (0, {MAX_TIME:g}] seconds")
-        if not 0 <= int(p["iterations"]) <= MAX_ITERATIONS:
-            raise PlannerError(f"{cls.name}.iterations must be in [0, {MAX_ITERATIONS}]")
+        if not 1 <= int(p["iterations"]) <= MAX_ITERATIONS:
+            raise PlannerError(f"{cls.name}.iterations must be in [1, {MAX_ITERATIONS}]")
         if float(p["margin"]) < 0.0:
             raise PlannerError(f"{cls.name}.margin must be >= 0")
         if not float(p["resolution"]) > 0.0:
@@ -382,16 +427,23 @@ class OmplPlanner(Planner):
                         align=True)
 
 
-def _baseline(name: str, algorithm: str, description: str) -> type[OmplPlanner]:
+def _baseline(name: str, algorithm: str, iterations: int,
+              description: str) -> type[OmplPlanner]:
     cls = type(name.replace("-", "_") + "Planner", (OmplPlanner,), {
         "name": name,
         "algorithm": algorithm,
         "description": description,
+        "defaults": {**OmplPlanner.defaults, "iterations": iterations},
     })
     return register(cls)  # type: ignore[return-value]
 
 
 _STATIC = ("given the static map (obstacles inflated by the robot radius), planned once in R^2 "
-           "with a path-length objective; 1 s budget by default, every segment re-checked exactly")
-_baseline("OMPL-RRTstar", "RRTstar", f"OMPL RRT* baseline: {_STATIC}")
-_baseline("OMPL-BITstar", "BITstar", f"OMPL BIT* baseline: {_STATIC}")
+           "with a path-length objective; an iteration budget by default (the same result on "
+           "any machine), every segment re-checked exactly")
+#: Default iteration budgets: about what one second of wall clock gave on a quiet machine on the
+#: papers' maps (docs/planners.md, "Budgets"), now the same on every machine.
+RRTSTAR_ITERATIONS = 10_000
+BITSTAR_ITERATIONS = 50_000
+_baseline("OMPL-RRTstar", "RRTstar", RRTSTAR_ITERATIONS, f"OMPL RRT* baseline: {_STATIC}")
+_baseline("OMPL-BITstar", "BITstar", BITSTAR_ITERATIONS, f"OMPL BIT* baseline: {_STATIC}")

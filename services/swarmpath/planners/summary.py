@@ -6,8 +6,11 @@ keys), shared by ``swarmpath plan`` and the REST service. Rules:
 * ``success_rate``, ``collisions`` (total; by cause ``robot_driven_contacts`` and
   ``obstacle_driven_contacts``, see :func:`swarmpath.metrics.contact_causes`), ``error_*``,
   ``seconds_*``, ``iterations_mean`` and ``steps_mean`` are over **all** runs;
-* ``length_*``, ``gap_*`` and ``smoothness_mean`` are over the **successful** runs only (a failed
-  run's length measures how far it got, not a path), and are ``None`` when no run succeeded;
+* ``length_*``, ``gap_*``, ``smoothness_mean``, ``travel_time_mean`` and the field's path
+  metrics (:data:`PATH_METRICS`: each the mean of the runs' values) are over the **successful**
+  runs only (a failed run's length measures how far it got, not a path), and are ``None`` when
+  no run succeeded; ``cpu_seconds_*`` (the planner's CPU time) are over all runs, beside the
+  wall time ``seconds_*``;
 * ``std`` is the sample standard deviation (ddof=1, 0 for one value), as in
   :func:`swarmpath.evidence.stats.describe`;
 * ``min_clearance`` is the smallest over all runs; every value is JSON-safe (no NaN or inf:
@@ -23,8 +26,10 @@ from collections.abc import Iterable, Mapping
 from typing import Any
 
 from swarmpath.evidence.stats import describe
+from swarmpath.path_metrics import PATH_METRICS
 
-__all__ = ["finite_or_none", "json_safe", "summarize", "summarize_cell"]
+__all__ = ["PATH_METRICS", "finite_or_none", "json_safe", "path_metric_means", "summarize",
+           "summarize_cell"]
 
 
 def finite_or_none(value: Any) -> float | None:
@@ -61,6 +66,20 @@ def _get(run: Any, key: str) -> Any:
     return getattr(run, key, None)
 
 
+def _mean(values: Iterable[Any]) -> float | None:
+    vals = [float(v) for v in values if finite_or_none(v) is not None]
+    return sum(vals) / len(vals) if vals else None
+
+
+def path_metric_means(successful: Iterable[Any]) -> dict[str, float | None]:
+    """Mean of each of :data:`PATH_METRICS` and of ``travel_time`` over ``successful`` runs
+    (None where no run has a finite value)."""
+    rows = list(successful)
+    out = {key: _mean(_get(r, key) for r in rows) for key in PATH_METRICS}
+    out["travel_time_mean"] = _mean(_get(r, "travel_time") for r in rows)
+    return out
+
+
 def summarize_cell(runs: Iterable[Any]) -> dict[str, Any]:
     """One summary row for runs of a single (planner, map); see the module docstring."""
     rows = list(runs)
@@ -71,6 +90,7 @@ def summarize_cell(runs: Iterable[Any]) -> dict[str, Any]:
     gap = _stats([_get(r, "gap") for r in ok if _get(r, "gap") is not None])
     error = _stats([float(_get(r, "error")) for r in rows])
     seconds = _stats([float(_get(r, "seconds")) for r in rows])
+    cpu = _stats([float(_get(r, "cpu_seconds") or 0.0) for r in rows])
     smooth = _stats([float(_get(r, "smoothness")) for r in ok])
     maybe = [finite_or_none(_get(r, "min_clearance")) for r in rows]
     clearances = [c for c in maybe if c is not None]
@@ -98,6 +118,8 @@ def summarize_cell(runs: Iterable[Any]) -> dict[str, Any]:
         "error_mean": error["mean"],
         "seconds_mean": seconds["mean"],
         "seconds_median": seconds["median"],
+        "cpu_seconds_mean": cpu["mean"],
+        "cpu_seconds_median": cpu["median"],
         "iterations_mean": sum(float(_get(r, "iterations") or 0) for r in rows) / len(rows),
         "steps_mean": sum(float(_get(r, "steps") or 0) for r in rows) / len(rows),
         "smoothness_mean": smooth["mean"],
@@ -106,6 +128,7 @@ def summarize_cell(runs: Iterable[Any]) -> dict[str, Any]:
         "gap_mean": gap["mean"],
         "gap_median": gap["median"],
         "gap_max": gap["max"],
+        **path_metric_means(ok),
         "failures": failures,
     })
 

@@ -10,6 +10,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from swarmpath.evidence.audit import origin_suspect
+from swarmpath.path_metrics import PATH_METRICS
 from swarmpath.service.cell_notes import CellNotes, cell_notes, job_warnings
 from swarmpath.service.store.base import StoreBase, _safe
 from swarmpath.service.summary_stats import (
@@ -25,8 +26,8 @@ BENCHMARK_COLUMNS = (
 )
 MAP_COLUMNS = (
     "planner", "map", "runs", "failed", "success_rate", "collisions", "length_mean", "length_std",
-    "error_mean", "seconds_mean", "gap_mean", "robot_driven_contacts", "obstacle_driven_contacts",
-    *MAP_TEST_COLUMNS,
+    "error_mean", "seconds_mean", "cpu_seconds_mean", "gap_mean", "robot_driven_contacts",
+    "obstacle_driven_contacts", "travel_time_mean", *PATH_METRICS, *MAP_TEST_COLUMNS,
 )
 
 
@@ -46,8 +47,9 @@ def _numbers(runs: Sequence[dict[str, Any]], key: str) -> list[float]:
 def map_cell_summary(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
     """Statistics of one planner x map from its runs' metrics (``swarmpath plan --json`` fields).
 
-    success_rate over all finished runs; length mean/std (ddof=1) and gap mean over the successful
-    runs; error, seconds and collisions over all runs, the collisions also by cause
+    success_rate over all finished runs; length mean/std (ddof=1), gap mean, travel time and the
+    path metrics (:data:`swarmpath.path_metrics.PATH_METRICS`) over the successful runs;
+    error, seconds (wall), cpu_seconds and collisions over all runs, the collisions also by cause
     (``robot_driven_contacts``, ``obstacle_driven_contacts``: :func:`swarmpath.metrics.
     contact_causes`). Missing values are left out; None when no run has the value."""
     from swarmpath.evidence.stats import describe
@@ -64,7 +66,10 @@ def map_cell_summary(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
         "length_std": stats["std"] if stats else None,
         "error_mean": _mean(_numbers(runs, "error")),
         "seconds_mean": _mean(_numbers(runs, "seconds")),
+        "cpu_seconds_mean": _mean(_numbers(runs, "cpu_seconds")),
         "gap_mean": _mean(_numbers(ok, "gap")),
+        "travel_time_mean": _mean(_numbers(ok, "travel_time")),
+        **{key: _mean(_numbers(ok, key)) for key in PATH_METRICS},
         **{key: _total(runs, key) for key in ("robot_driven_contacts", "obstacle_driven_contacts")},
     }
 

@@ -56,7 +56,7 @@ SAVE_FORMAT = "swarmpath-dashboard-1"
 #: Columns of the job page whose meaning is shown under it (swarmpath.evidence.legend).
 BENCHMARK_LEGEND = ("failed", "rank", "marker")
 MAP_LEGEND = ("failed", "success_rate", "success_marker", "collisions", "length_mean",
-              "length_marker", "gap_mean", "seconds_mean", "seconds_marker")
+              "length_marker", "gap_mean", "seconds_mean", "seconds_marker", "cpu_seconds_mean")
 
 
 class JobAggregates:

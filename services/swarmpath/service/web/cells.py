@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from swarmpath.path_metrics import PATH_METRICS
 from swarmpath.service.cell_notes import OPTIMUM_REASON, WARNING_PREFIX, cell_notes
 from swarmpath.service.web.series import (
     _number,
@@ -104,6 +105,13 @@ class _BenchmarkCell:
         self.cache = None
 
 
+#: Values a map cell keeps per run for its box statistics: of the successful runs, the length,
+#: the gap and the field's path metrics (:data:`swarmpath.path_metrics.PATH_METRICS`); of
+#: every run, the planning wall and CPU time.
+SUCCESS_VALUES = ("length", "gap", "travel_time", *PATH_METRICS)
+MAP_VALUES = (*SUCCESS_VALUES, "seconds", "cpu_seconds")
+
+
 class _MapCell:
     def __init__(self, spec: Mapping[str, Any], runs: int, seed: int):
         self.spec = spec
@@ -111,7 +119,7 @@ class _MapCell:
         self.scenario: Any = None
         self.seen = np.zeros(runs, dtype=bool)
         self.paths: dict[int, dict[str, Any]] = {}
-        self.values: dict[str, list[float]] = {"length": [], "gap": [], "seconds": []}
+        self.values: dict[str, list[float]] = {k: [] for k in MAP_VALUES}
         self.finished = 0
         self.succeeded = 0
         self.crashed = 0
@@ -137,15 +145,16 @@ class _MapCell:
         self.collisions += int(_number(metrics.get("collisions")) or 0)
         if success:
             self.succeeded += 1
-            for name in ("length", "gap"):
+            for name in SUCCESS_VALUES:
                 v = _number(metrics.get(name))
                 if v is not None:
                     self.values[name].append(v)
         else:
             self.failures[kind or "other"] = self.failures.get(kind or "other", 0) + 1
-        seconds = _number(metrics.get("seconds"))
-        if seconds is not None:
-            self.values["seconds"].append(seconds)
+        for name in ("seconds", "cpu_seconds"):
+            seconds = _number(metrics.get(name))
+            if seconds is not None:
+                self.values[name].append(seconds)
         if path is not None and len(path) and len(self.paths) < MAX_PATHS:
             self.paths[run] = {
                 "run": run, "success": success, "failure": kind,
@@ -170,6 +179,8 @@ class _MapCell:
         data = json.loads(str(state["json"]))
         for name in self._FIELDS:
             setattr(self, name, data[name])
+        for name in MAP_VALUES:  # saved before the value existed: none kept
+            self.values.setdefault(name, [])
         self.paths = {int(p["run"]): p for p in data["paths"]}
         self.optimum_reason = cell_notes([data], None, "").optimum_reason  # older saves: none
         saved = data.get("warnings")

@@ -114,17 +114,31 @@
     if (st.reference) html += `<p class="legend">Markers: Fisher's exact test of each planner's success rate against ${SP.esc(st.reference)} (Holm-adjusted, alpha ${st.alpha}): + significantly higher, = no significant difference, - significantly lower.</p>`;
     html += `<h2>Per planner and map</h2><table id="cells"><thead><tr><th class="l">map</th><th class="l">planner</th>
       <th>runs</th><th>failed</th><th>success_rate</th><th>collisions</th><th>length (median)</th><th>gap (median)</th>
-      <th>planning s (median)</th><th class="l">why runs did not reach the goal</th></tr></thead><tbody>`;
+      <th>planning s (median)</th><th>CPU s (median)</th><th class="l">why runs did not reach the goal</th></tr></thead><tbody>`;
     for (const g of data.groups) for (const p of planners) {
       const c = g.planners[p]; if (!c) continue;
       const med = (b) => (b ? SP.num(b.median, 3) : "");
       const mark = (what) => { const m = ((st[what + "_markers"] || {})[g.map] || {})[p]; return m ? `<span class="marker">${m}</span>` : ""; };
       html += `<tr><td class="l">${SP.esc(g.map)}</td><td class="l">${SP.esc(p)}</td><td>${c.runs}</td><td>${c.crashed}</td>
         <td>${c.success_rate === null ? "" : SP.num(c.success_rate, 3)}</td><td>${c.collisions}</td><td>${med(c.box.length)}${mark("length")}</td>
-        <td${c.box.gap || !c.optimum_reason ? "" : ` class="l note" title="no exact optimum: ${SP.esc(c.optimum_reason)}"`}>${c.box.gap ? med(c.box.gap) : (c.optimum_reason ? `no optimum: ${SP.esc(c.optimum_reason)}` : "")}</td><td>${med(c.box.seconds)}${mark("seconds")}</td>
+        <td${c.box.gap || !c.optimum_reason ? "" : ` class="l note" title="no exact optimum: ${SP.esc(c.optimum_reason)}"`}>${c.box.gap ? med(c.box.gap) : (c.optimum_reason ? `no optimum: ${SP.esc(c.optimum_reason)}` : "")}</td><td>${med(c.box.seconds)}${mark("seconds")}</td><td>${med(c.box.cpu_seconds)}</td>
         <td class="l">${Object.entries(c.failures).map(([k, n]) => `${n} ${k}`).join(", ")}</td></tr>`;
     }
     html += `</tbody></table>`;
+    /* the field's path metrics (docs/metrics.md), medians over the successful runs */
+    const quality = [["clearance_mean", "clearance mean (m)", 3, 1], ["curvature_max", "curvature max (1/m)", 2, 1],
+      ["curvature_mean", "curvature mean (1/m)", 3, 1], ["cusps", "cusps", 1, 1], ["danger_share", "in danger (%)", 1, 100],
+      ["travel_time", "travel time (s)", 1, 1], ["velocity_smoothness", "velocity smoothness (m/s²)", 3, 1],
+      ["angular_smoothness", "angular smoothness (rad/s²)", 2, 1], ["jerk", "jerk (m/s³)", 2, 1]];
+    html += `<h2>Path quality</h2><table id="quality"><thead><tr><th class="l">map</th><th class="l">planner</th>` +
+      quality.map(([, label]) => `<th>${label}</th>`).join("") + `</tr></thead><tbody>`;
+    for (const g of data.groups) for (const p of planners) {
+      const c = g.planners[p]; if (!c) continue;
+      html += `<tr><td class="l">${SP.esc(g.map)}</td><td class="l">${SP.esc(p)}</td>` + quality.map(([key, , digits, scale]) => {
+        const b = c.box[key]; return `<td>${b ? SP.num(scale * b.median, digits) : ""}</td>`;
+      }).join("") + "</tr>";
+    }
+    html += `</tbody></table><p class="legend">Medians over the runs that reached the goal. Clearance: body gap (clearance minus robot radius) sampled every 5 cm; curvature: circles through points 0.3 m apart (Bench-MR); cusps: turns over 60°; in danger: share of the travel time within 0.1 m of an obstacle (MRPB); smoothness: mean |change| per second of the speed (MRPB) and of the turn rate; jerk: mean |da/dt|.</p>`;
     const warned = data.groups.map((g) => [g.map, Object.values(g.planners).find((c) => c && c.warnings && c.warnings.length)]).filter(([, c]) => c);
     if (warned.length) html += `<ul id="map-warnings" class="legend">` + warned.map(([map, c]) => c.warnings.map(([f, m]) => `<li>warning: ${SP.esc(map)}: ${SP.esc(f)}: ${SP.esc(m)}</li>`).join("")).join("") + `</ul>`;
     if (st.reference) {
