@@ -37,6 +37,7 @@ from swarmpath.service.model import (
     Model,
     ParamValue,
 )
+from swarmpath.service.racing import RacingSpec, check_racing
 from swarmpath.service.spec_checks import (
     FieldProblems,
     Loc,
@@ -186,6 +187,23 @@ class BenchmarkJobSpec(Model):
         except ParameterError as exc:
             raise ValueError(str(exc)) from None
         return v
+
+    racing: RacingSpec | None = Field(
+        default=None,
+        description="race the cells: runs in rounds, a cell stops once its comparisons are "
+        "decided (docs/statistics.md, Racing); runs is then the most a cell may get",
+    )
+
+    @field_validator("racing")
+    @classmethod
+    def _racing_fits_the_job(cls, v: RacingSpec | None, info: ValidationInfo) -> (
+            RacingSpec | None):
+        if v is None or "runs" not in info.data or "algorithms" not in info.data:
+            return v  # no race, or runs/algorithms failed themselves: that error is reported
+        problems = check_racing(v, info.data["runs"], info.data["algorithms"])
+        if problems:
+            raise FieldProblems(problems)
+        return v.model_copy(update={"max_runs": info.data["runs"]})
 
 
 def _reference(v: str | None, members: list[str] | None) -> str | None:
@@ -395,7 +413,14 @@ def expand_cells(spec: BenchmarkJobSpec | MapJobSpec) -> list[BenchmarkCell | Ma
     ]
 
 
+def first_runs(spec: BenchmarkJobSpec | MapJobSpec) -> int:
+    """The runs each cell may have at first: all of them, or a raced job's ``min_runs``."""
+    racing = getattr(spec, "racing", None)
+    return spec.runs if racing is None else min(racing.min_runs, spec.runs)
+
+
 def runs_total(spec: BenchmarkJobSpec | MapJobSpec) -> int:
+    """Runs the job has at first (a race adds rounds as it goes)."""
     if isinstance(spec, BenchmarkJobSpec):
-        return len(spec.algorithms) * len(spec.functions) * len(spec.dims) * spec.runs
+        return len(spec.algorithms) * len(spec.functions) * len(spec.dims) * first_runs(spec)
     return len(spec.planners) * len(spec.maps) * spec.runs

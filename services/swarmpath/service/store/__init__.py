@@ -30,7 +30,8 @@ lease, another worker's lease, a run outside the lease, or a cancelled job are `
 Layout: :mod:`.base` (schema, connection, transactions), :mod:`.jobs`, :mod:`.leases`,
 :mod:`.results` (fencing), :mod:`.runs` (run views and records), :mod:`.summaries` (tables, CSV),
 :mod:`.series` (binary run series), :mod:`.maps` (uploaded maps),
-:mod:`.scenarios` (a lease's scenario by reference). :class:`Store` combines them.
+:mod:`.scenarios` (a lease's scenario by reference), :mod:`.races` (rounds of raced jobs).
+:class:`Store` combines them.
 """
 
 from swarmpath.service.store.base import (
@@ -45,6 +46,7 @@ from swarmpath.service.store.base import (
 from swarmpath.service.store.jobs import JobsMixin
 from swarmpath.service.store.leases import LeasesMixin
 from swarmpath.service.store.maps import MapsMixin
+from swarmpath.service.store.races import RacesMixin
 from swarmpath.service.store.results import ResultsMixin
 from swarmpath.service.store.runs import RunViewsMixin
 from swarmpath.service.store.scenarios import ScenariosMixin
@@ -59,7 +61,7 @@ from swarmpath.service.store.summaries import (
 
 
 class Store(JobsMixin, ScenariosMixin, LeasesMixin, ResultsMixin, RunViewsMixin, SummariesMixin,
-            MapsMixin):
+            MapsMixin, RacesMixin):
     """See the module docstring. ``now`` arguments are Unix seconds (default: ``time.time()``)."""
 
 

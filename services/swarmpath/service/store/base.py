@@ -109,6 +109,14 @@ CREATE TABLE IF NOT EXISTS results (
     created  REAL NOT NULL,
     UNIQUE (job_seq, cell_idx, run)                    -- a run has at most one result
 );
+CREATE TABLE IF NOT EXISTS races (                     -- raced jobs: one row per block
+    job_seq  INTEGER NOT NULL,
+    block    TEXT NOT NULL,                            -- the cells' shared spec (JSON)
+    state    TEXT NOT NULL,                            -- rounds, cells, comparisons (JSON)
+    finished INTEGER NOT NULL,                         -- 1: no cell of the block races on
+    updated  REAL NOT NULL,
+    PRIMARY KEY (job_seq, block)
+) WITHOUT ROWID;
 CREATE TABLE IF NOT EXISTS maps (                      -- uploaded with POST /maps
     id       TEXT PRIMARY KEY,
     name     TEXT NOT NULL,
@@ -172,6 +180,8 @@ class StoreBase:
         self._cell_specs: dict[tuple[int, int], tuple[str, CellSpec]] = {}
         # job id -> (seq, runs per cell, kind, seed, cells): see RunViewsMixin.iter_run_records
         self._record_contexts: dict[str, tuple[int, int, str, int, dict[int, Any]]] = {}
+        # job seq -> its race settings and blocks, or None (RacesMixin)
+        self._race_contexts: dict[int, Any] = {}
         self._closed = False
         self._migrate()
 
@@ -276,6 +286,7 @@ class StoreBase:
                 self._lease_runs.pop(lease_id, None)
             for key in [k for k in self._cell_specs if k[0] == seq]:
                 del self._cell_specs[key]
+            self._race_contexts.pop(seq, None)
         return leases
 
     def _runs_of(self, lease_id: str, runs_json: str) -> frozenset[int]:
@@ -292,6 +303,9 @@ class StoreBase:
             self._lease_runs.clear()
         cached = self._lease_runs[lease_id] = frozenset(runs)
         return cached
+
+    def _race_step(self, db: sqlite3.Connection, seq: int, cell_idx: int, now: float) -> None:
+        """Raced jobs decide their next round here (RacesMixin); a no-op for the others."""
 
     @staticmethod
     def _job_row(db: sqlite3.Connection, job_id: str) -> sqlite3.Row | None:

@@ -14,6 +14,7 @@ from swarmpath.service.protocol import (
     JobStatus,
     MapJobSpec,
     expand_cells,
+    first_runs,
     load_job_spec,
     parse_job_spec,
     runs_total,
@@ -49,7 +50,7 @@ class JobsMixin(StoreBase):
             db.executemany(
                 "INSERT INTO cells (job_seq, idx, key, spec, runs) VALUES (?, ?, ?, ?, ?)",
                 (
-                    (seq, i, c.key, c.model_dump_json(), spec.runs)
+                    (seq, i, c.key, c.model_dump_json(), first_runs(spec))
                     for i, c in enumerate(cells)
                 ),
             )

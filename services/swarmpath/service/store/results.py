@@ -166,6 +166,7 @@ class ResultsMixin(StoreBase):
                     "ended = CASE WHEN pending <= ? THEN ? ELSE ended END WHERE lease_id = ?",
                     (n, n, n, now, active["lease_id"]),
                 )
+        self._race_step(db, seq, cell_idx, now)  # may give a raced job's cells another round
         db.execute("UPDATE jobs SET runs_done = runs_done + ?, runs_failed = runs_failed + ? "
                    "WHERE seq = ?", (done, failed, seq))
         row = db.execute(

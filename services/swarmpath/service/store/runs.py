@@ -65,16 +65,17 @@ class RunViewsMixin(StoreBase):
             job = self._job_row(db, job_id)
             if job is None:
                 return None
-            seq, rpc = job["seq"], job["runs_per_cell"]
-            lo, hi = offset, min(offset + limit, job["runs_total"])
-            if lo >= hi:
+            seq = job["seq"]
+            positions = self._run_positions(db, job, offset, offset + limit)
+            if not positions:
                 return []
+            (first_cell, first_run), (last_cell, last_run) = positions[0], positions[-1]
             seed = json.loads(job["spec"])["seed"]
             cells = {
                 c["idx"]: (c["key"], json.loads(c["spec"]))
                 for c in db.execute(
                     "SELECT idx, key, spec FROM cells WHERE job_seq = ? AND idx BETWEEN ? AND ?",
-                    (seq, lo // rpc, (hi - 1) // rpc),
+                    (seq, first_cell, last_cell),
                 )
             }
             results = {
@@ -84,13 +85,12 @@ class RunViewsMixin(StoreBase):
                     f" created{', series' if series else ''}"
                     " FROM results WHERE job_seq = ? AND (cell_idx, run) >= (?, ?)"
                     " AND (cell_idx, run) <= (?, ?)",
-                    (seq, lo // rpc, lo % rpc, (hi - 1) // rpc, (hi - 1) % rpc),
+                    (seq, first_cell, first_run, last_cell, last_run),
                 )
             }
             leased = self._leased_runs(db, seq)
         items = []
-        for run_id in range(lo, hi):
-            cell_idx, run = divmod(run_id, rpc)
+        for cell_idx, run in positions:
             key, cell_spec = cells[cell_idx]
             res = results.get((cell_idx, run))
             state, worker = self._run_state(job["state"], cell_idx, run, res, leased)
@@ -114,6 +114,40 @@ class RunViewsMixin(StoreBase):
                 return
             yield from items
             offset += len(items)
+
+    @staticmethod
+    def _run_positions(db: sqlite3.Connection, job: sqlite3.Row, lo: int, hi: int) -> list[
+            tuple[int, int]]:
+        """(cell index, run) of the job's runs number ``lo`` to ``hi`` - 1 in run_id order. Every
+        cell has ``runs_per_cell`` runs, except in a raced job, whose cells have the runs their
+        race gave them (``cells.runs``): there the run ids have gaps."""
+        rpc = job["runs_per_cell"]
+        lo, hi = max(lo, 0), min(hi, job["runs_total"])
+        if lo >= hi:
+            return []
+        if job["runs_total"] == job["cells_total"] * rpc:
+            return [divmod(position, rpc) for position in range(lo, hi)]
+        out: list[tuple[int, int]] = []
+        start = 0  # the position of the cell's first run
+        for idx, runs in db.execute("SELECT idx, runs FROM cells WHERE job_seq = ? ORDER BY idx",
+                                    (job["seq"],)):
+            if start + runs > lo:
+                out.extend((idx, start_run) for start_run in range(
+                    max(lo - start, 0), min(hi - start, runs)))
+            start += runs
+            if start >= hi:
+                break
+        return out
+
+    @staticmethod
+    def _has_run(db: sqlite3.Connection, job: sqlite3.Row | None, run_id: int) -> bool:
+        """Whether ``run_id`` names a run of the job (a raced cell has only its race's runs)."""
+        if job is None or not 0 <= run_id < job["cells_total"] * job["runs_per_cell"]:
+            return False
+        cell_idx, run = divmod(run_id, job["runs_per_cell"])
+        row = db.execute("SELECT runs FROM cells WHERE job_seq = ? AND idx = ?",
+                         (job["seq"], cell_idx)).fetchone()
+        return row is not None and run < row["runs"]
 
     def _leased_runs(self, db: sqlite3.Connection, seq: int) -> dict[tuple[int, int], str]:
         out: dict[tuple[int, int], str] = {}
@@ -147,7 +181,7 @@ class RunViewsMixin(StoreBase):
         """One run's item plus its series (curve and best_position, or path); None if unknown."""
         with self._read() as db:
             job = self._job_row(db, job_id)
-            if job is None or not 0 <= run_id < job["runs_total"]:
+            if job is None or not self._has_run(db, job, run_id):
                 return None
             seq = job["seq"]
             cell_idx, run = divmod(run_id, job["runs_per_cell"])
@@ -226,7 +260,7 @@ class RunViewsMixin(StoreBase):
         """The recorder record of one finished run (None if unknown or not finished)."""
         with self._read() as db:
             job = self._job_row(db, job_id)
-            if job is None or not 0 <= run_id < job["runs_total"]:
+            if job is None or not self._has_run(db, job, run_id):
                 return None
             cell_idx, run = divmod(run_id, job["runs_per_cell"])
             r = db.execute(

@@ -1,0 +1,106 @@
+"""Raced benchmark jobs: the ``racing`` field of a job spec and the blocks its cells race in.
+
+A raced job is stored like any other, except that a cell's ``runs`` column is its current
+allowance (what may be leased now) rather than the job's ``runs``: it starts at ``min_runs`` and
+the store raises it round by round (:mod:`swarmpath.service.store.races`) from the decisions of
+:func:`swarmpath.evidence.racing.race_block`. The job's ``runs`` is the largest number of runs a
+cell may get (``max_runs``), so run r of cell c keeps its id ``c * runs + r`` and its numbers
+whether the race reaches it or not.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from pydantic import Field, field_validator
+
+from swarmpath.evidence.racing import PAIRS, RaceSettings, comparisons_per_block
+from swarmpath.service.model import MAX_RUNS_PER_CELL, Model
+
+#: Cell spec fields that tell the algorithms of a block apart (the rest is the block).
+_MEMBER_FIELDS = ("algorithm", "params")
+
+
+class RacingSpec(Model):
+    """``racing`` in a benchmark job spec. ``max_runs`` is the job's ``runs`` (it may be left
+    out); ``margin`` is on the scale of the probability that one algorithm's run beats the
+    other's (0.5 +- margin counts as equivalent; 0: only differences stop a comparison)."""
+
+    alpha: float = Field(default=0.05, gt=0, lt=1, allow_inf_nan=False,
+                         description="error rate of the whole study's race decisions")
+    min_runs: int = Field(default=10, ge=1, le=MAX_RUNS_PER_CELL, strict=True,
+                          description="runs every cell gets before its first decision")
+    max_runs: int | None = Field(default=None, ge=1, le=MAX_RUNS_PER_CELL, strict=True,
+                                 description="the job's runs (the most a cell may get)")
+    batch: int = Field(default=10, ge=1, le=MAX_RUNS_PER_CELL, strict=True,
+                       description="runs a racing cell gets per round after the first")
+    pairs: str = Field(default="reference",
+                       description="compare every algorithm with the reference, or all pairs")
+    margin: float = Field(default=0.0, ge=0, lt=0.5, allow_inf_nan=False,
+                          description="equivalence margin on P(A's run beats B's) - 1/2")
+
+    @field_validator("pairs")
+    @classmethod
+    def _known_pairs(cls, v: str) -> str:
+        if v not in PAIRS:
+            raise ValueError(f"must be one of {', '.join(PAIRS)}, got {v!r}")
+        return v
+
+    def settings(self, runs: int) -> RaceSettings:
+        return RaceSettings(max_runs=runs, alpha=self.alpha, min_runs=self.min_runs,
+                            batch=self.batch, pairs=self.pairs, margin=self.margin)
+
+
+def check_racing(racing: RacingSpec, runs: int, algorithms: Sequence[str]) -> list[
+        tuple[tuple[str, ...], str]]:
+    """Problems of a racing field against its job, as (location under ``racing``, message)."""
+    problems: list[tuple[tuple[str, ...], str]] = []
+    if racing.max_runs is not None and racing.max_runs != runs:
+        problems.append((("max_runs",), f"is the job's runs ({runs}); got {racing.max_runs}: "
+                         "leave one of them out"))
+    if racing.min_runs > runs:
+        problems.append((("min_runs",), f"must be at most the job's runs ({runs}), got "
+                         f"{racing.min_runs}"))
+    if len(algorithms) < 2:
+        problems.append(((), "a race needs at least two algorithms"))
+    return problems
+
+
+@dataclass(frozen=True)
+class Blocks:
+    """The job's cells grouped into blocks (one per function, dimension and whatever else the
+    cell spec holds besides its algorithm): per block the cell indices in race order, the
+    reference's cell last; ``of[cell]`` is a cell's block; ``comparisons`` counts the study's."""
+
+    members: dict[str, list[tuple[int, str]]]
+    of: dict[int, str]
+    comparisons: int
+
+    def names(self, block: str) -> list[str]:
+        return [name for _, name in self.members[block]]
+
+
+def block_key(cell_spec: dict[str, Any]) -> str:
+    return json.dumps({k: v for k, v in cell_spec.items() if k not in _MEMBER_FIELDS},
+                      sort_keys=True, separators=(",", ":"))
+
+
+def group_blocks(cells: Iterable[tuple[int, dict[str, Any]]], reference: str | None,
+                 pairs: str) -> Blocks:
+    """Blocks of the cells ``(index, cell spec)``; ``reference`` (None: the last algorithm of each
+    block in table order) is moved last in each block."""
+    members: dict[str, list[tuple[int, str]]] = {}
+    of: dict[int, str] = {}
+    for idx, spec in cells:
+        key = block_key(spec)
+        members.setdefault(key, []).append((idx, str(spec["algorithm"])))
+        of[idx] = key
+    for cells_ in members.values():
+        if reference is not None:
+            cells_.sort(key=lambda c: c[1] == reference)  # stable: the reference goes last
+    comparisons = sum(len(comparisons_per_block([n for _, n in c], pairs))
+                      for c in members.values())
+    return Blocks(members, of, comparisons)

@@ -1,0 +1,143 @@
+"""Raced jobs in the store: rounds decided as results arrive, cells stopping, the job finishing
+with the runs the race used; the same race as the pure replay over directly computed runs;
+a reopened store going on with the same decisions; racing fields validated."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from pydantic import ValidationError
+
+from swarmpath.evidence.racing import race_block
+from swarmpath.optimizers import minimize
+from swarmpath.service.protocol import expand_cells, parse_job_spec
+from swarmpath.service.racing import group_blocks
+from swarmpath.service.spec_checks import FieldProblems
+from swarmpath.service.store import Store
+from test_store import T0, execute
+
+SPEC = {
+    "kind": "benchmark", "algorithms": ["FDO", "PSO", "GWO"], "functions": ["F1", "F10"],
+    "dims": [5], "runs": 60, "agents": 8, "iterations": 30, "seed": 3,
+    "racing": {"min_runs": 10, "batch": 10, "alpha": 0.05},
+}
+
+
+def direct(spec: dict, algorithm: str, function: str) -> np.ndarray:
+    return minimize(algorithm, function, spec["dims"][0], spec["agents"], spec["iterations"],
+                    seed=spec["seed"], runs=spec["runs"]).best_fitness
+
+
+def drain(store: Store, job: str, max_runs: int = 7, stop_after: int | None = None) -> int:
+    leased = 0
+    while (lease := store.lease("w1", max_runs, now=T0)) is not None:
+        cells = {c["index"]: c for c in store.cells(job)}
+        assert max(lease.runs) < cells[lease.cell_index]["runs"]  # only the round's runs
+        assert set(store.accept_results(execute(lease), now=T0)) == {"accepted"}
+        leased += len(lease.runs)
+        if stop_after is not None and leased >= stop_after:
+            break
+    return leased
+
+
+def check_race_against_direct_runs(store: Store, job: str) -> dict:
+    race = store.race(job)
+    assert race is not None and race["settings"]["max_runs"] == SPEC["runs"]
+    spec = parse_job_spec(SPEC)
+    cells = [(i, c.model_dump()) for i, c in enumerate(expand_cells(spec))]
+    blocks = group_blocks(cells, None, "reference")
+    assert race["comparisons"] == blocks.comparisons == 4
+    for block in race["blocks"]:
+        function = block["block"]["function"]
+        names = [c["algorithm"] for c in block["cells"]]
+        values = {a: direct(SPEC, a, function) for a in names}
+        expected = race_block(values, names, spec.racing.settings(SPEC["runs"]), 4)
+        assert block["rounds"] == expected.rounds and block["finished"] == expected.finished
+        assert {c["algorithm"]: c["runs"] for c in block["cells"]} == expected.allowance
+        assert [d["decision"] for d in block["duels"]] == [
+            d.result.decision for d in expected.duels]
+        for c in block["cells"]:
+            assert c["finished_runs"] == c["runs"]
+    return race
+
+
+def test_a_raced_job_runs_its_rounds_and_finishes_with_the_runs_it_used(tmp_path):
+    with Store(tmp_path) as store:
+        job = store.create_job(SPEC, now=T0)
+        status = store.job_status(job)
+        assert status.runs_total == 6 * 10  # min_runs each, to begin with
+        leased = drain(store, job)
+        status = store.job_status(job)
+        assert status.state == "done"
+        race = check_race_against_direct_runs(store, job)
+        used = sum(c["runs"] for b in race["blocks"] for c in b["cells"])
+        assert leased == status.runs_done == status.runs_total == used < 6 * SPEC["runs"]
+        # FDO (the weakest) loses to GWO on both functions within the first rounds
+        fdo = [d for b in race["blocks"] for d in b["duels"] if d["a"] == "FDO"]
+        assert all(d["decision"] == "different" and d["better"] == "GWO" for d in fdo)
+        # the job lists the runs the race gave each cell, each the unraced study's run r
+        items = store.runs(job, limit=1000)
+        cells = {c["key"]: c["runs"] for c in store.cells(job)}
+        assert [(i["cell"], i["run"]) for i in items] == [
+            (key, r) for key, n in cells.items() for r in range(n)]
+        assert {i["state"] for i in items} == {"done"}
+        assert store.runs(job, limit=7, offset=25) == items[25:32]
+        for item in items[::17]:
+            a, f, _ = item["cell"].split("/")
+            assert item["best_fitness"] == direct(SPEC, a, f)[item["run"]]
+            assert store.run(job, item["run_id"])["run"] == item["run"]
+        gap = items[0]["run_id"] + cells[items[0]["cell"]]  # past the first cell's last run
+        assert store.run(job, gap) is None and store.run_record(job, gap) is None
+
+
+def test_a_reopened_store_goes_on_with_the_same_rounds(tmp_path):
+    with Store(tmp_path) as store:
+        job = store.create_job(SPEC, now=T0)
+        drain(store, job, stop_after=45)
+        before = store.race(job)
+    with Store(tmp_path) as store:  # the coordinator restarted
+        assert store.race(job) == before
+        drain(store, job)
+        assert store.job_status(job).state == "done"
+        check_race_against_direct_runs(store, job)
+
+
+@pytest.mark.parametrize("racing, loc", [
+    ({"max_runs": 50}, ("racing", "max_runs")),
+    ({"min_runs": 61}, ("racing", "min_runs")),
+    ({"pairs": "some"}, ("racing", "pairs")),
+    ({"margin": 0.5}, ("racing", "margin")),
+    ({"alpha": 0}, ("racing", "alpha")),
+    ({"rounds": 3}, ("racing", "rounds")),
+])
+def test_bad_racing_fields_are_named(racing, loc):
+    with pytest.raises(ValidationError) as err:
+        parse_job_spec({**SPEC, "racing": racing})
+    assert loc in set(_locations(err.value))
+
+
+def _locations(err: ValidationError):
+    """Error locations below the job kind, a field's own problems (FieldProblems) included, as
+    the REST error handler reports them."""
+    for e in err.errors():
+        problems = e.get("ctx", {}).get("error")
+        if isinstance(problems, FieldProblems):
+            yield from (tuple(e["loc"][1:]) + tuple(loc) for loc, _ in problems.problems)
+        else:
+            yield tuple(e["loc"][1:])
+
+
+def test_a_race_needs_two_algorithms_and_a_benchmark_job():
+    with pytest.raises(ValidationError) as err:
+        parse_job_spec({**SPEC, "algorithms": ["GWO"]})
+    assert "two algorithms" in str(err.value)
+    with pytest.raises(ValidationError) as err:
+        parse_job_spec({"kind": "map", "planners": ["MFB"], "maps": ["mfb-static"],
+                        "racing": {}})
+    assert any(e["loc"][-1] == "racing" for e in err.value.errors())
+
+
+def test_the_stored_spec_names_max_runs():
+    spec = parse_job_spec(SPEC)
+    assert spec.racing is not None and spec.racing.max_runs == 60
+    assert parse_job_spec({**SPEC, "racing": {"max_runs": 60}}).racing.max_runs == 60
