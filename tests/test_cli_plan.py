@@ -70,9 +70,10 @@ def test_json_document_has_exactly_runs_summary_statistics_and_maps():
                     "--seed", "3", "--params", fast("OMPL-RRTstar", "OMPL-BITstar"), "--json")
     assert result.exit_code == 0, result.stderr
     doc = json.loads(result.stdout)
-    assert set(doc) == {"runs", "summary", "statistics", "maps"}
+    assert set(doc) == {"runs", "summary", "statistics", "maps", "buckets"}
+    assert doc["buckets"] == []  # no --scen: no MovingAI buckets
     assert doc["maps"] == [{"map": "mfb-static", "optimum": doc["runs"][0]["optimum"],
-                            "optimum_reason": None, "octile": None}]
+                            "optimum_reason": None, "octile": None, "bucket": None}]
     assert len(doc["runs"]) == 4
     for i, run in enumerate(doc["runs"]):
         assert RUN_FIELDS <= set(run)

@@ -119,3 +119,46 @@ def test_slow_imports_and_optima_report_progress_on_stderr(monkeypatch: pytest.M
     assert "exact optimum of tb3_sandbox: 100% of the disk pairs" in err
     value = json.loads(result.stdout)["maps"][0]["optimum"]
     assert f"exact optimum of tb3_sandbox: {value:.4f} m in " in err
+
+
+def test_bucket_rows_count_success_and_gap_per_planner_and_bucket() -> None:
+    from swarmpath.evidence.buckets import bucket_rows
+
+    runs = [
+        {"planner": "A", "map": "m#1", "success": True, "gap": 0.02},
+        {"planner": "A", "map": "m#1", "success": False, "gap": None},
+        {"planner": "A", "map": "m#2", "success": True, "gap": 0.04},
+        {"planner": "A", "map": "m#9", "success": True, "gap": 0.10},
+        {"planner": "B", "map": "m#2", "success": False, "gap": None},
+        {"planner": "B", "map": "other", "success": True, "gap": 0.0},  # no bucket: left out
+    ]
+    rows = bucket_rows(runs, {"m#1": 0, "m#2": 0, "m#9": 3})
+    assert [(r["planner"], r["bucket"], r["pairs"], r["runs"], r["successes"]) for r in rows] == [
+        ("A", 0, 2, 3, 2), ("A", 3, 1, 1, 1), ("B", 0, 1, 1, 0)]
+    assert rows[0]["success_rate"] == pytest.approx(2 / 3)
+    assert rows[0]["gap_median"] == pytest.approx(0.03)
+    assert rows[0]["gap_mean"] == pytest.approx(0.03)
+    assert rows[2]["gap_median"] is None and rows[2]["success_rate"] == 0.0
+
+
+def test_scen_studies_report_success_and_gap_per_bucket(tmp_path) -> None:
+    # rows 0, 1 (bucket 0) and 80, 81 (bucket 8) of arena.map.scen
+    params = json.dumps({"OMPL-BITstar": {"iterations": 3000}})
+    args = ("-p", "OMPL-BITstar", "-m", ARENA, "--scen", SCEN, "--scen-ids", "0,1,80,81",
+            "--params", params)
+    doc = json.loads(invoke(*args, "--json").stdout)
+    rows = _scen_rows()
+    assert [m["bucket"] for m in doc["maps"]] == [int(rows[i][0]) for i in (0, 1, 80, 81)]
+    assert [(b["bucket"], b["pairs"], b["runs"]) for b in doc["buckets"]] == [(0, 2, 2),
+                                                                              (8, 2, 2)]
+    for b in doc["buckets"]:
+        mine = [r for r in doc["runs"] if doc["maps"][[m["map"] for m in doc["maps"]].index(
+            r["map"])]["bucket"] == b["bucket"]]
+        assert b["successes"] == sum(r["success"] for r in mine)
+    table = invoke(*args, "--plot", str(tmp_path))
+    assert table.exit_code == 0, table.stderr
+    assert "Per MovingAI bucket" in table.stdout
+    lines = [ln.split() for ln in table.stdout.splitlines()]
+    assert [r[:2] for r in lines if r[1:2] == ["OMPL-BITstar"] and r[0] in ("0", "8")] == [
+        ["0", "OMPL-BITstar"], ["8", "OMPL-BITstar"]]
+    assert (tmp_path / "difficulty.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -20,7 +20,7 @@ from __future__ import annotations
 import json
 import math
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Annotated, Any
@@ -62,6 +62,8 @@ class PlanSpec:
     optimum_budget: float | None = DEFAULT_BUDGET
     #: MovingAI octile optimum (m) of the maps made from --scen pairs, by map name
     octile: dict[str, float] = field(default_factory=dict)
+    #: MovingAI bucket of the maps made from --scen pairs, by map name
+    buckets: dict[str, int] = field(default_factory=dict)
     #: (exact optimum or None, reason or None) by map name, filled by the command
     optima: dict[str, tuple[float | None, str | None]] = field(default_factory=dict)
 
@@ -118,13 +120,14 @@ def make_spec(planners: str, maps: str, runs: int = 10, seed: int = 1,
         raise InputError("--reference", str(exc)) from None
     if optimum_budget is not None and not (math.isfinite(optimum_budget) and optimum_budget > 0):
         raise InputError("--optimum-budget", f"{optimum_budget} is not a positive number of s")
-    scenarios, octile = resolve_maps(maps, map_options, note)
+    resolved = resolve_maps(maps, map_options, note)
     if not 1 <= runs <= MAX_RUNS:
         raise InputError("--runs", f"{runs} is not in [1, {MAX_RUNS}]")
     if seed < 0:
         raise InputError("--seed", f"{seed} is negative")
     by_planner = apply_backend(backend, names, parse_params(params, names))
-    return PlanSpec(names, scenarios, runs, seed, by_planner, ref, optimum_budget, octile)
+    return PlanSpec(names, resolved.maps, runs, seed, by_planner, ref, optimum_budget,
+                    resolved.octile, resolved.buckets)
 
 
 # -------------------------------------------------------------------------------------- running
@@ -182,9 +185,12 @@ def simulated_world(scenario: Any, seed: int, run: int) -> Any:
 def document(cells: Sequence[CellResult], reference: str | None = None,
              spec: PlanSpec | None = None) -> dict[str, Any]:
     """The ``--json`` document: exactly {"runs": [...], "summary": [...], "statistics": {...},
-    "maps": [...]} (statistics: :meth:`swarmpath.evidence.compare_maps.MapStatistics.to_json`;
-    maps: per map its exact optimum, the reason when there is none, and the .scen octile
-    optimum)."""
+    "maps": [...], "buckets": [...]} (statistics:
+    :meth:`swarmpath.evidence.compare_maps.MapStatistics.to_json`; maps: per map its exact
+    optimum, the reason when there is none, the .scen octile optimum and bucket; buckets: success
+    and gap per planner and MovingAI bucket, :func:`swarmpath.evidence.buckets.bucket_rows`,
+    empty without --scen)."""
+    from swarmpath.evidence.buckets import bucket_rows
     from swarmpath.evidence.compare_maps import map_statistics
     from swarmpath.planners.summary import summarize
 
@@ -193,6 +199,7 @@ def document(cells: Sequence[CellResult], reference: str | None = None,
     names = list(dict.fromkeys(c.scenario.name for c in cells))
     optima = spec.optima if spec is not None else {}
     octile = spec.octile if spec is not None else {}
+    buckets = spec.buckets if spec is not None else {}
     by_name = {c.scenario.name: c.runs for c in cells}
     maps = []
     for name in names:
@@ -200,22 +207,30 @@ def document(cells: Sequence[CellResult], reference: str | None = None,
         if name not in optima:  # the runs carry the optimum (without the reason)
             value = next((r["optimum"] for r in by_name[name] if r["optimum"] is not None), None)
         maps.append({"map": name, "optimum": value, "optimum_reason": reason,
-                     "octile": octile.get(name)})
+                     "octile": octile.get(name), "bucket": buckets.get(name)})
     return {"runs": runs, "summary": summarize(runs),
-            "statistics": map_statistics(runs, planners, reference).to_json(), "maps": maps}
+            "statistics": map_statistics(runs, planners, reference).to_json(), "maps": maps,
+            "buckets": bucket_rows(runs, buckets)}
 
 
 # ---------------------------------------------------------------------------------------- plots
-def write_plots(cells: Sequence[CellResult], directory: Path) -> list[Path]:
+def write_plots(cells: Sequence[CellResult], directory: Path,
+                buckets: Mapping[str, int] | None = None) -> list[Path]:
     """One PNG per planner x map (every run's path on the map) and one per map (box plots of
-    length, gap and planning time): :func:`swarmpath.evidence.plots.write_map_plots`."""
+    length, gap and planning time): :func:`swarmpath.evidence.plots.write_map_plots`; with
+    MovingAI ``buckets`` (map name -> bucket) the difficulty curve ``difficulty.png``."""
     from swarmpath.evidence import plots
+    from swarmpath.evidence.buckets import bucket_rows
 
     scenarios = {c.scenario.name: c.scenario for c in cells}
     seeds = {c.scenario.name: c.seed for c in cells}
     runs = [r for c in cells for r in c.runs]
-    return plots.write_map_plots(
+    out = plots.write_map_plots(
         runs, scenarios, lambda sc, run: simulated_world(sc, seeds[sc.name], run), directory)
+    rows = bucket_rows(runs, buckets or {})
+    if rows:
+        out.append(plots.save_figure(plots.difficulty_figure(rows), directory / "difficulty.png"))
+    return out
 
 
 # -------------------------------------------------------------------------------------- command
@@ -368,7 +383,7 @@ def plan(
     cells = _run_with_progress(spec, stderr, jobs or min(parallel.usable_cpus(), total))
     seconds = time.perf_counter() - started
     if plot is not None:
-        for out in write_plots(cells, plot):
+        for out in write_plots(cells, plot, spec.buckets):
             stderr.print(f"wrote {out}", highlight=False)
     if as_json:
         sys.stdout.write(json.dumps(document(cells, spec.reference, spec), allow_nan=False)

@@ -196,9 +196,10 @@ def load_map(item: str, opts: MapOptions | None = None,
 
 def scen_pairs(path: Path, ids: Sequence[int] | None,
                shape: tuple[int, int] | None = None) -> list[tuple[int, tuple[int, int],
-                                                              tuple[int, int], float]]:
-    """(row, start cell, goal cell, octile length) of the chosen rows of a MovingAI .scen;
-    with ``shape`` (the map's width, height in cells) a row stated for another size is refused."""
+                                                              tuple[int, int], float, int]]:
+    """(row, start cell, goal cell, octile length, bucket) of the chosen rows of a MovingAI
+    .scen; with ``shape`` (the map's width, height in cells) a row stated for another size is
+    refused."""
     try:
         lines = path.read_text(encoding="utf-8").splitlines()
     except (OSError, UnicodeDecodeError) as exc:
@@ -211,11 +212,13 @@ def scen_pairs(path: Path, ids: Sequence[int] | None,
             continue
         cols = line.split("\t") if "\t" in line else line.split()
         try:
+            bucket = int(cols[0])
             width, height, sx, sy, gx, gy = (int(c) for c in cols[2:8])
-            rows.append(((sx, sy), (gx, gy), float(cols[8])))
+            rows.append(((sx, sy), (gx, gy), float(cols[8]), bucket))
         except (ValueError, IndexError):
             raise InputError("--scen", f"{path}: line {k}: expected 9 columns "
-                             "(bucket map width height sx sy gx gy length)") from None
+                             "(bucket map width height sx sy gx gy length), the bucket and "
+                             "the cells integers") from None
         if shape is not None and (width, height) != shape:
             raise InputError("--scen", f"{path}: line {k}: a pair of a {width} x {height} map "
                              f"({cols[1]}), but the .map in --maps is {shape[0]} x {shape[1]}")
@@ -233,10 +236,19 @@ def scen_pairs(path: Path, ids: Sequence[int] | None,
     return out
 
 
+@dataclass
+class ResolvedMaps:
+    """The maps of --maps (one scenario per --scen pair), with distinct names; for the maps made
+    from --scen pairs their octile optimum (m) and MovingAI bucket, by name."""
+
+    maps: list[Any]
+    octile: dict[str, float]
+    buckets: dict[str, int]
+
+
 def resolve_maps(spec: str, opts: MapOptions | None = None,
-                 note: Callable[[str], None] | None = None) -> tuple[list[Any], dict[str, float]]:
-    """Every map of --maps (expanded into one scenario per --scen pair), with distinct names,
-    and the octile optimum (m) of the maps made from --scen pairs, by name."""
+                 note: Callable[[str], None] | None = None) -> ResolvedMaps:
+    """Every map of --maps (expanded into one scenario per --scen pair): :class:`ResolvedMaps`."""
     from swarmpath.world.importers import movingai_cell_center
 
     opts = opts or MapOptions()
@@ -246,6 +258,7 @@ def resolve_maps(spec: str, opts: MapOptions | None = None,
                          "theirs in the YAML)")
     maps: list[Any] = []
     octile: dict[str, float] = {}
+    buckets: dict[str, int] = {}
     if opts.scen is not None:
         grids = [i for i in items if i.lower().endswith(".map")]
         if len(grids) != 1:
@@ -254,7 +267,7 @@ def resolve_maps(spec: str, opts: MapOptions | None = None,
         res = opts.resolution or 1.0
         height = round(base.size[1] / res)
         pairs = scen_pairs(opts.scen, opts.scen_ids, (round(base.size[0] / res), height))
-        for i, s_cell, g_cell, length in pairs:
+        for i, s_cell, g_cell, length, bucket in pairs:
             s = dataclasses.replace(
                 base, name=f"{base.name}#{i}",
                 start=movingai_cell_center(*s_cell, height, res),
@@ -265,6 +278,7 @@ def resolve_maps(spec: str, opts: MapOptions | None = None,
                 raise InputError("--scen", f"pair {i}: {'; '.join(problems)}")
             maps.append(s)
             octile[s.name] = length * res
+            buckets[s.name] = bucket
         items = [i for i in items if i != grids[0]]
     for item in items:
         maps.append(load_map(item, opts, note))
@@ -281,14 +295,15 @@ def resolve_maps(spec: str, opts: MapOptions | None = None,
         while name in names:  # two files with the same scenario name: keep them apart
             name, k = f"{scenario.name}#{k}", k + 1
         if name != scenario.name:
-            if scenario.name in octile:
-                octile[name] = octile[scenario.name]
+            for by_name in (octile, buckets):
+                if scenario.name in by_name:
+                    by_name[name] = by_name[scenario.name]  # type: ignore[index]
             scenario = dataclasses.replace(scenario, name=name)
         names.add(name)
         out.append(scenario)
     if not out:
         raise InputError("--maps", "no map given")
-    return out, octile
+    return ResolvedMaps(out, octile, buckets)
 
 
 # ------------------------------------------------------------------------------------ optimum

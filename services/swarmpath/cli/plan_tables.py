@@ -102,6 +102,20 @@ def render_quality(rows: Sequence[dict[str, Any]]) -> Table:
     return table
 
 
+def render_buckets(rows: Sequence[dict[str, Any]]) -> Table:
+    """Success and gap per MovingAI bucket and planner (the difficulty curve as a table)."""
+    table = Table(title="Per MovingAI bucket (difficulty: longer optimal paths in higher "
+                  "buckets)", box=box.SIMPLE_HEAD, pad_edge=False)
+    for name in ("Bucket", "Planner", "Pairs", "Success", "Gap median (%)", "Gap mean (%)"):
+        table.add_column(name, justify="left" if name == "Planner" else "right", no_wrap=True)
+    for r in sorted(rows, key=lambda r: (r["bucket"], str(r["planner"]))):
+        gm, ga = r["gap_median"], r["gap_mean"]
+        table.add_row(str(r["bucket"]), str(r["planner"]), str(r["pairs"]),
+                      f"{r['successes']}/{r['runs']}", _num(None if gm is None else 100 * gm, 2),
+                      _num(None if ga is None else 100 * ga, 2))
+    return table
+
+
 def print_tables(cells: Sequence[CellResult], spec: PlanSpec, seconds: float) -> None:
     from swarmpath.planners.summary import summarize
 
@@ -129,6 +143,11 @@ def print_tables(cells: Sequence[CellResult], spec: PlanSpec, seconds: float) ->
         highlight=False,
     )
     console.print(quality)
+    if spec.buckets:
+        from swarmpath.evidence.buckets import bucket_rows
+
+        console.print(render_buckets(bucket_rows([r for c in cells for r in c.runs],
+                                                 spec.buckets)))
     console.print(legend_text(["Collisions", "Gap (%)", "CPU time (s)", "clearance_mean",
                                "curvature_max", "cusps", "danger_share", "velocity_smoothness",
                                "angular_smoothness", "jerk"]), markup=False, highlight=False)

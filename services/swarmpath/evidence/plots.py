@@ -146,12 +146,46 @@ def box_figure(title: str, panels: Sequence[tuple[str, Mapping[str, Sequence[flo
     return fig
 
 
-def _save(fig: Any, path: Path) -> Path:
+def save_figure(fig: Any, path: Path) -> Path:
+    """Write ``fig`` to ``path`` (PNG) and close it."""
+    path.parent.mkdir(parents=True, exist_ok=True)
     try:
         fig.savefig(path)
     finally:
         _pyplot().close(fig)
     return path
+
+
+_save = save_figure
+
+
+def difficulty_figure(rows: Sequence[Mapping[str, Any]]) -> Any:
+    """The difficulty curve of a MovingAI ``--scen`` study: per planner, the success rate and the
+    median gap of its successful runs against the bucket
+    (:func:`swarmpath.evidence.buckets.bucket_rows` rows)."""
+    plt = _pyplot()
+    planners = list(dict.fromkeys(str(r["planner"]) for r in rows))
+    colours = palette(planners)
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 6.5), dpi=100, sharex=True)
+    for p in planners:
+        mine = [r for r in rows if r["planner"] == p]
+        x = [int(r["bucket"]) for r in mine]
+        top.plot(x, [100.0 * float(r["success_rate"]) for r in mine], marker="o",
+                 color=colours[p], label=p)
+        gaps = [(int(r["bucket"]), 100.0 * float(r["gap_median"])) for r in mine
+                if r["gap_median"] is not None]
+        if gaps:
+            bottom.plot(*zip(*gaps, strict=True), marker="o", color=colours[p], label=p)
+    top.set_ylabel("success (%)")
+    top.set_ylim(-5, 105)
+    top.set_title("Difficulty curve: MovingAI buckets (longer optimal paths to the right)")
+    bottom.set_ylabel("median gap to the exact optimum (%)")
+    bottom.set_xlabel("bucket (.scen column 1; octile optimum in [4 b, 4 b + 4) cells)")
+    for ax in (top, bottom):
+        ax.grid(True, alpha=0.3)
+    top.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
 
 
 def _finite(v: Any) -> float | None:
