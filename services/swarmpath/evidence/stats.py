@@ -1,7 +1,9 @@
 """Summary statistics of a study's runs, as the papers' tables report them.
 
-``describe`` gives min, max, avg, std and median of the best fitness of the runs; ``std`` is the
-sample standard deviation (ddof=1, MATLAB's ``std``). ``rank`` orders algorithms by their average.
+``describe`` gives min, max, avg, std, median, the quartiles q1 and q3 and the interquartile
+range iqr = q3 - q1 of the best fitness of the runs; ``std`` is the sample standard deviation
+(ddof=1, MATLAB's ``std``), the quartiles interpolate linearly between order statistics (numpy's
+default, R's type 7). ``rank`` orders algorithms by their average (or median: ``--stat``).
 
 Infinite values (a run that never evaluated a finite point) are handled without NaN or warnings:
 any infinite value makes ``avg`` infinite and ``std`` infinite, unless every value is identical
@@ -22,11 +24,26 @@ from numpy.typing import ArrayLike
 #: that modules which only name it do not load scipy.stats.
 ALPHA = 0.05
 
-__all__ = ["describe", "rank", "resolve_reference"]
+__all__ = ["STATS", "describe", "json_number", "location", "rank", "resolve_reference",
+           "spread"]
+
+#: The statistic a table reports and ranks by (``--stat``): mean with std, or median with IQR.
+STATS = ("mean", "median")
+
+
+def location(stats: Mapping[str, float], stat: str = "mean") -> float:
+    """The cell's avg (stat mean) or median from its :func:`describe`."""
+    return stats["median" if stat == "median" else "avg"]
+
+
+def spread(stats: Mapping[str, float], stat: str = "mean") -> float:
+    """std (stat mean) or iqr (stat median) from :func:`describe`."""
+    return stats["iqr" if stat == "median" else "std"]
 
 
 def describe(values: ArrayLike) -> dict[str, float]:
-    """min, max, avg, std (ddof=1; 0.0 for one value) and median of ``values`` (any shape)."""
+    """min, max, avg, std (ddof=1; 0.0 for one value), median, q1, q3 and iqr of ``values``
+    (any shape)."""
     x = np.asarray(values, dtype=float).ravel()
     if x.size == 0:
         raise ValueError("describe() needs at least one value")
@@ -34,7 +51,8 @@ def describe(values: ArrayLike) -> dict[str, float]:
         raise ValueError("describe() got NaN values")
     lo, hi = float(x.min()), float(x.max())
     if lo == hi:  # identical values (incl. all inf): exact, no rounding noise in avg or std
-        return {"min": lo, "max": hi, "avg": lo, "std": 0.0, "median": lo}
+        return {"min": lo, "max": hi, "avg": lo, "std": 0.0, "median": lo, "q1": lo, "q3": lo,
+                "iqr": 0.0}
     finite = np.isfinite(x)
     if finite.all():
         with np.errstate(over="ignore", invalid="ignore"):
@@ -54,7 +72,20 @@ def describe(values: ArrayLike) -> dict[str, float]:
     if not math.isfinite(median) and finite.all():  # the two middle values overflowed their sum
         middle = np.sort(x)[(x.size - 1) // 2 : x.size // 2 + 1]
         median = float(middle[0] / 2 + middle[-1] / 2)
-    return {"min": lo, "max": hi, "avg": avg, "std": std, "median": median}
+    ordered = np.sort(x)
+    q1, q3 = _quantile(ordered, 0.25), _quantile(ordered, 0.75)
+    iqr = 0.0 if q1 == q3 else q3 - q1
+    return {"min": lo, "max": hi, "avg": avg, "std": std, "median": median, "q1": q1, "q3": q3,
+            "iqr": iqr}
+
+
+def _quantile(ordered: np.ndarray, q: float) -> float:
+    """Linear interpolation between order statistics (numpy's default), exact for inf."""
+    h = (ordered.size - 1) * q
+    below, above = float(ordered[math.floor(h)]), float(ordered[math.ceil(h)])
+    if below == above:
+        return below
+    return below + (above - below) * (h - math.floor(h))
 
 
 def rank(avgs: Mapping[str, float]) -> dict[str, int]:
@@ -85,3 +116,12 @@ def resolve_reference(algorithms: Sequence[str], reference: str | None = None) -
         return by_lower[reference.lower()]
     names = ", ".join(algorithms)
     raise ValueError(f"{reference!r} is not one of the compared algorithms ({names})")
+
+
+def json_number(v: float) -> float | str:
+    """JSON has no inf/NaN: they are written as the strings "inf", "-inf", "nan"
+    (Python's float() reads them back); finite values stay numbers (round-trip exact)."""
+    v = float(v)
+    if math.isfinite(v):
+        return v
+    return "nan" if math.isnan(v) else ("inf" if v > 0 else "-inf")
