@@ -17,12 +17,15 @@ finite = st.floats(min_value=-1e150, max_value=1e150, allow_nan=False, allow_inf
 def test_describe_matches_numpy_with_sample_std():
     x = [3.0, 1.0, 4.0, 1.0, 5.0, 9.0]
     d = describe(x)
-    assert list(d) == ["min", "max", "avg", "std", "median"]
+    assert list(d) == ["min", "max", "avg", "std", "median", "q1", "q3", "iqr"]
     assert d["min"] == 1.0 and d["max"] == 9.0
     assert d["avg"] == pytest.approx(np.mean(x))
     assert d["std"] == pytest.approx(np.std(x, ddof=1))  # MATLAB's std, not ddof=0
     assert d["std"] != pytest.approx(np.std(x))
     assert d["median"] == 3.5
+    # quartiles as numpy's default (linear between order statistics): sorted 1 1 3 4 5 9
+    assert (d["q1"], d["q3"]) == (np.quantile(x, 0.25), np.quantile(x, 0.75)) == (1.5, 4.75)
+    assert d["iqr"] == 3.25
     assert all(type(v) is float for v in d.values())
 
 
@@ -32,7 +35,8 @@ def test_describe_any_shape_and_sequence():
 
 
 def test_single_value_has_zero_std():
-    assert describe([7.5]) == {"min": 7.5, "max": 7.5, "avg": 7.5, "std": 0.0, "median": 7.5}
+    assert describe([7.5]) == {"min": 7.5, "max": 7.5, "avg": 7.5, "std": 0.0, "median": 7.5,
+                               "q1": 7.5, "q3": 7.5, "iqr": 0.0}
 
 
 def test_identical_values_are_exact():
@@ -44,7 +48,8 @@ def test_infinite_values_without_nan_or_warnings():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         d = describe([1.0, 2.0, math.inf])
-        assert d == {"min": 1.0, "max": math.inf, "avg": math.inf, "std": math.inf, "median": 2.0}
+        assert d == {"min": 1.0, "max": math.inf, "avg": math.inf, "std": math.inf, "median": 2.0,
+                     "q1": 1.5, "q3": math.inf, "iqr": math.inf}
         d = describe([math.inf, math.inf])
         assert d["avg"] == math.inf and d["std"] == 0.0
         d = describe([-math.inf, 0.0, 0.0])
