@@ -36,9 +36,16 @@ from swarmpath.cli.study_options import (
     FunctionsOpt,
     InstancesOpt,
     IterationsOpt,
+    RopeOpt,
     SeedOpt,
+    StatOpt,
+    TableFormatOpt,
+    check_format,
+    check_rope,
+    check_stat,
 )
 from swarmpath.evidence import audit, report
+from swarmpath.evidence.benchmark_stats import bayes_lines, latex_legend
 from swarmpath.functions import get_function
 from swarmpath.optimizers import ParameterError, minimize_many
 from swarmpath.provenance import numeric_platform
@@ -178,7 +185,7 @@ def run_cell(
     return cell
 
 
-def caption(spec: BenchSpec, seconds: float) -> str:
+def caption(spec: BenchSpec, seconds: float | None) -> str:
     moved = "" if spec.transform == "none" else f", transform {spec.transform}"
     backend = "" if spec.backend == "numpy" else f", backend {spec.backend}"
     length = (f"{spec.iterations} iterations" if spec.budget_evals is None else
@@ -191,10 +198,12 @@ def caption(spec: BenchSpec, seconds: float) -> str:
         if spec.instances is not None:
             errors += (f", instances {_ranges(spec.instances)}"
                        + (" pooled" if spec.pool_instances else ""))
-    return (
-        f"{spec.runs} runs, {spec.agents} agents, {length}, seed {spec.seed}"
-        f"{moved}{backend}{errors}; {report.BEST_MARK} best avg; {seconds:.1f} s"
-    )
+    setting = (f"{spec.runs} runs, {spec.agents} agents, {length}, seed {spec.seed}"
+               f"{moved}{backend}{errors}")
+    if seconds is None:  # a paper's caption: what was run
+        dims = ", ".join(str(d) for d in spec.dims)
+        return f"swarmpath bench: {', '.join(spec.functions)} in {dims} dimensions; {setting}"
+    return f"{setting}; {report.BEST_MARK} best avg; {seconds:.1f} s"
 
 
 def _ranges(ids: Sequence[int]) -> str:
@@ -301,9 +310,16 @@ def bench(
                            help="One row per function with the runs of all its instances "
                            "(COCO's practice); default: a row per instance.")
     ] = False,
+    stat: StatOpt = "mean",
+    rope: RopeOpt = "1%",
+    fmt: TableFormatOpt = "table",
 ) -> None:
-    """Run optimizers on benchmark functions; print min/max/avg/std per function and dimension,
-    with Wilcoxon rank-sum markers against a reference and Friedman mean ranks."""
+    """Run optimizers on benchmark functions; print min/max/avg/std (or median/IQR) per function
+    and dimension, with Wilcoxon rank-sum markers, effect sizes and Bayesian probabilities
+    against a reference, and Friedman mean ranks."""
+    check_stat(stat)
+    the_rope = check_rope(rope)
+    check_format(fmt, ("table", "latex"))
     spec = make_spec(algorithms, functions, dims, runs, agents, iterations, seed, shifted, params,
                      reference, transform, backend, instances, budget_evals, pool_instances)
     check_range("--jobs", jobs, 0, parallel.MAX_JOBS)
@@ -320,7 +336,7 @@ def bench(
 
         cells = pool(cells)
     seconds = time.perf_counter() - started
-    tests = report.statistics(cells, spec.algorithms, spec.reference)
+    tests = report.statistics(cells, spec.algorithms, spec.reference, stat=stat, rope=the_rope)
     if plot is not None:
         from swarmpath.evidence import plots
         from swarmpath.evidence.cdplot import draw_cd
@@ -337,7 +353,21 @@ def bench(
         doc["platform"] = numeric_platform()
         sys.stdout.write(json.dumps(doc, allow_nan=False) + "\n")
         return
+    if fmt == "latex":
+        sys.stdout.write(latex_table(spec, cells, tests))
+        return
     print_tables(spec, cells, seconds, tests)
+
+
+def latex_table(spec: BenchSpec, cells: Sequence[report.Cell], tests: report.Statistics) -> str:
+    """The study's table as LaTeX, its caption naming the setting and the tests."""
+    from swarmpath.evidence import latex
+
+    multi = len(spec.algorithms) > 1
+    grid = report.study_grid(cells, spec.algorithms, tests=tests if multi else None,
+                             origin=spec.transform == "none")
+    text = caption(spec, None) + (f". {latex_legend(tests)}" if multi else ".")
+    return latex.grid_to_latex(grid, text, "tab:swarmpath-bench")
 
 
 def print_tables(
@@ -361,6 +391,6 @@ def print_tables(
     if multi:
         console.print(report.render_ranking(cells, spec.algorithms, tests))
         if tests is not None:
-            for line in report.friedman_lines(tests):
+            for line in report.friedman_lines(tests) + bayes_lines(tests):
                 console.print(line, highlight=False)
             console.print(report.legend(tests), highlight=False)

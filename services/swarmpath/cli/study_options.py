@@ -1,9 +1,9 @@
-"""Options shared by the commands that run a benchmark study (bench, audit, reproduce): one
-declaration each, so their names, help texts and defaults cannot drift apart."""
+"""Options shared by the commands that run or report a study (bench, audit, reproduce, plan,
+results): one declaration each, so their names, help texts and defaults cannot drift apart."""
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -39,3 +39,48 @@ BackendOpt = Annotated[
         "for run (numba: the 'fast' extra); what has no kernel is refused.",
     ),
 ]
+StatOpt = Annotated[
+    str,
+    typer.Option("--stat", metavar="mean|median",
+                 help="What the table reports and ranks by: mean with std, or median with the "
+                 "interquartile range (also the bold cells, Friedman ranks and Bayesian test)."),
+]
+RopeOpt = Annotated[
+    str,
+    typer.Option("--rope", metavar="WIDTH|PCT%",
+                 help="Region of practical equivalence of the Bayesian comparison: a width in "
+                 "the function's units (1e-8) or relative to the larger distance to the optimum "
+                 "(1%)."),
+]
+TableFormatOpt = Annotated[
+    str, typer.Option("--format", metavar="table|latex",
+                      help="table: the terminal table; latex: a booktabs table with a caption.")
+]
+
+
+def check_stat(stat: str) -> str:
+    from swarmpath.cli.core import InputError
+    from swarmpath.evidence.stats import STATS
+
+    if stat not in STATS:
+        raise InputError("--stat", f"{stat!r} is not one of {', '.join(STATS)}")
+    return stat
+
+
+def check_rope(text: str) -> Any:
+    """The ``--rope`` option as a :class:`swarmpath.evidence.bayes.Rope` (InputError if bad)."""
+    from swarmpath.cli.core import InputError
+    from swarmpath.evidence.bayes import parse_rope
+
+    try:
+        return parse_rope(text)
+    except ValueError as exc:
+        raise InputError("--rope", str(exc)) from None
+
+
+def check_format(fmt: str, allowed: tuple[str, ...]) -> str:
+    from swarmpath.cli.core import InputError
+
+    if fmt not in allowed:
+        raise InputError("--format", f"{fmt!r} is not one of {', '.join(allowed)}")
+    return fmt

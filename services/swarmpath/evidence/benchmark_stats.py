@@ -7,27 +7,36 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from swarmpath.evidence.stats import ALPHA, describe, json_number
+from swarmpath.evidence.stats import ALPHA, STATS, describe, json_number, location
 
 # swarmpath.evidence.compare loads scipy.stats (~0.8 s): only when statistics are run
 if TYPE_CHECKING:
     from swarmpath.evidence import compare
+    from swarmpath.evidence.bayes import BayesComparison, Rope
     from swarmpath.evidence.report import Cell
 
 
 @dataclass(frozen=True)
 class Statistics:
     """The study's tests (:mod:`swarmpath.evidence.compare`): every algorithm against the reference
-    in every (function, dim) cell, one Holm family over the whole table, and per dimension the
-    Friedman test over the functions on the cells' average best fitness."""
+    in every (function, dim) cell, one Holm family over the whole table, with effect sizes; per
+    dimension the Friedman test over the functions on the cells' average (or median) best
+    fitness; the Bayesian comparison with its rope (:mod:`swarmpath.evidence.bayes`); and per
+    cell the best algorithms with those not significantly worse (bold in the tables)."""
 
     comparison: compare.Comparison
     friedman: dict[int, compare.Friedman]  # per dim, in table order
+    bayes: BayesComparison | None = None
+    #: (function, dim) -> the best algorithms and those statistically similar to them
+    similar: dict[tuple[str, int], set[str]] = field(default_factory=dict)
+    stat: str = "mean"
+    #: (function, dim) -> the best algorithms by ``stat`` (ties all)
+    best: dict[tuple[str, int], set[str]] = field(default_factory=dict)
 
     @property
     def reference(self) -> str:
@@ -42,12 +51,24 @@ def statistics(
     algorithms: Sequence[str],
     reference: str | None = None,
     alpha: float = ALPHA,
+    stat: str = "mean",
+    rope: Rope | None = None,
 ) -> Statistics:
     """The tests of a study (reference: default the last algorithm; ValueError if unknown)."""
     return benchmark_tests(
         {(c.algorithm, c.function, c.dim): c.best_fitness for c in cells}, algorithms, reference,
-        alpha,
+        alpha, stat, rope,
     )
+
+
+def f_star(function: str, dim: int) -> float:
+    """The function's minimum at ``dim`` (0 for a name no longer registered)."""
+    try:
+        from swarmpath.functions import get_function
+
+        return float(get_function(function).f_min_for(dim))
+    except (KeyError, ValueError):
+        return 0.0
 
 
 def benchmark_tests(
@@ -55,23 +76,33 @@ def benchmark_tests(
     algorithms: Sequence[str],
     reference: str | None = None,
     alpha: float = ALPHA,
+    stat: str = "mean",
+    rope: Rope | None = None,
 ) -> Statistics:
     """:func:`statistics` from the best fitness of the runs per (algorithm, function, dim)
-    (NaN: a run without a value; an empty cell is not tested and leaves the Friedman test)."""
+    (NaN: a run without a value; an empty cell is not tested and leaves the Friedman test).
+    ``stat``: what the Friedman test, the bold cells and the Bayesian comparison use (mean or
+    median); ``rope``: the Bayesian comparison's (default: :data:`bayes.DEFAULT_ROPE`)."""
+    from swarmpath.evidence import bayes, compare
+
+    if stat not in STATS:
+        raise ValueError(f"stat must be one of {', '.join(STATS)}, got {stat!r}")
     samples: dict[tuple[str, int], dict[str, Sequence[float]]] = {}
-    averages: dict[int, dict[str, dict[str, float]]] = {}
+    locations: dict[int, dict[str, dict[str, float]]] = {}
     for (algorithm, function, dim), runs in values.items():
         samples.setdefault((function, dim), {})[algorithm] = runs
         arr = np.asarray(runs, dtype=float)
         kept = arr[~np.isnan(arr)]
-        avg = describe(kept)["avg"] if kept.size else math.nan
-        averages.setdefault(dim, {}).setdefault(function, {})[algorithm] = avg
-    from swarmpath.evidence import compare
-
+        value = location(describe(kept), stat) if kept.size else math.nan
+        locations.setdefault(dim, {}).setdefault(function, {})[algorithm] = value
     comparison = compare.compare_samples(samples, algorithms, reference, alpha)
     ref = comparison.reference
-    per_dim = {d: compare.friedman(v, algorithms, ref, alpha) for d, v in averages.items()}
-    return Statistics(comparison, per_dim)
+    per_dim = {d: compare.friedman(v, algorithms, ref, alpha) for d, v in locations.items()}
+    offsets = {key: f_star(*key) for key in samples}
+    posterior = bayes.compare_bayes(samples, algorithms, ref, rope or bayes.DEFAULT_ROPE, stat,
+                                    offsets, group=lambda key: key[1])
+    best, similar = compare.best_and_similar(samples, algorithms, stat, alpha)
+    return Statistics(comparison, per_dim, posterior, similar, stat, best)
 
 
 def format_p(p: float | None) -> str:
@@ -95,13 +126,35 @@ def friedman_lines(tests: Statistics) -> list[str]:
     return lines
 
 
+def bayes_lines(tests: Statistics) -> list[str]:
+    """Per dimension and algorithm: the Bayesian signed-rank test over the functions."""
+    b = tests.bayes
+    if b is None:
+        return []
+    out = []
+    for dim, per in b.across.items():
+        parts = [f"{a} {v['p_better']:.2f}/{v['p_equivalent']:.2f}/{v['p_worse']:.2f} "
+                 f"({v['verdict']})" for a, v in per.items()]
+        blocks = max((v["blocks"] for v in per.values()), default=0)
+        out.append(f"Bayesian signed-rank D={dim} over {blocks} functions, P(better/equivalent/"
+                   f"worse) than {b.reference} ({b.stat}, {b.rope.describe()}): "
+                   + "; ".join(parts))
+    return out
+
+
 def legend(tests: Statistics) -> str:
     c = tests.comparison
+    what = "median" if tests.stat == "median" else "avg"
+    rope = f", {tests.bayes.rope.describe()}" if tests.bayes is not None else ""
     return (
         f"+/=/-: significantly better / no significant difference / worse than {c.reference} "
         f"(two-sided Wilcoxon rank-sum test, Holm-adjusted over the table, alpha {c.alpha:g}); "
-        f"Friedman columns: mean rank over the functions (1 = best), +/- = differs from "
-        f"{c.reference} by Holm's post-hoc test"
+        f"* the best {what}, ~ not significantly worse than it (the same test; both bold); "
+        f"A12: P(a run beats a run of {c.reference}), 0.5 = no effect; shift: Hodges-Lehmann "
+        f"estimate of (algorithm - {c.reference}) with its 95 % interval; P(b/e/w): posterior "
+        f"probability of better / practically equivalent / worse (Bayesian bootstrap of the "
+        f"{tests.stat}{rope}); Friedman columns: mean rank over the functions (1 = best), +/- = "
+        f"differs from {c.reference} by Holm's post-hoc test"
     )
 
 
@@ -118,7 +171,30 @@ def tests_to_json(tests: Statistics) -> dict[str, Any]:
             return [clean(x) for x in v]
         return v
 
-    return clean({
+    doc = {
+        "stat": tests.stat,
         "comparison": tests.comparison.to_json(key_fields=("function", "dim")),
         "friedman": [{"dim": d, **f.to_json()} for d, f in tests.friedman.items()],
-    })
+        "similar": [{"function": f, "dim": d, "best": sorted(tests.best.get((f, d), ())),
+                     "algorithms": sorted(names)} for (f, d), names in tests.similar.items()],
+    }
+    if tests.bayes is not None:
+        doc["bayes"] = tests.bayes.to_json(("function", "dim"), "dim")
+    return clean(doc)
+
+
+def latex_legend(tests: Statistics) -> str:
+    """What a LaTeX table's bold cells, superscripts and effect rows mean (its caption)."""
+    c = tests.comparison
+    what = "median" if tests.stat == "median" else "mean"
+    rope = f", {tests.bayes.rope.describe()}" if tests.bayes is not None else ""
+    return (
+        f"Bold: the best {what} and those not significantly worse (two-sided Wilcoxon "
+        f"rank-sum test against the best, Holm-adjusted, alpha {c.alpha:g}). Superscript "
+        f"+/=/-: significantly better / no significant difference / worse than {c.reference} "
+        f"(the same test, Holm-adjusted over the table). A12: Vargha-Delaney probability that "
+        f"a run beats a run of {c.reference} (0.5: no effect); shift: Hodges-Lehmann estimate "
+        f"of (algorithm - {c.reference}) with its 95 % interval; P(b/e/w): posterior "
+        f"probabilities of better / practically equivalent / worse (Bayesian bootstrap of the "
+        f"{what}{rope}; decision at 0.95)."
+    )

@@ -279,3 +279,43 @@ def compare_success(
             raw.append(PairTest(key, a, n, rn, float(res.statistic), float(res.pvalue),
                                 a12=a12))
     return Comparison("fisher exact", algos, ref, alpha, False, _adjust(raw, alpha, direction))
+
+
+def best_and_similar(
+    samples: Mapping[K, Mapping[str, ArrayLike]],
+    algorithms: Sequence[str],
+    stat: str = "mean",
+    alpha: float = ALPHA,
+    lower_is_better: bool = True,
+) -> tuple[dict[K, set[str]], dict[K, set[str]]]:
+    """Per cell, the best algorithms by ``stat`` (mean or median; ties all best) and, second,
+    those with every one whose runs do not differ significantly from the best one's: the
+    rank-sum test against the first best, Holm-adjusted over every such test of the table (the
+    same test and correction as the markers). What a paper prints in bold."""
+    from swarmpath.evidence.bayes import point_statistic
+
+    best: dict[K, set[str]] = {}
+    pairs: list[tuple[K, str, np.ndarray, np.ndarray]] = []
+    for key, per_algo in samples.items():
+        present = {a: _clean(per_algo[a]) for a in algorithms if a in per_algo}
+        present = {a: v for a, v in present.items() if v.size}
+        if not present:
+            continue
+        sign = 1.0 if lower_is_better else -1.0
+        loc = {a: sign * point_statistic(v, stat) for a, v in present.items()}
+        low = min(v for v in loc.values() if not math.isnan(v)) if any(
+            not math.isnan(v) for v in loc.values()) else math.nan
+        winners = [a for a in present if loc[a] == low]
+        best[key] = set(winners)
+        if winners:
+            pairs += [(key, a, present[a], present[winners[0]]) for a in present
+                      if a not in winners]
+    results = rank_sum_many([(x, y) for _, _, x, y in pairs])
+    tested = [(key, a, res[1]) for (key, a, _, _), res in zip(pairs, results, strict=True)
+              if res is not None]
+    adjusted = holm([p for _, _, p in tested])
+    similar = {key: set(names) for key, names in best.items()}
+    for (key, a, _), q in zip(tested, adjusted, strict=True):
+        if q >= alpha:
+            similar[key].add(a)
+    return best, similar

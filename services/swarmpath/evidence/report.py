@@ -15,9 +15,8 @@ from typing import TYPE_CHECKING, Any
 
 from rich import box
 from rich.table import Table
-from rich.text import Text
 
-from swarmpath.evidence import audit
+from swarmpath.evidence import audit, tables
 from swarmpath.evidence.benchmark_stats import (
     Statistics,
     benchmark_tests,
@@ -43,7 +42,7 @@ if TYPE_CHECKING:
 #: Rows of the table, in the papers' order.
 TABLE_STATS = ("min", "max", "avg", "std")
 #: Appended to the best average of each function and dimension (survives non-tty output).
-BEST_MARK = "*"
+BEST_MARK = tables.BEST_MARK
 
 
 @dataclass
@@ -130,45 +129,23 @@ def render_table(
     origin: bool = False,
 ) -> Table:
     """The paper-style table as a rich Table (print it with any rich Console). With ``tests``,
-    each average is followed by its marker against the reference (``+``, ``=``, ``-``). With
+    each location (avg or median, by ``tests.stat``) is followed by its marker against the
+    reference (``+``, ``=``, ``-``), bold with ``*`` when best and ``~`` when not significantly
+    worse than the best, and the effect rows follow (:mod:`swarmpath.evidence.tables`). With
     ``origin`` (an untransformed study), the averages of origin-suspect cells
     (:func:`origin_suspects`) carry ``audit.ORIGIN_MARK``; print ``audit.ORIGIN_FOOTNOTE`` under
     the table when there are any."""
-    table = Table(title=title, caption=caption, box=box.SIMPLE_HEAD, pad_edge=False)
-    table.add_column("F", no_wrap=True)
-    table.add_column("D", justify="right", no_wrap=True)
-    table.add_column("", no_wrap=True)
-    for a in algorithms:
-        table.add_column(a, justify="right", no_wrap=True)
-    rows = table_rows(cells, algorithms)
-    show = tests is not None and len(algorithms) > 1
-    suspects = origin_suspects(cells) if origin else set()
-    for i, row in enumerate(rows):
-        first = i == 0 or (rows[i - 1].function, rows[i - 1].dim) != (row.function, row.dim)
-        last = i + 1 == len(rows) or (rows[i + 1].function, rows[i + 1].dim) != (
-            row.function,
-            row.dim,
-        )
-        texts = []
-        for a, v, marked in zip(algorithms, row.values, row.best, strict=True):
-            s = "-" if math.isnan(v) else format_value(v, digits)
-            # Every number gets the same trailing characters so that marked ones align.
-            s += BEST_MARK if marked else " "
-            if suspects:
-                odd = row.stat == "avg" and (row.function, row.dim, a) in suspects
-                s += audit.ORIGIN_MARK if odd else " "
-            if show:
-                m = tests.comparison.marker((row.function, row.dim), a) if tests else None
-                s += " " + (m if row.stat == "avg" and m else " ")
-            texts.append(Text(s, style="bold") if marked else Text(s))
-        table.add_row(
-            row.function if first else "",
-            str(row.dim) if first else "",
-            row.stat,
-            *texts,
-            end_section=last,
-        )
-    return table
+    grid = study_grid(cells, algorithms, digits, tests, origin)
+    return tables.to_rich(grid, title, caption)
+
+
+def study_grid(cells: Sequence[Cell], algorithms: Sequence[str], digits: int = 2,
+               tests: Statistics | None = None, origin: bool = False) -> tables.Grid:
+    """The study's table as a :class:`swarmpath.evidence.tables.Grid` (terminal or LaTeX)."""
+    compared = tests is not None and len(algorithms) > 1
+    rows = tables.study_rows(cells, tests if compared else None, origin)
+    return tables.benchmark_grid(rows, algorithms, tests.stat if tests else "mean", digits,
+                                 compared, tests.reference if tests else None)
 
 
 def origin_suspects(cells: Iterable[Cell]) -> set[tuple[str, int, str]]:
@@ -208,8 +185,11 @@ def render_ranking(
     table.add_column("best avg", justify="right")
     table.add_column("mean rank", justify="right")
     counts = tests.comparison.counts() if tests else {}
+    verdicts = tests.bayes.verdict_counts() if tests and tests.bayes else {}
     if tests:
         table.add_column(f"+/=/- vs {tests.reference}", justify="right")
+        if tests.bayes:
+            table.add_column("better/equiv./worse/undecided", justify="right")
         for dim in tests.friedman:
             table.add_column(f"Friedman D={dim}", justify="right")
     for r in ranking(cells, algorithms):
@@ -218,6 +198,9 @@ def render_ranking(
         if tests:
             n = counts.get(a)
             cols.append("ref" if n is None else f"{n['+']}/{n['=']}/{n['-']}")
+            if tests.bayes:
+                v = verdicts.get(a)
+                cols.append("ref" if v is None else "/".join(str(x) for x in v.values()))
             for f in tests.friedman.values():
                 post = f.posthoc.get(a, {}).get("marker", " ")
                 cols.append(f"{f.mean_ranks[a]:.2f} {post}")
@@ -255,11 +238,11 @@ def cell_to_json(
     if origin:
         out["origin_suspect"] = audit.origin_suspect(c.function, c.best_fitness)
     if tests is not None:
-        t = tests.comparison.get((c.function, c.dim), c.algorithm)
-        out["test"] = {
-            "reference": tests.reference, "marker": None if t is None else t.marker,
-            "p": None if t is None else t.p, "p_holm": None if t is None else t.p_holm,
-        }
+        fields = tables.test_fields(tests, (c.function, c.dim), c.algorithm)
+        out["test"] = {"reference": tests.reference, "stat": tests.stat,
+                       **{k: json_number(v) if isinstance(v, float) else v
+                          for k, v in fields.items() if k != "best"},
+                       "best": c.algorithm in tests.best.get((c.function, c.dim), set())}
     return out
 
 
