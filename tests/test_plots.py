@@ -35,9 +35,24 @@ def test_convergence_figure_draws_the_median_and_the_iqr_of_each_algorithm():
     assert legend == ["GWO (median of 7)", "PSO (median of 5)"]
 
 
-def test_negative_fitness_is_drawn_on_a_linear_axis():
-    fig = plots.convergence_figure("F8", {"GWO": [[-1.0, -2.0, -3.0], [-1.0, -1.5, -4.0]]})
-    assert fig.axes[0].get_yscale() == "linear"
+def test_curves_are_log_f_minus_f_star_like_the_dashboard():
+    # F8-like: negative f, f* = -4: the error f - f* is drawn on a log axis
+    fig = plots.convergence_figure("F8", {"GWO": [[-1.0, -2.0, -3.0], [-1.0, -1.5, -4.0]]},
+                                   f_star=-4.0)
+    ax = fig.axes[0]
+    assert ax.get_yscale() == "log"
+    assert np.allclose(ax.get_lines()[0].get_ydata(), [3.0, 2.25, 0.5])
+    # one algorithm reaches 0 (F9, F11): still log, its zeros at the smallest positive error,
+    # and the other two stay decades apart (a linear axis would show three flat lines at 0)
+    zero = [[1.0, 0.0, 0.0]] * 3
+    small, big = [[1.0, 1e-3, 1e-5]] * 3, [[10.0, 5.0, 1e3 / 1e3]] * 3
+    fig = plots.convergence_figure("F9", {"A": zero, "B": small, "C": big})
+    ax = fig.axes[0]
+    assert ax.get_yscale() == "log"
+    a, b, c = (line.get_ydata() for line in ax.get_lines())
+    assert a[-1] == pytest.approx(1e-5) and b[-1] == pytest.approx(1e-5)
+    assert c[1] / b[1] == pytest.approx(5e3)
+    assert "0 drawn at 1.0e-05" in ax.get_ylabel()
 
 
 def test_thinned_curves_are_resampled_onto_the_longest():

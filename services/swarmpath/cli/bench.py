@@ -44,7 +44,7 @@ from swarmpath.cli.study_options import (
     check_rope,
     check_stat,
 )
-from swarmpath.evidence import audit, report
+from swarmpath.evidence import anytime, audit, report
 from swarmpath.evidence.benchmark_stats import bayes_lines, latex_legend
 from swarmpath.functions import get_function
 from swarmpath.optimizers import ParameterError, minimize_many
@@ -313,6 +313,10 @@ def bench(
     stat: StatOpt = "mean",
     rope: RopeOpt = "1%",
     fmt: TableFormatOpt = "table",
+    show_anytime: Annotated[
+        bool, typer.Option("--anytime", help="Also print per function and dimension the "
+                           "fixed-target (ERT) and fixed-budget tables and the ECDF's area.")
+    ] = False,
 ) -> None:
     """Run optimizers on benchmark functions; print min/max/avg/std (or median/IQR) per function
     and dimension, with Wilcoxon rank-sum markers, effect sizes and Bayesian probabilities
@@ -337,11 +341,15 @@ def bench(
         cells = pool(cells)
     seconds = time.perf_counter() - started
     tests = report.statistics(cells, spec.algorithms, spec.reference, stat=stat, rope=the_rope)
+    groups = (anytime.study_groups(cells, spec.agents, spec.iterations)
+              if as_json or plot is not None or show_anytime else {})
     if plot is not None:
         from swarmpath.evidence import plots
+        from swarmpath.evidence.anytime_report import write_anytime_plots
         from swarmpath.evidence.cdplot import draw_cd
 
-        for out in plots.write_benchmark_plots(report.plot_runs(cells), plot):
+        for out in [*plots.write_benchmark_plots(report.plot_runs(cells), plot),
+                    *write_anytime_plots(groups, plot, spec.algorithms)]:
             stderr.print(f"wrote {out}", highlight=False)
         for dim, f in tests.friedman.items():
             cd = draw_cd(f, plot / f"cd-D{dim}.png", f"D = {dim}")
@@ -351,12 +359,28 @@ def bench(
     if as_json:
         doc = report.study_to_json(spec.settings(), cells, seconds, __version__, tests)
         doc["platform"] = numeric_platform()
+        doc["anytime"] = anytime.groups_to_json(groups)
         sys.stdout.write(json.dumps(doc, allow_nan=False) + "\n")
         return
     if fmt == "latex":
         sys.stdout.write(latex_table(spec, cells, tests))
         return
     print_tables(spec, cells, seconds, tests)
+    if show_anytime:
+        print_anytime(groups, spec.algorithms)
+
+
+def print_anytime(groups: dict[tuple[str, int], anytime.AnytimeGroup],
+                  algorithms: Sequence[str]) -> None:
+    from swarmpath.evidence import anytime_report
+
+    console = Console()
+    for (function, dim), group in groups.items():
+        console.print(anytime_report.fixed_target_table(
+            f"{function}, D={dim}: fixed target", group, algorithms))
+        console.print(anytime_report.fixed_budget_table(
+            f"{function}, D={dim}: fixed budget", group, algorithms))
+    console.print(anytime_report.LEGEND, highlight=False)
 
 
 def latex_table(spec: BenchSpec, cells: Sequence[report.Cell], tests: report.Statistics) -> str:

@@ -73,7 +73,7 @@ def curve_matrix(curves: Sequence[Sequence[float]]) -> tuple[np.ndarray, np.ndar
 
 
 def _y_scale(ax: Any, values: np.ndarray) -> str:
-    """Log y when every finite value is positive, else linear (F8's minimum is negative)."""
+    """Log y when every finite value is positive, else linear (a map measure at 0)."""
     finite = values[np.isfinite(values)]
     if finite.size and finite.min() > 0:
         ax.set_yscale("log")
@@ -81,26 +81,42 @@ def _y_scale(ax: Any, values: np.ndarray) -> str:
     return "linear"
 
 
-def convergence_figure(title: str, curves: Mapping[str, Sequence[Sequence[float]]]) -> Any:
-    """Median best-so-far against iteration with the interquartile band, one colour per
-    algorithm, log y (linear when a value is zero or negative)."""
+def log_floor(values: np.ndarray) -> float:
+    """Where a log axis draws the values at or below 0: the smallest positive finite value
+    (as the dashboard does), or 1e-300 when there is none."""
+    positive = values[np.isfinite(values) & (values > 0)]
+    return float(positive.min()) if positive.size else 1e-300
+
+
+def convergence_figure(title: str, curves: Mapping[str, Sequence[Sequence[float]]],
+                       f_star: float = 0.0) -> Any:
+    """Median best-so-far error f - f* against iteration with the interquartile band, one colour
+    per algorithm, on a log y axis like the dashboard's: an error of 0 (the optimum reached) is
+    drawn at the smallest positive error of the figure, so algorithms decades apart stay apart
+    even when one of them reaches 0 (F9, F11)."""
     plt = _pyplot()
     colours = palette(list(curves))
     fig, ax = plt.subplots(figsize=(7, 4.5), dpi=100)
-    everything = []
+    bands = {}
     for name, runs in curves.items():
-        if not runs:
-            continue
-        x, values = curve_matrix(runs)
-        q1, med, q3 = np.nanpercentile(values, [25, 50, 75], axis=0)
-        ax.fill_between(x, q1, q3, color=colours[name], alpha=0.2, lw=0)
-        ax.plot(x, med, color=colours[name], lw=1.5, label=f"{name} (median of {len(runs)})")
-        everything.append(values.ravel())
-    if everything:
-        _y_scale(ax, np.concatenate(everything))
+        if runs:
+            x, values = curve_matrix(runs)
+            bands[name] = (x, np.nanpercentile(np.maximum(values - f_star, 0.0), [25, 50, 75],
+                                               axis=0))
+    everything = [b.ravel() for _, b in bands.values()]
+    floor = log_floor(np.concatenate(everything)) if everything else 1e-300
+    reached = False
+    for name, (x, (q1, med, q3)) in bands.items():
+        reached = reached or bool(np.any(med <= 0))
+        ax.fill_between(x, np.maximum(q1, floor), np.maximum(q3, floor), color=colours[name],
+                        alpha=0.2, lw=0)
+        ax.plot(x, np.maximum(med, floor), color=colours[name], lw=1.5,
+                label=f"{name} (median of {len(curves[name])})")
+    ax.set_yscale("log")
     ax.set_title(title)
     ax.set_xlabel("iteration")
-    ax.set_ylabel("best fitness so far (median, IQR band)")
+    ax.set_ylabel("best-so-far f - f* (median, IQR band)"
+                  + (f"\n0 drawn at {floor:.1e}" if reached else ""))
     ax.grid(True, which="major", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
@@ -197,7 +213,8 @@ def _finite(v: Any) -> float | None:
 
 
 def write_benchmark_plots(runs: Iterable[Mapping[str, Any]], directory: Path) -> list[Path]:
-    """Per function and dimension: the convergence curves and the box plot of best fitness."""
+    """Per function and dimension: the convergence curves and the box plot of the best error
+    f - f* (log y where every error is positive)."""
     curves: dict[tuple[str, int], dict[str, list[Any]]] = {}
     best: dict[tuple[str, int], dict[str, list[float | None]]] = {}
     for r in runs:
@@ -208,13 +225,18 @@ def write_benchmark_plots(runs: Iterable[Mapping[str, Any]], directory: Path) ->
             _finite(r.get("best_fitness")))
     directory.mkdir(parents=True, exist_ok=True)
     out = []
+    from swarmpath.evidence.benchmark_stats import f_star
+
     for (function, dim), by_algo in best.items():
         name = f"{slug(function)}_d{dim}"
+        fs = f_star(function, dim)
         if curves.get((function, dim)):
-            fig = convergence_figure(f"{function}, {dim} dimensions", curves[(function, dim)])
+            fig = convergence_figure(f"{function}, {dim} dimensions", curves[(function, dim)], fs)
             out.append(_save(fig, directory / f"curves_{name}.png"))
-        fig = box_figure(f"{function}, {dim} dimensions: best fitness of each run",
-                         [("best fitness", by_algo)], log=True)
+        errors = {a: [None if v is None else v - fs for v in values]
+                  for a, values in by_algo.items()}
+        fig = box_figure(f"{function}, {dim} dimensions: best f - f* of each run",
+                         [("best f - f*", errors)], log=True)
         out.append(_save(fig, directory / f"box_{name}.png"))
     return out
 
