@@ -141,3 +141,29 @@ def test_the_stored_spec_names_max_runs():
     spec = parse_job_spec(SPEC)
     assert spec.racing is not None and spec.racing.max_runs == 60
     assert parse_job_spec({**SPEC, "racing": {"max_runs": 60}}).racing.max_runs == 60
+
+
+def test_a_raced_summary_has_the_race_markers_and_runs(tmp_path):
+    with Store(tmp_path) as store:
+        job = store.create_job(SPEC, now=T0)
+        drain(store, job)
+        summary = store.summary(job)
+        race = store.race(job)
+    assert summary["columns"][-3:] == ["race_runs", "race_state", "race_round"]
+    assert summary["statistics"]["race"] == race
+    comparison = summary["statistics"]["comparison"]
+    assert comparison["reference"] == "GWO" and comparison["correction"] == "bonferroni"
+    cells = {c["cell"]: c for b in race["blocks"] for c in b["cells"]}
+    duels = {(json_key(b), d["a"]): d for b in race["blocks"] for d in b["duels"]}
+    for i, row in enumerate(summary["rows"]):
+        assert row["race_runs"] == cells[i]["runs"] == row["runs"]
+        assert row["p"] is None
+        if row["algorithm"] == "GWO":
+            assert row["marker"] is None
+        else:
+            assert row["marker"] == duels[(row["function"], row["algorithm"])]["marker"]
+    assert comparison["counts"]["FDO"] == {"+": 0, "=": 0, "-": 2}
+
+
+def json_key(block):
+    return block["block"]["function"]

@@ -50,6 +50,12 @@ NOTES: dict[str, str] = {
               "table, alpha 0.05; blank for the reference itself; docs/statistics.md)",
     "p": "two-sided p-value of that test, before the correction",
     "p_holm": "the p-value after Holm's correction over every test of the table",
+    "race_runs": "runs the race gave this cell (a raced job: it stops a cell once its "
+                 "comparisons are decided; docs/statistics.md, Racing); its marker is the "
+                 "race's decision, not a rank-sum test",
+    "race_state": "racing (more rounds to come), decided (every comparison of the cell was "
+                  "decided) or max_runs (the cell reached the job's runs undecided)",
+    "race_round": "the round (0 = the first, min_runs) in which the cell stopped",
     "success_marker": "+/=/- against the reference planner's success rate (Fisher's exact test, "
                       "Holm-adjusted over the table, alpha 0.05)",
     "length_marker": "+/=/- against the reference planner's path lengths (Wilcoxon rank-sum "

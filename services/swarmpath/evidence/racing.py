@@ -24,6 +24,7 @@ whenever the race stops. See docs/statistics.md, "Racing".
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
@@ -109,7 +110,12 @@ class Duel:
         return {"a": self.a, "b": self.b, "decision": r.decision, "better":
                 None if r.better is None else (self.a if r.better == "a" else self.b),
                 "marker": self.marker, "round": self.round, "pairs": r.n, "decided_after": r.at,
-                "theta": r.theta, "low": r.low, "high": r.high}
+                "theta": _number(r.theta), "low": _number(r.low), "high": _number(r.high)}
+
+
+def _number(v: float) -> float | None:
+    """JSON has no NaN: an undefined score or interval (no pairs yet) is null."""
+    return v if math.isfinite(v) else None
 
 
 @dataclass(frozen=True)

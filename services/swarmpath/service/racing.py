@@ -104,3 +104,60 @@ def group_blocks(cells: Iterable[tuple[int, dict[str, Any]]], reference: str | N
     comparisons = sum(len(comparisons_per_block([n for _, n in c], pairs))
                       for c in members.values())
     return Blocks(members, of, comparisons)
+
+
+#: Columns a raced job's summary rows add: the runs its race gave the cell, whether it still
+#: races (``racing``) or why it stopped (``decided``, ``max_runs``), and its last round.
+RACE_COLUMNS = ("race_runs", "race_state", "race_round")
+
+
+def apply_race(rows: list[dict[str, Any]], race: dict[str, Any], algorithms: Sequence[str],
+               reference: str | None) -> dict[str, Any]:
+    """A raced job's summary: each row (one per cell, in cell order) gets :data:`RACE_COLUMNS`
+    and its marker from the race against the reference (p-values are left out: a rank-sum test
+    after optional stopping is not valid); returns the ``comparison`` document that replaces the
+    rank-sum one, and ``race`` (:meth:`Store.race`)."""
+    ref = reference or algorithms[-1]
+    by_cell: dict[int, tuple[dict[str, Any], dict[str, Any] | None]] = {}
+    for block in race["blocks"]:
+        vs_ref: dict[str, dict[str, Any]] = {}
+        for d in block["duels"]:
+            if d["b"] == ref:
+                vs_ref[d["a"]] = d
+            elif d["a"] == ref:
+                vs_ref[d["b"]] = _flipped(d)
+        for c in block["cells"]:
+            by_cell[c["cell"]] = (c, vs_ref.get(c["algorithm"]))
+    counts = {a: {"+": 0, "=": 0, "-": 0} for a in algorithms if a != ref}
+    tests = []
+    for i, row in enumerate(rows):
+        if i not in by_cell:
+            continue
+        c, duel = by_cell[i]
+        row["race_runs"] = c["runs"]
+        row["race_state"] = "racing" if c["racing"] else c["reason"]
+        row["race_round"] = c["stopped_round"]
+        row["p"] = row["p_holm"] = None
+        row["marker"] = None if duel is None else duel["marker"]
+        if duel is not None:
+            counts[row["algorithm"]][duel["marker"]] += 1
+            tests.append({"function": row["function"], "dim": row["dim"],
+                          "algorithm": row["algorithm"], "n": duel["pairs"],
+                          "marker": duel["marker"], "decision": duel["decision"],
+                          "round": duel["round"], "theta": duel["theta"], "low": duel["low"],
+                          "high": duel["high"]})
+    comparison = {"test": "race: betting confidence sequence on P(run beats reference's run)",
+                  "reference": ref, "alpha": race["settings"]["alpha"],
+                  "correction": "bonferroni", "comparisons": race["comparisons"],
+                  "lower_is_better": True, "counts": counts, "tests": tests}
+    return {"comparison": comparison, "race": race}
+
+
+def _flipped(d: dict[str, Any]) -> dict[str, Any]:
+    """A duel seen from its other side: its marker and interval mirrored."""
+    flip = {"+": "-", "-": "+", "=": "="}
+    def mirror(v: float | None) -> float | None:
+        return None if v is None else 1.0 - v
+
+    return {**d, "a": d["b"], "b": d["a"], "marker": flip[d["marker"]],
+            "theta": mirror(d["theta"]), "low": mirror(d["high"]), "high": mirror(d["low"])}

@@ -103,4 +103,20 @@ def statistics_lines(summary: Mapping[str, Any]) -> list[str]:
         counts = ", ".join(f"{a} {n['+']}/{n['=']}/{n['-']}" for a, n in c["counts"].items())
         lines.append(f"{label}+/=/- vs {ref}: {counts}")
     lines += [_friedman_line(label, f) for label, f in fried.items()]
+    if st.get("race"):
+        lines.append(race_line(st["race"]))
     return lines
+
+
+def race_line(race: Mapping[str, Any]) -> str:
+    """One line on a race: cells stopped, runs used against the unraced study's."""
+    cells = [c for b in race["blocks"] for c in b["cells"]]
+    used = sum(c["runs"] for c in cells)
+    full = race["settings"]["max_runs"] * len(cells)
+    stopped = sum(not c["racing"] for c in cells)
+    decided = sum(c["reason"] == "decided" for c in cells)
+    s = race["settings"]
+    return (f"race (alpha {s['alpha']:g} over {race['comparisons']} comparisons, min_runs "
+            f"{s['min_runs']}, batch {s['batch']}, margin {s['margin']:g}): {stopped}/"
+            f"{len(cells)} cells stopped ({decided} decided), {used} runs of {full} "
+            f"({full / max(used, 1):.1f}x fewer)")

@@ -398,6 +398,14 @@ class JobRecorder:
         name (atomic). Returns the final path."""
         if self.closed:
             raise RuntimeError(f"recorder of job {self.job_id} is closed")
+        race = ((summary or {}).get("statistics") or {}).get("race")
+        if race:  # a raced job: its decisions, on /race (one message per block) and as metadata
+            ns = _ns(time.time())
+            for block in race["blocks"]:
+                self._put("/race", "swarmpath.RaceBlock", ns, {"job_id": self.job_id, **block})
+            self._writer.add_metadata("swarmpath.race", {
+                "settings": json.dumps(race["settings"], separators=(",", ":")),
+                "comparisons": str(race["comparisons"])})
         self._writer.add_metadata(
             "swarmpath.summary",
             {

@@ -78,6 +78,32 @@ CURVE_SCHEMA: dict[str, Any] = {
     },
 }
 
+RACE_SCHEMA: dict[str, Any] = {
+    "title": "swarmpath.RaceBlock",
+    "description": "A raced job's block (one function and dimension) as its race left it: each "
+                   "cell's runs and why it stopped, each comparison's decision "
+                   "(docs/statistics.md, Racing)",
+    "type": "object",
+    "properties": {
+        "job_id": {"type": "string"},
+        "block": {"type": "object", "description": "what the block's cells share"},
+        "rounds": {"type": "integer"},
+        "finished": {"type": "boolean"},
+        "cells": {"type": "array", "items": {"type": "object", "properties": {
+            "cell": {"type": "integer"}, "key": {"type": "string"},
+            "algorithm": {"type": "string"}, "runs": {"type": "integer"},
+            "racing": {"type": "boolean"}, "stopped_round": {"type": ["integer", "null"]},
+            "reason": {"type": ["string", "null"]}}}},
+        "duels": {"type": "array", "items": {"type": "object", "properties": {
+            "a": {"type": "string"}, "b": {"type": "string"},
+            "decision": {"type": "string", "description": "different, equivalent or open"},
+            "better": {"type": ["string", "null"]}, "marker": {"type": "string"},
+            "round": {"type": ["integer", "null"]}, "pairs": {"type": "integer"},
+            "decided_after": {"type": "integer"}, "theta": {"type": ["number", "string"]},
+            "low": {"type": ["number", "string"]}, "high": {"type": ["number", "string"]}}}},
+    },
+}
+
 OWN_SCHEMAS = {
-    s["title"]: s for s in (BENCHMARK_RESULT_SCHEMA, MAP_RESULT_SCHEMA, CURVE_SCHEMA)
+    s["title"]: s for s in (BENCHMARK_RESULT_SCHEMA, MAP_RESULT_SCHEMA, CURVE_SCHEMA, RACE_SCHEMA)
 }

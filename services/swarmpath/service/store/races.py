@@ -71,9 +71,9 @@ class RacesMixin(StoreBase):
         for r in db.execute(
             f"SELECT cell_idx, run, value, status FROM results WHERE job_seq = ? "
             f"AND cell_idx IN ({marks})", (seq, *idx)):
-            if r["status"] == "ok" and r["value"] is not None and r["run"] < counts[
-                    r["cell_idx"]][0]:
-                values[r["cell_idx"]][r["run"]] = r["value"]
+            if r["status"] == "ok" and r["run"] < counts[r["cell_idx"]][0]:
+                # as the summary counts them: a run without a number is the worst run
+                values[r["cell_idx"]][r["run"]] = np.inf if r["value"] is None else r["value"]
         names = blocks.names(block)
         by_name = {name: values[i] for i, name in members}
         try:

@@ -12,6 +12,7 @@ from typing import Any
 from swarmpath.evidence.audit import origin_suspect
 from swarmpath.path_metrics import PATH_METRICS
 from swarmpath.service.cell_notes import CellNotes, cell_notes, job_warnings
+from swarmpath.service.racing import RACE_COLUMNS, apply_race
 from swarmpath.service.store.base import StoreBase, _safe
 from swarmpath.service.summary_stats import (
     BENCHMARK_TEST_COLUMNS,
@@ -176,6 +177,10 @@ class SummariesMixin(StoreBase):
                 rows, [values.get(c["idx"]) for c in cells], job_spec["algorithms"],
                 job_spec.get("reference"),
             )
+            race = self.race(job_id) if job_spec.get("racing") else None
+            if race is not None:  # the race decided the markers (service.racing.apply_race)
+                statistics.update(apply_race(rows, race, job_spec["algorithms"],
+                                             job_spec.get("reference")))
         else:
             where = _map_indexes(job_spec.get("maps") or [])
             for c in cells:
@@ -199,7 +204,8 @@ class SummariesMixin(StoreBase):
             "runs_total": job["runs_total"],
             "runs_done": job["runs_done"],
             "runs_failed": job["runs_failed"],
-            "columns": list(BENCHMARK_COLUMNS if kind == "benchmark" else MAP_COLUMNS),
+            "columns": list(BENCHMARK_COLUMNS if kind == "benchmark" else MAP_COLUMNS) + (
+                list(RACE_COLUMNS) if kind == "benchmark" and job_spec.get("racing") else []),
             "rows": [_safe(r) for r in rows],
             "statistics": statistics,
             **({} if kind == "benchmark" else {"warnings": job_warnings(notes)}),

@@ -61,3 +61,15 @@ def cancel_job(job_id: str, core: CoreDep) -> JobStatus:
     if status is None:
         raise HTTPException(404, f"unknown job {job_id!r}")
     return status
+
+
+@router.get("/jobs/{job_id}/race")
+def job_race(job_id: str, core: CoreDep) -> dict[str, Any]:
+    """A raced job's race: its settings and, per block (function and dimension), the rounds,
+    each cell's runs and state, each comparison's decision (docs/statistics.md, Racing); 404 for
+    an unknown job or one that does not race."""
+    status_or_404(core, job_id)
+    race = core.store.race(job_id)
+    if race is None:
+        raise HTTPException(404, f"job {job_id} does not race")
+    return race

@@ -1,0 +1,105 @@
+"""A raced job through the service: a worker and the coordinator SIGKILLed in the middle of the
+race, and the race ends as the pure replay over directly computed runs says; the summary, the
+race document, ``swarmpath results`` and the MCAP carry the decisions."""
+
+from __future__ import annotations
+
+import io
+import json
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from mcap.reader import make_reader
+
+from swarmpath.evidence.racing import race_block
+from swarmpath.optimizers import minimize
+from swarmpath.service.protocol import parse_job_spec
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_service_e2e import ENV, PY, Service
+
+# F1 is decided after two rounds; on F5 SSA loses to GWO after three and PSO against GWO stays
+# open to the end (8 rounds): 192 of the 360 runs
+SPEC = {"kind": "benchmark", "algorithms": ["SSA", "PSO", "GWO"], "functions": ["F1", "F5"],
+        "dims": [6], "runs": 60, "agents": 10, "iterations": 300, "seed": 4,
+        "racing": {"min_runs": 8, "batch": 8}}
+
+
+@pytest.fixture(scope="module")
+def service(tmp_path_factory) -> Iterator[Service]:
+    svc = Service(tmp_path_factory.mktemp("racing"))
+    try:
+        svc.start_worker("w1")
+        svc.start_worker("w2")
+        svc.start_coordinator(lease_seconds=6.0)
+        svc.wait_workers(["w1", "w2"])
+        yield svc
+    finally:
+        svc.close()
+
+
+def expected_race(function: str, names: list[str]):
+    values = {a: minimize(a, function, 6, 10, 300, seed=4, runs=60).best_fitness for a in names}
+    spec = parse_job_spec(SPEC)
+    return race_block(values, names, spec.racing.settings(60), 4)
+
+
+def test_a_raced_job_survives_kills_and_decides_as_the_replay(service, tmp_path):
+    job = service.submit(SPEC)
+    service.wait_for(lambda: service.status(job)["runs_done"] >= 20, 120, "the first round")
+    busy = [w["id"] for w in service.get("/workers").json() if w["alive"] and w["current_runs"]]
+    victim = busy[0] if busy else "w1"
+    service.kill(service.workers[victim])
+    service.start_worker(victim + "b")
+
+    def racing_on() -> bool:
+        blocks = service.get(f"/jobs/{job}/race").json()["blocks"]
+        return max(b["rounds"] for b in blocks) >= 3 and not all(b["finished"] for b in blocks)
+
+    service.wait_for(racing_on, 180, "a block in its fourth round")
+    service.kill(service.coordinator)
+    time.sleep(1.0)
+    service.start_coordinator(lease_seconds=6.0)
+    status = service.wait_done(job, 300)
+    assert status["state"] == "done" and status["runs_failed"] == 0
+
+    race = service.get(f"/jobs/{job}/race").json()
+    used = 0
+    for block in race["blocks"]:
+        names = [c["algorithm"] for c in block["cells"]]
+        expected = expected_race(block["block"]["function"], names)
+        assert {c["algorithm"]: c["runs"] for c in block["cells"]} == expected.allowance
+        assert [d["decision"] for d in block["duels"]] == [
+            d.result.decision for d in expected.duels]
+        used += sum(c["runs"] for c in block["cells"])
+    assert status["runs_done"] == status["runs_total"] == used == 192
+
+    runs = service.get(f"/jobs/{job}/runs", params={"limit": 1000}).json()["items"]
+    assert len(runs) == used and {r["state"] for r in runs} == {"done"}
+    direct = minimize("SSA", "F5", 6, 10, 300, seed=4, runs=60).best_fitness
+    ssa = [r for r in runs if r["cell"] == "SSA/F5/6"]
+    assert [r["best_fitness"] for r in ssa] == direct[: len(ssa)].tolist()
+
+    summary = service.get(f"/jobs/{job}/summary").json()
+    assert summary["statistics"]["race"] == race
+    by_cell = {c["cell"]: c["runs"] for b in race["blocks"] for c in b["cells"]}
+    assert [row["race_runs"] for row in summary["rows"]] == [by_cell[i] for i in range(6)]
+    mcap = service.get(f"/jobs/{job}/mcap")
+    reader = make_reader(io.BytesIO(mcap.content))
+    blocks = [json.loads(m.data) for _s, _c, m in reader.iter_messages(topics=["/race"])]
+    assert sorted(b["block"]["function"] for b in blocks) == ["F1", "F5"]
+    assert all(b["finished"] for b in blocks)
+    meta = {m.name: m.metadata for m in reader.iter_metadata()}
+    assert json.loads(meta["swarmpath.race"]["settings"])["min_runs"] == 8
+    results = list(reader.iter_messages(topics=["/results"]))
+    assert len(results) == used
+
+    out = subprocess.run([PY, "-m", "swarmpath.cli", "results", job, "--url", service.url],
+                         capture_output=True, text=True, env={**ENV, "COLUMNS": "250"},
+                         timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert "race (alpha 0.05 over 4 comparisons" in out.stdout and "race_runs" in out.stdout
