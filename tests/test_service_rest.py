@@ -9,7 +9,7 @@ import re
 import pytest
 from fastapi.testclient import TestClient
 
-from swarmpath.functions import list_functions
+from swarmpath.functions import list_names
 from swarmpath.optimizers import list_optimizers
 from swarmpath.planners import list_planners
 from swarmpath.service.coordinator import CoordinatorSettings, create_app
@@ -139,7 +139,8 @@ def test_openapi_documents_errors_and_enumerates_names(client):
     schemas = doc["components"]["schemas"]
     bench, maps = schemas["BenchmarkJobSpec"]["properties"], schemas["MapJobSpec"]["properties"]
     assert bench["algorithms"]["items"]["enum"] == list(list_optimizers())
-    assert bench["functions"]["items"]["enum"] == list(list_functions())
+    assert bench["functions"]["items"]["enum"] == list_names()
+    assert {"F1", "bbob:f24", "cec2017:F30", "cec2022:F12", "bbob"} <= set(list_names())
     assert maps["planners"]["items"]["enum"] == list(list_planners())
     preset = [b for b in maps["maps"]["items"]["anyOf"] if b.get("type") == "string"]
     assert preset[0]["enum"] == list(list_maps())

@@ -241,7 +241,7 @@ def make_spec(
                 raise InputError(option, f"{d}: {exc}") from None
     checked = parse_params(params, algos)
     try:
-        check_backend(backend, algos, kind, checked)
+        check_backend(backend, algos, kind, checked, fns)
         if budget is not None and backend != "numpy":
             raise ParameterError("--budget-evals runs on backend 'numpy' only")
     except ParameterError as exc:

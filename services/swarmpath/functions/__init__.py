@@ -8,9 +8,10 @@ from swarmpath.functions.registry import (
     get_function,
     get_suite,
     list_functions,
+    list_names,
     list_suites,
     register_suite,
 )
 
 __all__ = ["BenchmarkFunction", "Suite", "expand_function_names", "get_function", "get_suite",
-           "list_functions", "list_suites", "register_suite"]
+           "list_functions", "list_names", "list_suites", "register_suite"]

@@ -211,6 +211,13 @@ def list_functions(suite: str | None = None) -> list[str]:
     return [f.name for f in get_suite(suite).functions]
 
 
+def list_names() -> list[str]:
+    """Every name a study may list without a range or an instance: the stand-alone functions,
+    each suite's functions, then the suite names."""
+    _load_suites()
+    return [*_FUNCTIONS, *_SUITE_FUNCTIONS, *_SUITES]
+
+
 def get_function(name: str) -> BenchmarkFunction:
     """The function registered as ``name``; a suite function's instance k is
     ``<suite>:<name>@i<k>`` (instance 1 without the suffix)."""

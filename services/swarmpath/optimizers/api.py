@@ -93,6 +93,8 @@ def minimize(
     chunk_elements: int | None = None,
     transform: str | None = None,
     backend: str = "numpy",
+    *,
+    max_evaluations: int | None = None,
 ) -> Result:
     """Minimise ``function`` with ``algorithm`` for runs 0..runs-1 (or the given ``run_ids``).
 
@@ -108,7 +110,7 @@ def minimize(
     """
     return minimize_many(
         algorithm, [function], dim, agents, iterations, runs, seed, params, shifted, run_ids,
-        on_iteration, chunk_elements, transform, backend,
+        on_iteration, chunk_elements, transform, backend, max_evaluations=max_evaluations,
     )[0]
 
 
@@ -261,9 +263,11 @@ def check_backend(
     algorithms: Sequence[str],
     transform: str = "none",
     params: Mapping[str, Mapping[str, Any]] | None = None,
+    functions: Sequence[str] = (),
 ) -> None:
     """ParameterError unless every algorithm runs on ``backend`` with ``transform`` and its
-    ``params`` (per algorithm): what ``minimize_many`` would refuse, checked before a study."""
+    ``params`` (per algorithm), and every one of ``functions`` has a kernel there: what
+    ``minimize_many`` would refuse, checked before a study."""
     if backend not in BACKENDS:
         raise ParameterError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
     if backend == "numpy":
@@ -276,6 +280,10 @@ def check_backend(
         ) from None
     for algorithm in algorithms:
         check_study(algorithm, (params or {}).get(algorithm), transform)
+    from swarmpath.optimizers.compiled.run import compiled_function
+
+    for name in functions:
+        compiled_function(get_function(name))
 
 
 def _minimize_compiled(

@@ -21,10 +21,11 @@ def warm_registries() -> None:
 
 
 def build_catalog() -> dict[str, Any]:
-    from swarmpath.functions import get_function, list_functions
+    from swarmpath.functions import get_function, get_suite, list_functions, list_suites
     from swarmpath.optimizers import get_optimizer, list_optimizers
 
-    out: dict[str, Any] = {"optimizers": [], "functions": [], "planners": [], "maps": []}
+    out: dict[str, Any] = {"optimizers": [], "functions": [], "suites": [], "planners": [],
+                           "maps": []}
     for name in list_optimizers():
         cls = get_optimizer(name)
         out["optimizers"].append({
@@ -38,6 +39,15 @@ def build_catalog() -> dict[str, Any]:
             "name": name, "description": fn.description, "lower": fn.lower, "upper": fn.upper,
             "f_min_per_dim": fn.f_min_per_dim, "f_min_constant": fn.f_min_constant,
             "noisy": fn.noisy,
+        })
+    for name in list_suites():
+        suite = get_suite(name)
+        dims = getattr(suite.functions[0], "dimensions", None)
+        out["suites"].append({
+            "name": name, "description": suite.description, "members": list(suite.members),
+            "functions": [f.name for f in suite.functions],
+            "dims": None if dims is None else list(dims),
+            "bounds": [suite.functions[0].lower, suite.functions[0].upper],
         })
     try:
         from swarmpath.planners import get_planner, list_planners

@@ -43,6 +43,9 @@ class BenchmarkCell(Model):
     params: dict[str, ParamValue] = Field(default_factory=dict)
     transform: str = Field(default="none", validate_default=True)
     backend: str = Field(default="numpy", description="numpy or numba (optimizers.api.BACKENDS)")
+    max_evaluations: int | None = Field(
+        default=None, ge=1, description="evaluations each run may count (the job's budget_evals "
+        "at this dim; iterations then spend it); null: agents x iterations")
 
     @field_validator("transform")
     @classmethod

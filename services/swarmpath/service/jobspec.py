@@ -49,6 +49,13 @@ from swarmpath.service.spec_checks import (
     _unique,
     _unknown_names,
 )
+from swarmpath.service.spec_suites import (
+    MAX_INSTANCE,
+    MAX_INSTANCES,
+    _budget_at,
+    _check_budget,
+    _with_instances,
+)
 
 
 # -------------------------------------------------------------------------------------- job specs
@@ -58,8 +65,13 @@ class BenchmarkJobSpec(Model):
 
     kind: Literal["benchmark"]
     algorithms: list[str] = Field(min_length=1, description="registered optimizer names")
+    instances: list[Annotated[int, Field(ge=1, le=MAX_INSTANCE, strict=True)]] | None = Field(
+        default=None, min_length=1, max_length=MAX_INSTANCES,
+        description="suite instances (bbob: COCO's ids; CEC: 1): every suite function runs on "
+        "each, as its own cells (named <suite>:<function>@i<k>); null: instance 1")
     functions: list[str] = Field(
-        min_length=1, description="function names; ranges such as 'F1-F13' are expanded"
+        min_length=1, description="function names; ranges such as 'F1-F13', suite names "
+        "('bbob', 'cec2017', 'cec2022') and suite ranges ('bbob:f1-f5') are expanded"
     )
     dims: list[Annotated[int, Field(ge=1, le=MAX_DIM, strict=True)]] = Field(
         default=[30], min_length=1)
@@ -82,7 +94,14 @@ class BenchmarkJobSpec(Model):
     @field_validator("transform")
     @classmethod
     def _known_transform(cls, v: str, info: ValidationInfo) -> str:
-        return _transform(v, bool(info.data.get("shifted")))
+        kind = _transform(v, bool(info.data.get("shifted")))
+        from swarmpath.functions import get_function
+
+        for name in info.data.get("functions") or ():
+            if kind != "none" and getattr(get_function(name), "suite", ""):
+                raise ValueError(f"{name} is shifted and rotated by its instance; transform "
+                                 f"must be 'none', got {kind!r}")
+        return kind
 
     @model_validator(mode="after")
     def _shifted_follows_transform(self) -> BenchmarkJobSpec:
@@ -100,7 +119,7 @@ class BenchmarkJobSpec(Model):
 
     @field_validator("functions")
     @classmethod
-    def _known_functions(cls, v: list[str]) -> list[str]:
+    def _known_functions(cls, v: list[str], info: ValidationInfo) -> list[str]:
         from swarmpath.functions import expand_function_names
 
         names: list[str] = []
@@ -115,7 +134,7 @@ class BenchmarkJobSpec(Model):
         if not names:
             raise ValueError("no function names given")
         _unique(names, "function")
-        return names
+        return _with_instances(names, info.data.get("instances"))
 
     @field_validator("dims")
     @classmethod
@@ -124,10 +143,16 @@ class BenchmarkJobSpec(Model):
         from swarmpath.functions import get_function
 
         for name in info.data.get("functions") or ():
-            low = int(getattr(get_function(name), "min_dim", 1))
+            fn = get_function(name)
+            low = int(getattr(fn, "min_dim", 1))
             bad = [d for d in v if d < low]
             if bad:
                 raise ValueError(f"{name} needs dim >= {low}, got {bad[0]}")
+            for d in v:
+                try:
+                    fn.check_study(d, "none")
+                except ValueError as exc:
+                    raise ValueError(str(exc)) from None
         return v
 
     @field_validator("runs")
@@ -183,7 +208,8 @@ class BenchmarkJobSpec(Model):
 
         try:
             check_backend(v, info.data.get("algorithms") or (),
-                          info.data.get("transform") or "none", info.data.get("params"))
+                          info.data.get("transform") or "none", info.data.get("params"),
+                          info.data.get("functions") or ())
         except ParameterError as exc:
             raise ValueError(str(exc)) from None
         return v
@@ -204,6 +230,30 @@ class BenchmarkJobSpec(Model):
         if problems:
             raise FieldProblems(problems)
         return v.model_copy(update={"max_runs": info.data["runs"]})
+
+    budget_evals: str | None = Field(
+        default=None, max_length=32,
+        description="evaluations per run, 'N' or 'NxD' (N times the dimension: CEC's "
+        "'10000xD'); each algorithm gets the iterations that spend it (swarmpath.optimizers."
+        "budget) and no run counts an evaluation past it; null: agents x iterations")
+
+    @field_validator("budget_evals")
+    @classmethod
+    def _budget_fits(cls, v: str | None, info: ValidationInfo) -> str | None:
+        return _check_budget(v, info)
+
+    def evaluations(self, dim: int) -> int | None:
+        """The budget of one run at ``dim`` (None: agents x iterations)."""
+        return _budget_at(self.budget_evals, dim)
+
+    def iterations_for(self, algorithm: str, dim: int) -> int:
+        budget = self.evaluations(dim)
+        if budget is None:
+            return self.iterations
+        from swarmpath.optimizers.budget import iterations_for_budget
+
+        return iterations_for_budget(algorithm, budget, self.agents, dim,
+                                     self.params.get(algorithm))
 
 
 def _reference(v: str | None, members: list[str] | None) -> str | None:
@@ -388,11 +438,12 @@ def expand_cells(spec: BenchmarkJobSpec | MapJobSpec) -> list[BenchmarkCell | Ma
                 function=f,
                 dim=d,
                 agents=spec.agents,
-                iterations=spec.iterations,
+                iterations=spec.iterations_for(a, d),
                 shifted=spec.shifted,
                 params=dict(spec.params.get(a, {})),
                 transform=spec.transform,
                 backend=spec.backend,
+                max_evaluations=spec.evaluations(d),
             )
             for a in spec.algorithms
             for f in spec.functions

@@ -26,12 +26,12 @@ _VALIDATION = {"$ref": "#/components/schemas/HTTPValidationError"}
 
 
 def _registry_names() -> dict[str, list[str]]:
-    from swarmpath.functions import list_functions
+    from swarmpath.functions import list_names
     from swarmpath.functions.transforms import TRANSFORMS
     from swarmpath.optimizers import list_optimizers
     from swarmpath.optimizers.api import BACKENDS
 
-    names = {"algorithms": list(list_optimizers()), "functions": list(list_functions()),
+    names = {"algorithms": list(list_optimizers()), "functions": list_names(),
              "transform": list(TRANSFORMS), "backend": list(BACKENDS)}
     try:
         from swarmpath.planners import list_planners

@@ -137,7 +137,7 @@ def minimize_options(lease: Lease, spec: BenchmarkCell) -> dict[str, Any]:
     same for a lease run alone and for a stack of leases, see :mod:`.stacking`)."""
     return {"dim": spec.dim, "agents": spec.agents, "iterations": spec.iterations,
             "seed": lease.seed, "params": spec.params, "transform": spec.transform,
-            "backend": spec.backend}
+            "backend": spec.backend, "max_evaluations": spec.max_evaluations}
 
 
 def ok_results(lease: Lease, res: Any) -> list[RunResult]:
