@@ -29,6 +29,9 @@ def test_a_job_spec_expands_suite_instances_and_budgets_into_cells():
     cells = expand_cells(spec)
     assert {c.max_evaluations for c in cells} == {200}
     assert {c.iterations for c in cells} == {200 // 6 - 1}  # GWO, PSO: 6 + 6 T <= 200
+    from swarmpath.service.cost import benchmark_evaluations
+
+    assert benchmark_evaluations(spec) == 2 * 4 * 2 * 200  # algorithms x cells x runs x budget
 
 
 @pytest.mark.parametrize(("change", "field", "says"), [

@@ -24,6 +24,10 @@ DEFAULT_MAX_STEPS = 50_000_000
 
 
 def benchmark_evaluations(spec: BenchmarkJobSpec) -> int:
+    """runs x agents x iterations; with ``budget_evals``, runs x the budget of each dim."""
+    if getattr(spec, "budget_evals", None) is not None:
+        per_dim = sum(spec.evaluations(d) or 0 for d in spec.dims)
+        return len(spec.algorithms) * len(spec.functions) * spec.runs * per_dim
     return runs_total(spec) * spec.agents * spec.iterations
 
 
