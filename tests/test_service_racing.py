@@ -17,6 +17,7 @@ from mcap.reader import make_reader
 
 from swarmpath.evidence.racing import race_block
 from swarmpath.optimizers import minimize
+from swarmpath.service.foxglove_schemas import check_message
 from swarmpath.service.protocol import parse_job_spec
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -93,6 +94,7 @@ def test_a_raced_job_survives_kills_and_decides_as_the_replay(service, tmp_path)
     blocks = [json.loads(m.data) for _s, _c, m in reader.iter_messages(topics=["/race"])]
     assert sorted(b["block"]["function"] for b in blocks) == ["F1", "F5"]
     assert all(b["finished"] for b in blocks)
+    assert not any(check_message(b) for b in blocks)  # Foxglove reads them: no nulls
     meta = {m.name: m.metadata for m in reader.iter_metadata()}
     assert json.loads(meta["swarmpath.race"]["settings"])["min_runs"] == 8
     results = list(reader.iter_messages(topics=["/results"]))

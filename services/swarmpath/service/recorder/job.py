@@ -51,6 +51,15 @@ CHUNK_SIZE = 1024 * 1024
 _FLOAT64 = np.dtype(np.float64)
 
 
+def _without_nulls(value: Any) -> Any:
+    """``value`` with every null field left out (Foxglove's readers take no nulls)."""
+    if isinstance(value, dict):
+        return {k: _without_nulls(v) for k, v in value.items() if v is not None}
+    if isinstance(value, list):
+        return [_without_nulls(v) for v in value]
+    return value
+
+
 def _fast_json(message: dict[str, Any]) -> bytes:
     """``message`` as compact JSON, numpy arrays included (orjson; the general encoder for what
     orjson refuses, e.g. an integer beyond 64 bits)."""
@@ -402,7 +411,8 @@ class JobRecorder:
         if race:  # a raced job: its decisions, on /race (one message per block) and as metadata
             ns = _ns(time.time())
             for block in race["blocks"]:
-                self._put("/race", "swarmpath.RaceBlock", ns, {"job_id": self.job_id, **block})
+                self._put("/race", "swarmpath.RaceBlock", ns,
+                          _without_nulls({"job_id": self.job_id, **block}))
             self._writer.add_metadata("swarmpath.race", {
                 "settings": json.dumps(race["settings"], separators=(",", ":")),
                 "comparisons": str(race["comparisons"])})

@@ -82,7 +82,8 @@ RACE_SCHEMA: dict[str, Any] = {
     "title": "swarmpath.RaceBlock",
     "description": "A raced job's block (one function and dimension) as its race left it: each "
                    "cell's runs and why it stopped, each comparison's decision "
-                   "(docs/statistics.md, Racing)",
+                   "(docs/statistics.md, Racing); a field without a value (a cell still "
+                   "racing has no stopped_round) is left out",
     "type": "object",
     "properties": {
         "job_id": {"type": "string"},
@@ -92,15 +93,15 @@ RACE_SCHEMA: dict[str, Any] = {
         "cells": {"type": "array", "items": {"type": "object", "properties": {
             "cell": {"type": "integer"}, "key": {"type": "string"},
             "algorithm": {"type": "string"}, "runs": {"type": "integer"},
-            "racing": {"type": "boolean"}, "stopped_round": {"type": ["integer", "null"]},
-            "reason": {"type": ["string", "null"]}}}},
+            "racing": {"type": "boolean"}, "stopped_round": {"type": "integer"},
+            "reason": {"type": "string"}}}},
         "duels": {"type": "array", "items": {"type": "object", "properties": {
             "a": {"type": "string"}, "b": {"type": "string"},
             "decision": {"type": "string", "description": "different, equivalent or open"},
-            "better": {"type": ["string", "null"]}, "marker": {"type": "string"},
-            "round": {"type": ["integer", "null"]}, "pairs": {"type": "integer"},
-            "decided_after": {"type": "integer"}, "theta": {"type": ["number", "string"]},
-            "low": {"type": ["number", "string"]}, "high": {"type": ["number", "string"]}}}},
+            "better": {"type": "string"}, "marker": {"type": "string"},
+            "round": {"type": "integer"}, "pairs": {"type": "integer"},
+            "decided_after": {"type": "integer"}, "theta": {"type": "number"},
+            "low": {"type": "number"}, "high": {"type": "number"}}}},
     },
 }
 
