@@ -11,66 +11,151 @@ from __future__ import annotations
 
 import importlib
 from collections.abc import Callable, Mapping
-from typing import Any, Generic, TypeVar
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from swarmpath.plugins.origin import Origin
 
 ParamValue = float | int | bool | str
 T = TypeVar("T")
 
 
 class Registry(Generic[T]):
+    """Named entries of one kind (optimizer classes, planner classes, benchmark functions).
+
+    The built-in entries come from importing ``package.<module>`` for each of ``modules`` (they
+    register themselves); plugins then come from :func:`swarmpath.plugins.load_plugins` (entry
+    point ``group``, ``SWARMPATH_PLUGINS``), both on first use. Each name remembers its
+    :class:`~swarmpath.plugins.origin.Origin`; a name registered again by different code is
+    refused with both origins named (:class:`ExtensionClash`).
+    """
+
     def __init__(
         self,
         kind: str,
         package: str,
         modules: tuple[str, ...],
         error: Callable[[str], Exception],
+        group: str = "",
     ):
-        self.kind = kind  # "optimizer", "planner": used in messages
+        self.kind = kind  # "optimizer", "planner", "function": used in messages
         self.package = package
         self.modules = modules
         self.error = error
-        self._classes: dict[str, type[T]] = {}
-        self._sequence: dict[type[T], int] = {}
+        self.group = group  # entry-point group of its plugins
+        self._entries: dict[str, T] = {}
+        self._origins: dict[str, Origin] = {}
+        self._sequence: dict[int, int] = {}
         self._loaded = False
+        self._loading = False
 
-    def register(self, cls: type[T]) -> type[T]:
-        name: str = cls.name  # type: ignore[attr-defined]
-        if name in self._classes and self._classes[name] is not cls:
-            raise ValueError(f"{self.kind} {name!r} registered twice")
-        self._classes[name] = cls
-        self._sequence.setdefault(cls, len(self._sequence))
-        return cls
+    def register(self, entry: T, origin: Origin | None = None) -> T:
+        """Add ``entry`` under its ``name`` (usable as a class decorator); returns it."""
+        name = getattr(entry, "name", None)
+        if not isinstance(name, str) or not name.strip() or name != name.strip():
+            raise ValueError(f"a {self.kind} needs a non-empty name without surrounding spaces, "
+                             f"got {name!r}")
+        if "," in name:
+            raise ValueError(f"{self.kind} name {name!r} must not contain a comma")
+        found = origin or origin_for(_module_of(entry))
+        if not found.builtin:
+            self._load_builtins()  # a clash with a built-in is found now, whatever loads first
+        known = self._entries.get(name)
+        if known is not None and known is not entry:
+            before = self._origins[name]
+            if before != found:  # the same code registering again (a reload) replaces
+                raise ExtensionClash(
+                    f"{self.kind} {name!r} from {found.describe()} clashes with {self.kind} "
+                    f"{name!r} from {before.describe()}: rename one of them"
+                )
+        self._entries[name] = entry
+        self._origins[name] = found
+        self._sequence.setdefault(id(entry), len(self._sequence))
+        return entry
 
     def unregister(self, name: str) -> None:
-        self._sequence.pop(self._classes.pop(name), None)
+        entry = self._entries.pop(name)
+        self._origins.pop(name, None)
+        self._sequence.pop(id(entry), None)
+
+    def _load_builtins(self) -> None:
+        if not self._loaded and not self._loading:
+            self._loading = True
+            try:
+                for module in self.modules:
+                    importlib.import_module(f"{self.package}.{module}")
+            finally:
+                self._loading = False
+            self._loaded = True
 
     def _load(self) -> None:
         if not self._loaded:
-            for module in self.modules:
-                importlib.import_module(f"{self.package}.{module}")
-            self._loaded = True
+            self._load_builtins()
+        from swarmpath.plugins.loading import load_plugins
 
-    def _position(self, cls: type[T]) -> tuple[int, int]:
-        """Module order, then registration order (whatever was imported first)."""
-        module = cls.__module__.rsplit(".", 1)[-1]
-        rank = self.modules.index(module) if module in self.modules else len(self.modules)
-        return rank, self._sequence[cls]
+        load_plugins(self.group)
 
-    def names(self) -> list[str]:
+    def _position(self, name: str) -> tuple[int, int, int]:
+        """Built-ins first, in module order then registration order; plugins after them, in
+        registration order."""
+        entry = self._entries[name]
+        builtin = self._origins[name].builtin
+        module = _module_of(entry).rsplit(".", 1)[-1]
+        rank = self.modules.index(module) if builtin and module in self.modules else len(
+            self.modules)
+        return (0 if builtin else 1), rank, self._sequence[id(entry)]
+
+    def names(self, builtin: bool | None = None) -> list[str]:
+        """Registered names in catalogue order (``builtin``: only built-ins / only plugins)."""
         self._load()
-        ordered = sorted(self._classes.values(), key=self._position)
-        return [cls.name for cls in ordered]  # type: ignore[attr-defined]
+        ordered = sorted(self._entries, key=self._position)
+        if builtin is None:
+            return ordered
+        return [n for n in ordered if self._origins[n].builtin == builtin]
 
-    def get(self, name: str) -> type[T]:
+    def get(self, name: str) -> T:
         self._load()
         try:
-            return self._classes[name]
+            return self._entries[name]
         except KeyError:
             from swarmpath.names import unknown
 
             raise self.error(unknown(self.kind, name, self.names())) from None
+
+    def origin(self, name: str) -> Origin:
+        self.get(name)
+        return self._origins[name]
+
+    def __contains__(self, name: object) -> bool:
+        self._load()
+        return name in self._entries
+
+
+class ExtensionClash(ValueError):
+    """Two pieces of code registered the same name; the message names both origins."""
+
+
+def _module_of(entry: object) -> str:
+    """The module that defines an entry: a class's own; an instance's ``origin_module`` (a
+    function's kernel's)."""
+    if isinstance(entry, type):
+        return entry.__module__
+    return str(getattr(entry, "origin_module", None) or type(entry).__module__)
+
+
+def origin_for(module: str) -> Origin:
+    """The origin of an entry defined in ``module``: swarmpath's own modules are built-in; code
+    loaded by the plugin loader is the distribution or file it is loading; other code is found
+    from its module (:func:`swarmpath.plugins.origin.origin_of_module`)."""
+    from swarmpath.plugins.origin import builtin_origin, origin_of_module
+
+    if module == "swarmpath" or module.startswith("swarmpath."):
+        return builtin_origin(module)
+    from swarmpath.plugins.loading import loading_origin
+
+    return loading_origin(module) or origin_of_module(module)
 
 
 def resolve_params(

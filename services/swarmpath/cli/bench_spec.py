@@ -11,8 +11,6 @@ from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
-import numpy as np
-
 from swarmpath.cli.core import InputError, parse_params_option, resolve_names
 from swarmpath.functions import expand_function_names, get_function
 from swarmpath.optimizers import ParameterError, get_optimizer, list_optimizers
@@ -235,7 +233,6 @@ def make_spec(
         for d in ds:
             try:
                 get_function(f).check_study(d, kind)
-                get_function(f).evaluate(np.zeros((1, d)))
             except ValueError as exc:
                 option = "--transform" if "transform" in str(exc) else "--dims"
                 raise InputError(option, f"{d}: {exc}") from None

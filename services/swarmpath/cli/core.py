@@ -125,13 +125,77 @@ def error_line(path: str, message: str) -> str:
     return f"{path}: {typer.style('error', fg='red', bold=True)}: {one_line}"
 
 
+def load_plugins_option(specs: list[str] | None) -> None:
+    """``--plugin`` (every command): load each plugin, and the ``SWARMPATH_PLUGINS`` ones, before
+    the command reads any name; add them to this process's ``SWARMPATH_PLUGINS`` so that the
+    processes it starts (``-j`` children, ``up``'s workers and their slots) load them too."""
+    from swarmpath.plugins import (
+        ENV,
+        ExtensionClash,
+        PluginError,
+        export,
+        load_plugin,
+        load_plugins,
+    )
+
+    try:
+        load_plugins()
+    except (PluginError, ExtensionClash) as exc:
+        raise InputError(ENV, str(exc).removeprefix(f"{ENV}: ")) from None
+    for spec in specs or ():
+        try:
+            load_plugin(spec)
+        except (PluginError, ExtensionClash) as exc:
+            raise InputError("--plugin", str(exc).removeprefix("--plugin: ")) from None
+    export(specs or ())
+
+
+def _plugin_option() -> Any:
+    """The ``--plugin`` option as typer builds it (one parameter object, added to every command
+    by :class:`_Group`)."""
+    probe = typer.Typer()
+
+    @probe.command()
+    def _probe(
+        plugin: Annotated[
+            list[str] | None,
+            typer.Option(
+                "--plugin", metavar="MODULE_OR_FILE.py", is_eager=True, expose_value=False,
+                callback=load_plugins_option,
+                help="Load a plugin (a Python file or an importable module) first; repeatable. "
+                "Its optimizers, functions and planners are usable by name (docs/extending.md).",
+            ),
+        ] = None,
+    ) -> None:
+        return None
+
+    @probe.command()
+    def _other() -> None:  # two commands, so that typer builds a group
+        return None
+
+    group = typer.main.get_command(probe)
+    return next(iter(group.commands.values())).params[0]  # type: ignore[attr-defined]
+
+
 class _Group(TyperGroup):
     """Typer's group, except that errors in the user's input are one line on stderr (exit 2)
-    instead of a rich panel or a traceback."""
+    instead of a rich panel or a traceback, and every command takes ``--plugin``."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        option = _plugin_option()
+        for command in self.commands.values():
+            if not any(p.name == option.name for p in command.params):
+                command.params.append(option)
 
     def invoke(self, ctx: Any) -> Any:
+        from swarmpath.plugins import ExtensionClash, PluginError
+
         try:
-            return super().invoke(ctx)
+            try:
+                return super().invoke(ctx)
+            except (ExtensionClash, PluginError) as exc:  # an installed plugin's, on first use
+                raise InputError("plugins", str(exc)) from None
         except InputError as exc:
             path = " ".join(p for p in (ctx.command_path, ctx.invoked_subcommand) if p)
             for field, message in getattr(exc, "problems", [(exc.field, exc.detail)]):

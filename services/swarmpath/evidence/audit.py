@@ -35,7 +35,11 @@ ORIGIN_FOOTNOTE = (
 
 def optimum_at_origin(function: str) -> bool:
     """True for the registered functions whose minimiser is the origin."""
-    return get_function(function).optimum_coordinate == 0.0
+    f = get_function(function)
+    if not f.has_optimum:
+        return False
+    dim = f.dimensions[0] if f.dimensions else max(2, f.min_dim)
+    return bool(np.all(f.base_optimum(dim) == 0.0))
 
 
 def origin_suspect(function: str, values: Iterable[float]) -> bool:

@@ -1,110 +1,44 @@
-"""Registry of benchmark functions: the single source of their names, bounds and optima."""
+"""Registry of benchmark functions: the single source of their names, bounds and optima.
+
+Two kinds of names, in one space:
+
+* stand-alone functions: the built-in F1-F13 (and F6-floor), and plugins' functions
+  (:func:`register_function`), listed by :func:`list_functions`;
+* suites (:func:`register_suite`): a named family whose functions are named ``<suite>:<name>``
+  (``bbob:f3``, ``cec2017:F5``; instance k of a function with instances: ``bbob:f3@i7``). The
+  built-in suites (:mod:`swarmpath.functions.suites`) register themselves the way a plugin's do,
+  on the first lookup that needs them.
+
+Every name has an origin (built-in, distribution, file) with a digest of its code; a name taken
+by other code is refused naming both (:class:`~swarmpath.registry.ExtensionClash`). The names
+users type (ranges, suites) are read by :mod:`swarmpath.functions.expand`.
+"""
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
 from swarmpath.functions import definitions as d
+from swarmpath.functions.base import SHIFT_FRACTION, BenchmarkFunction
+from swarmpath.registry import ExtensionClash, Registry, origin_for
+
+if TYPE_CHECKING:
+    from swarmpath.plugins.origin import Origin
 
 Array = NDArray[np.float64]
 
 # Minimiser of F8 (Schwefel 2.26) per coordinate and its value per dimension.
 SCHWEFEL_ARGMIN = 420.968746
 SCHWEFEL_MIN_PER_DIM = -418.98288727243374
-# Fraction of the box (around its centre) inside which random shifts put the optimum.
-SHIFT_FRACTION = 0.8
 
-
-@dataclass(frozen=True)
-class BenchmarkFunction:
-    """A test function on a box, optionally shifted: value(x) = kernel(x - shift).
-
-    ``lower``/``upper`` are scalars applied to every coordinate (a shift does not move the box).
-    ``f_min`` is the known minimum inside the box for any dimension (F8's depends on it: see
-    :meth:`f_min_for`); ``optimum`` is the minimiser's coordinate value before shifting.
-    """
-
-    name: str
-    kernel: Callable[[Array], Array]
-    lower: float
-    upper: float
-    optimum_coordinate: float
-    f_min_per_dim: float = 0.0
-    f_min_constant: float = 0.0
-    noisy: bool = False
-    description: str = ""
-    shift: Array | None = field(default=None, compare=False)
-    # Wrap the shifted argument into the box: needed where the kernel is unbounded below outside it.
-    wrap_shifted: bool = False
-
-    @property
-    def f_min(self) -> float:
-        """Known minimum for dimension 1 per-dimension functions: use :meth:`f_min_for` for F8."""
-        return self.f_min_constant + self.f_min_per_dim
-
-    def f_min_for(self, dim: int) -> float:
-        return self.f_min_constant + self.f_min_per_dim * dim
-
-    def optimum(self, dim: int) -> Array:
-        """The minimiser in ``dim`` dimensions (moved by the shift, if any)."""
-        base = np.full(dim, self.optimum_coordinate)
-        if self.shift is None:
-            return base
-        return base + self._shift_for(dim)
-
-    def _shift_for(self, dim: int) -> Array:
-        assert self.shift is not None
-        if self.shift.shape[-1] != dim:
-            raise ValueError(f"shift has {self.shift.shape[-1]} coordinates, x has {dim}")
-        return self.shift
-
-    def evaluate(self, X: ArrayLike, rng: np.random.Generator | None = None) -> Array:
-        """Value at X of shape (..., d). F7's U[0,1) noise is drawn from ``rng``; without one the
-        noise term is left out (the deterministic part, whose minimum is ``f_min``)."""
-        x = np.asarray(X, dtype=float)
-        if x.ndim == 0 or x.shape[-1] < 1:
-            raise ValueError("X must have shape (..., d) with d >= 1")
-        if self.name.startswith("F5") or self.name.startswith("F12") or self.name.startswith("F13"):
-            if x.shape[-1] < 2:
-                raise ValueError(f"{self.name} needs at least 2 dimensions")
-        if self.shift is not None:
-            x = x - self._shift_for(x.shape[-1])
-            if self.wrap_shifted:
-                span = self.upper - self.lower
-                x = np.mod(x - self.lower, span) + self.lower
-        value = self.kernel(x)
-        if self.noisy and rng is not None:
-            value = value + rng.random(value.shape)
-        return np.asarray(value, dtype=float)
-
-    def check_study(self, dim: int, transform: str) -> None:
-        """ValueError naming what this function cannot run (a suite function: a dimension its
-        suite does not define, a transform on top of its instance)."""
-
-    def report(self, values: ArrayLike) -> Array:
-        """The values as reported in results (a CEC function floors errors below 1e-8 to 0)."""
-        return np.asarray(values, dtype=float)
-
-    def shifted(self, shift: ArrayLike) -> BenchmarkFunction:
-        """This function with its optimum moved by ``shift`` (bounds unchanged)."""
-        o = np.asarray(shift, dtype=float)
-        if o.ndim != 1:
-            raise ValueError("shift must be a 1-D vector")
-        moved = self.optimum_coordinate + o
-        if np.any(moved < self.lower) or np.any(moved > self.upper):
-            raise ValueError(f"shift moves the optimum of {self.name} outside its box")
-        return replace(self, shift=o)
-
-    def random_shift(self, dim: int, rng: np.random.Generator) -> Array:
-        """A shift putting the optimum uniformly inside the central 80% of the box."""
-        centre = 0.5 * (self.lower + self.upper)
-        half = 0.5 * SHIFT_FRACTION * (self.upper - self.lower)
-        target = rng.uniform(centre - half, centre + half, size=dim)
-        return np.asarray(target - self.optimum_coordinate, dtype=float)
+__all__ = ["BUILTIN", "SHIFT_FRACTION", "BenchmarkFunction", "Suite", "get_function",
+           "get_suite", "list_functions", "list_suites", "register_function", "register_suite"]
 
 
 def _fn(name: str, kernel: Callable[[Array], Array], bound: float, desc: str, **kw: object) -> (
@@ -114,29 +48,34 @@ def _fn(name: str, kernel: Callable[[Array], Array], bound: float, desc: str, **
                              **kw)  # type: ignore[arg-type]
 
 
-_FUNCTIONS: dict[str, BenchmarkFunction] = {
-    f.name: f
-    for f in [
-        _fn("F1", d.sphere, 100.0, "sphere", optimum_coordinate=0.0),
-        _fn("F2", d.schwefel_2_22, 10.0, "Schwefel 2.22", optimum_coordinate=0.0),
-        _fn("F3", d.schwefel_1_2, 100.0, "Schwefel 1.2", optimum_coordinate=0.0),
-        _fn("F4", d.schwefel_2_21, 100.0, "Schwefel 2.21", optimum_coordinate=0.0),
-        _fn("F5", d.rosenbrock, 30.0, "Rosenbrock", optimum_coordinate=1.0),
-        _fn("F6", d.step, 100.0, "step, sum((x+0.5)^2) as in the GWO code",
-            optimum_coordinate=-0.5),
-        _fn("F6-floor", d.step_floor, 100.0, "step, sum(floor(x+0.5)^2) as in Yao et al.",
-            optimum_coordinate=0.0),
-        _fn("F7", d.quartic, 1.28, "quartic with U[0,1) noise", optimum_coordinate=0.0,
-            noisy=True),
-        _fn("F8", d.schwefel_2_26, 500.0, "Schwefel 2.26", optimum_coordinate=SCHWEFEL_ARGMIN,
-            f_min_per_dim=SCHWEFEL_MIN_PER_DIM, wrap_shifted=True),
-        _fn("F9", d.rastrigin, 5.12, "Rastrigin", optimum_coordinate=0.0),
-        _fn("F10", d.ackley, 32.0, "Ackley", optimum_coordinate=0.0),
-        _fn("F11", d.griewank, 600.0, "Griewank", optimum_coordinate=0.0),
-        _fn("F12", d.penalized_1, 50.0, "generalized penalized 1", optimum_coordinate=-1.0),
-        _fn("F13", d.penalized_2, 50.0, "generalized penalized 2", optimum_coordinate=1.0),
-    ]
-}
+BUILTIN: tuple[BenchmarkFunction, ...] = (
+    _fn("F1", d.sphere, 100.0, "sphere", optimum_coordinate=0.0),
+    _fn("F2", d.schwefel_2_22, 10.0, "Schwefel 2.22", optimum_coordinate=0.0),
+    _fn("F3", d.schwefel_1_2, 100.0, "Schwefel 1.2", optimum_coordinate=0.0),
+    _fn("F4", d.schwefel_2_21, 100.0, "Schwefel 2.21", optimum_coordinate=0.0),
+    _fn("F5", d.rosenbrock, 30.0, "Rosenbrock", optimum_coordinate=1.0, min_dim=2),
+    _fn("F6", d.step, 100.0, "step, sum((x+0.5)^2) as in the GWO code",
+        optimum_coordinate=-0.5),
+    _fn("F6-floor", d.step_floor, 100.0, "step, sum(floor(x+0.5)^2) as in Yao et al.",
+        optimum_coordinate=0.0),
+    _fn("F7", d.quartic, 1.28, "quartic with U[0,1) noise", optimum_coordinate=0.0,
+        noisy=True),
+    _fn("F8", d.schwefel_2_26, 500.0, "Schwefel 2.26", optimum_coordinate=SCHWEFEL_ARGMIN,
+        f_min_per_dim=SCHWEFEL_MIN_PER_DIM, wrap_shifted=True),
+    _fn("F9", d.rastrigin, 5.12, "Rastrigin", optimum_coordinate=0.0),
+    _fn("F10", d.ackley, 32.0, "Ackley", optimum_coordinate=0.0),
+    _fn("F11", d.griewank, 600.0, "Griewank", optimum_coordinate=0.0),
+    _fn("F12", d.penalized_1, 50.0, "generalized penalized 1", optimum_coordinate=-1.0,
+        min_dim=2),
+    _fn("F13", d.penalized_2, 50.0, "generalized penalized 2", optimum_coordinate=1.0,
+        min_dim=2),
+)
+
+REGISTRY: Registry[BenchmarkFunction] = Registry(
+    "function", "swarmpath.functions", (), KeyError, group="swarmpath.functions"
+)
+for _f in BUILTIN:
+    REGISTRY.register(_f)
 
 
 @dataclass(frozen=True)
@@ -144,91 +83,123 @@ class Suite:
     """A named family of registered functions (``bbob``, ``cec2017``, a plugin's suite).
 
     ``functions``: its members in table order, named ``<suite>:<name>``. ``members``: the names
-    the suite's name and its ranges expand to (a member left out, such as CEC 2017's F2 that the
-    organisers excluded, is still registered and can be named on its own).
+    the suite's name and its ranges expand to (empty: all of ``functions``; a member left out,
+    such as CEC 2017's F2 that the organisers excluded, is still registered and can be named on
+    its own).
     """
 
     name: str
     functions: tuple[BenchmarkFunction, ...]
-    members: tuple[str, ...]
+    members: tuple[str, ...] = ()
     description: str = ""
+    reference: str = ""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "functions", tuple(self.functions))
+        if not self.functions:
+            raise ValueError(f"suite {self.name!r} has no function")
+        bad = [f for f in self.functions if not isinstance(f, BenchmarkFunction)]
+        if bad:
+            raise TypeError(f"suite {self.name!r}: {bad[0]!r} is not a BenchmarkFunction")
+        if not self.members:
+            object.__setattr__(self, "members", tuple(f.name for f in self.functions))
+        object.__setattr__(self, "members", tuple(self.members))
 
 
-_SUITES: dict[str, Suite] = {}
-_SUITE_FUNCTIONS: dict[str, BenchmarkFunction] = {}
-_suites_loaded = False
+#: Built-in suites load on first use (the ``suites`` package registers bbob, cec2017, cec2022).
+SUITES: Registry[Suite] = Registry("suite", "swarmpath.functions", ("suites",), KeyError,
+                                   group="swarmpath.functions")
+_SUITE_FUNCTIONS: dict[str, tuple[BenchmarkFunction, str]] = {}  # name -> (function, suite)
 
 
-def register_suite(suite: Suite) -> Suite:
-    """Register a suite and its functions (ValueError if a name is taken)."""
-    if suite.name in _SUITES or suite.name in _FUNCTIONS:
-        raise ValueError(f"suite {suite.name!r} is already registered")
+def _caller_module(depth: int = 2) -> str:
+    """The module of the code that called the registering function (the origin of what it
+    registers: a plugin that builds its function from swarmpath's pieces is still the plugin)."""
+    return str(sys._getframe(depth).f_globals.get("__name__", ""))
+
+
+def register_function(
+    function: BenchmarkFunction, origin: Origin | None = None
+) -> BenchmarkFunction:
+    """Add a stand-alone function under its name (a name already taken by other code is
+    refused, naming both origins); returns it. ``origin``: where it comes from (default: the
+    calling code's module)."""
+    if not isinstance(function, BenchmarkFunction):
+        raise TypeError(f"register_function takes a BenchmarkFunction, got {function!r}")
+    if ":" in function.name:
+        raise ValueError(f"{function.name!r}: names with ':' belong to suites (register_suite)")
+    return REGISTRY.register(function, origin or origin_for(_caller_module()))
+
+
+def register_suite(suite: Suite, origin: Origin | None = None) -> Suite:
+    """Register a suite and its functions; returns it. Its functions must be named
+    ``<suite>:<name>``; a name taken by other code is refused naming both origins.
+    ``origin``: as for :func:`register_function`."""
+    if not isinstance(suite, Suite):
+        raise TypeError(f"register_suite takes a Suite, got {suite!r}")
+    origin = origin or origin_for(_caller_module())
     names = [f.name for f in suite.functions]
     for name in names:
         if not name.startswith(f"{suite.name}:"):
             raise ValueError(f"{name!r}: a function of suite {suite.name!r} is named "
                              f"'{suite.name}:<name>'")
-        if name in _FUNCTIONS or name in _SUITE_FUNCTIONS:
-            raise ValueError(f"function {name!r} is already registered")
     unknown = set(suite.members) - set(names)
     if unknown:
         raise ValueError(f"suite {suite.name!r} lists members it does not have: {sorted(unknown)}")
-    _SUITES[suite.name] = suite
-    _SUITE_FUNCTIONS.update({f.name: f for f in suite.functions})
+    if suite.name in REGISTRY:
+        raise ExtensionClash(f"suite {suite.name!r} from {origin.describe()} has the name of "
+                             f"the function from {REGISTRY.origin(suite.name).describe()}")
+    SUITES.register(suite, origin)  # a suite of that name from other code: ExtensionClash
+    for fn in suite.functions:
+        _SUITE_FUNCTIONS[fn.name] = (fn, suite.name)
     return suite
 
 
-def _load_suites() -> None:
-    """Import the built-in suites (they register themselves) on first use."""
-    global _suites_loaded
-    if not _suites_loaded:
-        _suites_loaded = True
-        import swarmpath.functions.suites  # noqa: F401 - registers bbob, cec2017, cec2022
+def unregister_suite(name: str) -> None:
+    """Remove a suite and its functions (tests, notebooks re-running a cell)."""
+    suite = SUITES.get(name)
+    SUITES.unregister(name)
+    for fn in suite.functions:
+        _SUITE_FUNCTIONS.pop(fn.name, None)
 
 
-def list_suites() -> list[str]:
-    """Registered suite names."""
-    _load_suites()
-    return list(_SUITES)
+def list_suites(builtin: bool | None = None) -> list[str]:
+    """Registered suite names, built-ins first (``builtin``: only one of the two)."""
+    return SUITES.names(builtin)
 
 
 def get_suite(name: str) -> Suite:
-    _load_suites()
-    try:
-        return _SUITES[name]
-    except KeyError:
-        from swarmpath.names import unknown
-
-        raise KeyError(unknown("suite", name, _SUITES)) from None
+    return SUITES.get(name)
 
 
-def list_functions(suite: str | None = None) -> list[str]:
-    """Registered names in table order: without ``suite`` the stand-alone functions (F1..F13,
-    with F6-floor after F6), else that suite's functions (all of them, its excluded members
-    too)."""
+def list_functions(suite: str | None = None, builtin: bool | None = None) -> list[str]:
+    """Registered names in table order: without ``suite`` the stand-alone functions (the
+    built-ins F1..F13, with F6-floor after F6, then plugins' in registration order;
+    ``builtin``: only one of the two), else that suite's functions (all of them, its excluded
+    members too)."""
     if suite is None:
-        return list(_FUNCTIONS)
+        return REGISTRY.names(builtin)
     return [f.name for f in get_suite(suite).functions]
 
 
 def list_names() -> list[str]:
     """Every name a study may list without a range or an instance: the stand-alone functions,
     each suite's functions, then the suite names."""
-    _load_suites()
-    return [*_FUNCTIONS, *_SUITE_FUNCTIONS, *_SUITES]
+    suites = SUITES.names()
+    return [*REGISTRY.names(), *_SUITE_FUNCTIONS, *suites]
 
 
 def get_function(name: str) -> BenchmarkFunction:
     """The function registered as ``name``; a suite function's instance k is
     ``<suite>:<name>@i<k>`` (instance 1 without the suffix)."""
-    if name in _FUNCTIONS:
-        return _FUNCTIONS[name]
-    _load_suites()
+    if name in REGISTRY:
+        return REGISTRY.get(name)
+    SUITES.names()  # the suites (built-in and plugins') are loaded
     if name in _SUITE_FUNCTIONS:
-        return _SUITE_FUNCTIONS[name]
+        return _SUITE_FUNCTIONS[name][0]
     base, sep, instance = name.rpartition("@i")
     if sep and base in _SUITE_FUNCTIONS and instance.isdigit():
-        with_instance = getattr(_SUITE_FUNCTIONS[base], "with_instance", None)
+        with_instance = getattr(_SUITE_FUNCTIONS[base][0], "with_instance", None)
         if with_instance is not None:
             try:
                 return with_instance(int(instance))
@@ -236,57 +207,21 @@ def get_function(name: str) -> BenchmarkFunction:
                 raise KeyError(f"function {name!r}: {exc}") from None
     from swarmpath.names import unknown
 
-    raise KeyError(unknown("function", name, {**_FUNCTIONS, **_SUITE_FUNCTIONS, **_SUITES}))
+    raise KeyError(unknown("function", name, [*REGISTRY.names(), *_SUITE_FUNCTIONS,
+                                              *SUITES.names()]))
 
 
-def _suite_range(part: str) -> list[str] | None:
-    """'bbob:f1-f5', 'cec2017:F3-F10' -> the suite's members numbered in the range (inclusive);
-    None if ``part`` is not such a range."""
-    suite_name, colon, span = part.partition(":")
-    lo, dash, hi = span.partition("-")
-    if not (colon and dash) or suite_name not in _SUITES:
-        return None
-    suite = _SUITES[suite_name]
-    prefix = f"{suite_name}:"
-    first = get_function(prefix + lo) if prefix + lo in _SUITE_FUNCTIONS else None
-    last = get_function(prefix + hi) if prefix + hi in _SUITE_FUNCTIONS else None
-    if first is None or last is None:
-        return None
-    names = [f.name for f in suite.functions]
-    a, b = names.index(first.name), names.index(last.name)
-    if a > b:
-        raise KeyError(f"function range {part!r} runs backwards")
-    return [n for n in names[a:b + 1] if n in suite.members]
+def suite_of(name: str) -> str | None:
+    """The suite a function name belongs to (None for a stand-alone function)."""
+    base = name.rpartition("@i")[0] if "@i" in name else name
+    SUITES.names()
+    entry = _SUITE_FUNCTIONS.get(name) or _SUITE_FUNCTIONS.get(base)
+    return None if entry is None else entry[1]
 
 
-def expand_function_names(spec: str) -> list[str]:
-    """Parse 'F1-F13', 'F1,F5,F9', a suite name ('bbob': its members), a suite range
-    ('bbob:f1-f5', 'cec2017:F1-F10': the suite's members in it) or mixtures into registered
-    names."""
-    names: list[str] = []
-    for part in (p.strip() for p in spec.split(",")):
-        if not part:
-            continue
-        if part in _FUNCTIONS:
-            names.append(part)
-            continue
-        lo, sep, hi = part.partition("-")
-        if sep and lo.upper().startswith("F") and hi.upper().startswith("F"):
-            try:
-                a, b = int(lo[1:]), int(hi[1:])
-            except ValueError:
-                a, b = 0, -1
-            if 1 <= a <= b <= 13:
-                names.extend(f"F{i}" for i in range(a, b + 1))
-                continue
-        _load_suites()
-        if part in _SUITES:
-            names.extend(_SUITES[part].members)
-            continue
-        expanded = _suite_range(part)
-        if expanded is not None:
-            names.extend(expanded)
-            continue
-        get_function(part)  # raises with the list of valid names
-        names.append(part)
-    return names
+def function_origin(name: str) -> Origin:
+    """Where a function name comes from: its own origin, or its suite's."""
+    suite = suite_of(name)
+    if suite is not None:
+        return SUITES.origin(suite)
+    return REGISTRY.origin(name)

@@ -9,7 +9,7 @@
 from swarmpath.optimizers.api import Result, create, minimize, minimize_many
 from swarmpath.optimizers.base import Optimizer, ParameterError
 from swarmpath.optimizers.problem import BenchmarkProblem, Problem
-from swarmpath.optimizers.registry import get_optimizer, list_optimizers
+from swarmpath.optimizers.registry import get_optimizer, list_optimizers, register
 from swarmpath.optimizers.streams import RunStreams, run_generator
 
 __all__ = [
@@ -24,5 +24,6 @@ __all__ = [
     "list_optimizers",
     "minimize",
     "minimize_many",
+    "register",
     "run_generator",
 ]

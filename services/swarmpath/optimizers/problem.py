@@ -53,10 +53,10 @@ class Problem:
 
 @dataclass
 class BenchmarkProblem(Problem):
-    """F1-F13 on its box for each run, optionally transformed per run (``transform``: none,
-    shift, rotate, shift+rotate; see :mod:`swarmpath.functions.transforms`). The shift comes from
-    the run's ``SHIFT`` stream, the rotation from its ``ROTATE`` stream, so a run's function does
-    not depend on the batch, the algorithm or the other transform."""
+    """A registered function on its box for each run, optionally transformed per run
+    (``transform``: none, shift, rotate, shift+rotate; see :mod:`swarmpath.functions.transforms`).
+    The shift comes from the run's ``SHIFT`` stream, the rotation from its ``ROTATE`` stream, so
+    a run's function does not depend on the batch, the algorithm or the other transform."""
 
     function: BenchmarkFunction | None = None
     shifts: Array | None = None  # (runs, dim) or None
@@ -76,8 +76,9 @@ class BenchmarkProblem(Problem):
         if isinstance(transform, bool):
             transform = "shift" if transform else "none"
         runs = len(run_ids)
-        lower = np.full((runs, dim), function.lower)
-        upper = np.full((runs, dim), function.upper)
+        box = function.bounds(dim)  # ValueError naming the function if dim does not fit
+        lower = np.broadcast_to(box[0], (runs, dim)).copy()
+        upper = np.broadcast_to(box[1], (runs, dim)).copy()
         moved = None
         if function.shift is not None:  # a function shifted by its caller keeps its shift
             moved = np.broadcast_to(function._shift_for(dim), (runs, dim)).copy()
@@ -105,11 +106,12 @@ class BenchmarkProblem(Problem):
             # x* + Q (x - m), m = x* + shift the minimiser: rotation about the optimum
             m = self.optimum()
             x = np.matmul(X - m[:, None, :], self.rotations.transpose(0, 2, 1))
-            x += f.optimum_coordinate
+            x += f.base_optimum(self.dim)
         elif self.shifts is not None:
             x = X - self.shifts[:, None, :]
         if f.wrap_shifted and (self.shifts is not None or self.rotations is not None):
-            x = np.mod(x - f.lower, f.upper - f.lower) + f.lower
+            lower, upper = self.lower[:, None, :], self.upper[:, None, :]
+            x = np.mod(x - lower, upper - lower) + lower
         value = f.kernel(x)
         if f.noisy:
             value = value + streams.random(*value.shape[1:])
@@ -119,7 +121,7 @@ class BenchmarkProblem(Problem):
         """(runs, dim) minimisers."""
         f = self.function
         assert f is not None
-        base = np.full((self.runs, self.dim), f.optimum_coordinate)
+        base = np.broadcast_to(f.base_optimum(self.dim), (self.runs, self.dim)).copy()
         return base if self.shifts is None else base + self.shifts
 
 

@@ -11,6 +11,7 @@ from swarmpath.planners.base import (
     PlannerError,
     get_planner,
     list_planners,
+    register_planner,
 )
 from swarmpath.planners.episode import Episode, RunOutcome, scenario_optimum
 
@@ -23,5 +24,6 @@ __all__ = [
     "RunOutcome",
     "get_planner",
     "list_planners",
+    "register_planner",
     "scenario_optimum",
 ]

@@ -107,12 +107,25 @@ class Planner(ABC):
 
 # ----------------------------------------------------------------------------------- registry
 _MODULES = ("swarm_local", "rfo_gwo", "ompl_baselines")
-REGISTRY: Registry[Planner] = Registry("planner", "swarmpath.planners", _MODULES, PlannerError)
-register = REGISTRY.register
+REGISTRY: Registry[type[Planner]] = Registry(
+    "planner", "swarmpath.planners", _MODULES, PlannerError, group="swarmpath.planners"
+)
 
 
-def list_planners() -> list[str]:
-    return REGISTRY.names()
+def register_planner(cls: type[Planner]) -> type[Planner]:
+    """Class decorator: add a :class:`Planner` subclass under its ``name`` (a name taken by
+    other code is refused, naming both origins)."""
+    if not (isinstance(cls, type) and issubclass(cls, Planner)):
+        raise TypeError(f"register_planner takes a Planner subclass, got {cls!r}")
+    return REGISTRY.register(cls)
+
+
+register = register_planner  # the name the built-in modules use
+
+
+def list_planners(builtin: bool | None = None) -> list[str]:
+    """Registered names, built-ins first (``builtin``: only built-ins, or only plugins)."""
+    return REGISTRY.names(builtin)
 
 
 def get_planner(name: str) -> type[Planner]:
