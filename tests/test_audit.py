@@ -95,17 +95,34 @@ def test_bench_flags_origin_suspect_cells_of_untransformed_studies_only():
     assert all("origin_suspect" not in c for c in doc["cells"])
 
 
-@pytest.mark.parametrize(("where", "dim", "runs", "flagged"), [
-    ("F11", 30, [0.0, 1e-3], True), ("F12", 30, [0.0, 1e-3], False),
-    ("F1", 30, [1e-30, 1e-20], False), ("icoot-map1", None, [0.0], False),
-])
-def test_reproduce_tables_flag_origin_suspect_cells(where, dim, runs, flagged):
+@pytest.mark.parametrize(("lost", "flagged"), [(30.0, True), (3.2, True), (2.9, False),
+                                               (-5.0, False), (None, False)])
+def test_reproduce_marks_origin_suspect_cells_by_the_decades_they_lose_shifted(lost, flagged):
+    """Not exact zeros: GWO-like cells at 1e-30 that lose 30 decades shifted are marked, an
+    exact 0 that survives the shift is not."""
     from swarmpath.cli import reproduce_output as ro
     from swarmpath.evidence.reproduction import Row
 
+    runs = [0.0, 1e-3] if lost is not None and lost < 3 else [1e-30, 1e-20]
     stats = {"avg": float(np.mean(runs)), "median": 0.0, "min": 0.0, "max": 1.0, "std": 0.0}
-    row = Row(key=f"t/A/{where}", who="A", where=where, dim=dim, published={}, measured=stats,
+    extra = {} if lost is None else {"decades_lost_shift": lost}
+    row = Row(key="t/A/F1/30", who="A", where="F1", dim=30, published={}, measured=stats,
               runs=runs, log10_ratio=None, verdict="matches", reason=None, evidence=None,
-              extra={})
+              extra=extra)
     assert (au.ORIGIN_MARK in ro._measured(row, {})[0]) == flagged
-    assert ro._origin_note([row]) == ([au.ORIGIN_FOOTNOTE] if flagged else [])
+    assert ro._origin_note([row]) == ([au.SHIFT_FOOTNOTE] if flagged else [])
+
+
+def test_benchmark_rows_carry_the_decades_lost_under_shift():
+    """The same cell measured shifted: decades lost = log10(mean gap shifted / plain), the
+    audit's number."""
+    from swarmpath.evidence import reference, reproduction
+
+    table = reference.load("icoot-table2")
+    plain, moved = [1e-30, 3e-30], [1e-3, 3e-3]
+    (row,) = reproduction.benchmark_rows(table, {("F1", "COOT"): plain}, {},
+                                         {("F1", "COOT"): moved})
+    assert row.extra["decades_lost_shift"] == pytest.approx(27.0, abs=1e-3)
+    assert row.extra["shifted_runs"] == moved
+    assert au.shift_suspect(row.extra["decades_lost_shift"])
+    assert au.decades_lost("F1", 30, plain, moved) == pytest.approx(27.0)

@@ -2,55 +2,78 @@
 
 Pure functions over :mod:`swarmpath.evidence.reference` (the published tables and the reviewed
 reasons) and measured runs (per-run best values of a benchmark cell; per-run outcomes of a map
-cell). ``swarmpath reproduce`` runs the study and calls these.
+cell). ``swarmpath reproduce`` runs the study and calls these; the statistics of a verdict are
+:mod:`swarmpath.evidence.verdicts` (table-agnostic).
 
-Benchmark cells compare the measured mean with the published avg on a log scale:
-``log10(measured / published)``, computed on ``f - f_min`` (so F8, whose minimum is
--418.98 x dim, compares gaps to the optimum; for every other function f_min = 0) with both
-values raised to the function's floating-point floor (the value its kernel returns at the
-optimum, times 4; the smallest normal float where that is 0), so that two values at the floor
-give 0. Verdict: ``matches`` within one decade, ``better`` / ``worse`` beyond it, and
-``not comparable`` when the published avg is illegible or contradicts its own min/max.
+Benchmark cells are compared on ``f - f_min`` (so F8, whose minimum is -418.98 x dim, compares
+gaps to the optimum; for every other function f_min = 0), every value raised to the function's
+floating-point floor (the value its kernel returns at the optimum, times 4; the smallest normal
+float where that is 0), so that two values at the floor are equal. The log ratio is
+``log10(measured mean / published mean)``; the tolerance is one decade, except for F8 (a factor
+1.1, :data:`TOLERANCE`): F8's gap of a random point is only about twice a typical published
+gap, so a decade around it (0 to -11,900 at 30 dims) accepts every run an optimizer can end
+with, while its runs spread by about 10 % of the gap (published std / gap: 7-15 %).
 
-Map cells compare the mean executed length of the successful runs with the published mean
-distance: ``matches`` within 10 %, else ``better`` (shorter) or ``worse``. ``not comparable``:
-lengths in other units (RFO-GWO's), a published static-goal distance shorter than the straight
-line from start to goal, or no successful run.
+Map cells: :mod:`swarmpath.evidence.reproduction_maps`.
 
-A cell off by more than the tolerance is explained when ``reasons.yaml`` has its key, or --
-benchmark cells only -- when every measured run lies inside the published [min, max] (the
-averages then differ only by the weight of a few bad runs in a mean over many, see
-:func:`inside_published_range`); otherwise it is counted as unexplained.
+Verdicts (:mod:`~swarmpath.evidence.verdicts`): ``consistent``, ``matches``, ``better``,
+``worse``, ``not comparable``. A ``better`` or ``worse`` cell is explained only by a reviewed
+reason (``reasons.yaml``) that holds for it (:func:`reason_holds`): the reason states the
+direction it explains and, where it explains a tail, the exceedance; otherwise the cell is
+counted as unexplained.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from swarmpath.evidence.audit import decades_lost
+from swarmpath.evidence.prints import contradiction
 from swarmpath.evidence.reference import BenchmarkTable, MapTable, Reason, cell_key
 from swarmpath.evidence.stats import describe
+from swarmpath.evidence.verdicts import (
+    BETTER,
+    CONSISTENT,
+    DIFFERENT,
+    MATCHES,
+    NOT_COMPARABLE,
+    VERDICTS,
+    WORSE,
+    Exceedance,
+    judge,
+)
 from swarmpath.functions import get_function
 
+__all__ = [
+    "BETTER",
+    "CONSISTENT",
+    "MATCHES",
+    "NOT_COMPARABLE",
+    "VERDICTS",
+    "WORSE",
+    "Row",
+    "benchmark_rows",
+    "document",
+    "reason_holds",
+    "summary_line",
+]
+
 DECADE = 1.0
-MAP_TOLERANCE = 0.10
-MATCHES, BETTER, WORSE, NOT_COMPARABLE = "matches", "better", "worse", "not comparable"
-VERDICTS = (MATCHES, BETTER, WORSE, NOT_COMPARABLE)
-#: map-table column -> the run-outcome field measuring it (absent: no measured counterpart)
-MEASURED_FIELD = {"distance_m": "length", "error_m": "error"}
-#: what a map row keeps of each run outcome (enough to judge the cell again: ``--from``)
-OUTCOME_FIELDS = ("run", "success", "length", "error", "seconds", "collisions", "optimum",
-                  "reason")
+#: Tolerance in decades of the functions not compared within a decade (see the module doc).
+TOLERANCE: dict[str, float] = {"F8": math.log10(1.1)}
 
 
 @dataclass(frozen=True)
 class Row:
     """One cell of a reproduction (benchmark: who = algorithm, where = function; map: who =
-    planner, where = map)."""
+    planner, where = map). ``reason``: the reviewed reason's text, or the note why the cell is
+    not comparable; ``claim``: the reviewed reason (None without one); ``holds``: it holds for
+    this cell's verdict and exceedance."""
 
     key: str
     who: str
@@ -64,20 +87,58 @@ class Row:
     reason: str | None
     evidence: str | None
     extra: dict[str, Any]
+    #: the 95 % bootstrap interval of the measured mean (the table's units)
+    interval: tuple[float, float] | None = None
+    exceedance: Exceedance | None = None
+    claim: Reason | None = None
+    holds: bool = False
+    tolerance: tuple[float, float] | None = field(default=None, compare=False)
 
     @property
     def unexplained(self) -> bool:
-        return self.verdict in (BETTER, WORSE) and self.reason is None
+        return self.verdict in DIFFERENT and not self.holds
 
     def to_json(self, kind: str) -> dict[str, Any]:
         ident = ({"function": self.where, "dim": self.dim, "algorithm": self.who}
                  if kind == "benchmark" else {"planner": self.who, "map": self.where})
         return {
             **ident, "published": self.published, "measured": self.measured,
-            "runs": self.runs, "log10_ratio": self.log10_ratio, "verdict": self.verdict,
-            "reason": self.reason, "evidence": self.evidence, "unexplained": self.unexplained,
-            **self.extra,
+            "runs": self.runs, "log10_ratio": self.log10_ratio,
+            "tolerance_log10": None if self.tolerance is None else list(self.tolerance),
+            "interval95": None if self.interval is None else list(self.interval),
+            "exceedance": None if self.exceedance is None else self.exceedance.to_json(),
+            "verdict": self.verdict, "reason": self.reason, "evidence": self.evidence,
+            "reason_explains": None if self.claim is None else self.claim.direction,
+            "reason_exceedance": None if self.claim is None else self.claim.exceedance,
+            "reason_holds": self.holds,
+            "unexplained": self.unexplained, **self.extra,
         }
+
+
+def reason_holds(reason: Reason, verdict: str, exceedance: Exceedance | None) -> bool:
+    """A reviewed reason explains a cell only in the direction it states (``better``,
+    ``worse`` or ``not comparable``) and, when it states an exceedance, only when the runs
+    show it: ``none`` -- no departure from the published range on either side; ``above`` /
+    ``below`` -- the runs depart beyond the published max / min (and not on the other side)."""
+    if reason.direction != verdict:
+        return False
+    if reason.exceedance is None:
+        return True
+    if exceedance is None:
+        return False
+    if reason.exceedance == "none":
+        return not exceedance.departs()
+    other = "below" if reason.exceedance == "above" else "above"
+    return exceedance.side_departs(reason.exceedance) and not exceedance.side_departs(other)
+
+
+def explained(reason: Reason | None, verdict: str, exceedance: Exceedance | None,
+               auto: str | None) -> dict[str, Any]:
+    """The Row fields reason, evidence, claim, holds."""
+    if reason is None:
+        return {"reason": auto, "evidence": None, "claim": None, "holds": False}
+    return {"reason": reason.reason, "evidence": reason.evidence, "claim": reason,
+            "holds": reason_holds(reason, verdict, exceedance)}
 
 
 def function_floor(function: str, dim: int) -> float:
@@ -99,33 +160,45 @@ def log10_ratio(measured: float, published: float, floor: float) -> float:
     return math.log10(max(measured, floor)) - math.log10(max(published, floor))
 
 
-def verdict_of(ratio: float | None, tolerance: float) -> str:
-    if ratio is None or math.isnan(ratio):
-        return NOT_COMPARABLE
-    if abs(ratio) <= tolerance:
-        return MATCHES
-    return BETTER if ratio < 0 else WORSE
+def tolerance_for(function: str) -> float:
+    """How many decades a benchmark cell's mean may differ and still match."""
+    return TOLERANCE.get(function, DECADE)
 
 
-def inconsistent(cell: Mapping[str, float | None]) -> bool:
-    """The printed avg contradicts the printed min/max of the same cell."""
-    lo, hi, avg = cell.get("min"), cell.get("max"), cell.get("avg")
-    if avg is None:
-        return False
-    return (lo is not None and avg < lo) or (hi is not None and avg > hi)
+def not_comparable(table: BenchmarkTable, function: str, algorithm: str) -> str | None:
+    """Why the published cell cannot be compared (None: it can)."""
+    published = table.cells[(function, algorithm)]
+    if algorithm in table.derived:
+        return f"the published {algorithm} column is not a measurement: {table.derived[algorithm]}"
+    if published["avg"] is None:
+        return "the published avg is illegible in the seed text"
+    why = table.contradicts.get(f"{function}/{algorithm}") or contradiction(
+        published, int(table.setting["runs"]), get_function(function).f_min_for(table.dim))
+    if why is not None:
+        note = table.note_for(function, algorithm)
+        return f"the published cell contradicts itself: {why}" + (f" ({note})" if note else "")
+    return None
+
+
+def _gap(value: float | None, fmin: float) -> float | None:
+    return None if value is None else value - fmin
 
 
 def benchmark_rows(
     table: BenchmarkTable,
     runs: Mapping[tuple[str, str], Sequence[float]],
     reasons: Mapping[str, Reason],
+    shifted: Mapping[tuple[str, str], Sequence[float]] | None = None,
 ) -> list[Row]:
-    """One row per (function, algorithm) of ``table`` that has measured ``runs``, table order."""
+    """One row per (function, algorithm) of ``table`` that has measured ``runs``, table order.
+    ``shifted``: the same runs with the function shifted (``--transform shift``); each row
+    then carries them and its decades lost (``extra``; :func:`audit.shift_suspect`)."""
     dim = table.dim
     rows = []
     for function in table.functions:
         fmin = get_function(function).f_min_for(dim)
         floor = function_floor(function, dim)
+        tol = tolerance_for(function)
         for algorithm in table.algorithms:
             values = runs.get((function, algorithm))
             if values is None:
@@ -133,119 +206,31 @@ def benchmark_rows(
             published = dict(table.cells[(function, algorithm)])
             measured = describe(values)
             key = cell_key(table.name, algorithm, function, dim)
-            auto: str | None = None
+            auto = not_comparable(table, function, algorithm)
             ratio: float | None = None
-            if published["avg"] is None:
-                auto = "the published avg is illegible in the seed text"
-            elif inconsistent(published):
-                note = table.note_for(function, algorithm) or ""
-                auto = f"the published cell contradicts itself: {note}".rstrip(": ")
-            else:
+            verdict, interval, exc = NOT_COMPARABLE, None, None
+            if auto is None and published["avg"] is not None:
                 ratio = log10_ratio(measured["avg"] - fmin, published["avg"] - fmin, floor)
-            verdict = verdict_of(ratio, DECADE)
-            if verdict in (BETTER, WORSE):
-                auto = inside_published_range(published, values, fmin, floor)
-            reason = reasons.get(key)
-            text = reason.reason if reason is not None else auto
-            evidence = reason.evidence if reason is not None else (
-                "the measured runs of this cell (--json: runs)" if auto and ratio is not None
-                else None)
+                j = judge([v - fmin for v in values], published["avg"] - fmin, key, ratio,
+                          (-tol, tol), low=_gap(published["min"], fmin),
+                          high=_gap(published["max"], fmin),
+                          n_paper=int(table.setting["runs"]), floor=floor)
+                verdict, exc = j.verdict, j.exceedance
+                if j.interval is not None:  # in the table's units (F8: f, not the gap)
+                    interval = (j.interval[0] + fmin, j.interval[1] + fmin)
+            extra: dict[str, Any] = {}
+            moved = (shifted or {}).get((function, algorithm))
+            if moved is not None:
+                extra = {"shifted_runs": [float(v) for v in moved],
+                         "decades_lost_shift": round(decades_lost(function, dim, values,
+                                                                  moved), 3)}
             rows.append(Row(
                 key, algorithm, function, dim, published, measured,
                 [float(v) for v in values],
                 None if ratio is None else round(ratio, 3), verdict,
-                text if verdict != MATCHES or reason is not None else None,
-                evidence if verdict != MATCHES or reason is not None else None, {},
+                extra=extra, interval=interval, exceedance=exc, tolerance=(-tol, tol),
+                **explained(reasons.get(key), verdict, exc, auto),
             ))
-    return rows
-
-
-def inside_published_range(
-    published: Mapping[str, float | None], values: Sequence[float], fmin: float, floor: float
-) -> str | None:
-    """The automatic explanation of an average more than a decade off: every measured run lies
-    inside the published [min, max] (a published min at the floor admits any run down to it).
-    Then the averages differ only by how the few worst of the published runs weigh in a mean
-    of many runs (COOT-family averages over 1000 runs sit near max / 1000)."""
-    lo, hi = published.get("min"), published.get("max")
-    if lo is None or hi is None or not values:
-        return None
-    lo_gap, hi_gap = lo - fmin, max(hi - fmin, floor)
-    gaps = [v - fmin for v in values]
-    if all((lo_gap <= floor or g >= lo_gap) and g <= hi_gap for g in gaps):
-        avg = published["avg"]
-        weight = ""
-        if avg is not None and avg - fmin > 0 and hi_gap / (avg - fmin) >= 10:
-            weight = f"; the published avg is max / {hi_gap / (avg - fmin):.0f}"
-        return (f"all {len(values)} measured runs lie inside the published [min, max]{weight}: "
-                "the averages differ by the weight of rare bad runs, not by the runs' range")
-    return None
-
-
-def straight_line(scenario: Any) -> float:
-    return math.dist(scenario.start, scenario.goal)
-
-
-def map_rows(
-    table: MapTable,
-    outcomes: Mapping[tuple[str, str], Sequence[Mapping[str, Any]]],
-    reasons: Mapping[str, Reason],
-    scenarios: Mapping[str, Any],
-) -> list[Row]:
-    """One row per (planner, map) of ``table`` that has measured ``outcomes``, table order."""
-    rows = []
-    column = table.compare
-    for (planner, map_name), cell in table.cells.items():
-        runs = outcomes.get((planner, map_name))
-        if runs is None:
-            continue
-        published: dict[str, float | None] = {"avg": cell.mean[column]}
-        printed = cell.runs.get(column)
-        if printed:
-            p = describe(printed)
-            published.update(min=p["min"], max=p["max"], std=p["std"])
-        for other, value in cell.mean.items():
-            if other != column:
-                published[other] = value
-        ok = [r for r in runs if r.get("success")]
-        field_ = MEASURED_FIELD.get(column)
-        # the executed lengths are shown even when the published column has no counterpart
-        values = [float(r[field_ or "length"]) for r in ok]
-        measured = describe(values) if values else None
-        optima = [float(r["optimum"]) for r in runs if r.get("optimum") is not None]
-        extra = {
-            "success": f"{len(ok)}/{len(runs)}",
-            "seconds_median": float(np.median([float(r.get("seconds") or 0.0) for r in runs])),
-            "collisions": int(sum(int(r.get("collisions") or 0) for r in runs)),
-            "optimum": float(np.mean(optima)) if optima else None,
-            "outcomes": [{k: r.get(k) for k in OUTCOME_FIELDS} for r in runs],
-        }
-        scenario = scenarios[map_name]
-        line = straight_line(scenario)
-        auto: str | None = None
-        ratio: float | None = None
-        if field_ is None:
-            auto = f"published in {table.columns[column]!r}, which has no measured counterpart"
-        elif measured is None:
-            auto = "no successful run"
-        elif scenario.goal_motion is None and cell.mean[column] < line:
-            auto = (f"the published mean {cell.mean[column]:.4f} m is shorter than the "
-                    f"{line:.4f} m straight line from start to goal")
-        else:
-            ratio = math.log10(measured["avg"] / cell.mean[column])
-        if ratio is not None and abs(10**ratio - 1.0) <= MAP_TOLERANCE:
-            verdict = MATCHES  # within 10 % either way
-        else:
-            verdict = verdict_of(ratio, 0.0)
-        key = cell_key(table.name, planner, map_name)
-        reason = reasons.get(key)
-        text = reason.reason if reason is not None else auto
-        rows.append(Row(
-            key, planner, map_name, None, published, measured, values,
-            None if ratio is None else round(ratio, 4), verdict,
-            text if verdict != MATCHES or reason is not None else None,
-            reason.evidence if reason is not None else None, extra,
-        ))
     return rows
 
 
@@ -258,7 +243,9 @@ def counts(rows: Sequence[Row], order: Sequence[str]) -> dict[str, dict[str, int
 
 
 def summary_line(rows: Sequence[Row]) -> str:
-    return f"{len(rows)} cells, {sum(r.unexplained for r in rows)} unexplained"
+    """``N cells, M unexplained, K consistent``."""
+    return (f"{len(rows)} cells, {sum(r.unexplained for r in rows)} unexplained, "
+            f"{sum(r.verdict == CONSISTENT for r in rows)} consistent")
 
 
 def document(
@@ -277,6 +264,7 @@ def document(
         "cells": [r.to_json(table.kind) for r in rows],
         "counts": counts(rows, order),
         "unexplained": sum(r.unexplained for r in rows),
+        "consistent": sum(r.verdict == CONSISTENT for r in rows),
         "notes": list(table.notes),
     }
     if statistics is not None:
@@ -293,3 +281,4 @@ def _json_safe(v: Any) -> Any:
     if isinstance(v, list | tuple):
         return [_json_safe(x) for x in v]
     return v
+

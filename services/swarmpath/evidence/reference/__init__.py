@@ -7,8 +7,13 @@ printed runs and mean row. A value the seed text does not let us read is ``illeg
 as ``None``.
 
 ``reasons.yaml`` maps a cell key -- ``<table>/<algorithm>/<function>/<dim>`` for benchmark
-tables, ``<table>/<planner>/<map>`` for map tables -- to ``{reason, evidence}``: why the measured
-value differs from the published one by more than the tolerance, and the command that shows it.
+tables, ``<table>/<planner>/<map>`` for map tables -- to ``{direction, reason, evidence}`` and
+optionally ``exceedance``: the verdict the reason explains (``better``, ``worse`` or ``not
+comparable``), why the measured value differs from the published one in that direction, the
+command that shows the cause, and for a tail the runs beyond the published range it explains
+(``none``, ``above``, ``below``). ``same_as: <key>`` takes another cell's reason (a column a
+paper copied from another). A benchmark table's ``derived`` names columns that are not
+measurements (e.g. a scaled copy of another column), with the evidence.
 
 Pure: reads package data only (no network, no global state besides the read-only files).
 """
@@ -54,6 +59,11 @@ class BenchmarkTable:
     #: (function, algorithm) -> {stat: value or None when illegible}
     cells: dict[tuple[str, str], dict[str, float | None]]
     kind: str = "benchmark"
+    #: algorithm -> why its published column is not a measurement (its cells: not comparable)
+    derived: dict[str, str] = field(default_factory=dict)
+    #: "function/algorithm" -> how the print contradicts itself where the legible values alone
+    #: do not show it (e.g. both readings of an illegible min exceed the avg)
+    contradicts: dict[str, str] = field(default_factory=dict)
 
     @property
     def dim(self) -> int:
@@ -107,10 +117,20 @@ class MapTable:
 Table = BenchmarkTable | MapTable
 
 
+DIRECTIONS = ("better", "worse", "not comparable")
+EXCEEDANCES = ("none", "above", "below")
+
+
 @dataclass(frozen=True)
 class Reason:
+    """A reviewed reason: the verdict it explains (``direction``), the text, the command that
+    shows the cause, and optionally the exceedance it explains (``none``: no departure from the
+    published range; ``above``/``below``: runs beyond the published max/min)."""
+
     reason: str
     evidence: str
+    direction: str
+    exceedance: str | None = None
 
 
 def cell_key(table: str, who: str, where: str, dim: int | None = None) -> str:
@@ -148,10 +168,20 @@ def _benchmark(name: str, doc: dict[str, Any]) -> BenchmarkTable:
             cells[(function, algorithm)] = {
                 s: _value(v, f"{where}/{s}") for s, v in zip(stats, values, strict=True)
             }
+    derived = {str(k): " ".join(str(v).split()) for k, v in (doc.get("derived") or {}).items()}
+    for algorithm in derived:
+        if algorithm not in algorithms:
+            raise ReferenceError(f"{name}.yaml: derived: {algorithm!r} is not a column")
+    contradicts = {str(k): " ".join(str(v).split())
+                   for k, v in (doc.get("contradicts") or {}).items()}
+    for key in contradicts:
+        if tuple(key.split("/")) not in cells:
+            raise ReferenceError(f"{name}.yaml: contradicts: {key!r} is not a cell")
     return BenchmarkTable(
         name=name, source=doc["source"], setting=doc["setting"], algorithms=algorithms,
         functions=tuple(doc["cells"]), stats=stats, notes=_notes(name, doc),
-        cell_notes=dict(doc.get("cell_notes") or {}), cells=cells,
+        cell_notes=dict(doc.get("cell_notes") or {}), cells=cells, derived=derived,
+        contradicts=contradicts,
     )
 
 
@@ -211,21 +241,41 @@ def list_tables() -> list[str]:
 
 
 def load_reasons() -> dict[str, Reason]:
-    """Every entry of ``reasons.yaml`` (ReferenceError on a malformed entry)."""
+    """Every entry of ``reasons.yaml``, ``same_as`` resolved (ReferenceError on a malformed
+    entry)."""
     doc = _read(REASONS_FILE) or {}
     if not isinstance(doc, dict):
         raise ReferenceError(f"{REASONS_FILE}: expected a mapping of cell keys")
     out: dict[str, Reason] = {}
     for key, entry in doc.items():
-        if not isinstance(entry, dict) or set(entry) != {"reason", "evidence"}:
-            raise ReferenceError(f"{REASONS_FILE}: {key}: expected exactly reason and evidence")
-        reason, evidence = entry["reason"], entry["evidence"]
-        if not (isinstance(reason, str) and reason.strip()):
-            raise ReferenceError(f"{REASONS_FILE}: {key}: empty reason")
-        if not (isinstance(evidence, str) and evidence.strip()):
-            raise ReferenceError(f"{REASONS_FILE}: {key}: empty evidence")
-        out[str(key)] = Reason(" ".join(reason.split()), " ".join(evidence.split()))
+        out[str(key)] = _reason(str(key), entry, doc)
     return out
+
+
+def _reason(key: str, entry: Any, doc: dict[str, Any]) -> Reason:
+    where = f"{REASONS_FILE}: {key}"
+    if isinstance(entry, dict) and set(entry) == {"same_as"}:
+        target = entry["same_as"]
+        other = doc.get(target)
+        if not isinstance(other, dict) or "same_as" in other:
+            raise ReferenceError(f"{where}: same_as {target!r} is not a reason of its own")
+        return _reason(str(target), other, doc)
+    fields = {"direction", "reason", "evidence"}
+    if not isinstance(entry, dict) or not fields <= set(entry) <= fields | {"exceedance"}:
+        raise ReferenceError(f"{where}: expected direction, reason, evidence (and optionally "
+                             "exceedance), or same_as")
+    for name in ("reason", "evidence"):
+        if not (isinstance(entry[name], str) and entry[name].strip()):
+            raise ReferenceError(f"{where}: empty {name}")
+    if entry["direction"] not in DIRECTIONS:
+        raise ReferenceError(f"{where}: direction {entry['direction']!r} is not one of "
+                             f"{', '.join(DIRECTIONS)}")
+    exceedance = entry.get("exceedance")
+    if exceedance is not None and exceedance not in EXCEEDANCES:
+        raise ReferenceError(f"{where}: exceedance {exceedance!r} is not one of "
+                             f"{', '.join(EXCEEDANCES)}")
+    return Reason(" ".join(entry["reason"].split()), " ".join(entry["evidence"].split()),
+                  entry["direction"], exceedance)
 
 
 def all_cell_keys() -> set[str]:
