@@ -1,11 +1,12 @@
 """``swarmpath reproduce``: run a seed paper's table at the paper's setting and set it beside
 the published one (:mod:`swarmpath.evidence.reference` holds the tables,
-:mod:`swarmpath.evidence.reproduction`
-the verdicts).
+:mod:`swarmpath.evidence.reproduction` and :mod:`swarmpath.evidence.verdicts` the verdicts).
 
 Benchmark tables run through ``swarmpath bench``'s own functions (same spec, same seed, same
-numbers); map tables through ``swarmpath plan``'s. With ``--url`` the study is submitted as one
-job to a running coordinator and its runs are read back.
+numbers), and again shifted (``--transform shift``, the same runs and seeds) to mark the cells
+whose result owes more than 3 decades to where the optimum was; map tables run through
+``swarmpath plan``'s (:mod:`swarmpath.cli.reproduce_run`). With ``--url`` the study is submitted
+as one job to a running coordinator and its runs are read back.
 """
 
 from __future__ import annotations
@@ -19,13 +20,18 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import typer
-from rich.console import Console
 
 from swarmpath import __version__
 from swarmpath.cli import parallel
 from swarmpath.cli.core import InputError, app
+from swarmpath.cli.reproduce_run import (
+    cells_from_runs,
+    run_benchmark_local,
+    run_map_local,
+    run_remote,
+)
 from swarmpath.cli.study_options import BackendOpt
-from swarmpath.evidence import reference, report, reproduction
+from swarmpath.evidence import reference, report, reproduction, reproduction_maps
 from swarmpath.provenance import numeric_platform
 
 FORMATS = ("table", "markdown", "csv")
@@ -46,10 +52,24 @@ def resolve_tables(name: str | None) -> list[str]:
     return list(dict.fromkeys(names))
 
 
+def _subset(option: str, given: str | None, names: Sequence[str]) -> list[str]:
+    """``given`` (comma-separated) as a subset of ``names`` in table order (all when None)."""
+    if given is None:
+        return list(names)
+    wanted = [n.strip() for n in given.split(",") if n.strip()]
+    unknown = [n for n in wanted if n not in names]
+    if unknown or not wanted:
+        raise InputError(option, f"{', '.join(unknown) or 'nothing'} is not a column of the "
+                                 f"table ({', '.join(names)})")
+    return [n for n in names if n in wanted]
+
+
 def study_setting(table: reference.Table, runs: int | None, seed: int,
-                  backend: str = "numpy") -> dict[str, Any]:
-    """The study run for ``table``: the paper's setting, runs lowered by ``--runs``; a backend
-    other than the reference (numpy) is part of the setting."""
+                  backend: str = "numpy", algorithms: str | None = None,
+                  functions: str | None = None) -> dict[str, Any]:
+    """The study run for ``table``: the paper's setting, runs lowered by ``--runs``, cells
+    narrowed by ``--algorithms``/``--functions``; a backend other than the reference (numpy) is
+    part of the setting."""
     paper_runs = int(table.setting["runs"])
     if runs is not None and not 1 <= runs <= paper_runs:
         raise InputError("--runs", f"{runs} is not in [1, {paper_runs}] (the paper's count)")
@@ -57,9 +77,11 @@ def study_setting(table: reference.Table, runs: int | None, seed: int,
         raise InputError("--seed", f"{seed} is negative")
     n = paper_runs if runs is None else runs
     if isinstance(table, reference.BenchmarkTable):
-        setting = {
-            "kind": "benchmark", "algorithms": list(table.algorithms),
-            "functions": list(table.functions), "dims": [table.dim], "runs": n,
+        columns = _subset("--algorithms", algorithms, table.algorithms)
+        setting: dict[str, Any] = {
+            "kind": "benchmark", "algorithms": columns,
+            "functions": _subset("--functions", functions, table.functions),
+            "dims": [table.dim], "runs": n,
             "agents": int(table.setting["agents"]),
             "iterations": int(table.setting["iterations"]), "seed": seed,
         }
@@ -68,78 +90,19 @@ def study_setting(table: reference.Table, runs: int | None, seed: int,
             from swarmpath.optimizers.api import check_backend
 
             try:
-                check_backend(backend, setting["algorithms"])
+                check_backend(backend, columns)
+                check_backend(backend, columns, "shift")
             except ParameterError as exc:
                 raise InputError("--backend", f"{table.name}: {exc}") from None
             setting["backend"] = backend
         return setting
     if backend != "numpy":
         raise InputError("--backend", f"{table.name} is a map table: planners run on numpy only")
+    for option, given in (("--algorithms", algorithms), ("--functions", functions)):
+        if given is not None:
+            raise InputError(option, f"{table.name} is a map table: it has no {option[2:]}")
     return {"kind": "map", "planners": list(table.planners), "maps": list(table.maps),
             "runs": n, "seed": seed}
-
-
-# ------------------------------------------------------------------------------------ running
-def run_benchmark_local(setting: dict[str, Any], jobs: int) -> list[report.Cell]:
-    from swarmpath.cli import bench
-    from swarmpath.cli.bench_spec import make_spec
-
-    spec = make_spec(
-        ",".join(setting["algorithms"]), ",".join(setting["functions"]),
-        ",".join(str(d) for d in setting["dims"]), runs=setting["runs"],
-        agents=setting["agents"], iterations=setting["iterations"], seed=setting["seed"],
-        backend=setting.get("backend", "numpy"),
-    )
-    stderr = Console(stderr=True)
-    return bench._run_with_progress(spec, stderr, jobs or bench.auto_jobs(spec))
-
-
-def run_map_local(setting: dict[str, Any], jobs: int) -> list[dict[str, Any]]:
-    from swarmpath.cli import plan
-
-    spec = plan.make_spec(",".join(setting["planners"]), ",".join(setting["maps"]),
-                          runs=setting["runs"], seed=setting["seed"])
-    stderr = Console(stderr=True)
-    cells = plan._run_with_progress(spec, stderr, jobs or parallel.usable_cpus())
-    return [r for c in cells for r in c.runs]
-
-
-def run_remote(setting: dict[str, Any], url: str) -> list[dict[str, Any]]:
-    """Submit the study as one job, wait for it, return its runs (ServiceError/exit on failure)."""
-    from swarmpath.cli import service as svc
-
-    with svc._client(url) as client:
-        try:
-            job = client.submit(setting)
-            status = svc._wait_with_progress(client, job["id"], job["runs_total"])
-            if status["state"] != "done":
-                typer.echo(f"swarmpath reproduce: error: job {job['id']} ended "
-                           f"{status['state']}", err=True)
-                raise typer.Exit(1)
-            return client.all_runs(job["id"])
-        except typer.Exit:
-            raise
-        except Exception as exc:
-            svc._fail(exc)
-            raise
-
-
-def cells_from_runs(runs: Sequence[dict[str, Any]]) -> list[report.Cell]:
-    """Benchmark runs read back from the service -> bench's cells (runs in order)."""
-    groups: dict[tuple[str, str, int], list[dict[str, Any]]] = {}
-    for r in runs:
-        groups.setdefault((r["algorithm"], r["function"], int(r["dim"])), []).append(r)
-    out = []
-    for (algorithm, function, dim), items in groups.items():
-        items.sort(key=lambda r: int(r["run"]))
-        out.append(report.Cell(
-            algorithm=algorithm, function=function, dim=dim,
-            run_ids=[int(r["run"]) for r in items],
-            best_fitness=[float(r["best_fitness"]) for r in items],
-            evaluations=[int(r.get("evaluations") or 0) for r in items],
-            seconds=sum(float(r.get("seconds") or 0.0) for r in items),
-        ))
-    return out
 
 
 # ------------------------------------------------------------------------------- reproduction
@@ -148,31 +111,43 @@ Result = tuple[reference.Table, dict[str, Any], list[reproduction.Row], dict[str
 
 
 def reproduce_table(name: str, runs: int | None, seed: int, jobs: int, url: str | None,
-                    backend: str = "numpy") -> Result:
-    """Run one table's study; returns (table, setting, rows, statistics json, markers)."""
+                    backend: str = "numpy", origin_check: bool = True,
+                    algorithms: str | None = None, functions: str | None = None) -> Result:
+    """Run one table's study (benchmark tables: also shifted when ``origin_check``); returns
+    (table, setting, rows, statistics json, markers)."""
     table = reference.load(name)
-    setting = study_setting(table, runs, seed, backend)
+    setting = study_setting(table, runs, seed, backend, algorithms, functions)
     started = time.perf_counter()
     measured: list[Any]
+    shifted: list[report.Cell] | None = None
     if isinstance(table, reference.BenchmarkTable):
         measured = (cells_from_runs(run_remote(setting, url)) if url
                     else run_benchmark_local(setting, jobs))
+        if origin_check:  # the same runs and seeds with the optimum moved
+            moved = {**setting, "transform": "shift"}
+            shifted = (cells_from_runs(run_remote(moved, url)) if url
+                       else run_benchmark_local(moved, jobs))
+            setting["origin_check"] = "shift"
     else:
         measured = run_remote(setting, url) if url else run_map_local(setting, jobs)
     setting["seconds"] = round(time.perf_counter() - started, 1)
-    return judge(table, setting, measured)
+    return judge(table, setting, measured, shifted)
 
 
-def judge(table: reference.Table, setting: dict[str, Any], measured: Sequence[Any]) -> Result:
-    """Verdicts, statistics and markers for measured benchmark cells (``report.Cell``) or map
-    run outcomes (dicts with planner, map, success, length, ...), with the current reasons."""
+def judge(table: reference.Table, setting: dict[str, Any], measured: Sequence[Any],
+          shifted: Sequence[report.Cell] | None = None) -> Result:
+    """Verdicts, statistics and markers for measured benchmark cells (``report.Cell``; and the
+    same cells shifted, for the origin check) or map run outcomes (dicts with planner, map,
+    success, length, ...), with the current reasons."""
     reasons = reference.load_reasons()
     markers: dict[str, str | None] = {}
     statistics: dict[str, Any] | None = None
     if isinstance(table, reference.BenchmarkTable):
         cells: list[report.Cell] = list(measured)
         by_cell = {(c.function, c.algorithm): c.best_fitness for c in cells}
-        rows = reproduction.benchmark_rows(table, by_cell, reasons)
+        moved = (None if shifted is None else
+                 {(c.function, c.algorithm): c.best_fitness for c in shifted})
+        rows = reproduction.benchmark_rows(table, by_cell, reasons, moved)
         stats = report.statistics(cells, list(table.algorithms))
         statistics = report.tests_to_json(stats)
         for c in cells:
@@ -185,7 +160,7 @@ def judge(table: reference.Table, setting: dict[str, Any], measured: Sequence[An
         for r in measured:
             grouped.setdefault((r["planner"], r["map"]), []).append(r)
         scenarios = {m: get_map(m) for m in table.maps}
-        rows = reproduction.map_rows(table, grouped, reasons, scenarios)
+        rows = reproduction_maps.map_rows(table, grouped, reasons, scenarios)
         if len(table.planners) > 1:
             from swarmpath.evidence import compare
 
@@ -206,20 +181,27 @@ def from_document(doc: dict[str, Any]) -> Result:
         raise InputError("--from", f"not a reproduce document of a known table: {name!r}")
     table = reference.load(name)
     measured: list[Any] = []
+    shifted: list[report.Cell] = []
     for c in doc["cells"]:
         if table.kind == "benchmark":
-            values = [float(v) for v in c["runs"]]
-            measured.append(report.Cell(
-                algorithm=c["algorithm"], function=c["function"], dim=int(c["dim"]),
-                run_ids=list(range(len(values))), best_fitness=values,
-                evaluations=[0] * len(values), seconds=0.0))
+            measured.append(_saved_cell(c, c["runs"]))
+            if "shifted_runs" in c:
+                shifted.append(_saved_cell(c, c["shifted_runs"]))
         else:
             measured += [{**o, "planner": c["planner"], "map": c["map"]}
                          for o in c["outcomes"]]
-    return judge(table, dict(doc["setting"]), measured)
+    return judge(table, dict(doc["setting"]), measured, shifted or None)
 
 
-def command_line(name: str, runs: int | None, seed: int, fmt: str, backend: str = "numpy") -> str:
+def _saved_cell(c: dict[str, Any], runs: Sequence[Any]) -> report.Cell:
+    values = [float(v) for v in runs]
+    return report.Cell(algorithm=c["algorithm"], function=c["function"], dim=int(c["dim"]),
+                       run_ids=list(range(len(values))), best_fitness=values,
+                       evaluations=[0] * len(values), seconds=0.0)
+
+
+def command_line(name: str, runs: int | None, seed: int, fmt: str, backend: str = "numpy",
+                 options: Sequence[str] = ()) -> str:
     parts = ["swarmpath", "reproduce", name]
     if runs is not None:
         parts += ["--runs", str(runs)]
@@ -227,9 +209,24 @@ def command_line(name: str, runs: int | None, seed: int, fmt: str, backend: str 
         parts += ["--seed", str(seed)]
     if backend != "numpy":
         parts += ["--backend", backend]
+    parts += list(options)
     if fmt != "table":
         parts += ["--format", fmt]
     return shlex.join(parts)
+
+
+def narrowing(table: reference.Table, setting: dict[str, Any]) -> list[str]:
+    """The options that narrowed a benchmark study (cells, origin check), as typed."""
+    if not isinstance(table, reference.BenchmarkTable):
+        return []
+    out = []
+    for option, key, names in (("--algorithms", "algorithms", table.algorithms),
+                               ("--functions", "functions", table.functions)):
+        if list(setting.get(key, names)) != list(names):
+            out += [option, ",".join(setting[key])]
+    if "origin_check" not in setting:
+        out.append("--no-origin-check")
+    return out
 
 
 @app.command()
@@ -263,6 +260,19 @@ def reproduce(
                                     "(no study is run; reasons as they are now)."),
     ] = None,
     backend: BackendOpt = "numpy",
+    algorithms: Annotated[
+        str | None, typer.Option("--algorithms", "-a", help="Only these columns of a "
+                                 "benchmark table (comma-separated; default: all).")
+    ] = None,
+    functions: Annotated[
+        str | None, typer.Option("--functions", "-f", help="Only these rows of a benchmark "
+                                 "table (comma-separated; default: all).")
+    ] = None,
+    origin_check: Annotated[
+        bool, typer.Option("--origin-check/--no-origin-check", help="Also run benchmark "
+                           "tables shifted (same runs and seeds) and mark the cells that lose "
+                           "more than 3 decades (origin-suspect).")
+    ] = True,
 ) -> None:
     """Run a seed paper's table at its setting; print published beside measured, with verdicts."""
     from swarmpath.cli import reproduce_output as output
@@ -277,9 +287,11 @@ def reproduce(
         raise InputError("--jobs", f"{jobs} is not in [0, {parallel.MAX_JOBS}]")
     results: list[Result] = []
     if from_ is not None and (table is not None or runs is not None or url is not None
-                              or backend != "numpy"):
-        raise InputError("--from", "judges saved runs: give no TABLE, --runs, --url or "
-                                   "--backend with it")
+                              or backend != "numpy" or algorithms is not None
+                              or functions is not None or not origin_check):
+        raise InputError("--from", "judges saved runs: give no TABLE, --runs, --url, "
+                                   "--backend, --algorithms, --functions or "
+                                   "--no-origin-check with it")
     if from_ is not None:
         try:
             loaded = json.loads(from_.read_text(encoding="utf-8"))
@@ -296,36 +308,38 @@ def reproduce(
     else:
         names = resolve_tables(table)
         for name in names:  # validate every table's options before running anything
-            study_setting(reference.load(name), runs, seed, backend)
+            study_setting(reference.load(name), runs, seed, backend, algorithms, functions)
+    options = [*(["--algorithms", algorithms] if algorithms else []),
+               *(["--functions", functions] if functions else []),
+               *([] if origin_check else ["--no-origin-check"])]
     if fmt == "markdown" and not as_json:
         whole = table if table is not None else (
             "all" if names == list(reference.TABLES) else ",".join(names))
-        first_runs = runs
-        if from_ is not None:
-            first_runs = int(results[0][1]["runs"])
-            seed = int(results[0][1]["seed"])
-        sys.stdout.write(output.markdown_header(
-            command_line(whole, first_runs, seed, fmt, backend), __version__,
+        sys.stdout.write(output.markdown_header(  # --from: each section names its command
+            command_line(whole, runs, seed, fmt, backend, options), __version__,
             None if from_ is None else from_.name))
     docs = []
     for i, name in enumerate(names):
         tab, setting, rows, statistics, markers = (
-            results[i] if results else reproduce_table(name, runs, seed, jobs, url, backend))
+            results[i] if results else reproduce_table(name, runs, seed, jobs, url, backend,
+                                                       origin_check, algorithms, functions))
         if results:
             runs, seed = int(setting["runs"]), int(setting["seed"])
             backend = str(setting.get("backend", "numpy"))
+            options = narrowing(tab, setting)
         doc = reproduction.document(tab, setting, rows, statistics)
         doc["version"] = __version__
         doc["platform"] = numeric_platform()
         docs.append(doc)
         if out is not None:
             output.write_outputs(out, tab, setting, rows, markers,
-                                 command_line(name, runs, seed, "markdown", backend))
+                                 command_line(name, runs, seed, "markdown", backend, options))
         if as_json:
             continue
         if fmt == "markdown":
             sys.stdout.write(output.markdown(tab, setting, rows, markers,
-                                             command_line(name, runs, seed, fmt, backend)))
+                                             command_line(name, runs, seed, fmt, backend,
+                                                          options)))
         elif fmt == "csv":
             sys.stdout.write(output.csv_text(tab, rows, markers))
         else:
