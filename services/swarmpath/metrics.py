@@ -24,12 +24,13 @@ Definitions (p_i = (x_i, y_i), s_i = p_{i+1} - p_i):
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmpath.world import clearance
 from swarmpath.world.geometry import (
     ObstacleSet,
     collides,
@@ -136,9 +137,10 @@ def _snapshots(
 
 def _obstacle_frames(
     path: ArrayLike, obstacles_at: Callable[[float], ObstacleSet] | ObstacleSet
-) -> tuple[Array, ObstacleSet, Array]:
+) -> tuple[Array, ObstacleSet, Array | None]:
     """Trajectory rows (at least two), the obstacles at t_0 and each obstacle's offset from its
-    t_0 pose at every row, shape (n, k + n_poly, 2) (circles first, then polygons)."""
+    t_0 pose at every row, shape (n, k + n_poly, 2) (circles first, then polygons); None when
+    every snapshot is the t_0 one (a static world: all offsets 0)."""
     P = np.asarray(path, dtype=np.float64)
     if P.ndim != 2 or P.shape[1] != 3:
         raise ValueError(f"trajectory must be an (n, 3) array of [x, y, t], got {P.shape}")
@@ -151,6 +153,8 @@ def _obstacle_frames(
         raise ValueError("trajectory times must be non-decreasing")
     snaps = _snapshots(obstacles_at, t)
     ref = snaps[0]
+    if all(s is ref for s in snaps):
+        return P, ref, None
     k, n_poly = len(ref.circles), len(ref.polygons)
     for s in snaps:
         if len(s.circles) != k or len(s.polygons) != n_poly:
@@ -172,24 +176,38 @@ def _obstacle_frames(
     return P, ref, offsets
 
 
-def _clearance_matrix(xy_a: Array, xy_b: Array, ref: ObstacleSet, off_a: Array,
-                      off_b: Array) -> Array:
+def _clearance_columns(xy_a: Array, xy_b: Array, ref: ObstacleSet, off_a: Array | None,
+                       off_b: Array | None) -> Iterator[Array]:
     """Clearance of the robot moving xy_a -> xy_b while each obstacle translates off_a -> off_b
-    (rows: steps, columns: obstacles; exact, as in :func:`step_clearances`)."""
+    (None: no obstacle moves), one column per obstacle (circles, then polygons; exact, as in
+    :func:`step_clearances`)."""
     k = len(ref.circles)
-    out = np.empty((len(xy_a), k + len(ref.polygons)))
     if k:
-        a = xy_a[:, None, :] - ref.circles[:, :2] - off_a[:, :k]
-        b = xy_b[:, None, :] - ref.circles[:, :2] - off_b[:, :k]
-        out[:, :k] = np.maximum(point_segment_distance(np.zeros(2), a, b) - ref.circles[:, 2], 0.0)
+        a = xy_a[:, None, :] - ref.circles[:, :2]
+        b = xy_b[:, None, :] - ref.circles[:, :2]
+        if off_a is not None and off_b is not None:
+            a, b = a - off_a[:, :k], b - off_b[:, :k]
+        circles = np.maximum(point_segment_distance(np.zeros(2), a, b) - ref.circles[:, 2], 0.0)
+        yield from circles.T
     for j, shape in enumerate(ref.polygons):
-        out[:, k + j] = segment_polygon_distance(xy_a - off_a[:, k + j], xy_b - off_b[:, k + j],
-                                                 shape)
+        if off_a is None or off_b is None:
+            yield segment_polygon_distance(xy_a, xy_b, shape)
+        else:
+            yield segment_polygon_distance(xy_a - off_a[:, k + j], xy_b - off_b[:, k + j], shape)
+
+
+def _clearance_matrix(xy_a: Array, xy_b: Array, ref: ObstacleSet, off_a: Array | None,
+                      off_b: Array | None) -> Array:
+    """:func:`_clearance_columns` as a matrix (rows: steps, columns: obstacles)."""
+    out = np.empty((len(xy_a), len(ref.circles) + len(ref.polygons)))
+    for j, column in enumerate(_clearance_columns(xy_a, xy_b, ref, off_a, off_b)):
+        out[:, j] = column
     return out
 
 
 def step_clearances(
-    path: ArrayLike, obstacles_at: Callable[[float], ObstacleSet] | ObstacleSet
+    path: ArrayLike, obstacles_at: Callable[[float], ObstacleSet] | ObstacleSet,
+    backend: str = "auto",
 ) -> Array:
     """Exact clearance of the robot centre during each step, shape (max(n - 1, 1),).
 
@@ -200,12 +218,24 @@ def step_clearances(
     offset), so the step's clearance to that obstacle is an exact segment-to-static-obstacle
     distance (0 when touching, crossing or inside). The step clearance is the minimum over
     obstacles (+inf if there are none). A single-row path is one zero-length step.
+
+    ``backend`` (:mod:`swarmpath.world.clearance`): ``"numba"`` visits only the obstacles a step
+    can reach and gives the same doubles; ``"auto"`` uses it when numba is installed.
     """
-    P, ref, off = _obstacle_frames(path, obstacles_at)
-    if off.shape[1] == 0:
+    return _step_clearances(*_obstacle_frames(path, obstacles_at), backend)
+
+
+def _step_clearances(P: Array, ref: ObstacleSet, off: Array | None, backend: str) -> Array:
+    if ref.is_empty:
         return np.full(len(P) - 1, np.inf)
     xy = P[:, :2]
-    return np.asarray(_clearance_matrix(xy[:-1], xy[1:], ref, off[:-1], off[1:]).min(axis=1))
+    if clearance.resolve(backend) == "numba":
+        return clearance.step_clearances(xy, ref, off)
+    out = np.full(len(P) - 1, np.inf)
+    off_a, off_b = (None, None) if off is None else (off[:-1], off[1:])
+    for column in _clearance_columns(xy[:-1], xy[1:], ref, off_a, off_b):
+        out = np.minimum(out, column)  # the least over obstacles, one column at a time
+    return out
 
 
 class ContactCauses(NamedTuple):
@@ -228,25 +258,29 @@ def contact_causes(
     path: ArrayLike,
     obstacles_at: Callable[[float], ObstacleSet] | ObstacleSet,
     radius: float,
+    backend: str = "auto",
 ) -> ContactCauses:
     """Classify every colliding step (see :class:`ContactCauses`); touching counts, as in
-    :func:`min_clearance`."""
+    :func:`min_clearance`. Only the colliding steps (:func:`step_clearances`, ``backend``) are
+    looked at obstacle by obstacle."""
     P, ref, off = _obstacle_frames(path, obstacles_at)
-    if off.shape[1] == 0:
+    if ref.is_empty:
         return ContactCauses(0, 0)
     xy = P[:, :2]
-    swept = _clearance_matrix(xy[:-1], xy[1:], ref, off[:-1], off[1:])
-    touching = collides(swept, radius)
-    rows = np.flatnonzero(touching.any(axis=1))
+    rows = np.flatnonzero(collides(_step_clearances(P, ref, off, backend), radius))
     if rows.size == 0:
         return ContactCauses(0, 0)
     a, b = xy[rows], xy[rows + 1]
+    if off is None:
+        off = np.zeros((len(P), ref.circles.shape[0] + len(ref.polygons), 2))
+    swept = _clearance_matrix(a, b, ref, off[rows], off[rows + 1])
+    touching = collides(swept, radius)
     frozen = off[rows]  # every obstacle held at its pose at the start of the step
     before = _clearance_matrix(a, a, ref, frozen, frozen)
     after = _clearance_matrix(b, b, ref, frozen, frozen)
     approached = after < before - APPROACH_TOL
     moved = np.hypot(*(off[rows + 1] - off[rows]).transpose(2, 0, 1)) > 0.0
-    robot = touching[rows] & (approached | ~moved)
+    robot = touching & (approached | ~moved)
     n_robot = int(np.count_nonzero(robot.any(axis=1)))
     return ContactCauses(n_robot, int(rows.size) - n_robot)
 
@@ -255,6 +289,7 @@ def min_clearance(
     path: ArrayLike,
     obstacles_at: Callable[[float], ObstacleSet] | ObstacleSet,
     radius: float,
+    backend: str = "auto",
 ) -> ClearanceResult:
     """Smallest body gap along a trajectory and the number of colliding steps.
 
@@ -263,5 +298,5 @@ def min_clearance(
     accepted for static maps). The body gap of a step is clearance - radius; a step collides when
     ``collides(clearance, radius)``, i.e. gap <= 0.
     """
-    c = step_clearances(path, obstacles_at)
+    c = step_clearances(path, obstacles_at, backend)
     return ClearanceResult(float(np.min(c) - radius), int(np.count_nonzero(collides(c, radius))))

@@ -23,7 +23,8 @@ from swarmpath.robot.kinematics import (
     diff_drive_command,
     omni_command,
 )
-from swarmpath.robot.sensors import SensorModel, get_sensor_model, read_sensors
+from swarmpath.robot.sensors import SensorModel, get_sensor_model, read_sensors_in
+from swarmpath.world.clearance import segment_clearance
 from swarmpath.world.geometry import ObstacleSet, collides
 from swarmpath.world.scenario import RobotSpec, Scenario, WorldState
 
@@ -84,10 +85,9 @@ class Simulator:
     def observe(self) -> Observation:
         reading = None
         if self.sensor_model is not None:
-            obstacles = self.world.obstacles()
-            reading = read_sensors(
+            reading = read_sensors_in(
                 self.sensor_model, self.pose.x, self.pose.y, self.pose.theta, self.radius,
-                obstacles.circles, obstacles.polygons,
+                self.world.obstacles(),
             )
         return Observation(
             time=self.time,
@@ -149,7 +149,7 @@ class Simulator:
             return new
         a = np.array([self.pose.x, self.pose.y])
         b = np.array([new.x, new.y])
-        if not collides(self.guard.segment_clearance(a, b), self.radius):
+        if not collides(segment_clearance(self.guard, a, b), self.radius):
             return new
         here, there = self.guard.point_clearance(np.stack([a, b]))
         if collides(here, self.radius):
@@ -157,7 +157,7 @@ class Simulator:
         lo, hi = 0.0, 1.0
         for _ in range(GUARD_ROUNDS):
             mid = 0.5 * (lo + hi)
-            if collides(self.guard.segment_clearance(a, a + mid * (b - a)), self.radius):
+            if collides(segment_clearance(self.guard, a, a + mid * (b - a)), self.radius):
                 hi = mid
             else:
                 lo = mid

@@ -28,6 +28,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmpath.world import clearance
+from swarmpath.world.geometry import ObstacleSet
+
 Array = NDArray[np.float64]
 
 
@@ -158,9 +161,7 @@ def read_sensors(
     polygons: tuple[Array, ...],
 ) -> SensorReading:
     """Cast the model's rays from the robot centre; distances are measured from the body surface."""
-    origin = np.array([x, y], dtype=float)
-    world = model.angles + theta
-    dirs = np.stack([np.cos(world), np.sin(world)], axis=1)
+    origin, dirs = _rays(model, x, y, theta)
     t = ray_circle_distance(origin, dirs, np.asarray(circles, dtype=float).reshape(-1, 3))
     if polygons:
         A = np.concatenate([p for p in polygons])
@@ -168,6 +169,46 @@ def read_sensors(
         t = np.minimum(t, ray_segment_distance(origin, dirs, A, B))
         if _inside_any_polygon(origin, polygons):
             t = np.zeros_like(t)
+    return _reading(model, origin, dirs, t, body_radius)
+
+
+def read_sensors_in(
+    model: SensorModel,
+    x: float,
+    y: float,
+    theta: float,
+    body_radius: float,
+    obstacles: ObstacleSet,
+    backend: str = "auto",
+) -> SensorReading:
+    """:func:`read_sensors` against an obstacle set. With ``backend`` ``"numba"`` (``"auto"``:
+    when numba is installed) the polygons' edges are visited only where they come within the
+    longest ray's reach of the robot (:func:`swarmpath.world.clearance.polygon_rays`): a
+    farther edge could only be hit beyond the range, which reads as nothing, so the reading is
+    the same to the last bit."""
+    if clearance.resolve(backend) == "numpy" or not obstacles.polygons:
+        return read_sensors(model, x, y, theta, body_radius, obstacles.circles,
+                            obstacles.polygons)
+    origin, dirs = _rays(model, x, y, theta)
+    t = ray_circle_distance(origin, dirs, obstacles.circles)
+    reach = float(np.max(model.ranges)) + body_radius
+    t_poly, inside = clearance.polygon_rays(obstacles, origin, dirs, reach)
+    t = np.minimum(t, t_poly)
+    if inside:
+        t = np.zeros_like(t)
+    return _reading(model, origin, dirs, t, body_radius)
+
+
+def _rays(model: SensorModel, x: float, y: float, theta: float) -> tuple[Array, Array]:
+    """The robot centre and the rays' world-frame unit directions."""
+    origin = np.array([x, y], dtype=float)
+    world = model.angles + theta
+    return origin, np.stack([np.cos(world), np.sin(world)], axis=1)
+
+
+def _reading(model: SensorModel, origin: Array, dirs: Array, t: Array,
+             body_radius: float) -> SensorReading:
+    """The reading of rays that first meet an obstacle at distances ``t`` from the centre."""
     from_body = np.maximum(t - body_radius, 0.0)
     within = from_body <= model.ranges
     distances = np.where(within, from_body, np.inf)
