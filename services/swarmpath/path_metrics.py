@@ -1,4 +1,5 @@
-"""The field's path-quality metrics of an executed trajectory (pure functions, numpy only).
+"""The field's path-quality metrics of an executed trajectory (pure functions; the clearances
+through :mod:`swarmpath.world.clearance`, compiled when numba is installed, the same doubles).
 
 Beside :mod:`swarmpath.metrics` (length, smoothness, the exact swept clearance and collisions):
 what Bench-MR, OMPL, MRPB and nav2's planner benchmark report, each computed on the executed
@@ -29,6 +30,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmpath.world import clearance
 from swarmpath.world.geometry import ObstacleSet
 
 Array = NDArray[np.float64]
@@ -97,14 +99,14 @@ def _gaps(points: Array, obstacles_at: Callable[[float], ObstacleSet] | Obstacle
     if isinstance(obstacles_at, ObstacleSet):
         if obstacles_at.is_empty:
             return np.full(len(points), np.inf)
-        return np.asarray(obstacles_at.point_clearance(points[:, :2]), dtype=float) - radius
+        return clearance.point_clearances(obstacles_at, points[:, :2]) - radius
     out = np.empty(len(points))
     times, inverse = np.unique(points[:, 2], return_inverse=True)
     for k, t in enumerate(times):
         rows = inverse == k
         obs = obstacles_at(float(t))
         out[rows] = (np.inf if obs.is_empty
-                     else np.asarray(obs.point_clearance(points[rows, :2])) - radius)
+                     else clearance.point_clearances(obs, points[rows, :2]) - radius)
     return out
 
 

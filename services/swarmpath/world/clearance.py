@@ -4,6 +4,8 @@
   (:func:`swarmpath.metrics.step_clearances` calls it);
 * :func:`segment_clearance` - one segment against a static map
   (:meth:`~swarmpath.world.geometry.ObstacleSet.segment_clearance`: the motion guard);
+* :func:`point_clearances` - points against a map (:meth:`~swarmpath.world.geometry.ObstacleSet.
+  point_clearance`: the clearance along a path of :mod:`swarmpath.path_metrics`);
 * :func:`polygon_rays` - range rays against the polygons (:func:`swarmpath.robot.sensors.
   read_sensors_in`).
 
@@ -95,9 +97,12 @@ class PolygonIndex:
         return cls(np.ascontiguousarray(obstacles.circles), verts, starts, counts, bb_lo, bb_hi,
                    grid, start, items, np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64))
 
-    def mark(self) -> int:
-        """A fresh mark for one query's visited polygons."""
-        return next(self.marks)
+    def mark(self, queries: int = 1) -> int:
+        """The first of ``queries`` fresh marks (one per query) for the visited polygons."""
+        first = next(self.marks)
+        for _ in range(queries - 1):
+            next(self.marks)
+        return first
 
 
 _INDEXES: weakref.WeakKeyDictionary[ObstacleSet, PolygonIndex] = weakref.WeakKeyDictionary()
@@ -141,6 +146,19 @@ def segment_clearance(obstacles: ObstacleSet, a: Array, b: Array, backend: str =
     return float(segment_clearance_kernel(
         float(a[0]), float(a[1]), float(b[0]), float(b[1]), i.circles, i.verts, i.starts,
         i.counts, i.bb_lo, i.bb_hi, i.grid, i.start, i.items, i.stamp, i.mark(), i.buf))
+
+
+def point_clearances(obstacles: ObstacleSet, points: Array, backend: str = "auto") -> Array:
+    """``obstacles.point_clearance(points)`` of (n, 2) points (the same doubles)."""
+    P = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
+    if resolve(backend) == "numpy" or obstacles.is_empty or not obstacles.polygons:
+        return np.asarray(obstacles.point_clearance(P), dtype=np.float64)
+    from swarmpath.world.clearance_compiled import point_clearances_kernel
+
+    i = index_of(obstacles)
+    return np.asarray(point_clearances_kernel(
+        P, i.circles, i.verts, i.starts, i.counts, i.bb_lo, i.bb_hi, i.grid, i.start, i.items,
+        i.stamp, i.mark(len(P)), i.buf))
 
 
 def polygon_rays(obstacles: ObstacleSet, origin: Array, dirs: Array,

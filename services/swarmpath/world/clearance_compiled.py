@@ -25,7 +25,7 @@ import numpy as np
 from numba import njit
 
 import swarmpath.optimizers.compiled  # noqa: F401 - first: numba's versioned cache directory
-from swarmpath.world.optimum_compiled import _point_segment, _segment_segment
+from swarmpath.world.optimum_compiled import _point_segment, _segment_segment, _signed_polygon
 
 Array = np.ndarray
 
@@ -42,7 +42,7 @@ def _cell_range(lo: float, hi: float, origin: float, cell: float, n: int) -> tup
     top = n - 1.0
     a = min(max((lo - origin) / cell, 0.0), top)
     b = min(max((hi - origin) / cell, 0.0), top)
-    return int(math.floor(a)), int(math.floor(b))
+    return math.floor(a), math.floor(b)
 
 
 @njit(cache=True)
@@ -308,3 +308,42 @@ def rays_kernel(ox: float, oy: float, dirs: Array, reach: float, verts: Array, s
         if crossings % 2 == 1:
             inside = True
     return t_min, inside
+
+
+# -------------------------------------------------------------------------- point clearances
+@njit(cache=True)
+def point_clearances_kernel(points: Array, circles: Array, verts: Array, starts: Array,
+                            counts: Array, bb_lo: Array, bb_hi: Array, grid: Array,
+                            start: Array, items: Array, stamp: Array, mark: int,
+                            buf: Array) -> Array:
+    """ObstacleSet.point_clearance of each point: the least of the circles' hypot - r and the
+    polygons' signed edge distances (negative inside, even-odd), +inf with no obstacle. The
+    polygons are searched as :func:`_static_polygons` does (a reach growing from one cell);
+    a polygon whose box is farther than the best value found cannot be the least (its signed
+    distance is at least its box gap). Point i marks its polygons with ``mark + i``."""
+    out = np.empty(points.shape[0])
+    npoly = counts.shape[0]
+    for i in range(points.shape[0]):
+        px, py = points[i, 0], points[i, 1]
+        best = math.inf
+        for c in range(circles.shape[0]):
+            best = min(best, math.hypot(px - circles[c, 0], py - circles[c, 1]) - circles[c, 2])
+        if npoly:
+            reach = grid[2]
+            for round_ in range(1, 64):
+                n = _candidates(px - reach, py - reach, px + reach, py + reach, grid, start,
+                                items, stamp, (mark + i) * 64 + round_, buf)
+                every = n == npoly
+                found = math.inf
+                for q in range(n):
+                    j = buf[q]
+                    gap = _box_gap(px, py, px, py, bb_lo, bb_hi, j)
+                    if (not every and gap > reach) or gap > min(best, found) + SLACK:
+                        continue
+                    found = min(found, _signed_polygon(px, py, verts, starts[j], counts[j]))
+                best = min(best, found)
+                if best <= reach or every:
+                    break
+                reach *= 4.0
+        out[i] = best
+    return out
