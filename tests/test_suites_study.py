@@ -148,3 +148,18 @@ def test_pooling_keeps_cells_without_instances():
     cell = report.Cell("GWO", "F1", 5, [0, 1], [1.0, 2.0], [10, 10], 0.1)
     (same,) = pool_instances([cell])
     assert same is cell
+
+
+def test_ioh_export_writes_suite_instances_as_iohprofiler_numbers_them(tmp_path):
+    from swarmpath.evidence.ioh import write_ioh
+
+    items = [{"state": "done", "algorithm": "GWO", "function": f, "dim": 5, "run": r,
+              "curve": [3.0, 2.0], "evaluations": 20, "seed": 1,
+              "spec": {"iterations": 2, "agents": 10}}
+             for f in ("bbob:f3", "bbob:f3@i7", "cec2022:F2") for r in (0, 1)]
+    write_ioh(items, tmp_path, "j")
+    lines = (tmp_path / "GWO" / "IOHprofiler_f3_bbob_f3.info").read_text().splitlines()
+    assert lines[0].startswith('suite = "bbob", funcId = 3, funcName = "bbob:f3", DIM = 5')
+    assert [e.split(":")[0] for e in lines[2].split(", ")[1:]] == ["1", "1", "7", "7"]
+    cec = (tmp_path / "GWO" / "IOHprofiler_f2_cec2022_F2.info").read_text()
+    assert cec.startswith('suite = "cec2022", funcId = 2,')

@@ -21,10 +21,12 @@ taken as ``round(N + k * (E - N) / T)`` (N: the agents, evaluated once before th
 iteration; E: the run's evaluations; T: the iterations), exact for the algorithms that evaluate
 the initial population and then the same number of agents each iteration. A curve the service
 thinned (``curve_stride`` s) has iterations 1, 1 + s, 1 + 2s, ... and the last one. Function ids
-are the positions in the function registry (F1 = 1, ...). Runs of a transformed job (shift,
-rotate) are instances 1 + run (each run moves or turns the function); otherwise every run is
-instance 1. Non-finite values (an infeasible start) are left out; a run without a finite value
-is left out and counted.
+are the positions in the function registry (F1 = 1, ...). A suite function is written as its
+suite has it (``suite = "bbob"``, ``funcId`` its number, ``funcName`` without the instance) and
+the runs of all its instances go to one file, each with its instance id. Runs of a transformed
+job (shift, rotate) are instances 1 + run (each run moves or turns the function); otherwise
+every run is instance 1. Non-finite values (an infeasible start) are left out; a run without a
+finite value is left out and counted.
 """
 
 from __future__ import annotations
@@ -45,9 +47,24 @@ def _slug(text: str) -> str:
 
 
 def function_id(name: str) -> int:
-    from swarmpath.functions import list_functions
+    """F1..F13's position in the registry; a suite function's number in its suite (bbob:f3 ->
+    3, as COCO and IOHprofiler number them)."""
+    from swarmpath.functions import get_function, list_functions
 
-    return list_functions().index(name) + 1
+    if name in list_functions():
+        return list_functions().index(name) + 1
+    return int(getattr(get_function(name), "number", 0))
+
+
+def _suite_of(name: str) -> tuple[str, str, int | None]:
+    """(suite label, function name without its instance, instance) of a function name."""
+    from swarmpath.functions.suites.base import split_instance
+
+    base, instance = split_instance(name)
+    suite, colon, _ = base.partition(":")
+    if not colon:
+        return "swarmpath", name, None
+    return suite, base, 1 if instance is None else instance
 
 
 def evaluation_points(length: int, iterations: int, evaluations: int, stride: int = 1,
@@ -104,8 +121,9 @@ def write_ioh(items: Iterable[Mapping[str, Any]], directory: Path, job_id: str =
         if not item.get("curve"):
             out.skipped += 1
             continue
-        groups.setdefault((str(item["algorithm"]), str(item["function"]), int(item["dim"])),
-                          []).append(item)
+        # a suite function's instances are runs of one function (instance ids in the .info)
+        groups.setdefault((str(item["algorithm"]), _suite_of(str(item["function"]))[1],
+                           int(item["dim"])), []).append(item)
     infos: dict[Path, list[str]] = {}
     for (algorithm, function, dim), runs in sorted(groups.items(),
                                                    key=lambda kv: (kv[0][0], function_id(kv[0][1]),
@@ -119,7 +137,9 @@ def write_ioh(items: Iterable[Mapping[str, Any]], directory: Path, job_id: str =
         entries: list[str] = []
         lines: list[str] = []
         spec: Mapping[str, Any] = {}
-        for item in sorted(runs, key=lambda r: int(r["run"])):
+        suite = _suite_of(function)[0]
+        for item in sorted(runs, key=lambda r: (_suite_of(str(r["function"]))[2] or 0,
+                                                int(r["run"]))):
             spec = item.get("spec") or {}
             curve = list(item["curve"])
             iterations = int(spec.get("iterations") or len(curve))
@@ -131,7 +151,8 @@ def write_ioh(items: Iterable[Mapping[str, Any]], directory: Path, job_id: str =
             if not block:
                 out.skipped += 1
                 continue
-            instance = int(item["run"]) + 1 if _transform(spec) != "none" else 1
+            instance = _suite_of(str(item["function"]))[2] or (
+                int(item["run"]) + 1 if _transform(spec) != "none" else 1)
             lines.append(SEPARATOR)
             lines += [f"{e} {_num(v)}" for e, v in block]
             entries.append(f"{instance}:{block[-1][0]}|{_num(block[-1][1])}")
@@ -146,7 +167,7 @@ def write_ioh(items: Iterable[Mapping[str, Any]], directory: Path, job_id: str =
                     f"iterations; seed {runs[0].get('seed', '?')}"
                     + (f"; transform {_transform(spec)}" if _transform(spec) != "none" else ""))
         infos.setdefault(info, []).extend([
-            f'suite = "swarmpath", funcId = {fid}, funcName = "{function}", DIM = {dim}, '
+            f'suite = "{suite}", funcId = {fid}, funcName = "{function}", DIM = {dim}, '
             f'maximization = "F", algId = "{algorithm}", algInfo = "{alg_info}"',
             f"% swarmpath job {job_id}".rstrip(),
             ", ".join([rel, *entries]),
