@@ -36,7 +36,7 @@ def test_a_job_spec_expands_suite_instances_and_budgets_into_cells():
 
 @pytest.mark.parametrize(("change", "field", "says"), [
     ({"instances": [2]}, "functions", "cec2022 has instances 1"),
-    ({"functions": ["F1"], "instances": [2]}, "functions", "instances apply to suite"),
+    ({"functions": ["F1"], "instances": [2]}, "functions", "only suite functions"),
     ({"instances": [0]}, "instances", "greater than or equal to 1"),
     ({"dims": [30]}, "dims", "defined for dim in 10, 20"),
     ({"transform": "rotate"}, "transform", "transform must be 'none'"),

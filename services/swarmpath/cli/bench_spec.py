@@ -13,6 +13,7 @@ from typing import Any
 
 from swarmpath.cli.core import InputError, parse_params_option, resolve_names
 from swarmpath.functions import expand_function_names, get_function
+from swarmpath.functions.suites.base import MAX_INSTANCE, with_instances
 from swarmpath.optimizers import ParameterError, get_optimizer, list_optimizers
 from swarmpath.optimizers.api import (
     MAX_AGENTS,
@@ -21,10 +22,9 @@ from swarmpath.optimizers.api import (
     check_backend,
     resolve_transform,
 )
+from swarmpath.optimizers.budget import budget_at, parse_budget, study_iterations
 
 MAX_RUNS = 10_000
-#: the largest instance id a study may name (COCO's ids are small; 1e6 keeps seeds in range)
-MAX_INSTANCE = 1_000_000
 
 @dataclass(frozen=True)
 class BenchSpec:
@@ -60,13 +60,8 @@ class BenchSpec:
 
     def iterations_for(self, algorithm: str, dim: int) -> int:
         """Iterations of ``algorithm`` at ``dim``: ``iterations``, or those spending the budget."""
-        budget = self.evaluations(dim)
-        if budget is None:
-            return self.iterations
-        from swarmpath.optimizers.budget import iterations_for_budget
-
-        return iterations_for_budget(algorithm, budget, self.agents, dim,
-                                     self.params.get(algorithm))
+        return study_iterations(algorithm, self.budget_evals, self.iterations, self.agents, dim,
+                                self.params.get(algorithm))
 
     def settings(self) -> dict[str, Any]:
         return asdict(self)
@@ -108,25 +103,12 @@ def parse_dims(spec: str) -> list[int]:
     return dims
 
 
-def budget_at(spec: str | None, dim: int) -> int | None:
-    """'100000' -> 100000; '10000xD' -> 10000 * dim; None -> None."""
-    if spec is None:
-        return None
-    number, _, per_dim = spec.partition("x")
-    return int(number) * (dim if per_dim else 1)
-
-
-def parse_budget(spec: str | None) -> str | None:
-    """``--budget-evals``: a positive integer N, or NxD (N times the dimension: CEC's 10000xD)."""
-    if spec is None:
-        return None
-    text = spec.strip().replace("*", "x")
-    number, sep, per_dim = text.partition("x")
-    if (sep and per_dim.strip().upper() != "D") or not number.strip().isdigit() or int(
-            number) < 1:
-        raise InputError("--budget-evals", f"{spec!r} is not a positive integer N or NxD "
-                         "(N times the dimension, e.g. 10000xD)")
-    return f"{int(number)}xD" if sep else str(int(number))
+def parse_budget_option(spec: str | None) -> str | None:
+    """``--budget-evals``: N or NxD (optimizers.budget.parse_budget), InputError naming it."""
+    try:
+        return parse_budget(spec)
+    except ParameterError as exc:
+        raise InputError("--budget-evals", str(exc)) from None
 
 
 def parse_instances(spec: str | None) -> list[int] | None:
@@ -149,29 +131,13 @@ def parse_instances(spec: str | None) -> list[int] | None:
     return out
 
 
-def with_instances(functions: list[str], instances: list[int] | None) -> list[str]:
-    """Each suite function once per instance (``bbob:f3``, ``bbob:f3@i2``, ...); the other
-    functions once. InputError naming ``--instances`` if a suite lacks one of them or no
-    function of the study has instances."""
-    if instances is None:
-        return functions
-    out: list[str] = []
-    suites = 0
-    for name in functions:
-        fn = get_function(name)
-        if not hasattr(fn, "with_instance"):
-            out.append(name)
-            continue
-        suites += 1
-        for i in instances:
-            try:
-                out.append(fn.with_instance(i).name)
-            except ValueError as exc:
-                raise InputError("--instances", str(exc)) from None
-    if not suites:
-        raise InputError("--instances", "only suite functions (bbob:..., cec2017:..., "
-                         "cec2022:...) have instances")
-    return list(dict.fromkeys(out))
+def instances_of(functions: list[str], instances: list[int] | None) -> list[str]:
+    """``functions`` with each suite function once per instance (suites.base.with_instances);
+    InputError naming ``--instances``."""
+    try:
+        return with_instances(functions, instances)
+    except ValueError as exc:
+        raise InputError("--instances", str(exc)) from None
 
 
 def check_range(option: str, value: int, low: int, high: int) -> int:
@@ -215,10 +181,10 @@ def make_spec(
     except ValueError as exc:
         raise InputError("--reference", str(exc)) from None
     ids = parse_instances(instances)
-    fns = with_instances(resolve_functions(functions), ids)
+    fns = instances_of(resolve_functions(functions), ids)
     if pool_instances and ids is None:
         raise InputError("--pool-instances", "needs --instances")
-    budget = parse_budget(budget_evals)
+    budget = parse_budget_option(budget_evals)
     ds = parse_dims(dims)
     check_range("--runs", runs, 1, MAX_RUNS)
     check_range("--agents", agents, 1, MAX_AGENTS)
@@ -243,16 +209,12 @@ def make_spec(
             raise ParameterError("--budget-evals runs on backend 'numpy' only")
     except ParameterError as exc:
         raise InputError("--backend", str(exc)) from None
-    if budget is not None:
-        from swarmpath.optimizers.budget import iterations_for_budget
-
-        for a in algos:
-            for d in ds:
-                try:
-                    iterations_for_budget(a, budget_at(budget, d) or 0, agents, d,
-                                          checked.get(a))
-                except ParameterError as exc:
-                    raise InputError("--budget-evals", str(exc)) from None
+    for a in algos:
+        for d in ds:
+            try:
+                study_iterations(a, budget, iterations, agents, d, checked.get(a))
+            except ParameterError as exc:
+                raise InputError("--budget-evals", str(exc)) from None
     return BenchSpec(
         algorithms=algos,
         functions=fns,

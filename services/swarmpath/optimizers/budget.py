@@ -20,6 +20,39 @@ from swarmpath.optimizers.base import ParameterError
 
 #: CEC's budget: 10000 evaluations per dimension.
 CEC_EVALUATIONS_PER_DIM = 10_000
+#: the largest N of a budget N or NxD
+MAX_BUDGET = 10**9
+
+
+def parse_budget(text: str | None) -> str | None:
+    """A budget as a study states it: 'N' (evaluations per run) or 'NxD' (N times the
+    dimension: CEC's '10000xD'), normalised; ParameterError naming budget_evals otherwise."""
+    if text is None:
+        return None
+    number, sep, per_dim = str(text).strip().replace("*", "x").partition("x")
+    if (sep and per_dim.strip().upper() != "D") or not number.strip().isdigit() or not (
+            1 <= int(number) <= MAX_BUDGET):
+        raise ParameterError(f"budget_evals {text!r} is not a positive integer N or NxD "
+                             "(N times the dimension, e.g. 10000xD)")
+    return f"{int(number)}xD" if sep else str(int(number))
+
+
+def budget_at(budget: str | None, dim: int) -> int | None:
+    """The evaluations of one run at ``dim`` of a parsed budget (None: no budget)."""
+    if budget is None:
+        return None
+    number, _, per_dim = budget.partition("x")
+    return int(number) * (dim if per_dim else 1)
+
+
+def study_iterations(algorithm: str, budget: str | None, iterations: int, agents: int, dim: int,
+                     params: Mapping[str, Any] | None = None) -> int:
+    """A study's iterations for ``algorithm`` at ``dim``: ``iterations`` without a budget, else
+    those that spend it (:func:`iterations_for_budget`)."""
+    evaluations = budget_at(budget, dim)
+    if evaluations is None:
+        return iterations
+    return iterations_for_budget(algorithm, evaluations, agents, dim, params)
 
 
 def iterations_for_budget(algorithm: str, budget: int, agents: int, dim: int,

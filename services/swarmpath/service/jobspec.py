@@ -52,7 +52,6 @@ from swarmpath.service.spec_checks import (
 from swarmpath.service.spec_suites import (
     MAX_INSTANCE,
     MAX_INSTANCES,
-    _budget_at,
     _check_budget,
     _with_instances,
 )
@@ -244,16 +243,15 @@ class BenchmarkJobSpec(Model):
 
     def evaluations(self, dim: int) -> int | None:
         """The budget of one run at ``dim`` (None: agents x iterations)."""
-        return _budget_at(self.budget_evals, dim)
+        from swarmpath.optimizers.budget import budget_at
+
+        return budget_at(self.budget_evals, dim)
 
     def iterations_for(self, algorithm: str, dim: int) -> int:
-        budget = self.evaluations(dim)
-        if budget is None:
-            return self.iterations
-        from swarmpath.optimizers.budget import iterations_for_budget
+        from swarmpath.optimizers.budget import study_iterations
 
-        return iterations_for_budget(algorithm, budget, self.agents, dim,
-                                     self.params.get(algorithm))
+        return study_iterations(algorithm, self.budget_evals, self.iterations, self.agents, dim,
+                                self.params.get(algorithm))
 
 
 def _reference(v: str | None, members: list[str] | None) -> str | None:

@@ -32,6 +32,8 @@ Values = Callable[[Array, int], Array]
 Optimum = Callable[[int, int], tuple[Array, float]]
 
 INSTANCE_SEPARATOR = "@i"
+#: the largest instance id a study may name (COCO's seeds are f + 10000 i: far from overflow)
+MAX_INSTANCE = 1_000_000
 _INSTANCE = re.compile(r"^(?P<base>.+)@i(?P<instance>[0-9]+)$")
 
 
@@ -169,3 +171,26 @@ def make_suite_function(
 
 def _unbound(x: Array) -> Array:  # replaced by with_instance
     raise RuntimeError("suite function without an instance")
+
+
+def with_instances(names: list[str], instances: list[int] | None) -> list[str]:
+    """Each suite function of ``names`` once per instance (``bbob:f3``, ``bbob:f3@i2``, ...),
+    the other functions once, duplicates dropped; ValueError if a suite lacks one of the
+    instances or none of ``names`` has instances."""
+    from swarmpath.functions.registry import get_function
+
+    if instances is None:
+        return names
+    out: list[str] = []
+    suites = 0
+    for name in names:
+        fn = get_function(name)
+        if not isinstance(fn, SuiteFunction):
+            out.append(name)
+            continue
+        suites += 1
+        out.extend(fn.with_instance(i).name for i in instances)
+    if not suites:
+        raise ValueError("only suite functions (bbob:..., cec2017:..., cec2022:...) have "
+                         "instances, and none is listed")
+    return list(dict.fromkeys(out))

@@ -1,10 +1,9 @@
-"""Sums and matrix-vector products added in a C loop's order, vectorized over points.
+"""Sums added in a C loop's order, and rotations, vectorized over points.
 
 The references (COCO, the CEC codes) add ``acc += a[j] * b[j]`` for j = 0, 1, ...; numpy's
-reductions and matmul add in other orders (pairwise, blocked). The difference is in the last
-bits, and the chaotic functions (BBOB f16/f19, Weierstrass, Katsuura, the composition weights)
-turn last bits of a rotated point into 1e-9 of f. These helpers repeat the references' order,
-one numpy operation per coordinate, still vectorized over all points at once.
+reductions add pairwise. The difference is in the last bits; where it matters (COCO's
+Gram-Schmidt, whose last bits the chaotic f16/f19 turn into 1e-9 of f) the suites add in the
+references' order with :func:`sequential` (a cumulative sum: left to right).
 """
 
 from __future__ import annotations
@@ -16,13 +15,15 @@ Array = NDArray[np.float64]
 
 
 def rotate(x: Array, matrix: Array, offset: float = 0.0) -> Array:
-    """offset + matrix @ x for every point x of X (..., d): row i is
-    ``offset + x[0] m[i, 0] + x[1] m[i, 1] + ...`` added left to right."""
-    x = np.asarray(x, dtype=float)
-    acc = np.full((*x.shape[:-1], matrix.shape[0]), offset)
-    for j in range(x.shape[-1]):
-        acc += x[..., j, None] * matrix[:, j]
-    return acc
+    """offset + matrix @ x for every point x of X (..., d), as one matmul. Its sums add in BLAS
+    order, not the references' left to right; measured on every golden case that moves no value
+    by more than 3.2e-11 of max(|f|, |f - f_opt|) (bbob f19; adding in the C order gave
+    3.4e-11 at 1.5-4x the cost), so the order that matters is the rotations' own construction
+    (``bbob_instances``, Gram-Schmidt summed in order)."""
+    out = np.matmul(np.asarray(x, dtype=float), matrix.T)
+    if offset:
+        out += offset
+    return np.asarray(out)
 
 
 def sequential(terms: Array) -> Array:
