@@ -1,0 +1,140 @@
+#!/usr/bin/env python3
+"""Evaluations per second of the suites: swarmpath's vectorized numpy (and the compiled kernels
+where they exist) against calling the reference point by point.
+
+    PYTHONPATH=services .venv/bin/python scripts/bench/suites.py [--suite bbob] [--dims 10,40]
+        [--points 900] [--repeats 5]
+        [--cec2017 LIB INPUT_DIR] [--cec2022 LIB INPUT_DIR] [--symbol-suffix _c]
+
+References: bbob: ``cocoex.BareProblem`` called once per point (how an optimizer drives
+COCO); CEC: the organisers' ``cec17_test_func`` / ``cec22_test_func`` from a shared library you
+built from their code (as for scripts/suites/golden.py), called once per point (mx = 1) and once
+for the whole batch (mx = points: the C code's own speed without the per-call overhead).
+swarmpath evaluates the batch of ``--points`` points (30 runs x 30 agents by default) in one
+call. Every figure is the best of ``--repeats`` in process CPU time, measured side by side in
+one run; each row also checks that the values agree (golden.agree). Prints one row per function
+and a median line per suite and dimension, and the load average.
+"""
+
+from __future__ import annotations
+
+import argparse
+import ctypes
+import os
+import statistics
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from swarmpath.functions import get_function, list_functions
+from swarmpath.functions.suites import golden
+
+
+def best_time(call: Callable[[], object], repeats: int) -> float:
+    times = []
+    for _ in range(repeats):
+        start = time.process_time()
+        call()
+        times.append(time.process_time() - start)
+    return max(min(times), 1e-9)
+
+
+def cec_library(lib: Path, symbol: str, workdir: Path) -> Callable[[int, np.ndarray, int], np.ndarray]:
+    function = getattr(ctypes.CDLL(str(lib.resolve())), symbol)
+    pointer = ctypes.POINTER(ctypes.c_double)
+
+    def evaluate(number: int, X: np.ndarray, per_call: int) -> np.ndarray:
+        X = np.ascontiguousarray(X)
+        out = np.zeros(len(X))
+        here = os.getcwd()
+        os.chdir(workdir)
+        try:
+            for start in range(0, len(X), per_call):
+                rows = X[start:start + per_call]
+                function(rows.ctypes.data_as(pointer), out[start:].ctypes.data_as(pointer),
+                         X.shape[1], len(rows), number)
+        finally:
+            os.chdir(here)
+        return out
+
+    return evaluate
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--suite", action="append", choices=("bbob", "cec2017", "cec2022"))
+    parser.add_argument("--dims", default=None, help="default: bbob 10,40; cec2017 10,50; "
+                        "cec2022 10,20")
+    parser.add_argument("--points", type=int, default=900)
+    parser.add_argument("--reference-points", type=int, default=300)
+    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--cec2017", nargs=2, type=Path, metavar=("LIB", "INPUT_DIR"))
+    parser.add_argument("--cec2022", nargs=2, type=Path, metavar=("LIB", "INPUT_DIR"))
+    parser.add_argument("--symbol-suffix", default="", help="e.g. _c for a C-linkage wrapper")
+    args = parser.parse_args(argv)
+    suites = args.suite or ["bbob", "cec2017", "cec2022"]
+    defaults = {"bbob": "10,40", "cec2017": "10,50", "cec2022": "10,20"}
+    print(f"load average {os.getloadavg()[0]:.2f}; {args.points} points per batch, best of "
+          f"{args.repeats}, process CPU time")
+    print(f"{'function':<14}{'D':>4}{'numpy/s':>12}{'ref/s':>11}{'ratio':>8}{'C batch/s':>12}")
+    rng = np.random.default_rng(1)
+    for suite in suites:
+        reference: Callable[..., np.ndarray] | None = None
+        if suite == "bbob":
+            try:
+                import cocoex
+            except ImportError:
+                print("bbob: cocoex not installed (pip install coco-experiment)")
+                continue
+        else:
+            where = getattr(args, suite)
+            if where is None:
+                print(f"{suite}: no reference library given (--{suite} LIB INPUT_DIR)")
+                continue
+            name = ("cec17_test_func" if suite == "cec2017" else "cec22_test_func")
+            reference = cec_library(where[0], name + args.symbol_suffix, where[1])
+        for dim in map(int, (args.dims or defaults[suite]).split(",")):
+            ratios, speeds = [], []
+            for name in list_functions(suite):
+                fn = get_function(name)
+                try:
+                    fn.check_dim(dim)  # type: ignore[attr-defined]
+                except ValueError:
+                    continue
+                X = rng.uniform(fn.lower, fn.upper, (args.points, dim))
+                ours = fn.value(X)  # type: ignore[attr-defined]  (warms the instance cache)
+                t_ours = best_time(lambda fn=fn, X=X: fn.value(X), args.repeats)
+                R = X[: args.reference_points]
+                batch = ""
+                if suite == "bbob":
+                    problem = cocoex.BareProblem("bbob", fn.number, dim, 1)  # type: ignore[attr-defined]
+                    ref = np.array([problem(x) for x in R])
+                    t_ref = best_time(lambda p=problem, R=R: [p(x) for x in R], args.repeats)
+                else:
+                    assert reference is not None
+                    number = fn.number  # type: ignore[attr-defined]
+                    ref = reference(number, R, 1)
+                    t_ref = best_time(lambda n=number, R=R: reference(n, R, 1), args.repeats)
+                    t_batch = best_time(lambda n=number, X=X: reference(n, X, len(X)),
+                                        args.repeats)
+                    batch = f"{args.points / t_batch:12.3g}"
+                ok = golden.agree(ours[: len(R)], ref, fn.f_opt(dim)).all()  # type: ignore[attr-defined]
+                speed, ref_speed = args.points / t_ours, len(R) / t_ref
+                ratios.append(speed / ref_speed)
+                speeds.append(speed)
+                flag = "" if ok else "  VALUES DIFFER"
+                print(f"{name:<14}{dim:>4}{speed:12.3g}{ref_speed:11.3g}"
+                      f"{speed / ref_speed:8.2f}{batch}{flag}")
+            if ratios:
+                print(f"{suite + ' median':<14}{dim:>4}{statistics.median(speeds):12.3g}"
+                      f"{'':>11}{statistics.median(ratios):8.2f}  (ratio min "
+                      f"{min(ratios):.2f}, max {max(ratios):.2f})")
+    print(f"load average {os.getloadavg()[0]:.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
