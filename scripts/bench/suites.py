@@ -42,7 +42,10 @@ def best_time(call: Callable[[], object], repeats: int) -> float:
     return max(min(times), 1e-9)
 
 
-def cec_library(lib: Path, symbol: str, workdir: Path) -> Callable[[int, np.ndarray, int], np.ndarray]:
+Reference = Callable[[int, np.ndarray, int], np.ndarray]
+
+
+def cec_library(lib: Path, symbol: str, workdir: Path) -> Reference:
     function = getattr(ctypes.CDLL(str(lib.resolve())), symbol)
     pointer = ctypes.POINTER(ctypes.c_double)
 
@@ -117,8 +120,9 @@ def main(argv: list[str] | None = None) -> int:
                     assert reference is not None
                     number = fn.number  # type: ignore[attr-defined]
                     ref = reference(number, R, 1)
-                    t_ref = best_time(lambda n=number, R=R: reference(n, R, 1), args.repeats)
-                    t_batch = best_time(lambda n=number, X=X: reference(n, X, len(X)),
+                    t_ref = best_time(lambda n=number, R=R, c=reference: c(n, R, 1),
+                                      args.repeats)
+                    t_batch = best_time(lambda n=number, X=X, c=reference: c(n, X, len(X)),
                                         args.repeats)
                     batch = f"{args.points / t_batch:12.3g}"
                 ok = golden.agree(ours[: len(R)], ref, fn.f_opt(dim)).all()  # type: ignore[attr-defined]
