@@ -62,7 +62,8 @@ def test_table_has_the_papers_columns_and_a_mean_row():
                    "Travel time", "Velocity smoothness", "Angular smoothness", "Jerk"):
         assert column in head
     row = next(r for r in lines[quality:] if r[:2] == ["mfb-static", "OMPL-RRTstar"])
-    assert len(row) == 2 + 10 and all(v != "-" for v in row[2:])
+    assert len(row) == 2 + 12 and all(v != "-" for v in row[2:12])
+    assert row[12:] == ["-", "-"]  # nav2 costs: maps imported from a grid only
 
 
 def test_json_document_has_exactly_runs_summary_statistics_and_maps():

@@ -83,7 +83,7 @@ def test_bad_values_exit_2_naming_the_option(args: tuple[str, ...], option: str)
 
 def test_a_start_on_an_obstacle_says_where_it_is_never_clearance_minus_0() -> None:
     """``--start 0,0`` on tb3_sandbox said "clearance -0 <= 0.105" (issue 25)."""
-    result = invoke("-m", str(DATA / "tb3_sandbox.yaml"), "--start", "0,0")
+    result = invoke("-m", str(DATA / "tb3_sandbox.yaml"), "--start", "0,0", "--frame", "scenario")
     assert result.exit_code == 2
     err = " ".join(result.stderr.split())
     assert "--start" in err and "(0, 0) lies on an obstacle's edge: the robot collides" in err
@@ -162,3 +162,24 @@ def test_scen_studies_report_success_and_gap_per_bucket(tmp_path) -> None:
     assert [r[:2] for r in lines if r[1:2] == ["OMPL-BITstar"] and r[0] in ("0", "8")] == [
         ["0", "OMPL-BITstar"], ["8", "OMPL-BITstar"]]
     assert (tmp_path / "difficulty.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_start_and_goal_of_a_nav2_map_are_in_its_map_frame() -> None:
+    # tb3_sandbox's YAML origin is (-10, -10): map (-1.5, -1.5) is the scenario's (8.5, 8.5)
+    tb3 = str(DATA / "tb3_sandbox.yaml")
+    params = json.dumps({"OMPL-BITstar": {"iterations": 2000}})
+    base = ("-p", "OMPL-BITstar", "-m", tb3, "--runs", "1", "--params", params, "--json")
+    doc = json.loads(invoke(*base, "--start", "-1.5,-1.5", "--goal", "1.0,2.0").stdout)
+    same = json.loads(invoke(*base, "--start", "8.5,8.5", "--goal", "11.0,12.0", "--frame",
+                             "scenario").stdout)
+    assert doc["runs"][0]["path"] == same["runs"][0]["path"]
+    assert doc["runs"][0]["path"][0][:2] == [8.5, 8.5]  # runs keep the scenario frame ...
+    assert doc["runs"][0]["frame_origin"] == [-10.0, -10.0]  # ... and say where the map's is
+    (entry,) = doc["maps"]
+    assert entry["frame"] == "map" and entry["origin"] == [-10.0, -10.0]
+    assert entry["start"] == [-1.5, -1.5] and entry["goal"] == [1.0, 2.0]
+    inside = invoke(*base, "--start", "-8,-8.5")  # in the unknown space around the building
+    assert inside.exit_code == 2 and "--start" in inside.stderr
+    assert "minus the YAML origin" in " ".join(inside.stderr.split())
+    bad = invoke(*base, "--start", "1,1", "--frame", "world")
+    assert bad.exit_code == 2 and "--frame" in bad.stderr

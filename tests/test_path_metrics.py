@@ -116,3 +116,45 @@ def test_episodes_report_the_metrics_of_their_executed_path():
     assert out.clearance_mean >= out.min_clearance > 0.0
     assert 0.0 <= out.danger_share <= 1.0
     assert out.cpu_seconds > 0.0
+
+
+def test_nav2_inflation_costs_by_hand():
+    from swarmpath.costmap import inflation_costs
+
+    lethal = np.zeros((30, 30), dtype=bool)
+    lethal[15, 5] = True
+    unknown = np.zeros_like(lethal)
+    unknown[15, 6] = unknown[15, 10] = True
+    c = inflation_costs(lethal, unknown, 0.05, 0.105)
+    assert c[15, 5] == 254
+    assert c[15, 7] == 253  # 0.10 m <= inscribed 0.105 m
+    assert c[15, 8] == math.floor(252 * math.exp(-3.0 * (0.15 - 0.105)))  # 220
+    assert c[15, 16] == math.floor(252 * math.exp(-3.0 * (0.55 - 0.105)))  # 11 cells: 66
+    assert c[15, 17] == 0  # beyond ceil(0.55 / 0.05) = 11 cells
+    assert c[15, 6] == 253  # unknown, but inscribed: nav2 keeps the inflated cost
+    assert c[15, 10] == 255  # unknown farther out: NO_INFORMATION
+    assert c[20, 5] == math.floor(252 * math.exp(-3.0 * (0.25 - 0.105)))  # Euclidean, in y
+
+
+def test_nav2_maps_report_costmap_costs_and_their_frame():
+    from pathlib import Path
+
+    from swarmpath.costmap import path_costs, scenario_costmap
+    from swarmpath.world.importers import load_ros_map
+
+    imported = load_ros_map(Path(__file__).parent / "data" / "tb3_sandbox.yaml")
+    scenario = imported.scenario
+    costmap = scenario_costmap(scenario)
+    blocked = imported.blocked
+    unknown = imported.grid.data == -1
+    assert costmap.costs.shape == blocked.shape
+    assert np.array_equal(costmap.costs == 254, blocked & ~unknown)  # exactly the occupied cells
+    assert set(np.unique(costmap.costs[unknown]).tolist()) <= {253, 255}
+    assert not (costmap.costs[~unknown] == 255).any()
+    out = Episode(scenario, "OMPL-BITstar", seed=1, params={"iterations": 2000}).run()
+    assert out.success
+    assert (out.costmap_cost_mean, out.costmap_cost_max) == path_costs(costmap, out.path)
+    assert 0.0 <= out.costmap_cost_mean <= out.costmap_cost_max < 254
+    assert out.frame_origin == [-10.0, -10.0]
+    preset = Episode(get_map("mfb-static"), "OMPL-BITstar", 1, params={"iterations": 500}).run()
+    assert preset.costmap_cost_mean is None and preset.frame_origin is None

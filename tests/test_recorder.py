@@ -603,3 +603,26 @@ def test_the_recorder_process_writes_what_the_store_holds_even_after_dying(store
     _summary, meta_in, want = read_all(Recorders(store).finish(job))
     assert [(c.topic, m, t) for _s, c, m, t in got] == [(c.topic, m, t) for _s, c, m, t in want]
     assert len(got) == 40 and meta == meta_in
+
+
+def test_a_nav2_map_is_placed_through_its_own_map_frame(tmp_path):
+    # a map imported from nav2 carries its YAML origin: /tf puts its scenario frame in the
+    # map's own frame at that origin, and the map's frame in the world where the map goes
+    nav2 = {**SCENARIO, "name": "nav2", "grid": {"frame": "map", "origin": [-10.0, -4.5],
+                                                 "resolution": 0.5, "unknown": []}}
+    spec = {"kind": "map", "planners": ["P"], "maps": [nav2], "runs": 1, "seed": 1}
+    rec = JobRecorder(tmp_path / "m.mcap", "job1", "map", spec, T0)
+    record = map_record("job1", 0, T0 + 1, nav2)
+    record["spec"]["map"], record["cell"] = "nav2", "P/nav2"
+    assert rec.add(record)
+    rec.finish()
+    _summary, _metadata, messages = read_all(tmp_path / "m.mcap")
+    tfs = {m["child_frame_id"]: m for _s, c, m, _t in messages if c.topic == "/tf"}
+    assert set(tfs) == {"map/nav2/map", "map/nav2"}
+    assert tfs["map/nav2/map"]["parent_frame_id"] == "world"
+    assert tfs["map/nav2"]["parent_frame_id"] == "map/nav2/map"
+    assert (tfs["map/nav2"]["translation"]["x"], tfs["map/nav2"]["translation"]["y"]) == (
+        -10.0, -4.5)
+    # the scenario frame ends up where it was: world x = offset 0, y = 0
+    assert tfs["map/nav2/map"]["translation"]["x"] + tfs["map/nav2"]["translation"]["x"] == 0.0
+    assert tfs["map/nav2/map"]["translation"]["y"] + tfs["map/nav2"]["translation"]["y"] == 0.0

@@ -63,7 +63,13 @@ def test_upload_list_read_and_use_in_a_job_across_a_restart(data_dir: Path) -> N
         spec = client.app.state.core.store.job_spec(job_id)  # type: ignore[attr-defined]
         first, second = spec.maps  # the job carries the scenarios, not references
         assert first["name"] == arena["id"] and first["start"] == [0.75, 1.25]
-        assert second["name"] == tb3["id"] and second["goal"] == tb3["goal"]
+        # GET /maps and a job's start/goal are in the map's own frame (nav2: its YAML origin);
+        # the job's scenario keeps the scenario frame
+        assert (arena["frame"], arena["origin"]) == ("scenario", [0.0, 0.0])
+        assert (tb3["frame"], tb3["origin"]) == ("map", [-10.0, -10.0])
+        assert second["name"] == tb3["id"] and second["goal"] == pytest.approx(
+            [tb3["goal"][0] + 10.0, tb3["goal"][1] + 10.0])
+        assert second["grid"]["origin"] == [-10.0, -10.0]
 
 
 def test_unknown_map_and_bad_start_name_the_field(data_dir: Path) -> None:

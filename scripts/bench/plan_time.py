@@ -42,7 +42,7 @@ def one_run(scenario: Any, planner: str, seed: int,
     data = out.to_dict()
     # the digest covers what the run did: not the host's timings, nor the metrics derived
     # from the path (so digests stay comparable with those recorded before they existed)
-    for key in (*TIMING_FIELDS, *PATH_METRICS):
+    for key in (*TIMING_FIELDS, *PATH_METRICS, "frame_origin"):
         data.pop(key)
     digest = hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()[:16]
     return cpu, out.seconds, digest, out

@@ -44,10 +44,11 @@ CUSP_ANGLE = math.pi / 3.0
 #: m of body gap (clearance - radius) under which the robot is "in danger" (MRPB's safety).
 DANGER_DISTANCE = 0.1
 MOVING = 1e-9  # m: a shorter step is a stop (turning in place, waiting), with no direction
-#: The per-run fields these metrics fill (RunOutcome); summaries average them over the
-#: successful runs under the same names.
+#: The per-run fields these metrics (and nav2's costs, :mod:`swarmpath.costmap`) fill
+#: (RunOutcome); summaries average them over the successful runs under the same names.
 PATH_METRICS = ("clearance_mean", "curvature_max", "curvature_mean", "cusps", "danger_share",
-                "velocity_smoothness", "angular_smoothness", "jerk")
+                "velocity_smoothness", "angular_smoothness", "jerk", "costmap_cost_mean",
+                "costmap_cost_max")
 
 __all__ = [
     "CLEARANCE_SPACING",

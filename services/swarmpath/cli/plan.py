@@ -206,11 +206,26 @@ def document(cells: Sequence[CellResult], reference: str | None = None,
         value, reason = optima.get(name, (None, None))
         if name not in optima:  # the runs carry the optimum (without the reason)
             value = next((r["optimum"] for r in by_name[name] if r["optimum"] is not None), None)
+        scenario = next(c.scenario for c in cells if c.scenario.name == name)
         maps.append({"map": name, "optimum": value, "optimum_reason": reason,
-                     "octile": octile.get(name), "bucket": buckets.get(name)})
+                     "octile": octile.get(name), "bucket": buckets.get(name),
+                     **frame_entry(scenario)})
     return {"runs": runs, "summary": summarize(runs),
             "statistics": map_statistics(runs, planners, reference).to_json(), "maps": maps,
             "buckets": bucket_rows(runs, buckets)}
+
+
+def frame_entry(scenario: Any) -> dict[str, Any]:
+    """The frame a map's positions are reported in (``--json`` ``maps[]``): ``frame`` (a nav2
+    map's "map", else "scenario"), the scenario's (0, 0) in it (``origin``) and the start and
+    goal in it; the runs' paths stay in the scenario frame (``frame_origin`` on each run)."""
+    grid = getattr(scenario, "grid", None)
+    if grid is None:
+        return {"frame": "scenario", "origin": [0.0, 0.0], "start": list(scenario.start),
+                "goal": list(scenario.goal)}
+    return {"frame": grid.frame, "origin": list(grid.origin),
+            "start": grid.to_map_frame(scenario.start).tolist(),
+            "goal": grid.to_map_frame(scenario.goal).tolist()}
 
 
 # ---------------------------------------------------------------------------------------- plots
@@ -317,12 +332,19 @@ def plan(
                      "against (default: the last one listed)."),
     ] = None,
     start: Annotated[
-        str | None, typer.Option("--start", metavar="X,Y", help="Start of every map (metres "
-                                 "from the map's lower-left corner).")
+        str | None, typer.Option("--start", metavar="X,Y", help="Start of every map (metres, "
+                                 "in --frame).")
     ] = None,
     goal: Annotated[
-        str | None, typer.Option("--goal", metavar="X,Y", help="Goal of every map (metres).")
+        str | None, typer.Option("--goal", metavar="X,Y", help="Goal of every map (metres, in "
+                                 "--frame).")
     ] = None,
+    frame: Annotated[
+        str, typer.Option("--frame", metavar="map|scenario", help="Frame of --start/--goal: "
+                          "map (a nav2 map's own frame, its YAML origin honoured; the same as "
+                          "scenario for other maps) or scenario (metres from the map's "
+                          "lower-left corner).")
+    ] = "map",
     resolution: Annotated[
         float | None, typer.Option("--resolution", metavar="M",
                                    help="Cell size of MovingAI .map files (default 1 m).")
@@ -370,7 +392,8 @@ def plan(
     def note(text: str) -> None:
         stderr.print(f"swarmpath plan: {text}", highlight=False, markup=False, soft_wrap=True)
 
-    options = make_options(start, goal, resolution, scen, scen_ids, max_cells, max_obstacles)
+    options = make_options(start, goal, resolution, scen, scen_ids, max_cells, max_obstacles,
+                           frame)
     spec = make_spec(planners, maps, runs, seed, params, reference, options, optimum_budget,
                      note, backend)
     if not 0 <= jobs <= parallel.MAX_JOBS:

@@ -32,6 +32,12 @@ class MapOptions:
     scen_ids: tuple[int, ...] | None = None
     max_cells: int | None = None
     max_obstacles: int | None = None
+    #: the frame of --start/--goal: "map" (a nav2 map's own frame, its YAML origin honoured; the
+    #: scenario frame for every other map) or "scenario" (metres from the lower-left corner)
+    frame: str = "map"
+
+
+FRAMES = ("map", "scenario")
 
 
 def parse_point(text: str | None, option: str) -> tuple[float, float] | None:
@@ -64,7 +70,7 @@ def parse_ids(text: str | None) -> tuple[int, ...] | None:
 def make_options(start: str | None = None, goal: str | None = None,
                  resolution: float | None = None, scen: Path | None = None,
                  scen_ids: str | None = None, max_cells: int | None = None,
-                 max_obstacles: int | None = None) -> MapOptions:
+                 max_obstacles: int | None = None, frame: str = "map") -> MapOptions:
     if resolution is not None and not (math.isfinite(resolution) and resolution > 0):
         raise InputError("--resolution", f"{resolution} is not a positive cell size in metres")
     for option, value in (("--max-cells", max_cells), ("--max-obstacles", max_obstacles)):
@@ -74,8 +80,10 @@ def make_options(start: str | None = None, goal: str | None = None,
         raise InputError("--scen-ids", "needs --scen FILE")
     if scen is not None and (start is not None or goal is not None):
         raise InputError("--scen", "takes start and goal from the file: drop --start/--goal")
+    if frame not in FRAMES:
+        raise InputError("--frame", f"must be one of {', '.join(FRAMES)}, got {frame!r}")
     return MapOptions(parse_point(start, "--start"), parse_point(goal, "--goal"), resolution,
-                      scen, parse_ids(scen_ids), max_cells, max_obstacles)
+                      scen, parse_ids(scen_ids), max_cells, max_obstacles, frame)
 
 
 # ------------------------------------------------------------------------------------ loading
@@ -126,7 +134,8 @@ def _load_file(path: Path, opts: MapOptions,
         except yaml.YAMLError as exc:
             raise InputError("--maps", f"{path}: not valid YAML ({exc})") from None
         if isinstance(doc, dict) and "image" in doc:
-            return load_ros_map(path, **ends, progress=progress, **_limits(opts)).scenario, True
+            return load_ros_map(path, **ends, progress=progress, endpoints_frame=opts.frame,
+                                **_limits(opts)).scenario, True
         if not isinstance(doc, dict):
             raise InputError("--maps", f"{path}: expected a YAML mapping")
         return scenario_from_dict(doc, str(path)), False
@@ -139,12 +148,24 @@ def _with_endpoints(scenario: Any, opts: MapOptions) -> Any:
 
     if opts.start is None and opts.goal is None:
         return scenario
-    s = dataclasses.replace(scenario, start=opts.start or scenario.start,
-                            goal=opts.goal or scenario.goal)
+    start, goal = opts.start, opts.goal
+    if opts.frame == "map" and scenario.grid is not None:  # a scenario saved from a nav2 map
+        start, goal = (None if p is None else tuple(scenario.grid.to_scenario_frame(p).tolist())
+                       for p in (start, goal))
+    s = dataclasses.replace(scenario, start=start or scenario.start,
+                            goal=goal or scenario.goal)
     for field_, message in scenario_problems(s):
         if field_ in ("start", "goal"):
             raise InputError(f"--{field_}", f"on {scenario.name}: {message}")
     return s
+
+
+def _frame_hint(field_: str, opts: MapOptions, nav2: bool) -> str:
+    """On a nav2 map the user's map-frame --start/--goal is reported in the scenario frame."""
+    if nav2 and _problem_option(field_, opts) in ("--start", "--goal"):
+        return (" (scenario-frame coordinates: the map-frame point given minus the YAML "
+                "origin)")
+    return ""
 
 
 def load_map(item: str, opts: MapOptions | None = None,
@@ -183,8 +204,10 @@ def load_map(item: str, opts: MapOptions | None = None,
     except (ValueError, KeyError, OSError) as exc:  # ScenarioError, MapImportError, ...
         problems = getattr(exc, "problems", None)
         if problems:  # a scenario: one line per problem
-            raise InputErrors([(_problem_option(p, opts), f"{item}: {p}: {m}" if p
-                                else f"{item}: {m}") for p, m in problems]) from None
+            nav2 = path.suffix.lower() in (".yaml", ".yml") and opts.frame == "map"
+            raise InputErrors([(_problem_option(p, opts), (f"{item}: {p}: {m}" if p
+                                else f"{item}: {m}") + _frame_hint(p, opts, nav2))
+                               for p, m in problems]) from None
         text = str(exc)  # the importers' messages start with the file already
         raise InputError(_option_of(exc), text if text.startswith(item) else f"{item}: {text}"
                          ) from None

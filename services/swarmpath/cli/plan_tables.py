@@ -82,6 +82,8 @@ QUALITY_COLUMNS = (
     ("Velocity smoothness (m/s2)", "velocity_smoothness", 3, 1.0),
     ("Angular smoothness (rad/s2)", "angular_smoothness", 2, 1.0),
     ("Jerk (m/s3)", "jerk", 2, 1.0),
+    ("Cost mean (nav2)", "costmap_cost_mean", 1, 1.0),
+    ("Cost max (nav2)", "costmap_cost_max", 1, 1.0),
 )
 
 
@@ -150,7 +152,8 @@ def print_tables(cells: Sequence[CellResult], spec: PlanSpec, seconds: float) ->
                                                  spec.buckets)))
     console.print(legend_text(["Collisions", "Gap (%)", "CPU time (s)", "clearance_mean",
                                "curvature_max", "cusps", "danger_share", "velocity_smoothness",
-                               "angular_smoothness", "jerk"]), markup=False, highlight=False)
+                               "angular_smoothness", "jerk", "costmap_cost_mean"]),
+                  markup=False, highlight=False)
     if len(spec.planners) > 1:
         from swarmpath.cli import plan_stats
         from swarmpath.evidence.compare_maps import map_statistics

@@ -38,6 +38,9 @@ NOTES: dict[str, str] = {
                            "successful runs",
     "angular_smoothness": "mean |change of the turn rate of the direction of travel| per "
                           "second (rad/s^2), mean over successful runs",
+    "costmap_cost_mean": "nav2 maps: mean and largest cost (0-254) of nav2's inflated costmap "
+                         "(inflation radius 0.55 m, cost scaling 3.0) along the path, as nav2's "
+                         "planner benchmark reports them; means over successful runs",
     "jerk": "mean magnitude of the jerk, the rate of change of acceleration (m/s^3), mean over "
             "successful runs",
     "rank": "rank of avg among the algorithms on this function and dimension (1 = best)",

@@ -30,6 +30,8 @@ PATH_RGB = "#1f77b4"
 FAILED_RGB = "#d32f2f"
 STATIC_RGB = "#9e9e9e"
 MOVING_RGB = "#f4b183"
+UNKNOWN_RGB = "#cfcfcf"
+OCCUPIED_RGB = "#424242"
 
 
 def _pyplot() -> Any:
@@ -291,21 +293,28 @@ def map_figure(planner: str, scenario: Any, runs: Sequence[Mapping[str, Any]],
     s = scenario
     r = s.robot.radius
     w, h = s.size
+    grid = getattr(s, "grid", None)
+    # positions are drawn in the map's own frame (a nav2 map's YAML origin honoured)
+    ox, oy = (float(v) for v in grid.origin) if grid is not None else (0.0, 0.0)
     fig, ax = plt.subplots(figsize=(7, 7.6), dpi=100)
-    ax.add_patch(Rectangle((0, 0), w, h, fill=False, ec="black", lw=1.0))
-    for ob in s.obstacles:
+    ax.add_patch(Rectangle((ox, oy), w, h, fill=False, ec="black", lw=1.0))
+    if grid is not None:
+        _grid_obstacles(ax, s, grid, (ox, oy))
+    for ob in s.obstacles if grid is None else [o for o in s.obstacles if o.is_moving]:
         face = MOVING_RGB if ob.is_moving else STATIC_RGB
         if ob.shape == "circle":
-            ax.add_patch(Circle(ob.center, ob.radius, fc=face, ec="none", alpha=0.9))
-            ax.add_patch(Circle(ob.center, ob.radius + r, fill=False, ec="#616161", ls="--",
+            centre = (ob.center[0] + ox, ob.center[1] + oy)
+            ax.add_patch(Circle(centre, ob.radius, fc=face, ec="none", alpha=0.9))
+            ax.add_patch(Circle(centre, ob.radius + r, fill=False, ec="#616161", ls="--",
                                 lw=0.8))
         else:
-            pts = np.asarray(ob.points)
+            pts = np.asarray(ob.points) + np.array([ox, oy])
             ax.add_patch(Polygon(pts, closed=True, fc=face, ec="none", alpha=0.9))
             xs, ys = ShapelyPolygon(pts).buffer(r, quad_segs=16).exterior.xy
             ax.plot(xs, ys, color="#616161", ls="--", lw=0.8)
     paths = {int(run.get("run", i)): np.asarray(run["path"], dtype=float).reshape(-1, 3)
              for i, run in enumerate(runs) if run.get("path")}
+    shift = np.array([ox, oy, 0.0])
     t_end = max((p[-1, 2] for p in paths.values()), default=0.0)
     if s.is_dynamic and t_end > 0:
         world = world_of(min(paths) if paths else 0)
@@ -314,34 +323,41 @@ def map_figure(planner: str, scenario: Any, runs: Sequence[Mapping[str, Any]],
         if movers:
             pos = np.array([world.obstacle_positions_at(float(t)) for t in times])
             for j in movers:
-                ax.plot(pos[:, j, 0], pos[:, j, 1], color="#e07b39", alpha=0.35, lw=1.0)
+                ax.plot(pos[:, j, 0] + ox, pos[:, j, 1] + oy, color="#e07b39", alpha=0.35,
+                        lw=1.0)
         if s.goal_motion is not None:
             g = np.array([world.goal_at(float(t)) for t in times])
-            ax.plot(g[:, 0], g[:, 1], color="#2e7d32", alpha=0.5, lw=1.0, ls=":")
+            ax.plot(g[:, 0] + ox, g[:, 1] + oy, color="#2e7d32", alpha=0.5, lw=1.0, ls=":")
     any_collision = False
     for i, run in enumerate(runs):
         p = paths.get(int(run.get("run", i)))
         if p is None:
             continue
+        scenario_frame = p
+        p = p + shift
         if run.get("success"):
             ax.plot(p[:, 0], p[:, 1], lw=1.2, alpha=0.85, color=PATH_RGB)
             continue
         ax.plot(p[:, 0], p[:, 1], lw=1.2, ls="--", color=FAILED_RGB, alpha=0.85)
         ax.plot(p[-1, 0], p[-1, 1], marker="x", color=FAILED_RGB, ms=9, mew=2, ls="none")
         if int(run.get("collisions") or 0) > 0:
-            hits = collision_points(p, world_of(int(run.get("run", i))), r)
+            hits = collision_points(scenario_frame, world_of(int(run.get("run", i))),
+                                    r) + np.array([ox, oy])
             if len(hits):
                 any_collision = True
                 ax.plot(hits[:, 0], hits[:, 1], marker="o", color="black", mfc=FAILED_RGB,
                         ms=5, ls="none")
-    ax.plot(*s.start, marker="o", color="#1565c0", ms=8, ls="none")
-    ax.plot(*s.goal, marker="*", color="#2e7d32", ms=13, ls="none")
+    ax.plot(s.start[0] + ox, s.start[1] + oy, marker="o", color="#1565c0", ms=8, ls="none")
+    ax.plot(s.goal[0] + ox, s.goal[1] + oy, marker="*", color="#2e7d32", ms=13, ls="none")
     handles = [
         Line2D([], [], marker="o", color="#1565c0", ls="none", label="start"),
         Line2D([], [], marker="*", color="#2e7d32", ms=10, ls="none", label="goal (t=0)"),
-        Patch(fc=STATIC_RGB, label="static obstacle"),
+        Patch(fc=STATIC_RGB if grid is None else OCCUPIED_RGB,
+              label="static obstacle" if grid is None else "occupied (map)"),
         Line2D([], [], color="#616161", ls="--", lw=0.8, label=f"inflated by r={r:g} m"),
     ]
+    if grid is not None and grid.unknown:
+        handles.append(Patch(fc=UNKNOWN_RGB, label="unknown (an obstacle to the robot)"))
     if any(ob.is_moving for ob in s.obstacles):
         handles += [Patch(fc=MOVING_RGB, label="moving obstacle (t=0)"),
                     Line2D([], [], color="#e07b39", alpha=0.35, label="obstacle track (run 1)")]
@@ -356,14 +372,62 @@ def map_figure(planner: str, scenario: Any, runs: Sequence[Mapping[str, Any]],
                               label="colliding step"))
     ok = sum(1 for run in runs if run.get("success"))
     ax.set_title(f"{planner} on {s.name}: {ok}/{len(runs)} runs reached the goal")
-    ax.set_xlim(-0.02 * w, 1.02 * w)
-    ax.set_ylim(-0.02 * h, 1.02 * h)
+    ax.set_xlim(ox - 0.02 * w, ox + 1.02 * w)
+    ax.set_ylim(oy - 0.02 * h, oy + 1.02 * h)
     ax.set_aspect("equal")
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
+    frame = f", {grid.frame} frame" if grid is not None else ""
+    ax.set_xlabel(f"x (m{frame})")
+    ax.set_ylabel(f"y (m{frame})")
     fig.legend(handles=handles, loc="lower center", ncol=3, fontsize=8, frameon=False)
     fig.subplots_adjust(bottom=0.16, top=0.94)
     return fig
+
+
+def _grid_obstacles(ax: Any, scenario: Any, grid: Any, origin: tuple[float, float]) -> None:
+    """An imported grid map's static obstacles as one shape (the importer's 64 x 64-cell tile
+    cuts are no walls), their outline inflated by the robot radius, and the unknown cells grey
+    on top (they are obstacles to the robot, but nobody mapped a wall there)."""
+    from matplotlib.patches import PathPatch
+    from matplotlib.path import Path as MplPath
+    from shapely import affinity
+    from shapely.geometry import Polygon as ShapelyPolygon
+    from shapely.ops import unary_union
+
+    def patch(shape: Any, **style: Any) -> None:
+        parts = getattr(shape, "geoms", [shape])
+        verts: list[Any] = []
+        codes: list[Any] = []
+        for part in parts:
+            if part.is_empty:
+                continue
+            for ring in (part.exterior, *part.interiors):
+                xy = np.asarray(ring.coords)
+                verts.extend(xy)
+                codes.extend([MplPath.MOVETO] + [MplPath.LINETO] * (len(xy) - 2)
+                             + [MplPath.CLOSEPOLY])
+        if verts:
+            ax.add_patch(PathPatch(MplPath(np.asarray(verts), codes), **style))
+
+    def moved(shape: Any) -> Any:
+        return affinity.translate(shape, *origin)
+
+    static = [o for o in scenario.obstacles if not o.is_moving]
+    shapes = [ShapelyPolygon(o.points) if o.shape == "polygon"
+              else ShapelyPolygon(np.asarray(o.center) + o.radius * np.column_stack(
+                  [np.cos(np.linspace(0, 2 * np.pi, 64)), np.sin(np.linspace(0, 2 * np.pi, 64))]))
+              for o in static]
+    union = unary_union(shapes) if shapes else None
+    unknown = unary_union([ShapelyPolygon(p) for p in grid.unknown]) if grid.unknown else None
+    if union is not None:
+        mapped = union.difference(unknown) if unknown is not None else union
+        patch(moved(mapped), fc=OCCUPIED_RGB, ec="none")
+        outline = moved(union.buffer(scenario.robot.radius, quad_segs=8))
+        for part in getattr(outline, "geoms", [outline]):
+            for ring in (part.exterior, *part.interiors):
+                xs, ys = ring.xy
+                ax.plot(xs, ys, color="#616161", ls="--", lw=0.6)
+    if unknown is not None:
+        patch(moved(unknown), fc=UNKNOWN_RGB, ec="none")
 
 
 def write_map_plots(

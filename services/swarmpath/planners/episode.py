@@ -82,6 +82,14 @@ class RunOutcome:
     velocity_smoothness: float | None = None
     angular_smoothness: float | None = None
     jerk: float | None = None
+    #: nav2's planner-benchmark costs along the path (0-254, nav2's inflation layer; maps
+    #: imported from a grid only, else None): mean and largest (:mod:`swarmpath.costmap`).
+    costmap_cost_mean: float | None = None
+    costmap_cost_max: float | None = None
+    #: ``path`` is in the scenario frame (0, 0 = the map's lower-left corner); a map imported
+    #: with a frame of its own (nav2: "map") puts the scenario's (0, 0) here in that frame, so
+    #: ``map_xy = path_xy + frame_origin`` (None: no other frame).
+    frame_origin: list[float] | None = None
     path: list[list[float]] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
@@ -230,6 +238,14 @@ class Episode:
         self.sim.drive(goal, None, self.time_limit, finish=True, align=True,
                        arrive=FINISH_TOLERANCE)
 
+    def _costs(self, path: np.ndarray) -> tuple[float | None, float | None]:
+        """nav2's mean and largest costmap cost along the path (maps imported from a grid)."""
+        if self.scenario.grid is None:
+            return None, None
+        from swarmpath.costmap import path_costs, scenario_costmap
+
+        return path_costs(scenario_costmap(self.scenario), path)
+
     def run(self) -> RunOutcome:
         while not self.done:
             self.step()
@@ -249,6 +265,8 @@ class Episode:
         if reached and collisions:
             reason = f"collided {collisions} times"
         quality = path_metrics.path_quality(path, world.obstacles_at, self.sim.radius)
+        grid = self.scenario.grid
+        costs = self._costs(path)
         optimum = scenario_optimum(self.scenario, self.optimum_budget)
         gap = metrics.gap(length, optimum) if (success and optimum) else None
         return RunOutcome(
@@ -275,5 +293,8 @@ class Episode:
             obstacle_driven_contacts=causes.obstacle_driven,
             cpu_seconds=self.planning_cpu_seconds,
             **quality._asdict(),
+            costmap_cost_mean=costs[0],
+            costmap_cost_max=costs[1],
+            frame_origin=None if grid is None else list(grid.origin),
             path=[[float(x), float(y), float(t)] for x, y, t in path],
         )

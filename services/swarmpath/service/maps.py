@@ -237,10 +237,13 @@ def resolve_refs(spec: MapJobSpec,
             problems.append(((i, "map"), f"unknown map id {entry.map!r} (see GET /maps)"))
             continue
         doc = dict(stored, name=entry.map)
+        # start and goal in the map's own frame (a nav2 map's YAML origin), as GET /maps
+        # reports them; the scenario keeps its own frame (0, 0 = the lower-left corner)
+        ox, oy = (float(v) for v in (stored.get("grid") or {}).get("origin") or (0.0, 0.0))
         for key in ("start", "goal"):
             value = getattr(entry, key)
             if value is not None:
-                doc[key] = [float(value[0]), float(value[1])]
+                doc[key] = [float(value[0]) - ox, float(value[1]) - oy]
         try:
             found = scenario_problems(scenario_from_dict(doc))
         except ScenarioError as exc:

@@ -15,9 +15,10 @@ from numpy.typing import NDArray
 from scipy import ndimage
 
 from swarmpath.world.grid_polygons import blocked_components, grid_polygons
-from swarmpath.world.raster import GridSpec, OccupancyGrid
+from swarmpath.world.raster import UNKNOWN, GridSpec, OccupancyGrid
 from swarmpath.world.scenario import (
     ROBOT_PRESETS,
+    GridSource,
     Obstacle,
     RobotSpec,
     Scenario,
@@ -175,7 +176,11 @@ def _build(
     endpoint_margin: float = ENDPOINT_MARGIN,
     allowed: NDArray[np.bool_] | None = None,
     progress: Callable[[float], None] | None = None,
+    frame: str | None = None,
 ) -> ImportedMap:
+    """The scenario of a grid (row 0 at the bottom); with ``frame`` (a ROS map's "map") the
+    scenario records that frame, ``offset`` as its origin, the resolution and the unknown
+    cells (:class:`~swarmpath.world.scenario.GridSource`)."""
     spec = GridSpec((0.0, 0.0), res, (data.shape[0], data.shape[1]))
     grid = OccupancyGrid(spec, data)
     blocked = grid.blocked(unknown_as_occupied)
@@ -194,6 +199,11 @@ def _build(
             raise MapImportError(f"{source}: {e}") from None
         start = s0 if start is None else start
         goal = g0 if goal is None else goal
+    grid_source = None
+    if frame is not None:
+        unknown = tuple(tuple((float(x) * res, float(y) * res) for x, y in poly)
+                        for poly in grid_polygons(data == UNKNOWN))
+        grid_source = GridSource(frame, offset, res, unknown)
     scenario = Scenario(
         name=name,
         size=(spec.cols * res, spec.rows * res),
@@ -204,6 +214,7 @@ def _build(
         sensors=sensors,
         time_step=time_step,
         description=f"imported from {Path(source).name}",
+        grid=grid_source,
     )
     problems = scenario_problems(scenario)
     if problems:

@@ -158,13 +158,17 @@ def load_ros_map(
     endpoint_margin: float = ENDPOINT_MARGIN,
     progress: Callable[[float], None] | None = None,
     image_name: str | None = None,
+    endpoints_frame: str = "scenario",
 ) -> ImportedMap:
     """Import a ROS map_server / nav2 map (YAML + PGM/PNG/BMP image).
 
-    ``start``/``goal`` in the scenario frame (metres from the map's lower-left corner); defaults
-    as in the module docstring. ``robot`` defaults to the ``turtlebot3-burger`` preset.
+    ``start``/``goal`` in the scenario frame (metres from the map's lower-left corner), or with
+    ``endpoints_frame="map"`` in the map frame (the YAML origin honoured); defaults as in the
+    module docstring. ``robot`` defaults to the ``turtlebot3-burger`` preset.
     ``image_name``: what messages call the image (default: its path).
     """
+    if endpoints_frame not in ("scenario", "map"):
+        raise ValueError(f"endpoints_frame must be scenario or map, got {endpoints_frame!r}")
     ypath = Path(yaml_path)
     src = str(ypath)
     try:
@@ -208,6 +212,10 @@ def load_ros_map(
     mode = mode.lower()
     if not image.is_file():
         raise MapImportError(f"{src}: image: file not found: {image}")
+    if endpoints_frame == "map":  # the scenario's (0, 0) is the origin's x, y
+        start, goal = (None if p is None else (float(p[0]) - float(origin[0]),
+                                               float(p[1]) - float(origin[1]))
+                       for p in (start, goal))
     shade, opaque = _image_shade(image, with_alpha=(mode == "trinary"), max_cells=max_cells,
                                  name=image_name)
     values = ros_occupancy(shade, opaque, mode, bool(neg), occ_t, free_t)
@@ -241,6 +249,7 @@ def load_ros_map(
         endpoint_margin=endpoint_margin,
         allowed=sure_free,
         progress=progress,
+        frame="map",
     )
 
 

@@ -54,6 +54,7 @@ from swarmpath.world.scenario_parts import (
     DEFAULT_RANDOM_MAX_SPEED,
     DEFAULT_TIME_STEP,
     ROBOT_PRESETS,
+    GridSource,
     Motion,
     MotionSpec,
     Obstacle,
@@ -70,6 +71,7 @@ __all__ = [
     "DEFAULT_TIME_STEP",
     "MAX_METRES",
     "ROBOT_PRESETS",
+    "GridSource",
     "Motion",
     "MotionSpec",
     "Obstacle",
@@ -92,7 +94,8 @@ def _default_robot() -> RobotSpec:
 class Scenario:
     """A planning problem: a ``size = (w, h)`` world ``[0, w] x [0, h]``, start, goal, obstacles.
 
-    ``goal_motion`` moves the goal (None: static goal). ``sensors`` names a sensor model of
+    ``goal_motion`` moves the goal (None: static goal). ``grid``: an imported grid map's frame,
+    resolution and unknown cells (:class:`GridSource`). ``sensors`` names a sensor model of
     :mod:`swarmpath.robot.sensors` (e.g. ``"icoot-80"``, ``"mfb-12"``) or None. ``time_step`` is the
     simulator step in seconds; random motion is redrawn once per step. Validation is separate
     (:func:`scenario_problems`) so that tools can build and inspect broken scenarios.
@@ -108,6 +111,8 @@ class Scenario:
     sensors: str | None = None
     time_step: float = DEFAULT_TIME_STEP
     description: str = ""
+    #: The grid map the scenario was imported from (frame, resolution, unknown cells), or None.
+    grid: GridSource | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "size", _point(self.size, "size"))

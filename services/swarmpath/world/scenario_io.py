@@ -35,6 +35,7 @@ from swarmpath.world.scenario import (
     DEFAULT_RANDOM_MAX_SPEED,
     DEFAULT_TIME_STEP,
     ROBOT_PRESETS,
+    GridSource,
     Motion,
     MotionSpec,
     Obstacle,
@@ -142,6 +143,19 @@ class RobotModel(_Strict):
     )
 
 
+class GridModel(_Strict):
+    """The grid map a scenario was imported from (written by the importers)."""
+
+    frame: str = Field(min_length=1, max_length=64,
+                       description="Name of the map's own frame, e.g. map (ROS).")
+    origin: Vec2 = Field(description="Position of the scenario's (0, 0) in that frame, metres "
+                         "(a ROS map's YAML origin x, y).")
+    resolution: Pos = Field(description="Cell size in metres.")
+    unknown: list[Annotated[list[Vec2], Field(min_length=3)]] = Field(
+        default_factory=list, description="Cells of unknown occupancy as polygons (scenario "
+        "frame); drawn grey, used by the costmap metrics; not obstacles by themselves.")
+
+
 class ScenarioModel(_Strict):
     """A swarmpath scenario: a w x h world [0, w] x [0, h] in metres, origin at the lower left."""
 
@@ -159,6 +173,9 @@ class ScenarioModel(_Strict):
         None, description="Sensor model of swarmpath.robot.sensors, e.g. icoot-80 or mfb-12."
     )
     time_step: Pos = Field(DEFAULT_TIME_STEP, description="Simulator step in seconds.")
+    grid: GridModel | None = Field(
+        None, description="The grid map the scenario was imported from: its frame, "
+        "resolution and unknown cells (set by the nav2 importer).")
 
 
 # ---------------------------------------------------------------------------- error formatting
@@ -180,7 +197,8 @@ def _path(loc: tuple[int | str, ...]) -> str:
 
 def _field_names() -> list[str]:
     """Every field name of the scenario document (for "did you mean" on unknown fields)."""
-    models = (ScenarioModel, RobotModel, CircleModel, PolygonModel, GoalMotionModel)
+    models = (ScenarioModel, RobotModel, CircleModel, PolygonModel, GoalMotionModel,
+              GridModel)
     return list(dict.fromkeys(name for m in models for name in m.model_fields))
 
 
@@ -298,6 +316,9 @@ def scenario_from_dict(data: Mapping[str, Any], source: str | None = None) -> Sc
         sensors=m.sensors,
         time_step=m.time_step,
         description=m.description,
+        grid=None if m.grid is None else GridSource(
+            m.grid.frame, m.grid.origin, m.grid.resolution,
+            tuple(tuple(p) for p in m.grid.unknown)),
     )
     problems += scenario_problems(scenario)
     if problems:
@@ -366,6 +387,10 @@ def scenario_to_dict(s: Scenario) -> dict[str, Any]:
     if s.sensors is not None:
         out["sensors"] = s.sensors
     out["time_step"] = s.time_step
+    if s.grid is not None:
+        out["grid"] = {"frame": s.grid.frame, "origin": list(s.grid.origin),
+                       "resolution": s.grid.resolution,
+                       "unknown": [[list(p) for p in poly] for poly in s.grid.unknown]}
     return out
 
 

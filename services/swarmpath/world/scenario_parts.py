@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from swarmpath.world.geometry import (
     ObstacleSet,
@@ -210,3 +210,36 @@ ROBOT_PRESETS: dict[str, RobotSpec] = {
     "omni": RobotSpec("omni", 0.5, 0.5, 1.0, None, None),
 }
 
+
+
+# -------------------------------------------------------------------------------- grid source
+@dataclass(frozen=True)
+class GridSource:
+    """Where an imported grid map came from: its frame and what the grid held beyond obstacles.
+
+    ``frame`` names the map's own frame (``"map"`` for ROS maps, whose YAML ``origin`` places
+    the lower-left pixel); ``origin`` is that frame's position of the scenario's (0, 0), so
+    ``map_xy = scenario_xy + origin``. ``resolution`` is the cell size (m); ``unknown`` the
+    cells of unknown occupancy as orthogonal polygons in the scenario frame (drawn grey by the
+    plots, used by the costmap metrics; the planners never see it: with the importer's default
+    those cells are obstacles too). Not validated beyond its shape: the importer makes it.
+    """
+
+    frame: str
+    origin: Point
+    resolution: float
+    unknown: tuple[tuple[Point, ...], ...] = ()
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "origin", _point(self.origin, "grid.origin"))
+        object.__setattr__(self, "resolution", float(self.resolution))
+        object.__setattr__(self, "unknown", tuple(
+            tuple(_point(p, "grid.unknown[]") for p in poly) for poly in self.unknown))
+
+    def to_map_frame(self, xy: ArrayLike) -> Array:
+        """Scenario-frame points (..., 2) in the map frame."""
+        return np.asarray(xy, dtype=np.float64) + np.asarray(self.origin)
+
+    def to_scenario_frame(self, xy: ArrayLike) -> Array:
+        """Map-frame points (..., 2) in the scenario frame."""
+        return np.asarray(xy, dtype=np.float64) - np.asarray(self.origin)

@@ -40,6 +40,7 @@ from swarmpath.service.recorder.scene import (
     map_frame,
     occupancy,
     scenario_for,
+    source_frame,
     world_for,
 )
 from swarmpath.service.recorder.schemas import OWN_SCHEMAS
@@ -320,8 +321,18 @@ class JobRecorder:
         topic = _topic_name(name)
         frame = map_frame(name)
         w, h = (float(v) for v in scenario.size)
-        self._put("/tf", "foxglove.FrameTransform", ns,
-                  fg.frame_transform(ns, WORLD_FRAME, frame, self._map_offset(name, w)))
+        offset = self._map_offset(name, w)
+        grid = getattr(scenario, "grid", None)
+        if grid is None:
+            self._put("/tf", "foxglove.FrameTransform", ns,
+                      fg.frame_transform(ns, WORLD_FRAME, frame, offset))
+        else:  # world -> the map's own frame -> its scenario frame, at the same place
+            ox, oy = (float(v) for v in grid.origin)
+            own = source_frame(name, grid.frame)
+            self._put("/tf", "foxglove.FrameTransform", ns,
+                      fg.frame_transform(ns, WORLD_FRAME, own, offset - ox, -oy))
+            self._put("/tf", "foxglove.FrameTransform", ns,
+                      fg.frame_transform(ns, own, frame, ox, oy))
         data, cols, res = occupancy(scenario)
         grid = fg.grid_uint8(ns, data, cols, res, frame_id=frame)
         self._put(f"/map/{topic}/occupancy", "foxglove.Grid", ns, grid)

@@ -28,6 +28,13 @@ def map_frame(name: str) -> str:
     return f"map/{_topic_name(name)}"
 
 
+def source_frame(name: str, frame: str) -> str:
+    """The frame of an imported map's own frame (a nav2 map's ``map``): its origin is the YAML
+    origin's, and ``/tf`` places the map's scenario frame (:func:`map_frame`) in it at the
+    origin's (x, y), so positions can be read in the frame the ROS user thinks in."""
+    return f"{map_frame(name)}/{_topic_name(frame)}"
+
+
 def _run_about(record: dict[str, Any], planner: str, map_: str) -> dict[str, str]:
     """What identifies a map run, as strings (scene entity metadata, the run's metadata)."""
     metrics = record.get("metrics") or {}

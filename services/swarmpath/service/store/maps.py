@@ -47,9 +47,17 @@ class MapsMixin(StoreBase):
 
 def _info(row: Any, with_scenario: bool) -> dict[str, Any]:
     scenario = json.loads(row["scenario"])
+    grid = scenario.get("grid") or {}
+    frame = str(grid.get("frame") or "scenario")
+    ox, oy = (float(v) for v in grid.get("origin") or (0.0, 0.0))
+    # positions in the map's own frame (a nav2 map's YAML origin honoured), as a job's
+    # {"map": id, "start", "goal"} takes them
     out = {"id": row["id"], "name": row["name"], "format": row["format"],
-           "created": row["created"], "size": scenario["size"], "start": scenario["start"],
-           "goal": scenario["goal"], "obstacles": len(scenario.get("obstacles", ()))}
+           "created": row["created"], "size": scenario["size"], "frame": frame,
+           "origin": [ox, oy],
+           "start": [scenario["start"][0] + ox, scenario["start"][1] + oy],
+           "goal": [scenario["goal"][0] + ox, scenario["goal"][1] + oy],
+           "obstacles": len(scenario.get("obstacles", ()))}
     if with_scenario:
         out["scenario"] = scenario
     return out

@@ -129,7 +129,8 @@
     const quality = [["clearance_mean", "clearance mean (m)", 3, 1], ["curvature_max", "curvature max (1/m)", 2, 1],
       ["curvature_mean", "curvature mean (1/m)", 3, 1], ["cusps", "cusps", 1, 1], ["danger_share", "in danger (%)", 1, 100],
       ["travel_time", "travel time (s)", 1, 1], ["velocity_smoothness", "velocity smoothness (m/s²)", 3, 1],
-      ["angular_smoothness", "angular smoothness (rad/s²)", 2, 1], ["jerk", "jerk (m/s³)", 2, 1]];
+      ["angular_smoothness", "angular smoothness (rad/s²)", 2, 1], ["jerk", "jerk (m/s³)", 2, 1],
+      ["costmap_cost_mean", "cost mean (nav2)", 1, 1], ["costmap_cost_max", "cost max (nav2)", 1, 1]];
     html += `<h2>Path quality</h2><table id="quality"><thead><tr><th class="l">map</th><th class="l">planner</th>` +
       quality.map(([, label]) => `<th>${label}</th>`).join("") + `</tr></thead><tbody>`;
     for (const g of data.groups) for (const p of planners) {
@@ -138,7 +139,7 @@
         const b = c.box[key]; return `<td>${b ? SP.num(scale * b.median, digits) : ""}</td>`;
       }).join("") + "</tr>";
     }
-    html += `</tbody></table><p class="legend">Medians over the runs that reached the goal. Clearance: body gap (clearance minus robot radius) sampled every 5 cm; curvature: circles through points 0.3 m apart (Bench-MR); cusps: turns over 60°; in danger: share of the travel time within 0.1 m of an obstacle (MRPB); smoothness: mean |change| per second of the speed (MRPB) and of the turn rate; jerk: mean |da/dt|.</p>`;
+    html += `</tbody></table><p class="legend">Medians over the runs that reached the goal. Clearance: body gap (clearance minus robot radius) sampled every 5 cm; curvature: circles through points 0.3 m apart (Bench-MR); cusps: turns over 60°; in danger: share of the travel time within 0.1 m of an obstacle (MRPB); smoothness: mean |change| per second of the speed (MRPB) and of the turn rate; jerk: mean |da/dt|; cost: nav2's inflated costmap along the path (nav2 maps only).</p>`;
     const warned = data.groups.map((g) => [g.map, Object.values(g.planners).find((c) => c && c.warnings && c.warnings.length)]).filter(([, c]) => c);
     if (warned.length) html += `<ul id="map-warnings" class="legend">` + warned.map(([map, c]) => c.warnings.map(([f, m]) => `<li>warning: ${SP.esc(map)}: ${SP.esc(f)}: ${SP.esc(m)}</li>`).join("")).join("") + `</ul>`;
     if (st.reference) {
