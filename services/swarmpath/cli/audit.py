@@ -77,10 +77,31 @@ def audit_command(
     as_json: Annotated[
         bool, typer.Option("--json", help="Print one JSON document (every function's decades).")
     ] = False,
+    maps: Annotated[
+        str | None,
+        typer.Option("--maps", "-m", help="Audit path planners instead: their invariance on "
+                     "these maps (presets or paths, as swarmpath plan takes them) and on their "
+                     "rotated, mirrored, translated and start/goal-swapped copies."),
+    ] = None,
+    planners: Annotated[
+        str, typer.Option("--planners", "-p", help="With --maps: comma-separated planner "
+                          "names, or 'all'.")
+    ] = "all",
+    params: Annotated[
+        str | None, typer.Option(help='With --maps: planner parameters, as swarmpath plan '
+                                 'takes them: \'{"MFB": {"agents": 10}}\'.')
+    ] = None,
 ) -> None:
     """Run every optimizer plain, shifted and shifted+rotated; print per optimizer the decades
     lost (median over functions of log10 of the mean-gap ratio), the functions losing more than
-    1 and 3 decades, and the plain runs that ended at exactly 0."""
+    1 and 3 decades, and the plain runs that ended at exactly 0. With --maps: the planners'
+    invariance certificate (swarmpath.evidence.map_audit)."""
+    if maps is not None:
+        from swarmpath.cli.audit_maps import map_audit
+
+        check_range("--jobs", jobs, 0, parallel.MAX_JOBS)
+        map_audit(planners, maps, runs, seed, params, jobs, as_json)
+        return
     if fmt not in FORMATS:
         raise InputError("--format", f"must be one of {', '.join(FORMATS)}, got {fmt!r}")
     check_range("--jobs", jobs, 0, parallel.MAX_JOBS)
