@@ -74,7 +74,9 @@ def test_json_document_has_exactly_runs_summary_statistics_and_maps():
     assert set(doc) == {"runs", "summary", "statistics", "maps", "buckets"}
     assert doc["buckets"] == []  # no --scen: no MovingAI buckets
     assert doc["maps"] == [{"map": "mfb-static", "optimum": doc["runs"][0]["optimum"],
-                            "optimum_reason": None, "octile": None, "bucket": None}]
+                            "optimum_reason": None, "octile": None, "bucket": None,
+                            "frame": "scenario", "origin": [0.0, 0.0], "start": [0.0, 0.0],
+                            "goal": [10.0, 10.0]}]
     assert len(doc["runs"]) == 4
     for i, run in enumerate(doc["runs"]):
         assert RUN_FIELDS <= set(run)
