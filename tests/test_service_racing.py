@@ -105,3 +105,29 @@ def test_a_raced_job_survives_kills_and_decides_as_the_replay(service, tmp_path)
                          timeout=120)
     assert out.returncode == 0, out.stderr
     assert "race (alpha 0.05 over 4 comparisons" in out.stdout and "race_runs" in out.stdout
+
+
+def test_a_race_extended_through_the_cli_reuses_its_runs(service):
+    job = service.submit({**SPEC, "runs": 24})
+    assert service.wait_done(job, 300)["state"] == "done"
+    out = subprocess.run([PY, "-m", "swarmpath.cli", "extend", job, "--runs", "60", "--wait",
+                          "--url", service.url], capture_output=True, text=True, env=ENV,
+                         timeout=600)
+    assert out.returncode == 0, out.stderr
+    new = out.stdout.split()[0]
+    assert f"extends {job} to 60 runs per cell" in out.stderr
+    reused = int(out.stderr.split(" runs reused")[0].rsplit(" ", 1)[1])
+    assert reused == service.status(job)["runs_done"]
+    race = service.get(f"/jobs/{new}/race").json()
+    for block in race["blocks"]:
+        names = [c["algorithm"] for c in block["cells"]]
+        expected = expected_race(block["block"]["function"], names)
+        assert {c["algorithm"]: c["runs"] for c in block["cells"]} == expected.allowance
+    runs = service.get(f"/jobs/{new}/runs", params={"limit": 1000}).json()["items"]
+    old = {(r["cell"], r["run"]): r for r in service.get(
+        f"/jobs/{job}/runs", params={"limit": 1000}).json()["items"]}
+    assert sum((r["cell"], r["run"]) in old for r in runs) == reused
+    assert all(r["worker"] == old[(r["cell"], r["run"])]["worker"] for r in runs
+               if (r["cell"], r["run"]) in old)  # copied, not run again
+    bad = service.http_client.post(f"/jobs/{new}/extend", json={"runs": 10})
+    assert bad.status_code == 422 and bad.json()["detail"][0]["loc"] == ["body", "runs"]

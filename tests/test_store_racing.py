@@ -13,7 +13,7 @@ from swarmpath.optimizers import minimize
 from swarmpath.service.protocol import expand_cells, parse_job_spec
 from swarmpath.service.racing import group_blocks
 from swarmpath.service.spec_checks import FieldProblems
-from swarmpath.service.store import Store
+from swarmpath.service.store import ExtendError, Store
 from test_store import T0, execute
 
 SPEC = {
@@ -167,3 +167,48 @@ def test_a_raced_summary_has_the_race_markers_and_runs(tmp_path):
 
 def json_key(block):
     return block["block"]["function"]
+
+
+def test_an_extended_race_reuses_its_runs_and_goes_on(tmp_path):
+    short = {**SPEC, "runs": 30}
+    with Store(tmp_path) as store:
+        job = store.create_job(short, now=T0)
+        drain(store, job)
+        old = store.race(job)
+        assert store.job_status(job).state == "done"
+        new, reused = store.extend_job(job, 60, now=T0)
+        assert reused == store.job_status(job).runs_done
+        # the copied runs replay the old race: decided comparisons stay, the others go on
+        race = store.race(new)
+        for before, after in zip(old["blocks"], race["blocks"], strict=True):
+            for a, b in zip(before["duels"], after["duels"], strict=True):
+                if a["decision"] != "open":
+                    assert (b["decision"], b["round"]) == (a["decision"], a["round"])
+        leased = drain(store, new)
+        status = store.job_status(new)
+        assert status.state == "done" and leased == status.runs_total - reused
+        check_race_against_direct_runs(store, new)  # as if it had raced to 60 from the start
+
+
+def test_an_unraced_job_extended_keeps_its_runs_and_adds_the_rest(tmp_path):
+    plain = {k: v for k, v in SPEC.items() if k != "racing"} | {"runs": 4}
+    with Store(tmp_path) as store:
+        job = store.create_job(plain, now=T0)
+        drain(store, job)
+        new, reused = store.extend_job(job, 6, now=T0)
+        assert reused == 24 and store.job_status(new).runs_total == 36
+        assert drain(store, new) == 12
+        items = store.runs(new, limit=100)
+        assert [(i["cell"], i["run"]) for i in items] == [
+            (c["key"], r) for c in store.cells(new) for r in range(6)]
+        for item in items:
+            a, f, _ = item["cell"].split("/")
+            one = minimize(a, f, 5, 8, 30, seed=3, run_ids=[item["run"]]).best_fitness[0]
+            assert item["best_fitness"] == one
+        with pytest.raises(ExtendError, match="at least"):
+            store.extend_job(new, 5)
+        running = store.create_job(plain, now=T0)
+        with pytest.raises(ExtendError, match="queued"):
+            store.extend_job(running, 8)
+        with pytest.raises(KeyError):
+            store.extend_job("nope", 8)

@@ -130,6 +130,39 @@ def submit(
         raise typer.Exit(1)
 
 
+@app.command()
+def extend(
+    job: Annotated[str, typer.Argument(metavar="JOB", help="An ended job's id.")],
+    runs: Annotated[int, typer.Option("--runs", help="Runs per cell of the new job (a raced "
+                                      "job: its max_runs); at least the job's runs.")],
+    wait: Annotated[bool, typer.Option("--wait", help="Wait for the job, with progress.")] = False,
+    url: UrlOpt = None,
+) -> None:
+    """A new job with an ended job's spec and more runs per cell, reusing every run the job has
+    (run r is the same run in both; a raced job's race goes on from its runs); prints its id."""
+    from swarmpath.service.model import MAX_RUNS_PER_CELL
+
+    if not 1 <= runs <= MAX_RUNS_PER_CELL:
+        raise InputError("--runs", f"must be in 1..{MAX_RUNS_PER_CELL}, got {runs}")
+    with _client(url) as client:
+        try:
+            new = client.extend(job, runs)
+        except Exception as exc:
+            _fail(exc)
+            raise
+        typer.echo(new["id"])
+        typer.echo(f"job {new['id']}: extends {job} to {runs} runs per cell, "
+                   f"{new['reused']} runs reused, {new['runs_total']} runs, {new['state']}",
+                   err=True)
+        if not wait:
+            return
+        status = _wait_with_progress(client, new["id"], new["runs_total"])
+    typer.echo(f"job {status['id']}: {status['state']} ({status['runs_done']} done, "
+               f"{status['runs_failed']} failed)", err=True)
+    if status["state"] != "done":
+        raise typer.Exit(1)
+
+
 def trajectory_notes(spec: dict[str, Any]) -> list[str]:
     """``maps[i].FIELD: message`` for each inline scenario of a map job whose moving goal or
     moving obstacle has a stated path into a static obstacle
@@ -173,8 +206,9 @@ def _wait_with_progress(client: Any, job_id: str, total: int) -> dict[str, Any]:
     with Progress(*columns, console=stderr, transient=False) as progress:
         task = progress.add_task(f"job {job_id}", total=total)
 
-        def show(status: dict[str, Any]) -> None:
+        def show(status: dict[str, Any]) -> None:  # a race adds runs as it goes: its total too
             progress.update(task, completed=status["runs_done"] + status["runs_failed"],
+                            total=status["runs_total"],
                             description=f"job {job_id} {status['state']}")
 
         try:

@@ -122,6 +122,13 @@ class ServiceClient:
     def cancel(self, job_id: str) -> dict[str, Any]:
         return self._json("DELETE", f"/jobs/{job_id}")
 
+    def extend(self, job_id: str, runs: int) -> dict[str, Any]:
+        """POST /jobs/{id}/extend: a new job reusing the ended job's runs."""
+        return self._json("POST", f"/jobs/{job_id}/extend", json={"runs": runs})
+
+    def race(self, job_id: str) -> dict[str, Any]:
+        return self._json("GET", f"/jobs/{job_id}/race")
+
     def summary(self, job_id: str) -> dict[str, Any]:
         return self._json("GET", f"/jobs/{job_id}/summary")
 

@@ -268,6 +268,18 @@ class Coordinator(ResultIntake):
         log.info("job %s submitted: %s, %d runs", job_id, spec.kind, status.runs_total)
         return status
 
+    def extend(self, job_id: str, runs: int) -> tuple[JobStatus, int]:
+        """A new job extending ``job_id`` to ``runs`` runs per cell, reusing its results
+        (:meth:`Store.extend_job`); finalized at once when it has nothing left to run."""
+        new_id, reused = self.store.extend_job(job_id, runs)
+        status = self.store.job_status(new_id)
+        assert status is not None
+        log.info("job %s extends job %s to %d runs per cell: %d results reused, %d runs",
+                 new_id, job_id, runs, reused, status.runs_total)
+        if status.state in FINAL_STATES:
+            self.finalize(new_id)
+        return status, reused
+
     def cancel(self, job_id: str) -> JobStatus | None:
         before = self.store.job_status(job_id)
         if before is None:

@@ -30,7 +30,7 @@ lease, another worker's lease, a run outside the lease, or a cancelled job are `
 Layout: :mod:`.base` (schema, connection, transactions), :mod:`.jobs`, :mod:`.leases`,
 :mod:`.results` (fencing), :mod:`.runs` (run views and records), :mod:`.summaries` (tables, CSV),
 :mod:`.series` (binary run series), :mod:`.maps` (uploaded maps),
-:mod:`.scenarios` (a lease's scenario by reference), :mod:`.races` (rounds of raced jobs).
+:mod:`.scenarios` (a lease's scenario by reference), :mod:`.races` (rounds of raced jobs), :mod:`.extend` (a finished job extended to more runs).
 :class:`Store` combines them.
 """
 
@@ -43,6 +43,7 @@ from swarmpath.service.store.base import (
     RunsFor,
     StoreError,
 )
+from swarmpath.service.store.extend import ExtendError, ExtendMixin
 from swarmpath.service.store.jobs import JobsMixin
 from swarmpath.service.store.leases import LeasesMixin
 from swarmpath.service.store.maps import MapsMixin
@@ -61,13 +62,14 @@ from swarmpath.service.store.summaries import (
 
 
 class Store(JobsMixin, ScenariosMixin, LeasesMixin, ResultsMixin, RunViewsMixin, SummariesMixin,
-            MapsMixin, RacesMixin):
+            MapsMixin, RacesMixin, ExtendMixin):
     """See the module docstring. ``now`` arguments are Unix seconds (default: ``time.time()``)."""
 
 
 __all__ = [
     "BENCHMARK_COLUMNS",
     "DB_NAME",
+    "ExtendError",
     "FINAL_STATES",
     "JOB_STATES",
     "MAP_COLUMNS",

@@ -32,29 +32,32 @@ class JobsMixin(StoreBase):
         if isinstance(spec, dict):
             spec = parse_job_spec(spec)
         now = time.time() if now is None else now
-        cells = expand_cells(spec)
-        total = runs_total(spec)
         with self._tx() as db:
-            for _ in range(10):
-                job_id = uuid.uuid4().hex[:12]
-                if db.execute("SELECT 1 FROM jobs WHERE id = ?", (job_id,)).fetchone() is None:
-                    break
-            else:  # pragma: no cover - 48 random bits colliding ten times
-                raise StoreError("could not allocate a job id")
-            cur = db.execute(
-                "INSERT INTO jobs (id, kind, spec, state, runs_per_cell, cells_total, runs_total,"
-                " created) VALUES (?, ?, ?, 'queued', ?, ?, ?, ?)",
-                (job_id, spec.kind, spec.model_dump_json(), spec.runs, len(cells), total, now),
-            )
-            seq = cur.lastrowid
-            db.executemany(
-                "INSERT INTO cells (job_seq, idx, key, spec, runs) VALUES (?, ?, ?, ?, ?)",
-                (
-                    (seq, i, c.key, c.model_dump_json(), first_runs(spec))
-                    for i, c in enumerate(cells)
-                ),
-            )
-        return job_id
+            return self._insert_job(db, spec, now)[0]
+
+    @staticmethod
+    def _insert_job(db: sqlite3.Connection, spec: BenchmarkJobSpec | MapJobSpec,
+                    now: float) -> tuple[str, int]:
+        """The job's row and its cells' rows, in the caller's transaction: (id, seq)."""
+        cells = expand_cells(spec)
+        for _ in range(10):
+            job_id = uuid.uuid4().hex[:12]
+            if db.execute("SELECT 1 FROM jobs WHERE id = ?", (job_id,)).fetchone() is None:
+                break
+        else:  # pragma: no cover - 48 random bits colliding ten times
+            raise StoreError("could not allocate a job id")
+        cur = db.execute(
+            "INSERT INTO jobs (id, kind, spec, state, runs_per_cell, cells_total, runs_total,"
+            " created) VALUES (?, ?, ?, 'queued', ?, ?, ?, ?)",
+            (job_id, spec.kind, spec.model_dump_json(), spec.runs, len(cells), runs_total(spec),
+             now),
+        )
+        seq = int(cur.lastrowid or 0)
+        db.executemany(
+            "INSERT INTO cells (job_seq, idx, key, spec, runs) VALUES (?, ?, ?, ?, ?)",
+            ((seq, i, c.key, c.model_dump_json(), first_runs(spec)) for i, c in enumerate(cells)),
+        )
+        return job_id, seq
 
     def job_spec(self, job_id: str) -> BenchmarkJobSpec | MapJobSpec | None:
         with self._read() as db:

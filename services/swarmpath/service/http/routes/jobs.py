@@ -3,11 +3,19 @@
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Body, Depends, HTTPException
+from pydantic import BaseModel, ConfigDict, Field
 
 from swarmpath.service.cost import check as check_cost
 from swarmpath.service.http.deps import CoreDep, Limit, Offset, authorized, status_or_404
 from swarmpath.service.maps import resolve_refs
-from swarmpath.service.protocol import BenchmarkJobSpec, FieldProblems, JobStatus, MapJobSpec
+from swarmpath.service.protocol import (
+    MAX_RUNS_PER_CELL,
+    BenchmarkJobSpec,
+    FieldProblems,
+    JobStatus,
+    MapJobSpec,
+)
+from swarmpath.service.store import ExtendError
 
 router = APIRouter(tags=["jobs"])
 
@@ -61,6 +69,30 @@ def cancel_job(job_id: str, core: CoreDep) -> JobStatus:
     if status is None:
         raise HTTPException(404, f"unknown job {job_id!r}")
     return status
+
+
+class Extension(BaseModel):
+    """``POST /jobs/{id}/extend``: the runs per cell of the new job."""
+
+    model_config = ConfigDict(extra="forbid")
+    runs: int = Field(ge=1, le=MAX_RUNS_PER_CELL, strict=True,
+                      description="runs per cell of the new job (a raced job: its max_runs)")
+
+
+@router.post("/jobs/{job_id}/extend", status_code=201, dependencies=[Depends(authorized)])
+def extend_job(job_id: str, body: Extension, core: CoreDep) -> dict[str, Any]:
+    """A new job with the ended job's spec and ``runs`` runs per cell, reusing every result the
+    old job has (run r of a cell is the same run in both); a raced job's race goes on from its
+    runs. 201 with the new id, state, runs_total and ``reused``; 404 for an unknown job; 422
+    naming ``runs`` when the job has not ended or ``runs`` is below its runs."""
+    status_or_404(core, job_id)
+    try:
+        status, reused = core.extend(job_id, body.runs)
+    except ExtendError as exc:
+        raise HTTPException(422, [{"loc": ["body", "runs"], "msg": str(exc),
+                                   "type": "value_error"}]) from None
+    return {"id": status.id, "state": status.state, "runs_total": status.runs_total,
+            "extends": job_id, "reused": reused}
 
 
 @router.get("/jobs/{job_id}/race")

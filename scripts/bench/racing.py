@@ -1,0 +1,213 @@
+#!/usr/bin/env python3
+"""Racing (docs/statistics.md, Racing): its error rate, its power, and the ICOOT paper's Table 2
+raced through ``swarmpath up``.
+
+    .venv/bin/python scripts/bench/racing.py error [--seeds 5] [--max-runs 100] [--alpha 0.05]
+    .venv/bin/python scripts/bench/racing.py power [--races 300] [--max-runs 1000]
+    .venv/bin/python scripts/bench/racing.py table2 [--max-runs 1000] [--margin 0.05]
+                                                    [--workers 2] [--full FILE | --full-up]
+
+``error``: races between one optimizer and itself on two seeds' streams (exchangeable runs: any
+declared difference is a false one), for every registered optimizer on F1-F13 (5 dims, 10
+agents, 50 iterations), each race at level alpha alone; prints the rate of false differences per
+optimizer and overall with its 95 % Monte Carlo interval. The same optimizer under two names
+(every pair a tie) never differs: ``tests/test_racing.py`` checks that.
+
+``power``: races between samples with a known theta = P(A's run beats B's) (normal runs shifted
+by sqrt(2) Phi^-1(theta)), at the level of a 65-comparison table (Table 2 against its reference:
+alpha 0.05/65), min 10, batch 10: the share decided right, decided wrong, the runs used.
+
+``table2``: the Table 2 setting (PSO, SSA, FDO, mCOOT, COOT, ICOOT x F1-F13, 30 dims, 30 agents,
+500 iterations, the numba backend when numba is installed) raced through ``swarmpath up
+--workers N`` with ``max_runs`` runs per cell at most, beside the full study's verdicts
+(rank-sum tests, Holm over the table, alpha 0.05: what ``swarmpath bench`` prints), read from
+``--full FILE`` (a ``swarmpath bench --json`` document of the same setting and seed) or run
+through the same service (``--full-up``). Prints the runs used, the wall times, the agreement of
+every +/=/- and each disagreement with its race interval and the full study's A12 and p.
+Markdown to stdout, progress to stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scipy import stats
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from service import TABLE2_ALGORITHMS, TABLE2_FUNCTIONS, Up, elapsed, note
+
+from swarmpath.evidence import report
+from swarmpath.evidence.racing import RaceSettings, race_block
+from swarmpath.optimizers import list_optimizers, minimize
+
+
+def error(args: argparse.Namespace) -> None:
+    settings = RaceSettings(max_runs=args.max_runs, alpha=args.alpha, min_runs=10, batch=10)
+    functions = [f"F{i}" for i in range(1, 14)]
+    print("| optimizer | races | false differences | rate |\n| --- | ---: | ---: | ---: |")
+    total = wrong = 0
+    for name in list_optimizers():
+        races = false = 0
+        for f in functions:
+            for s in range(args.seeds):
+                a = minimize(name, f, 5, 10, 50, seed=1000 + s, runs=args.max_runs).best_fitness
+                b = minimize(name, f, 5, 10, 50, seed=9000 + s, runs=args.max_runs).best_fitness
+                race = race_block({"A": a, "B": b}, ["A", "B"], settings, 1)
+                races += 1
+                false += race.duels[0].result.decision == "different"
+        total += races
+        wrong += false
+        print(f"| {name} | {races} | {false} | {false / races:.3f} |")
+        note(f"{name}: {false}/{races}")
+    rate = wrong / total
+    half = 1.96 * math.sqrt(rate * (1 - rate) / total) if wrong else 3.0 / total
+    print(f"| all | {total} | {wrong} | {rate:.4f} (95 % MC: {max(rate - half, 0):.4f}-"
+          f"{rate + half:.4f}; alpha {args.alpha}) |")
+
+
+def power(args: argparse.Namespace) -> None:
+    rng = np.random.default_rng(args.seed)
+    level = 0.05 / 65
+    print(f"alpha {level:.2e} (0.05 over 65 comparisons), min_runs 10, batch 10, max_runs "
+          f"{args.max_runs}, {args.races} races per row\n")
+    print("| theta | margin | right | wrong | open at max | median runs | p90 runs |\n"
+          "| ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    for theta, margin in [(0.5, 0.1), (0.5, 0.05), (0.56, 0.0), (0.6, 0.0), (0.64, 0.0),
+                          (0.71, 0.0), (0.8, 0.0), (0.9, 0.0), (0.6, 0.05), (0.71, 0.05)]:
+        settings = RaceSettings(max_runs=args.max_runs, alpha=0.05, min_runs=10, batch=10,
+                                margin=margin)  # with 65 comparisons: each at ``level``
+        shift = math.sqrt(2.0) * float(stats.norm.ppf(theta))
+        right = wrong = undecided = 0
+        used = []
+        for _ in range(args.races):
+            a = rng.normal(size=args.max_runs) - shift
+            b = rng.normal(size=args.max_runs)
+            race = race_block({"A": a, "B": b}, ["A", "B"], settings, 65)
+            d = race.duels[0].result
+            truth = "equivalent" if abs(theta - 0.5) < margin else "different"
+            if d.decision == "open":
+                undecided += 1
+            elif d.decision == truth and (d.decision != "different" or d.better == "a"):
+                right += 1
+            else:
+                wrong += 1
+            used.append(race.allowance["A"])
+        n = args.races
+        print(f"| {theta} | {margin} | {right / n:.3f} | {wrong / n:.3f} | {undecided / n:.3f} "
+              f"| {np.median(used):.0f} | {np.percentile(used, 90):.0f} |")
+
+
+def table2_spec(max_runs: int, margin: float, seed: int, backend: str) -> dict[str, Any]:
+    return {"kind": "benchmark", "algorithms": TABLE2_ALGORITHMS, "functions": TABLE2_FUNCTIONS,
+            "dims": [30], "agents": 30, "iterations": 500, "runs": max_runs, "seed": seed,
+            "backend": backend,
+            "racing": {"min_runs": 10, "batch": 10, "alpha": 0.05, "margin": margin}}
+
+
+def _full_values_from_up(up: Up, job: str) -> dict[tuple[str, str], list[float]]:
+    out: dict[tuple[str, str], list[float]] = {}
+    offset = 0
+    while True:
+        items = up.http.get(f"/jobs/{job}/runs",
+                            params={"limit": 1000, "offset": offset}).json()["items"]
+        if not items:
+            return out
+        for r in items:
+            out.setdefault((r["algorithm"], r["function"]), []).append(
+                float(r.get("best_fitness", math.inf)))
+        offset += len(items)
+
+
+def table2(args: argparse.Namespace) -> None:
+    try:
+        import numba  # noqa: F401
+
+        backend = "numba"
+    except ImportError:
+        backend = "numpy"
+    spec = table2_spec(args.max_runs, args.margin, args.seed, backend)
+    with tempfile.TemporaryDirectory(prefix="swarmpath-race-") as d, \
+            Up(args.workers, Path(d)) as up:
+        note(f"raced Table 2 (max {args.max_runs} runs per cell, {backend}) ...")
+        raced = up.run_job(spec, timeout=86400)
+        summary = up.http.get(f"/jobs/{raced['id']}/summary").json()
+        full_values: dict[tuple[str, str], list[float]]
+        full_status: dict[str, Any] | None = None
+        if args.full_up:
+            note("the full study through the same service ...")
+            plain = {k: v for k, v in spec.items() if k != "racing"}
+            full_status = up.run_job(plain, timeout=86400)
+            full_values = _full_values_from_up(up, full_status["id"])
+        else:
+            doc = json.loads(Path(args.full).read_text())
+            full_values = {(c["algorithm"], c["function"]): [float(v) for v in c["best_fitness"]]
+                           for c in doc["cells"]}
+    samples = {(f, 30, a): full_values[(a, f)] for a in TABLE2_ALGORITHMS for f in TABLE2_FUNCTIONS}
+    tests = report.benchmark_tests(samples, TABLE2_ALGORITHMS, None)
+    used = raced["runs_total"]
+    full_runs = len(TABLE2_ALGORITHMS) * len(TABLE2_FUNCTIONS) * args.max_runs
+    print(f"raced: {used} runs of {full_runs} ({full_runs / used:.1f}x fewer), "
+          f"{elapsed(raced):.0f} s through swarmpath up --workers {args.workers}, load "
+          f"{raced['load'][0]:.1f} -> {raced['load'][1]:.1f}")
+    if full_status is not None:
+        print(f"full: {full_runs} runs, {elapsed(full_status):.0f} s, load "
+              f"{full_status['load'][0]:.1f} -> {full_status['load'][1]:.1f}")
+    agree = 0
+    rows = []
+    for row in summary["rows"]:
+        if row["algorithm"] == "ICOOT":
+            continue
+        t = tests.comparison.get((row["function"], 30), row["algorithm"])
+        full = t.marker if t is not None else None
+        agree += row["marker"] == full
+        if row["marker"] != full:
+            duel = next(x for x in summary["statistics"]["comparison"]["tests"]
+                        if x["function"] == row["function"] and x["algorithm"] == row["algorithm"])
+            rows.append(f"| {row['function']} | {row['algorithm']} | {row['marker']} "
+                        f"({duel['decision']}, {row['race_runs']} runs, theta "
+                        f"{duel['theta']:.3f} [{duel['low']:.3f}, {duel['high']:.3f}]) | {full} "
+                        f"(A12 {t.a12 if t is not None else float('nan'):.3f}, p_holm "
+                        f"{t.p_holm if t is not None else float('nan'):.2g}) |")
+    n = len(summary["rows"]) - len(TABLE2_FUNCTIONS)
+    print(f"\nverdicts agreeing with the full study: {agree}/{n} ({100 * agree / n:.1f} %)\n")
+    if rows:
+        print("| function | algorithm | raced | full study |\n| --- | --- | --- | --- |")
+        print("\n".join(rows))
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    sub = ap.add_subparsers(dest="what", required=True)
+    e = sub.add_parser("error")
+    e.add_argument("--seeds", type=int, default=5)
+    e.add_argument("--max-runs", type=int, default=100)
+    e.add_argument("--alpha", type=float, default=0.05)
+    p = sub.add_parser("power")
+    p.add_argument("--races", type=int, default=300)
+    p.add_argument("--max-runs", type=int, default=1000)
+    p.add_argument("--seed", type=int, default=1)
+    t = sub.add_parser("table2")
+    t.add_argument("--max-runs", type=int, default=1000)
+    t.add_argument("--margin", type=float, default=0.05)
+    t.add_argument("--workers", type=int, default=2)
+    t.add_argument("--seed", type=int, default=1)
+    src = t.add_mutually_exclusive_group(required=True)
+    src.add_argument("--full", type=Path, help="swarmpath bench --json of the same setting")
+    src.add_argument("--full-up", action="store_true", help="run the full study too")
+    args = ap.parse_args(argv)
+    started = time.perf_counter()
+    {"error": error, "power": power, "table2": table2}[args.what](args)
+    note(f"{time.perf_counter() - started:.0f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
