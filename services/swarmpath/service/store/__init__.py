@@ -30,7 +30,8 @@ lease, another worker's lease, a run outside the lease, or a cancelled job are `
 Layout: :mod:`.base` (schema, connection, transactions), :mod:`.jobs`, :mod:`.leases`,
 :mod:`.results` (fencing), :mod:`.runs` (run views and records), :mod:`.summaries` (tables, CSV),
 :mod:`.series` (binary run series), :mod:`.maps` (uploaded maps),
-:mod:`.scenarios` (a lease's scenario by reference), :mod:`.races` (rounds of raced jobs), :mod:`.extend` (a finished job extended to more runs).
+:mod:`.scenarios` (a lease's scenario by reference), :mod:`.races` (rounds of raced jobs),
+:mod:`.extend` (a finished job extended to more runs).
 :class:`Store` combines them.
 """
 
