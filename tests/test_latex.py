@@ -88,3 +88,38 @@ def test_bad_format_stat_and_rope_are_refused() -> None:
                          (["--rope", "abc"], "--rope")):
         result = runner.invoke(app, ["bench", "-a", "GWO", "-f", "F1", "-d", "2", *args])
         assert result.exit_code == 2 and option in result.stderr
+
+
+def test_results_latex_of_benchmark_and_map_summaries_compiles(tmp_path: Path) -> None:
+    import numpy as np
+
+    from swarmpath.cli.results import summary_latex
+    from swarmpath.evidence.stats import describe
+    from swarmpath.service.summary_stats import benchmark_statistics, map_statistics
+
+    rng = np.random.default_rng(0)
+    rows, values = [], []
+    for f in ("F1", "F8"):
+        for a, shift in (("GWO", 0.0), ("PSO", 2.0), ("ICOOT", 1.0)):
+            v = (rng.random(6) + shift).tolist()
+            rows.append({"algorithm": a, "function": f, "dim": 2, "runs": 6, **describe(v)})
+            values.append(v)
+    doc = benchmark_statistics(rows, values, ["GWO", "PSO", "ICOOT"])
+    source = summary_latex("j1", {"kind": "benchmark", "rows": rows, "statistics": doc,
+                                  "partial": False})
+    assert "swarmpath job j1 (benchmark): F1, F8 in 2 dimensions" in source
+    assert source.count(r"\boldmath") >= 2 and " & A12 & " in source
+    maps = []
+    runs = []
+    for p, length in (("ICOOT", 10.0), ("MFB", 11.0)):
+        cell = [{"success": True, "length": length + 0.1 * i, "gap": 0.01 * i, "seconds": 1.0}
+                for i in range(5)]
+        maps.append({"planner": p, "map": "m1", "success_rate": 1.0, "length_mean": length,
+                     "gap_mean": 0.02, "seconds_mean": 1.0, "runs": 5})
+        runs.append(cell)
+    mdoc = map_statistics(maps, runs, ["ICOOT", "MFB"])
+    msource = summary_latex("j2", {"kind": "map", "rows": maps, "statistics": mdoc,
+                                   "partial": True})
+    assert "(map (partial)): m1" in msource and "100\\%$^{=}$" in msource
+    assert "$^{+}$" in msource  # ICOOT's lengths are all shorter than MFB's
+    _compile(source + msource, tmp_path)

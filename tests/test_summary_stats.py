@@ -12,6 +12,7 @@ from swarmpath.evidence import report
 from swarmpath.evidence.compare_maps import map_statistics as map_tests
 from swarmpath.service.protocol import parse_job_spec
 from swarmpath.service.summary_stats import (
+    BENCHMARK_TEST_COLUMNS,
     MAP_TEST_COLUMNS,
     benchmark_statistics,
     map_statistics,
@@ -93,7 +94,13 @@ def test_store_summary_tests_the_runs_against_the_specs_reference(tmp_path) -> N
         assert row["marker"] == (None if t is None else t.marker)
         assert row["p_holm"] == (None if t is None else t.p_holm)
     assert [r["marker"] for r in summary["rows"] if r["algorithm"] == "GWO"] == [None, None]
-    assert summary["columns"][-3:] == ["marker", "p", "p_holm"]
+    assert summary["columns"][-len(BENCHMARK_TEST_COLUMNS):] == list(BENCHMARK_TEST_COLUMNS)
+    for row in summary["rows"]:  # effect sizes and the posterior beside every marker
+        t = expected.comparison.get((row["function"], row["dim"]), row["algorithm"])
+        assert row["a12"] == (None if t is None else t.a12)
+        assert row["shift"] == (None if t is None or t.shift is None else t.shift.estimate)
+        post = expected.bayes.get((row["function"], row["dim"]), row["algorithm"])  # type: ignore[union-attr]
+        assert row["p_better"] == (None if post is None else post.p_better)
 
 
 def test_statistics_lines_of_a_map_summary() -> None:

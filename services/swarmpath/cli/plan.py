@@ -44,6 +44,7 @@ from swarmpath.cli.plan_maps import (
     resolve_maps,
 )
 from swarmpath.cli.plan_tables import print_tables
+from swarmpath.cli.study_options import TableFormatOpt, check_format
 from swarmpath.world.optimum_base import DEFAULT_BUDGET
 
 MAX_RUNS = 10_000
@@ -376,11 +377,13 @@ def plan(
                                  "the 'fast' extra; the same runs); a different one in "
                                  "--params is refused.")
     ] = None,
+    fmt: TableFormatOpt = "table",
 ) -> None:
     """Run path planners on maps; print the papers' run tables (Run / Distance / Error / Elapsed
     time) with success, collisions and the gap to the exact optimum."""
     import time
 
+    check_format(fmt, ("table", "latex"))
     if list_maps or list_planners:
         if list_maps:
             _list_maps()
@@ -412,4 +415,31 @@ def plan(
         sys.stdout.write(json.dumps(document(cells, spec.reference, spec), allow_nan=False)
                          + "\n")
         return
+    if fmt == "latex":
+        sys.stdout.write(latex_table(cells, spec))
+        return
     print_tables(cells, spec, seconds)
+
+
+def latex_table(cells: Sequence[CellResult], spec: PlanSpec) -> str:
+    """The comparison of a study as a booktabs table (one planner: its rows without tests)."""
+    from swarmpath.evidence import latex, tables
+    from swarmpath.planners.summary import summarize
+    from swarmpath.service.summary_stats import map_statistics
+
+    rows = [{**summarize(c.runs)[0], "planner": c.planner, "map": c.scenario.name}
+            for c in cells]
+    doc = map_statistics(rows, [c.runs for c in cells], spec.planners, spec.reference)
+    reference = doc["reference"] if len(spec.planners) > 1 else None
+    grid = tables.map_grid(rows, spec.planners, reference)
+    maps = ", ".join(dict.fromkeys(c.scenario.name for c in cells))
+    caption = (f"swarmpath plan: {maps}; {spec.runs} runs per planner and map, seed {spec.seed}."
+               " Length and gap over successful runs, time: planning wall time.")
+    if reference:
+        caption += (f" Against {reference}: superscript +/=/- significantly better / no "
+                    "difference / worse (success: Fisher's exact test; length, gap, time: "
+                    "two-sided Wilcoxon rank-sum test; each Holm-adjusted, alpha 0.05); A12: "
+                    "Vargha-Delaney effect size; P(b/e/w): posterior probabilities of better / "
+                    "practically equivalent / worse (Bayesian bootstrap of the mean, rope 1 % "
+                    "of the larger value).")
+    return latex.grid_to_latex(grid, caption, "tab:swarmpath-plan")

@@ -16,7 +16,7 @@ from rich.table import Table
 
 from swarmpath.evidence.compare_maps import MEASURES, MapStatistics
 
-LABELS = {"success": "success", "length": "length", "seconds": "time"}
+LABELS = {"success": "success", "length": "length", "gap": "gap", "seconds": "time"}
 
 
 def _num(v: Any, digits: int) -> str:
@@ -29,11 +29,15 @@ def render_comparison(
     """``summaries``: :func:`swarmpath.planners.summary.summarize` rows of the study."""
     ref = tests.reference
     table = Table(title=f"Planners against {ref}", box=box.SIMPLE_HEAD, pad_edge=False)
-    for name in ("Map", "Planner", "Success", "Length mean (m)", "Time mean (s)"):
+    names = ["Map", "Planner", "Success", "Length mean (m)", "length A12", "length P(b/e/w)",
+             "Gap mean (%)", "gap A12", "gap P(b/e/w)", "Time mean (s)", "time A12",
+             "time P(b/e/w)"]
+    for name in names:
         table.add_column(name, justify="left" if name in ("Map", "Planner") else "right",
                          no_wrap=True)
     by_cell = {(s["map"], s["planner"]): s for s in summaries}
     maps = list(dict.fromkeys(s["map"] for s in summaries))
+    posterior = {m: b.index() for m, b in tests.bayes.items()}
     for i, m in enumerate(maps):
         present = [p for p in planners if (m, p) in by_cell]
         for j, p in enumerate(present):
@@ -42,11 +46,19 @@ def render_comparison(
             def mark(measure: str, m: str = m, p: str = p) -> str:
                 return " " + (tests.marker(measure, m, p) or " ")
 
+            def effects(measure: str, m: str = m, p: str = p) -> list[str]:
+                t = tests.comparisons[measure].get(m, p)
+                post = posterior.get(measure, {}).get((m, p))
+                return ["" if t is None or t.a12 is None else f"{t.a12:.2f}",
+                        "" if post is None else post.short()]
+
+            gap = None if s.get("gap_mean") is None else 100.0 * s["gap_mean"]
             table.add_row(
                 m if j == 0 else "", p,
                 f"{s['successes']}/{s['runs']}" + mark("success"),
-                _num(s["length_mean"], 4) + mark("length"),
-                _num(s["seconds_mean"], 3) + mark("seconds"),
+                _num(s["length_mean"], 4) + mark("length"), *effects("length"),
+                _num(gap, 2) + mark("gap"), *effects("gap"),
+                _num(s["seconds_mean"], 3) + mark("seconds"), *effects("seconds"),
                 end_section=j + 1 == len(present) and i + 1 < len(maps),
             )
     return table
@@ -86,9 +98,20 @@ def lines(tests: MapStatistics) -> list[str]:
             text += f"; Nemenyi CD = {f.cd:.3g}"
         out.append(text)
     alpha = tests.comparisons["length"].alpha
+    for measure, b in tests.bayes.items():
+        for v in b.across.values():
+            parts = [f"{a} {x['p_better']:.2f}/{x['p_equivalent']:.2f}/{x['p_worse']:.2f} "
+                     f"({x['verdict']})" for a, x in v.items()]
+            blocks = max((x["blocks"] for x in v.values()), default=0)
+            out.append(f"Bayesian signed-rank ({LABELS[measure]}) over {blocks} maps, "
+                       f"P(better/equivalent/worse) than {b.reference} ({b.stat}, "
+                       f"{b.rope.describe()}): " + "; ".join(parts))
     out.append(
         f"+/=/-: significantly better / no significant difference / worse than {tests.reference}"
-        f" (success: Fisher's exact test; length over successful runs and time: Wilcoxon "
-        f"rank-sum test; each Holm-adjusted over its table, alpha {alpha:g})"
+        f" (success: Fisher's exact test; length and gap over successful runs and time: "
+        f"Wilcoxon rank-sum test; each Holm-adjusted over its table, alpha {alpha:g}); A12: "
+        f"P(a run beats a run of {tests.reference}); P(b/e/w): posterior probability of better"
+        f" / practically equivalent / worse (Bayesian bootstrap per map; its rope in the "
+        f"Bayesian lines)"
     )
     return out

@@ -14,7 +14,7 @@ from swarmpath.cli import service as svc
 from swarmpath.cli.core import InputError, app, plot_dir
 from swarmpath.evidence.legend import legend_text
 
-SUMMARY_FORMATS = ("table", "json", "csv")
+SUMMARY_FORMATS = ("table", "json", "csv", "latex")
 RUN_FORMATS = ("csv", "json", "parquet")
 
 
@@ -49,8 +49,9 @@ def results(
     job: Annotated[str, typer.Argument(metavar="JOB", help="A job id.")],
     format: Annotated[
         str,
-        typer.Option("--format", help="Summary: table, json or csv. With --runs: csv, json or "
-                     "parquet. ioh: the curves as IOHprofiler files (-o DIR)."),
+        typer.Option("--format", help="Summary: table, json, csv or latex (a booktabs table). "
+                     "With --runs: csv, json or parquet. ioh: the curves as IOHprofiler files "
+                     "(-o DIR)."),
     ] = "table",
     runs: Annotated[
         bool, typer.Option("--runs", help="One row per run (identity, metrics, curve or path).")
@@ -96,6 +97,9 @@ def _summary(client: Any, job: str, format: str) -> None:
     summary = _call(client.summary, job)
     if format == "json":
         typer.echo(json.dumps(summary, indent=2))
+        return
+    if format == "latex":
+        sys.stdout.write(summary_latex(job, summary))
         return
     title = (f"job {job} ({summary['kind']}): {summary['state']}, "
              f"{summary['runs_done'] + summary['runs_failed']}/{summary['runs_total']} runs"
@@ -175,3 +179,37 @@ def _plots(client: Any, job: str, directory: Path) -> list[Path]:
     seed = int(items[0]["seed"])
     return plots.write_map_plots(known, scenarios, lambda sc, run: world_for(sc, seed, run),
                                  directory)
+
+
+def summary_latex(job: str, summary: dict[str, Any]) -> str:
+    """A job's summary as a booktabs table: the benchmark table (location, spread, markers,
+    effect sizes, posterior; bold = best and similar) or the map comparison."""
+    from swarmpath.evidence import latex, tables
+
+    rows = summary["rows"]
+    st = summary.get("statistics") or {}
+    runs = max((int(r.get("runs") or 0) for r in rows), default=0)
+    state = "" if not summary.get("partial") else " (partial)"
+    if summary["kind"] == "benchmark":
+        algorithms = list(dict.fromkeys(r["algorithm"] for r in rows))
+        reference = (st.get("comparison") or {}).get("reference")
+        grid = tables.benchmark_grid(rows, algorithms, compared=reference is not None,
+                                     reference=reference)
+        functions = ", ".join(dict.fromkeys(r["function"] for r in rows))
+        dims = ", ".join(str(d) for d in dict.fromkeys(r["dim"] for r in rows))
+        what = f"{functions} in {dims} dimensions"
+    else:
+        planners = list(dict.fromkeys(r["planner"] for r in rows))
+        reference = next(iter((st.get("comparisons") or {}).values()), {}).get("reference")
+        grid = tables.map_grid(rows, planners, reference)
+        what = ", ".join(dict.fromkeys(r["map"] for r in rows))
+    tests = (f" Against {reference}: superscript +/=/- significantly better / no difference / "
+             "worse (two-sided Wilcoxon rank-sum test; success rates: Fisher's exact test; "
+             "Holm-adjusted, alpha 0.05); A12: Vargha-Delaney effect size; shift and its 95 % "
+             "interval: Hodges-Lehmann; P(b/e/w): posterior probabilities of better / "
+             "practically equivalent / worse (Bayesian bootstrap of the mean, rope 1 % of the "
+             "larger distance to the optimum). Bold: the best mean and those not significantly "
+             "worse." if reference else "")
+    caption = (f"swarmpath job {job} ({summary['kind']}{state}): {what}; up to {runs} runs per "
+               f"cell.{tests}")
+    return latex.grid_to_latex(grid, caption, f"tab:swarmpath-{job}")

@@ -77,9 +77,9 @@ def grid_to_latex(grid: Grid, caption: str, label: str | None = None,
     body = []
     last = len(grid.rows) - 1
     for i, row in enumerate(grid.rows):
-        effect = row[2].text in EFFECT_ROWS
-        cells = [cell_text(c.text) for c in row[:3]]
-        cells += [_cell(c, grid.markers and not effect) for c in row[3:]]
+        effect = grid.labels == 3 and row[2].text in EFFECT_ROWS
+        cells = [cell_text(c.text) for c in row[:grid.labels]]
+        cells += [_cell(c, grid.markers and not effect) for c in row[grid.labels:]]
         body.append(" & ".join(cells) + r" \\")
         if i in grid.section_ends and i != last:
             body.append(r"\midrule")

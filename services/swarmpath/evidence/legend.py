@@ -65,7 +65,31 @@ NOTES: dict[str, str] = {
                      "test over successful runs, Holm-adjusted over the table, alpha 0.05)",
     "seconds_marker": "+/=/- against the reference planner's planning times (Wilcoxon "
                       "rank-sum test, Holm-adjusted over the table, alpha 0.05)",
+    "gap_marker": "+/=/- against the reference planner's gaps to the exact optimum (Wilcoxon "
+                  "rank-sum test over successful runs, Holm-adjusted over the table, alpha 0.05)",
+    "iqr": "interquartile range q3 - q1 of the runs' best fitness (numpy's linear quartiles)",
+    "a12": "Vargha-Delaney effect size: the probability that a run of this algorithm beats a "
+           "run of the reference, ties half (0.5: no effect; |A12 - 0.5| >= 0.06 small, 0.14 "
+           "medium, 0.21 large)",
+    "shift": "Hodges-Lehmann shift: median of the differences (this run - reference run) over "
+             "all pairs of runs, in the function's units (negative: lower than the reference)",
+    "shift_low": "lower end of the shift's 95 % interval (the rank-sum test inverted)",
+    "shift_high": "upper end of the shift's 95 % interval",
+    "p_better": "posterior probability that the mean is lower than the reference's by more than "
+                "the rope (Bayesian bootstrap; rope 1 % of the larger distance to the optimum)",
+    "p_equivalent": "posterior probability that the means differ by less than the rope",
+    "p_worse": "posterior probability that the mean is higher than the reference's by more "
+               "than the rope",
+    "verdict": "better / equivalent / worse when that probability reaches 0.95, else undecided",
+    "best": "true for the lowest average of the function and dimension (ties all)",
+    "similar": "true when not the best but not significantly worse than it (rank-sum test "
+               "against the best, Holm-adjusted over the table): bold in the papers' tables",
 }
+for _measure in ("length", "gap", "seconds"):
+    NOTES[f"{_measure}_a12"] = f"A12 of the {_measure} (see a12)"
+    NOTES[f"{_measure}_shift"] = f"Hodges-Lehmann shift of the {_measure} (see shift)"
+    for _p in ("p_better", "p_equivalent", "p_worse"):
+        NOTES[f"{_measure}_{_p}"] = f"{_p} of the {_measure} (relative rope 1 % of the larger)"
 ALIASES = {"gap": "gap_mean", "gap (%)": "gap_mean", "collision": "collisions",
            "cpu time (s)": "cpu_seconds_mean"}
 

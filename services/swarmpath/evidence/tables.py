@@ -52,6 +52,8 @@ class Grid:
     #: the marks used, so a renderer can pad every cell of a column to the same width
     mark_width: int = 0
     markers: bool = False
+    #: the leading columns that are labels (function, dim, statistic; or map, planner)
+    labels: int = 3
 
 
 def format_value(v: float | None, digits: int = 2) -> str:
@@ -219,3 +221,39 @@ def mark_best(rows: list[dict[str, Any]], stat: str, similar: bool = True) -> No
         for r, v in zip(group, values, strict=True):
             r["best"] = low is not None and v == low
             r["similar"] = bool(r.get("similar")) and not r["best"] if similar else False
+
+
+def map_grid(rows: Sequence[Mapping[str, Any]], planners: Sequence[str],
+             reference: str | None = None) -> Grid:
+    """A map study's comparison (the REST summary's map rows, or ``plan``'s in the same shape):
+    per map and planner the success rate, mean length, gap and time, each with its +/=/- marker,
+    A12 and Bayesian P(b/e/w) against the reference."""
+    header = ["Map", "Planner", "Success"]
+    for label in ("Length (m)", "Gap (%)", "Time (s)"):
+        header += [label, "A12", "P(b/e/w)"]
+    grid = Grid(header, ["l", "l", *("r" * (len(header) - 2))], markers=True, labels=2)
+    maps = list(dict.fromkeys(r["map"] for r in rows))
+    by_cell = {(r["map"], r["planner"]): r for r in rows}
+    for m in maps:
+        present = [p for p in planners if (m, p) in by_cell]
+        for j, p in enumerate(present):
+            r = by_cell[(m, p)]
+            rate = _num(r.get("success_rate"))
+            cells = [TCell(m if j == 0 else ""), TCell(p),
+                     TCell("-" if rate is None else f"{100 * rate:.0f}%",
+                           marker=r.get("success_marker"))]
+            for measure, key, scale, digits in (("length", "length_mean", 1.0, 3),
+                                                ("gap", "gap_mean", 100.0, 2),
+                                                ("seconds", "seconds_mean", 1.0, 3)):
+                v = _num(r.get(key))
+                a12 = _num(r.get(f"{measure}_a12"))
+                ps = [_num(r.get(f"{measure}_{k}")) for k in
+                      ("p_better", "p_equivalent", "p_worse")]
+                cells += [TCell("-" if v is None else f"{scale * v:.{digits}f}",
+                                marker=r.get(f"{measure}_marker")),
+                          TCell("" if p == reference or a12 is None else f"{a12:.2f}"),
+                          TCell("" if p == reference or any(x is None for x in ps) else
+                                "/".join(f"{x:.2f}" for x in ps if x is not None))]
+            grid.rows.append(cells)
+        grid.section_ends.add(len(grid.rows) - 1)
+    return grid

@@ -13,13 +13,19 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from swarmpath.evidence import report
-from swarmpath.evidence.compare_maps import MEASURES
+from swarmpath.evidence.compare_maps import MEASURES, SAMPLED
 from swarmpath.evidence.compare_maps import map_statistics as map_tests
+from swarmpath.evidence.tables import test_fields
 
-#: Columns added to the benchmark rows, after the existing ones.
-BENCHMARK_TEST_COLUMNS = ("marker", "p", "p_holm")
-#: Columns added to the map rows: per measure its marker and Holm-adjusted p.
-MAP_TEST_COLUMNS = tuple(f"{m}_{c}" for m in MEASURES for c in ("marker", "p_holm"))
+#: Columns added to the benchmark rows, after the existing ones: the test against the reference,
+#: its effect sizes, the Bayesian posterior, and the bold cells (best, similar).
+BENCHMARK_TEST_COLUMNS = ("marker", "p", "p_holm", "a12", "shift", "shift_low", "shift_high",
+                          "p_better", "p_equivalent", "p_worse", "verdict", "best", "similar")
+#: Per sampled measure (length, gap, seconds): A12, the shift and the Bayesian posterior.
+MAP_EFFECTS = ("a12", "shift", "p_better", "p_equivalent", "p_worse")
+#: Columns added to the map rows: per measure its marker and Holm-adjusted p, then the effects.
+MAP_TEST_COLUMNS = (*(f"{m}_{c}" for m in MEASURES for c in ("marker", "p_holm")),
+                    *(f"{m}_{c}" for m in SAMPLED for c in MAP_EFFECTS))
 
 
 def benchmark_statistics(
@@ -35,11 +41,12 @@ def benchmark_statistics(
         for r, v in zip(rows, values, strict=True) if v
     }
     tests = report.benchmark_tests(samples, algorithms, reference)
+    index = tests.bayes.index() if tests.bayes is not None else {}
     for r in rows:
-        t = tests.comparison.get((r["function"], int(r["dim"])), r["algorithm"])
-        r["marker"] = None if t is None else t.marker
-        r["p"] = None if t is None else t.p
-        r["p_holm"] = None if t is None else t.p_holm
+        key = (r["function"], int(r["dim"]))
+        r.update(test_fields(tests, key, r["algorithm"], index))
+        r["best"] = r["algorithm"] in tests.best.get(key, set()) if "avg" in r else None
+        r["similar"] = (r["similar"] and not r["best"]) if "avg" in r else None
     return report.tests_to_json(tests)
 
 
@@ -57,11 +64,19 @@ def map_statistics(
         for r, cell in zip(rows, runs, strict=True) for m in cell
     ]
     tests = map_tests(records, planners, reference)
+    posterior = {m: b.index() for m, b in tests.bayes.items()}
     for r in rows:
         for measure in MEASURES:
             t = tests.comparisons[measure].get(r["map"], r["planner"])
             r[f"{measure}_marker"] = None if t is None else t.marker
             r[f"{measure}_p_holm"] = None if t is None else t.p_holm
+        for measure in SAMPLED:
+            t = tests.comparisons[measure].get(r["map"], r["planner"])
+            post = posterior[measure].get((r["map"], r["planner"]))
+            r[f"{measure}_a12"] = None if t is None else t.a12
+            r[f"{measure}_shift"] = None if t is None or t.shift is None else t.shift.estimate
+            for k in ("p_better", "p_equivalent", "p_worse"):
+                r[f"{measure}_{k}"] = None if post is None else getattr(post, k)
     return tests.to_json()
 
 
@@ -100,6 +115,8 @@ def statistics_lines(summary: Mapping[str, Any]) -> list[str]:
         return []
     lines = []
     for label, c in comparisons.items():
+        if not any(sum(n.values()) for n in c["counts"].values()):
+            continue  # nothing tested (a gap on maps without an exact optimum)
         counts = ", ".join(f"{a} {n['+']}/{n['=']}/{n['-']}" for a, n in c["counts"].items())
         lines.append(f"{label}+/=/- vs {ref}: {counts}")
     lines += [_friedman_line(label, f) for label, f in fried.items()]

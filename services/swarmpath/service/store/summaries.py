@@ -22,7 +22,8 @@ from swarmpath.service.summary_stats import (
 )
 
 BENCHMARK_COLUMNS = (
-    "algorithm", "function", "dim", "runs", "failed", "min", "max", "avg", "std", "median", "rank",
+    "algorithm", "function", "dim", "runs", "failed", "min", "max", "avg", "std", "median", "iqr",
+    "rank",
     "origin_suspect", *BENCHMARK_TEST_COLUMNS,
 )
 MAP_COLUMNS = (
@@ -171,7 +172,8 @@ class SummariesMixin(StoreBase):
                     row["rank"] = ranks[(row["function"], row["dim"])][row["algorithm"]]
                 else:
                     row.update(dict.fromkeys(
-                        ("min", "max", "avg", "std", "median", "rank", "origin_suspect")
+                        ("min", "max", "avg", "std", "median", "q1", "q3", "iqr", "rank",
+                         "origin_suspect")
                     ))
             statistics = benchmark_statistics(
                 rows, [values.get(c["idx"]) for c in cells], job_spec["algorithms"],
