@@ -3,6 +3,7 @@ per-run exports, IOHprofiler files and plots of a finished job."""
 
 from __future__ import annotations
 
+import itertools
 import json
 from pathlib import Path
 
@@ -264,8 +265,47 @@ def parse_dat(path: Path) -> list[list[tuple[int, float]]]:
     return blocks
 
 
-def test_ioh_export_follows_the_iohprofiler_format(service, tmp_path):
-    from swarmpath.functions import list_functions
+def test_ioh_info_export_follows_the_iohprofiler_format(service, tmp_path):
+    from swarmpath.evidence.benchmark_stats import f_star
+
+    cli, http, _core = service
+    job = finished(service, BENCH)
+    out = tmp_path / "ioh"
+    result = cli("results", job, "--format", "ioh-info", "-o", str(out))
+    assert result.exit_code == 0, result.stderr
+    items = rest_runs(http, job)
+    assert sorted(p.name for p in out.iterdir()) == ["GWO", "PSO"]
+    for algorithm in ("GWO", "PSO"):
+        infos = sorted((out / algorithm).glob("*.info"))
+        # stable ids: F8 is IOHanalyzer's f8 although F6-floor is registered before it
+        assert [p.name for p in infos] == ["IOHprofiler_f1_F1.info", "IOHprofiler_f8_F8.info"]
+        for info in infos:
+            (block,) = parse_info(info)
+            pairs = block["pairs"]
+            function = pairs["funcName"].strip('"')
+            assert int(pairs["funcId"]) == int(function[1:])
+            assert (pairs["DIM"], pairs["algId"], pairs["maximization"]) == (
+                "2", f'"{algorithm}"', '"F"')
+            runs = [i for i in items if (i["algorithm"], i["function"]) == (algorithm, function)]
+            dat = parse_dat(block["dat"])
+            assert len(dat) == len(block["runs"]) == len(runs) == 3
+            fs = f_star(function, 2)  # values are f - f* (F8's minimum is negative)
+            for (instance, evals, best), records, item in zip(block["runs"], dat, runs,
+                                                              strict=True):
+                assert instance == 1  # not shifted: one instance
+                assert records[-1] == (evals, best)  # each block ends at the last evaluation
+                assert evals == item["evaluations"]
+                assert best == pytest.approx(item["best_fitness"] - fs, rel=1e-9, abs=1e-300)
+                assert records[0][1] == pytest.approx(item["curve"][0] - fs, rel=1e-9)
+                assert best >= 0
+
+
+def test_ioh_export_loads_in_iohinspector(service, tmp_path):
+    """The JSON form loads in IOHprofiler's own Python reader with every run, its function id
+    and its best value; each run starts at evaluation 1 and never gets worse."""
+    import iohinspector
+
+    from swarmpath.evidence.benchmark_stats import f_star
 
     cli, http, _core = service
     job = finished(service, BENCH)
@@ -273,27 +313,40 @@ def test_ioh_export_follows_the_iohprofiler_format(service, tmp_path):
     result = cli("results", job, "--format", "ioh", "-o", str(out))
     assert result.exit_code == 0, result.stderr
     items = rest_runs(http, job)
-    assert sorted(p.name for p in out.iterdir()) == ["GWO", "PSO"]
-    for algorithm in ("GWO", "PSO"):
-        infos = sorted((out / algorithm).glob("*.info"))
-        assert [p.name for p in infos] == ["IOHprofiler_f1_F1.info", "IOHprofiler_f9_F8.info"]
-        for info in infos:
-            (block,) = parse_info(info)
-            pairs = block["pairs"]
-            function = pairs["funcName"].strip('"')
-            assert int(pairs["funcId"]) == list_functions().index(function) + 1
-            assert (pairs["DIM"], pairs["algId"], pairs["maximization"]) == (
-                "2", f'"{algorithm}"', '"F"')
-            runs = [i for i in items if (i["algorithm"], i["function"]) == (algorithm, function)]
-            dat = parse_dat(block["dat"])
-            assert len(dat) == len(block["runs"]) == len(runs) == 3
-            for (instance, evals, best), records, item in zip(block["runs"], dat, runs,
-                                                              strict=True):
-                assert instance == 1  # not shifted: one instance
-                assert records[-1] == (evals, best)  # each block ends at the last evaluation
-                assert evals == item["evaluations"]
-                assert best == pytest.approx(item["best_fitness"], rel=1e-9, abs=1e-300)
-                assert records[0][1] == pytest.approx(item["curve"][0], rel=1e-9)
+    dm = iohinspector.DataManager()
+    dm.add_folder(str(out))
+    overview = dm.overview
+    assert overview.height == len(items) == 12
+    assert sorted(set(overview["function_id"].to_list())) == [1, 8]
+    assert sorted(set(overview["algorithm_name"].to_list())) == ["GWO", "PSO"]
+    expected = sorted(i["best_fitness"] - f_star(i["function"], 2) for i in items)
+    assert sorted(overview["best_y"].to_list()) == pytest.approx(expected, rel=1e-9,
+                                                                 abs=1e-300)
+    data = dm.load(monotonic=False, include_meta_data=True)
+    for _, run in data.group_by("data_id"):
+        evals, ys = run["evaluations"].to_list(), run["raw_y"].to_list()
+        assert evals[0] == 1 and evals == sorted(evals)
+        assert all(a >= b for a, b in itertools.pairwise(ys))
+
+
+def test_ioh_function_ids_are_stable_and_extendable():
+    from swarmpath.evidence import ioh
+
+    assert [ioh.function_id(n) for n in ("F1", "F8", "F13", "F23")] == [1, 8, 13, 23]
+    assert ioh.function_id("F6-floor") == 106
+    # suite functions as their suite numbers them (unique within the suite label)
+    assert ioh.function_id("bbob:f3") == 3 and ioh.function_id("cec2022:F12") == 12
+    ioh._check_ids(["F3", "bbob:f3"])  # two suite labels: no clash
+    assert ioh.function_id("mysuite:g4") == 4
+    fallback = ioh.function_id("my-plugin-function")
+    assert fallback == ioh.function_id("my-plugin-function") and fallback >= 10_000
+    ioh.register_function_id("my-plugin-function", 77)
+    try:
+        assert ioh.function_id("my-plugin-function") == 77
+        with pytest.raises(ValueError, match="both have IOHprofiler id 77"):
+            ioh._check_ids(["my-plugin-function", "F77"])
+    finally:
+        ioh._IDS.pop("my-plugin-function")
 
 
 def test_ioh_evaluation_points_follow_thinned_curves():

@@ -27,11 +27,11 @@ def _call(fn: Any, *args: Any) -> Any:
 
 
 def _check(format: str, runs: bool, output: Path | None) -> None:
-    if format == "ioh":
+    if format in ("ioh", "ioh-info"):
         if runs:
-            raise InputError("--runs", "--format ioh writes the curves, not --runs")
+            raise InputError("--runs", f"--format {format} writes the curves, not --runs")
         if output is None:
-            raise InputError("--output", "--format ioh needs a directory: -o DIR")
+            raise InputError("--output", f"--format {format} needs a directory: -o DIR")
         plot_dir(output, "--output")
         return
     allowed = RUN_FORMATS if runs else SUMMARY_FORMATS
@@ -51,7 +51,7 @@ def results(
         str,
         typer.Option("--format", help="Summary: table, json, csv or latex (a booktabs table). "
                      "With --runs: csv, json or parquet. ioh: the curves as IOHprofiler files "
-                     "(-o DIR)."),
+                     "(-o DIR; ioh-info: the older .info form)."),
     ] = "table",
     runs: Annotated[
         bool, typer.Option("--runs", help="One row per run (identity, metrics, curve or path).")
@@ -82,8 +82,8 @@ def results(
                 typer.echo(f"wrote {out}", err=True)
             if not figures:
                 typer.echo(f"job {job}: no finished run to plot yet", err=True)
-        if format == "ioh":
-            _ioh(client, job, output)  # type: ignore[arg-type]
+        if format in ("ioh", "ioh-info"):
+            _ioh(client, job, output, format)  # type: ignore[arg-type]
         elif runs:
             _runs(client, job, format, output)
         else:
@@ -135,12 +135,15 @@ def _runs(client: Any, job: str, format: str, output: Path | None) -> None:
     typer.echo(f"{output}: {n} runs", err=True)
 
 
-def _ioh(client: Any, job: str, directory: Path) -> None:
+def _ioh(client: Any, job: str, directory: Path, fmt: str = "ioh") -> None:
     from swarmpath.evidence.ioh import write_ioh
 
     if _call(client.job, job)["kind"] != "benchmark":
         raise InputError("--format", "ioh holds optimizer curves: JOB must be a benchmark job")
-    written = write_ioh(_call(client.iter_runs, job), directory, job)
+    try:
+        written = write_ioh(_call(client.iter_runs, job), directory, job, fmt)
+    except ValueError as exc:  # two functions on one IOHprofiler id
+        raise InputError("--format", str(exc)) from None
     typer.echo(f"{directory}: {written.runs} runs in {len(written.files)} files"
                + (f" ({written.skipped} runs without a finite curve left out)"
                   if written.skipped else ""), err=True)
