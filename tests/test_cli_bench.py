@@ -314,7 +314,8 @@ def test_plot_writes_curves_and_box_plots_per_function_and_dim(tmp_path):
     result = invoke("-a", ",".join(ALGOS), "-f", "F1,F8", "-d", "2", *SMALL, "--plot", str(out))
     assert result.exit_code == 0, result.stderr
     assert sorted(p.name for p in out.iterdir()) == [
-        "box_F1_d2.png", "box_F8_d2.png", "cd-D2.png", "curves_F1_d2.png", "curves_F8_d2.png"]
+        "anytime_F1_d2.png", "anytime_F8_d2.png", "box_F1_d2.png", "box_F8_d2.png", "cd-D2.png",
+        "curves_F1_d2.png", "curves_F8_d2.png"]
     assert all(p.read_bytes().startswith(b"\x89PNG\r\n\x1a\n") for p in out.iterdir())
 
 

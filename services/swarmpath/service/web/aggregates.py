@@ -237,6 +237,15 @@ class JobAggregates:
             })
             g["algorithms"][s["algorithm"]] = {**cell.view(), "cell": index}
         samples: dict[tuple[str, int], dict[str, np.ndarray]] = {}
+        from swarmpath.evidence.anytime import grid_ecdf
+
+        rows_of: dict[tuple[str, int], dict[str, np.ndarray]] = {}
+        for cell in self._cells:
+            assert isinstance(cell, _BenchmarkCell)
+            key = (cell.spec["function"], int(cell.spec["dim"]))
+            rows_of.setdefault(key, {})[cell.spec["algorithm"]] = cell.rows[cell.ok]
+        for key, g in groups.items():  # the runtime ECDF over iterations (anytime view)
+            g["ecdf"] = grid_ecdf(np.asarray(g["iterations"]), rows_of.get(key, {}))
         for g in groups.values():
             means = {a: v["describe"]["avg"] for a, v in g["algorithms"].items()
                      if v["describe"] is not None and not math.isnan(v["describe"]["avg"])}
@@ -257,7 +266,8 @@ class JobAggregates:
 
     def _map_view(self) -> dict[str, Any]:
         groups: dict[str, dict[str, Any]] = {}
-        samples: dict[str, dict[str, dict[str, list[float]]]] = {"length": {}, "seconds": {}}
+        samples: dict[str, dict[str, dict[str, list[float]]]] = {"length": {}, "gap": {},
+                                                                  "seconds": {}}
         planners: list[str] = []
         for index, cell in enumerate(self._cells):
             s = cell.spec
@@ -265,7 +275,7 @@ class JobAggregates:
                 planners.append(s["planner"])
             g = groups.setdefault(s["map"], {"map": s["map"], "cell": index, "planners": {}})
             g["planners"][s["planner"]] = {**cell.view(), "cell": index}
-            for metric in ("length", "seconds"):
+            for metric in ("length", "gap", "seconds"):
                 samples[metric].setdefault(s["map"], {})[s["planner"]] = cell.values[metric]
         return {"job_id": self.job_id, "kind": "map", "version": self.version,
                 "loading": self.loading, "finished": self.finished,

@@ -38,6 +38,16 @@
     if (b) b.onclick = async () => { const r = await SP.cancelJob(id); if (r.ok) renderStatus(r.data); };
   }
 
+  /* A12 and the Bayesian P(better/equivalent/worse) under a marker; the shift in the title. */
+  function effect(per, name) {
+    const e = per && per[name];
+    if (!e) return "";
+    const p = (v) => (v === null || v === undefined ? "-" : v.toFixed(2));
+    const title = e.shift !== undefined ? `Hodges-Lehmann shift ${SP.num(e.shift, 3)} [${SP.num(e.shift_low, 3)}, ${SP.num(e.shift_high, 3)}]` : "";
+    return `<div class="effect" title="${title}">A12 ${p(e.a12)}` + (e.p_better !== undefined
+      ? ` &middot; P ${p(e.p_better)}/${p(e.p_equivalent)}/${p(e.p_worse)}` : "") + `</div>`;
+  }
+
   function pivot(data) {
     const st = data.statistics || { markers: {}, counts: {}, friedman: {} };
     const algs = data.algorithms;
@@ -52,7 +62,7 @@
         const value = d ? SP.num(d.avg, 3) + " (" + SP.num(d.std, 2) + ")" : "-";
         html += `<td class="${g.best.includes(a) ? "best" : ""}">${run === null ? value
           : `<a class="run-link" title="open the best run" href="/ui/jobs/${encodeURIComponent(id)}/runs/${run}">${value}</a>`}`
-          + `${m ? `<span class="marker">${m}</span>` : ""}</td>`;
+          + `${m ? `<span class="marker">${m}</span>` : ""}${effect((st.effects || {})[g.function + "/" + g.dim], a)}</td>`;
       }
       html += "</tr>";
     }
@@ -69,7 +79,7 @@
       }
     }
     html += "</tfoot></table>";
-    if (st.reference) html += `<p class="legend">Bold: lowest mean. Markers: Wilcoxon rank-sum test of each algorithm's best fitness against ${SP.esc(st.reference)} (Holm-adjusted over the table, alpha ${st.alpha}): + significantly better, = no significant difference, - significantly worse. Mean rank: Friedman ranks of the means over the functions (1 = best).</p>`;
+    if (st.reference) html += `<p class="legend">Bold: lowest mean. Markers: Wilcoxon rank-sum test of each algorithm's best fitness against ${SP.esc(st.reference)} (Holm-adjusted over the table, alpha ${st.alpha}): + significantly better, = no significant difference, - significantly worse. A12: Vargha-Delaney effect size, the probability that a run beats a run of ${SP.esc(st.reference)} (0.5: no effect; hover for the Hodges-Lehmann shift and its 95 % interval). P: posterior probabilities of better / practically equivalent / worse (Bayesian bootstrap of the mean, rope ${SP.esc(st.rope || "")} of the larger distance to the optimum). Mean rank: Friedman ranks of the means over the functions (1 = best).</p>`;
     return html;
   }
 
@@ -82,7 +92,7 @@
       const row = document.createElement("div");
       row.className = "grid";
       row.dataset.group = g.function + "/" + g.dim;
-      row.innerHTML = `<div class="card chart conv"></div><div class="card chart box"></div>`;
+      row.innerHTML = `<div class="card chart conv"></div><div class="card chart box"></div><div class="card chart ecdf"></div>`;
       charts.appendChild(row);
       const series = algs.filter((a) => g.algorithms[a] && g.algorithms[a].runs).map((a) => {
         const b = g.algorithms[a].band;
@@ -93,6 +103,11 @@
       const boxes = algs.map((a) => ({ name: a, color: color(a, algs), stats: g.algorithms[a] && g.algorithms[a].box }));
       const positive = boxes.every((b) => !b.stats || b.stats.min > 0);
       SP.boxChart(row.children[1], { title: `${g.function}, dim ${g.dim}: best fitness`, ylabel: "best fitness", logy: positive, boxes: boxes });
+      const ecdf = g.ecdf || { algorithms: {}, points: [] };
+      SP.lineChart(row.children[2], { title: `${g.function}, dim ${g.dim}: runtime ECDF`, xlabel: "iteration",
+        ylabel: "share of (run, target) pairs", logx: true, logy: false,
+        series: algs.filter((a) => ecdf.algorithms[a]).map((a) => ({ name: `${a} (AUC ${ecdf.algorithms[a].auc.toFixed(2)})`,
+          color: color(a, algs), x: ecdf.points, y: ecdf.algorithms[a].ecdf })) });
     }
   }
 
@@ -118,10 +133,10 @@
     for (const g of data.groups) for (const p of planners) {
       const c = g.planners[p]; if (!c) continue;
       const med = (b) => (b ? SP.num(b.median, 3) : "");
-      const mark = (what) => { const m = ((st[what + "_markers"] || {})[g.map] || {})[p]; return m ? `<span class="marker">${m}</span>` : ""; };
+      const mark = (what) => { const m = ((st[what + "_markers"] || {})[g.map] || {})[p]; return (m ? `<span class="marker">${m}</span>` : "") + effect((st[what + "_effects"] || {})[g.map], p); };
       html += `<tr><td class="l">${SP.esc(g.map)}</td><td class="l">${SP.esc(p)}</td><td>${c.runs}</td><td>${c.crashed}</td>
         <td>${c.success_rate === null ? "" : SP.num(c.success_rate, 3)}</td><td>${c.collisions}</td><td>${med(c.box.length)}${mark("length")}</td>
-        <td${c.box.gap || !c.optimum_reason ? "" : ` class="l note" title="no exact optimum: ${SP.esc(c.optimum_reason)}"`}>${c.box.gap ? med(c.box.gap) : (c.optimum_reason ? `no optimum: ${SP.esc(c.optimum_reason)}` : "")}</td><td>${med(c.box.seconds)}${mark("seconds")}</td><td>${med(c.box.cpu_seconds)}</td>
+        <td${c.box.gap || !c.optimum_reason ? "" : ` class="l note" title="no exact optimum: ${SP.esc(c.optimum_reason)}"`}>${c.box.gap ? med(c.box.gap) + mark("gap") : (c.optimum_reason ? `no optimum: ${SP.esc(c.optimum_reason)}` : "")}</td><td>${med(c.box.seconds)}${mark("seconds")}</td><td>${med(c.box.cpu_seconds)}</td>
         <td class="l">${Object.entries(c.failures).map(([k, n]) => `${n} ${k}`).join(", ")}</td></tr>`;
     }
     html += `</tbody></table>`;
@@ -143,9 +158,9 @@
     const warned = data.groups.map((g) => [g.map, Object.values(g.planners).find((c) => c && c.warnings && c.warnings.length)]).filter(([, c]) => c);
     if (warned.length) html += `<ul id="map-warnings" class="legend">` + warned.map(([map, c]) => c.warnings.map(([f, m]) => `<li>warning: ${SP.esc(map)}: ${SP.esc(f)}: ${SP.esc(m)}</li>`).join("")).join("") + `</ul>`;
     if (st.reference) {
-      const measures = ["success", "length", "seconds"].filter((w) => st[w === "success" ? "counts" : w + "_counts"]);
+      const measures = ["success", "length", "gap", "seconds"].filter((w) => st[w === "success" ? "counts" : w + "_counts"]);
       const ranked = Object.keys(st.friedman || {});
-      const label = { success: "success", length: "length", seconds: "planning s" };
+      const label = { success: "success", length: "length", gap: "gap", seconds: "planning s" };
       html += `<h2>Planners against ${SP.esc(st.reference)}</h2><table id="map-ranks"><thead><tr><th class="l">planner</th>`
         + measures.map((w) => `<th>${label[w]} +/=/-</th>`).join("")
         + ranked.map((w) => `<th>${label[w]} mean rank</th>`).join("") + `</tr></thead><tbody>`;
@@ -211,7 +226,7 @@
       if (r.data.kind === "benchmark") renderBenchmark(r.data); else await renderMap(r.data);
       SP.q("#legend").innerHTML = (r.data.legend || []).map(([c, t]) => `<dt>${SP.esc(c)}</dt><dd>${SP.esc(t)}</dd>`).join("");
       SP.q("#notes").textContent = r.data.kind === "benchmark"
-        ? "Curves: median best-so-far error f(x) - f* over the successful runs, band from the 25th to the 75th percentile, log scale; box plots: quartiles, whiskers at 1.5 IQR, outliers as circles. Crashed runs (an exception in the optimizer) have no value."
+        ? "Curves: median best-so-far error f(x) - f* over the successful runs, band from the 25th to the 75th percentile, log scale; box plots: quartiles, whiskers at 1.5 IQR, outliers as circles; runtime ECDF: share of (run, target) pairs whose error reached the target by that iteration, over IOHanalyzer's default targets (10 log-spaced between the smallest and largest error of the function and dimension), AUC its area over the iterations divided by the last. Crashed runs (an exception in the optimizer) have no value."
         : "Paths: up to 200 runs per planner and map. Success: the run reached the goal without touching an obstacle. Crashed runs (an exception) are counted in 'runs' but have no path. Gap: length / optimum - 1 (the exact shortest path), only on static maps: with moving obstacles there is no optimum. Collisions count colliding steps.";
       document.body.dataset.version = r.data.version;
       loading = !!r.data.loading;
