@@ -192,8 +192,13 @@ def test_job_page_follows_a_running_job(server, jobs, browser):
     wait_for(browser, "body[data-loaded='1']")  # the refresh loop saw the job end
     assert browser.find_element(By.ID, "job-state").text == "done"
     groups = len(BENCH["functions"]) * len(BENCH["dims"])
-    assert len(browser.find_elements(By.CSS_SELECTOR, "#charts g.sp-series")) == groups * len(
+    assert len(browser.find_elements(By.CSS_SELECTOR, "#charts .conv g.sp-series")) == groups * len(
         BENCH["algorithms"])
+    # the runtime ECDF of every algorithm beside each convergence chart, and A12 / P under the
+    # markers of the pivot table
+    assert len(browser.find_elements(By.CSS_SELECTOR, "#charts .ecdf g.sp-series")) == groups * len(
+        BENCH["algorithms"])
+    assert browser.find_elements(By.CSS_SELECTOR, "#pivot .effect")
 
 
 def test_benchmark_job_page_table_curves_and_boxes(server, jobs, browser):
@@ -285,8 +290,8 @@ def test_map_job_page_paths_failures_and_boxes(server, jobs, browser):
     ranks = browser.find_elements(By.CSS_SELECTOR, "#map-ranks tbody tr")
     assert [r.get_attribute("data-planner") for r in ranks] == MAP["planners"]
     header = texts(browser.find_elements(By.CSS_SELECTOR, "#map-ranks thead th"))
-    assert header[1:] == ["success +/=/-", "length +/=/-", "planning s +/=/-",
-                          "length mean rank", "planning s mean rank"]
+    assert header[1:] == ["success +/=/-", "length +/=/-", "gap +/=/-", "planning s +/=/-",
+                          "length mean rank", "gap mean rank", "planning s mean rank"]
     st = view["statistics"]
     for row, p in zip(ranks, MAP["planners"], strict=True):
         cells = texts(row.find_elements(By.TAG_NAME, "td"))
