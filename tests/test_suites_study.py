@@ -157,7 +157,11 @@ def test_ioh_export_writes_suite_instances_as_iohprofiler_numbers_them(tmp_path)
               "curve": [3.0, 2.0], "evaluations": 20, "seed": 1,
               "spec": {"iterations": 2, "agents": 10}}
              for f in ("bbob:f3", "bbob:f3@i7", "cec2022:F2") for r in (0, 1)]
-    write_ioh(items, tmp_path, "j")
+    write_ioh(items, tmp_path / "json", "j")  # the default: IOHexperimenter's JSON form
+    meta = json.loads((tmp_path / "json" / "GWO" / "IOHprofiler_f3_bbob_f3.json").read_text())
+    assert (meta["suite"], meta["function_id"], meta["function_name"]) == ("bbob", 3, "bbob:f3")
+    assert [r["instance"] for r in meta["scenarios"][0]["runs"]] == [1, 1, 7, 7]
+    write_ioh(items, tmp_path, "j", "ioh-info")
     lines = (tmp_path / "GWO" / "IOHprofiler_f3_bbob_f3.info").read_text().splitlines()
     assert lines[0].startswith('suite = "bbob", funcId = 3, funcName = "bbob:f3", DIM = 5')
     assert [e.split(":")[0] for e in lines[2].split(", ")[1:]] == ["1", "1", "7", "7"]
