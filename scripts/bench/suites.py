@@ -13,24 +13,30 @@ for the whole batch (mx = points: the C code's own speed without the per-call ov
 swarmpath evaluates the batch of ``--points`` points (30 runs x 30 agents by default) in one
 call. Every figure is the best of ``--repeats`` in process CPU time, measured side by side in
 one run; each row also checks that the values agree (golden.agree). Prints one row per function
-and a median line per suite and dimension, and the load average.
+and a median line per suite and dimension, and the load average. BLAS runs on one thread, as in
+the study processes (swarmpath.parallel): on a loaded machine its threads' spinning otherwise
+costs 10-50x the matmul of a rotation.
 """
 
 from __future__ import annotations
 
-import argparse
-import ctypes
 import os
-import statistics
-import sys
-import time
-from collections.abc import Callable
-from pathlib import Path
 
-import numpy as np
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_var] = "1"  # before numpy loads its BLAS
 
-from swarmpath.functions import get_function, list_functions
-from swarmpath.functions.suites import golden
+import argparse  # noqa: E402
+import ctypes  # noqa: E402
+import statistics  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+from collections.abc import Callable  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from swarmpath.functions import get_function, list_functions  # noqa: E402
+from swarmpath.functions.suites import golden  # noqa: E402
 
 
 def best_time(call: Callable[[], object], repeats: int) -> float:
