@@ -167,3 +167,26 @@ def test_ioh_export_writes_suite_instances_as_iohprofiler_numbers_them(tmp_path)
     assert [e.split(":")[0] for e in lines[2].split(", ")[1:]] == ["1", "1", "7", "7"]
     cec = (tmp_path / "GWO" / "IOHprofiler_f2_cec2022_F2.info").read_text()
     assert cec.startswith('suite = "cec2022", funcId = 2,')
+
+
+def test_a_reproduction_table_on_a_suite_runs_its_budget_and_pooled_instances():
+    """A reproduce-style table may state budget_evals and instances (the baselines' CEC and
+    BBOB tables will): its study runs them, pools the instances per function, and skips the
+    origin check (an instance moves the optimum already)."""
+    from swarmpath.cli import reproduce
+    from swarmpath.cli.reproduce_run import run_benchmark_local
+    from swarmpath.evidence.reference import BenchmarkTable
+
+    table = BenchmarkTable(
+        name="suite-demo", source={}, setting={"runs": 2, "agents": 6, "iterations": 5,
+                                               "dims": [3], "budget_evals": "40xD",
+                                               "instances": [1, 3]},
+        algorithms=("GWO", "PSO"), functions=("bbob:f1", "bbob:f7"), stats=("avg",), notes=(),
+        cell_notes={}, cells={})
+    setting = reproduce.study_setting(table, None, 2)
+    assert setting["budget_evals"] == "40xD" and setting["instances"] == [1, 3]
+    assert reproduce._suites(setting)
+    cells = pool_instances(run_benchmark_local(setting, 1))
+    assert sorted({(c.function, c.algorithm) for c in cells}) == [
+        ("bbob:f1", "GWO"), ("bbob:f1", "PSO"), ("bbob:f7", "GWO"), ("bbob:f7", "PSO")]
+    assert all(len(c.best_fitness) == 4 and max(c.evaluations) <= 120 for c in cells)

@@ -85,6 +85,9 @@ def study_setting(table: reference.Table, runs: int | None, seed: int,
             "agents": int(table.setting["agents"]),
             "iterations": int(table.setting["iterations"]), "seed": seed,
         }
+        for key in ("budget_evals", "instances"):  # the suites' settings (docs/functions.md)
+            if table.setting.get(key) is not None:
+                setting[key] = table.setting[key]
         if backend != "numpy":
             from swarmpath.optimizers import ParameterError
             from swarmpath.optimizers.api import check_backend
@@ -105,6 +108,15 @@ def study_setting(table: reference.Table, runs: int | None, seed: int,
             "runs": n, "seed": seed}
 
 
+def _suites(setting: dict[str, Any]) -> bool:
+    """Whether the study runs suite functions (their instance already moves the optimum: no
+    origin check)."""
+    from swarmpath.functions import expand_function_names, get_function
+
+    return any(getattr(get_function(f), "suite", "") for f in
+               expand_function_names(",".join(setting["functions"])))
+
+
 # ------------------------------------------------------------------------------- reproduction
 Result = tuple[reference.Table, dict[str, Any], list[reproduction.Row], dict[str, Any] | None,
                dict[str, str | None]]
@@ -123,7 +135,11 @@ def reproduce_table(name: str, runs: int | None, seed: int, jobs: int, url: str 
     if isinstance(table, reference.BenchmarkTable):
         measured = (cells_from_runs(run_remote(setting, url)) if url
                     else run_benchmark_local(setting, jobs))
-        if origin_check:  # the same runs and seeds with the optimum moved
+        if setting.get("instances"):  # a table's function is its instances pooled (COCO)
+            from swarmpath.evidence.instances import pool_instances
+
+            measured = pool_instances(measured)
+        if origin_check and not _suites(setting):  # the same runs, the optimum moved
             moved = {**setting, "transform": "shift"}
             shifted = (cells_from_runs(run_remote(moved, url)) if url
                        else run_benchmark_local(moved, jobs))

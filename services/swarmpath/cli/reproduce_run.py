@@ -23,6 +23,9 @@ def run_benchmark_local(setting: dict[str, Any], jobs: int) -> list[report.Cell]
         ",".join(str(d) for d in setting["dims"]), runs=setting["runs"],
         agents=setting["agents"], iterations=setting["iterations"], seed=setting["seed"],
         backend=setting.get("backend", "numpy"), transform=setting.get("transform"),
+        instances=(",".join(str(i) for i in setting["instances"]) if setting.get("instances")
+                   else None),
+        budget_evals=setting.get("budget_evals"),
     )
     stderr = Console(stderr=True)
     return bench._run_with_progress(spec, stderr, jobs or bench.auto_jobs(spec))
