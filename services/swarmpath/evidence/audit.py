@@ -11,9 +11,10 @@ more than one and more than three decades, and how many plain runs ended at exac
 A cell is *origin-suspect* by measurement (:func:`shift_suspect`, what ``swarmpath reproduce``
 marks) when it loses more than :data:`SUSPECT_DECADES` decades under ``shift`` -- the same runs
 and seeds with the optimum moved -- i.e. when the optimizer owes more than a factor 1000 of its
-mean gap to where the optimum was. Three decades, not one: a 30-run mean of the heavy-tailed
-COOT-family cells moves by up to about two decades between disjoint sets of runs of the same
-study (docs/reproduction.md names the measurement), while the origin-pulling moves lose 14-300.
+mean gap to where the optimum was. Three decades, not one: PSO, without any move toward the
+origin, loses at most 0.5 decades in a cell of icoot-table2 (30 runs) and SSA at most 1.0 but
+on F2 (3.9, one shifted run of 30), while the origin-pulling moves of the COOT family lose
+7-30 decades there, every plain run below every shifted one (docs/statistics.md).
 Without a shifted study, :func:`origin_suspect` is the cheap hint ``bench`` and the service
 print: some run ended at exactly 0 or below :data:`SUSPECT_BELOW` on a function whose optimum is
 at the origin (such values usually come from a move that scales positions toward 0).
