@@ -123,3 +123,17 @@ def test_results_latex_of_benchmark_and_map_summaries_compiles(tmp_path: Path) -
     assert "(map (partial)): m1" in msource and "100\\%$^{=}$" in msource
     assert "$^{+}$" in msource  # ICOOT's lengths are all shorter than MFB's
     _compile(source + msource, tmp_path)
+
+
+def test_reproduce_format_latex_and_out_anytime(tmp_path: Path) -> None:
+    """A narrowed benchmark table: its booktabs form compiles, and --out draws the anytime
+    figure (runtime ECDF and ERT) beside the markdown and the ratio plot."""
+    args = ["reproduce", "icoot-table2", "--runs", "2", "--algorithms", "PSO,ICOOT",
+            "--functions", "F1", "--no-origin-check", "--jobs", "1"]
+    result = runner.invoke(app, [*args, "--format", "latex", "--out", str(tmp_path / "out")])
+    assert result.exit_code == 0, result.stderr
+    source = result.stdout
+    assert r"\begin{tabular}" in source and "Wilcoxon rank-sum" in source
+    assert "icoot-table2" in source and " & PSO & " in source
+    assert (tmp_path / "out" / "icoot-table2-anytime" / "anytime_F1_d30.png").stat().st_size > 0
+    _compile(source, tmp_path)

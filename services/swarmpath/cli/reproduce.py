@@ -34,7 +34,7 @@ from swarmpath.cli.study_options import BackendOpt
 from swarmpath.evidence import reference, report, reproduction, reproduction_maps
 from swarmpath.provenance import numeric_platform
 
-FORMATS = ("table", "markdown", "csv")
+FORMATS = ("table", "markdown", "csv", "latex")
 
 
 def resolve_tables(name: str | None) -> list[str]:
@@ -166,6 +166,11 @@ def judge(table: reference.Table, setting: dict[str, Any], measured: Sequence[An
         rows = reproduction.benchmark_rows(table, by_cell, reasons, moved)
         stats = report.statistics(cells, list(table.algorithms))
         statistics = report.tests_to_json(stats)
+        if any(c.curves for c in cells):  # run here (not --from, --url): the anytime view
+            from swarmpath.evidence import anytime
+
+            statistics["anytime"] = anytime.groups_to_json(anytime.study_groups(
+                cells, int(setting["agents"]), int(setting["iterations"])))
         for c in cells:
             markers[reference.cell_key(table.name, c.algorithm, c.function, c.dim)] = (
                 stats.marker(c))
@@ -265,10 +270,11 @@ def reproduce(
     url: Annotated[
         str | None, typer.Option(help="Run as a job on this coordinator (http://host:port).")
     ] = None,
-    fmt: Annotated[str, typer.Option("--format", help="table, markdown or csv.")] = "table",
+    fmt: Annotated[str, typer.Option("--format", help="table, markdown, csv or latex.")] = "table",
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON document.")] = False,
     out: Annotated[
-        Path | None, typer.Option(help="Also write DIR/<table>.md and DIR/<table>.png.")
+        Path | None, typer.Option(help="Also write DIR/<table>.md, DIR/<table>.png and, for a "
+                                   "benchmark table run here, DIR/<table>-anytime/*.png.")
     ] = None,
     from_: Annotated[
         Path | None,
@@ -349,7 +355,8 @@ def reproduce(
         docs.append(doc)
         if out is not None:
             output.write_outputs(out, tab, setting, rows, markers,
-                                 command_line(name, runs, seed, "markdown", backend, options))
+                                 command_line(name, runs, seed, "markdown", backend, options),
+                                 statistics)
         if as_json:
             continue
         if fmt == "markdown":
@@ -358,6 +365,8 @@ def reproduce(
                                                           options)))
         elif fmt == "csv":
             sys.stdout.write(output.csv_text(tab, rows, markers))
+        elif fmt == "latex":
+            sys.stdout.write(output.latex_table(tab, setting, rows, markers))
         else:
             output.print_rich(tab, setting, rows, markers)
     if as_json:

@@ -296,8 +296,39 @@ def plot(tab: reference.Table, rows: Sequence[Row], path: Path) -> Path:
 
 
 def write_outputs(directory: Path, tab: reference.Table, setting: Mapping[str, Any],
-                  rows: Sequence[Row], markers: Markers, command: str) -> None:
+                  rows: Sequence[Row], markers: Markers, command: str,
+                  statistics: Mapping[str, Any] | None = None) -> list[Path]:
+    """DIR/<table>.md and .png, and for a benchmark table run here its anytime figures
+    (DIR/<table>-anytime/anytime_<function>_d<dim>.png: runtime ECDF and ERT per function)."""
     directory.mkdir(parents=True, exist_ok=True)
     (directory / f"{tab.name}.md").write_text(markdown(tab, setting, rows, markers, command),
                                               encoding="utf-8")
-    plot(tab, rows, directory / f"{tab.name}.png")
+    out = [directory / f"{tab.name}.md", plot(tab, rows, directory / f"{tab.name}.png")]
+    groups = (statistics or {}).get("anytime")
+    if groups:
+        from swarmpath.evidence.anytime import AnytimeGroup
+        from swarmpath.evidence.anytime_report import write_anytime_plots
+
+        parsed = {(g["function"], int(g["dim"])): AnytimeGroup.from_json(g) for g in groups}
+        order = tab.algorithms if isinstance(tab, reference.BenchmarkTable) else None
+        out += write_anytime_plots(parsed, directory / f"{tab.name}-anytime", order)
+    return out
+
+
+def latex_table(tab: reference.Table, setting: Mapping[str, Any], rows: Sequence[Row],
+                markers: Markers) -> str:
+    """The reproduction as a booktabs table: published beside measured, markers, verdicts; the
+    reasons and the caption naming the setting and the tests."""
+    from swarmpath.evidence import latex
+
+    header, lines, notes = grid(tab, rows, markers)
+    caption = (f"{tab.name}: {_setting_text(tab, setting)}. +/=/- beside a measured mean: "
+               "two-sided Wilcoxon rank-sum test against the last one listed, Holm-corrected, "
+               "alpha 0.05. " + reproduction.summary_line(rows))
+    ends = [i for i in range(len(rows) - 1) if rows[i].where != rows[i + 1].where]
+    text = latex.rows_to_latex(header, lines, caption, f"tab:{tab.name}",
+                               "l" * 2 + "r" * (len(header) - 2), section_ends=ends)
+    if notes:
+        text += "\\begin{enumerate}\n" + "".join(
+            f"\\item {latex.cell_text(n)}\n" for n in notes) + "\\end{enumerate}\n"
+    return text

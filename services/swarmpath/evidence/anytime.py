@@ -176,6 +176,21 @@ class AnytimeGroup:
     cells: dict[str, AnytimeCell]
     target_set: str = "iohanalyzer"
 
+    @classmethod
+    def from_json(cls, doc: Mapping[str, Any]) -> AnytimeGroup:
+        """The group back from :meth:`to_json` ("inf" strings read as floats; no runtimes)."""
+        def nums(v: Sequence[Any]) -> list[float]:
+            return [float(x) for x in v]
+
+        cells = {a: AnytimeCell(int(c["runs"]), nums(c["ert"]), nums(c["ert_low"]),
+                                nums(c["ert_high"]), [int(h) for h in c["hits"]],
+                                float(c["auc"]), nums(c["ecdf"]),
+                                nums(c["fixed_budget_median"]), nums(c["fixed_budget_mean"]))
+                 for a, c in doc["algorithms"].items()}
+        return cls(nums(doc["targets"]), int(doc["budget"]), nums(doc["ecdf_budgets"]),
+                   [int(b) for b in doc["fixed_budgets"]], cells,
+                   str(doc.get("target_set", "iohanalyzer")))
+
     def to_json(self) -> dict[str, Any]:
         return {"targets": self.targets, "target_set": self.target_set, "budget": self.budget,
                 "ecdf_budgets": self.ecdf_budgets, "fixed_budgets": self.fixed_budgets,
