@@ -391,7 +391,8 @@ def test_cancel_publishes_and_finalizes(client, core):
 
 def test_made_up_worker_ids_leave_no_state(client, core):
     """30,000 ids in lease requests, results and progress add nothing; 100,000 liveliness
-    tokens fill the table up to its cap (refusals counted), and gone workers are pruned.
+    tokens keep the table at its cap and leave nothing when they go; a newcomer is refused (and
+    counted) only when proven workers fill the table, and gone workers are pruned.
     (scripts/bench/bus_state.py measures memory and GET /workers for 100,000 ids.)"""
     core.worker_table.max_entries = 500
     job = client.post("/jobs", json=SPEC).json()
@@ -411,15 +412,22 @@ def test_made_up_worker_ids_leave_no_state(client, core):
                                  json.dumps(progress).encode())
     assert len(core.worker_table) == 0 and client.get("/workers").json() == []
     assert core.sizer.slots == 1
-    for i in range(100_000):
-        core.worker_alive(f"token-{i}", now=1000.0)
-    assert len(core.worker_table) == 500 and core.worker_table.refused == 99_500
+    for i in range(100_000):  # tokens alone: unproven entries, each making room for the next
+        core.worker_alive(f"token-{i}", now=1000.0 + i)
+    assert len(core.worker_table) == 500 and core.worker_table.refused == 0
     assert len(client.get("/workers").json()) == 500
-    text = client.get("/metrics").text
-    assert "swarmpath_workers_refused_total 99500" in text
-    assert "swarmpath_worker_table_entries 500" in text
-    for i in range(500):
+    assert "swarmpath_worker_table_entries 500" in client.get("/metrics").text
+    for i in range(100_000):  # tokens that leave take their (unproven) entries with them
         core.worker_mark_gone(f"token-{i}")
+    assert len(core.worker_table) == 0
+    for i in range(500):  # proven workers (a lease request each) fill the table ...
+        core.worker_alive(f"real-{i}")
+        lease_for(core, f"real-{i}", max_runs=1)
+    core.worker_alive("late")  # ... and only then is a newcomer refused, and counted
+    assert not core.is_alive("late") and core.worker_table.refused == 1
+    assert "swarmpath_workers_refused_total 1" in client.get("/metrics").text
+    for i in range(500):
+        core.worker_mark_gone(f"real-{i}")
     core.worker_alive("newcomer")  # room is made by forgetting a gone worker
     assert core.is_alive("newcomer") and len(core.worker_table) == 500
     core.tick(now=time.time() + core.settings.forget_workers_seconds + 1)

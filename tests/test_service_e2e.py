@@ -47,8 +47,12 @@ def free_port() -> int:
 class Service:
     """A coordinator and its workers, as subprocesses; logs under ``tmp``."""
 
-    def __init__(self, tmp: Path):
+    def __init__(self, tmp: Path, insecure: bool = True):
         self.tmp = tmp
+        tmp.mkdir(parents=True, exist_ok=True)
+        # the coordinator without a Zenoh login (--insecure): these tests put a hostile client
+        # on an open bus; tests/test_service_identity.py runs the default, with logins
+        self.insecure = insecure
         self.data = tmp / "data"
         self.http = free_port()
         self.zport = free_port()
@@ -71,12 +75,14 @@ class Service:
         self.coordinator = self._spawn("coordinator", [
             "coordinator", "--http", f"127.0.0.1:{self.http}", "--zenoh", self.zenoh,
             "--data", str(self.data), "--lease-seconds", str(lease_seconds),
+            *(["--insecure"] if self.insecure else []),
         ])
         self.wait_for(lambda: self.get("/healthz").status_code == 200, 60, "coordinator up")
 
-    def start_worker(self, name: str) -> None:
+    def start_worker(self, name: str, *extra: str) -> None:
+        login = [] if self.insecure else ["--login-file", str(self.data / "zenoh-users.txt")]
         self.workers[name] = self._spawn(name, [
-            "worker", "--connect", self.zenoh, "--id", name, "--grace", "2",
+            "worker", "--connect", self.zenoh, "--id", name, "--grace", "2", *login, *extra,
         ])
 
     def wait_workers(self, names: list[str], timeout: float = 60.0) -> None:

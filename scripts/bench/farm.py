@@ -160,7 +160,8 @@ class Farm:
             stats = self.data / f"sim-{p}.json"
             cmd = [sys.executable, str(self.root / "scripts" / "bench" / "farm_workers.py"),
                    "--connect", f"tcp/127.0.0.1:{self.zenoh_port}", "--count", str(count),
-                   "--id-prefix", f"sim{p}", "--slots", str(a.slots), "--run-ms", str(a.run_ms),
+                   "--id-prefix", f"{self.login[0]}-sim{p}",  # ids of the farm's login
+                   "--slots", str(a.slots), "--run-ms", str(a.run_ms),
                    "--max-runs", str(a.runs_per_lease), "--max-leases", str(a.max_leases),
                    "--seconds", str(a.seconds + 120), "--stats", str(stats),
                    "--log-level", a.log_level]

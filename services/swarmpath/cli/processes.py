@@ -18,6 +18,7 @@ from typing import Annotated, Any
 import typer
 
 from swarmpath.cli.core import InputError, app
+from swarmpath.service.identity import read_logins
 
 DEFAULT_DATA = "swarmpath-data"
 DEFAULT_ZENOH = "tcp/127.0.0.1:7447"
@@ -146,17 +147,46 @@ def coordinator(
     auth_dictionary: Annotated[
         Path | None,
         typer.Option("--auth-dictionary",
-                     help="Zenoh user/password file (user:password lines): workers must log in."),
+                     help="Zenoh user/password file (user:password lines): workers must log in. "
+                          "Without it (and without mutual TLS) a login is made in "
+                          "DATA/zenoh-users.txt."),
     ] = None,
+    insecure: Annotated[
+        bool, typer.Option("--insecure",
+                           help="No Zenoh login: any process reaching the router can lease "
+                                "work and report results.")
+    ] = False,
     shm: ShmOpt = False,
     zenoh_config: ZConfOpt = None,
     log_level: LogOpt = "info",
 ) -> None:
-    """Run the coordinator: REST API, job queue and the Zenoh router (no local workers)."""
+    """Run the coordinator: REST API, job queue and the Zenoh router (no local workers).
+
+    Workers log in: with --auth-dictionary, or else with the login made in DATA/zenoh-users.txt
+    (start them with --login-file DATA/zenoh-users.txt); every login may do only what a worker
+    does (Zenoh access control). --insecure turns logins off."""
+    from swarmpath.cli.logins import mutual_tls, standalone_login, with_access_control
+
     parse_http(http)
+    if insecure and auth_dictionary is not None:
+        raise InputError("--insecure", "--auth-dictionary makes workers log in: choose one")
     settings = _coordinator_settings(data, zenoh, prefix, lease_seconds, shm, auth_dictionary,
                                      zenoh_config)
     _logging(log_level)
+    if insecure:
+        warning = ("INSECURE (--insecure): no Zenoh login; any process that reaches "
+                   f"{', '.join(settings.zenoh_listen)} can lease work and report results")
+        typer.echo(f"swarmpath coordinator: WARNING: {warning}", err=True)
+        logging.getLogger("swarmpath.coordinator").warning("%s", warning)
+    elif auth_dictionary is None and not mutual_tls(settings.zenoh_extra):
+        users = standalone_login(data)
+        settings.dictionary_file = str(users)
+        typer.echo(f"swarmpath coordinator: workers log in with {users} (0600): swarmpath "
+                   f"worker --connect {_connectable(settings.zenoh_listen[0])} --login-file "
+                   f"{users}", err=True)
+    if settings.dictionary_file is not None:
+        names = list(read_logins(settings.dictionary_file))
+        settings.zenoh_extra = with_access_control(prefix, names, settings.zenoh_extra)
     from swarmpath.service.coordinator import create_app
 
     _serve(create_app(settings), http, log_level)
@@ -181,6 +211,12 @@ def worker(
         str | None,
         typer.Option("--password", envvar="SWARMPATH_ZENOH_PASSWORD",
                      help="Zenoh password (prefer the environment variable)."),
+    ] = None,
+    login_file: Annotated[
+        Path | None,
+        typer.Option("--login-file", envvar="SWARMPATH_ZENOH_LOGIN_FILE",
+                     help="user:password file (its first line), e.g. the coordinator's "
+                          "DATA/zenoh-users.txt; instead of --user/--password."),
     ] = None,
     threads: Annotated[
         bool, typer.Option("--threads", help="Run leases in threads, not child processes.")
@@ -216,8 +252,23 @@ def worker(
     except ValueError as exc:
         option = "--prefix" if "prefix" in str(exc) else "--id"
         raise InputError(option, f"{exc} (ids match {ID_PATTERN})") from None
+    if login_file is not None:
+        from swarmpath.cli.logins import login_file as read_login_file
+
+        if user or password:
+            raise InputError("--login-file", "gives the user and password: drop --user/--password")
+        user, password = read_login_file(login_file)
     if bool(user) != bool(password):
         raise InputError("--password" if user else "--user", "user and password go together")
+    if user:
+        from swarmpath.service.identity import id_for
+        from swarmpath.service.worker import default_worker_id
+
+        try:
+            worker_id = id_for(user, worker_id, default_worker_id())
+            keys.worker_token(worker_id)
+        except ValueError as exc:
+            raise InputError("--id", str(exc)) from None
     if grace < 0:
         raise InputError("--grace", "must be >= 0")
     if not 1 <= max_leases <= MAX_BUNDLE_LEASES:
@@ -238,26 +289,31 @@ def worker(
 class LocalWorkers:
     """The worker subprocesses of ``swarmpath up`` (fork+exec'd, so nothing of Zenoh is shared)."""
 
-    def __init__(self, n: int, connect: str, prefix: str, slots: int, log_level: str,
-                 login: tuple[str, str] | None = None, stacking: bool = True):
-        self.n, self.connect, self.prefix, self.slots = n, connect, prefix, slots
+    def __init__(self, logins: list[tuple[str, str]], connect: str, prefix: str, slots: int,
+                 log_level: str, stacking: bool = True):
+        self.n, self.connect, self.prefix, self.slots = len(logins), connect, prefix, slots
         self.stacking = stacking
         self.log_level = log_level
-        self.login = login  # (user, password), handed over in the environment, never in argv
+        # one login per worker, named by its id: (user, password), handed over in the
+        # environment, never in argv
+        self.logins = logins
         self.procs: list[subprocess.Popen[bytes]] = []
 
+    @staticmethod
+    def ids(n: int) -> list[str]:
+        return [f"{_host()}-{os.getpid()}-w{i}" for i in range(n)]
+
     def start(self) -> None:
-        for i in range(self.n):
+        for worker_id, password in self.logins:
             cmd = [
                 sys.executable, "-m", "swarmpath.cli", "worker", "--connect", self.connect,
                 "--prefix", self.prefix, "--slots", str(self.slots),
                 "--exit-with-parent", str(os.getpid()), "--log-level", self.log_level,
-                "--id", f"{_host()}-{os.getpid()}-w{i}",
-                *([] if self.stacking else ["--no-stacking"]),
+                "--id", worker_id, *([] if self.stacking else ["--no-stacking"]),
             ]
             env = dict(os.environ)
-            if self.login is not None:
-                env["SWARMPATH_ZENOH_USER"], env["SWARMPATH_ZENOH_PASSWORD"] = self.login
+            env.pop("SWARMPATH_ZENOH_LOGIN_FILE", None)
+            env["SWARMPATH_ZENOH_USER"], env["SWARMPATH_ZENOH_PASSWORD"] = worker_id, password
             self.procs.append(subprocess.Popen(cmd, start_new_session=True, env=env))
         typer.echo(f"swarmpath up: {self.n} local worker(s) started "
                    f"(pids {', '.join(str(p.pid) for p in self.procs)})", err=True)
@@ -279,29 +335,6 @@ def _host() -> str:
     from swarmpath.service.worker import default_worker_id
 
     return default_worker_id().rsplit("-", 1)[0]
-
-
-def _local_login(data: Path, extra: Path | None) -> tuple[tuple[str, str], Path]:
-    """A fresh random login for this start's local workers, written with the logins of
-    ``extra`` (user:password lines) to DATA/zenoh-users.txt (0600)."""
-    import secrets
-
-    lines: list[str] = []
-    if extra is not None:
-        if not extra.is_file():
-            raise InputError("--auth-dictionary", f"{str(extra)!r} does not exist")
-        lines = [line.strip() for line in extra.read_text().splitlines() if line.strip()]
-        bad = [line for line in lines if ":" not in line or line.startswith(":")]
-        if bad:
-            raise InputError("--auth-dictionary", f"{bad[0]!r} is not a user:password line")
-    login = ("swarmpath-local", secrets.token_urlsafe(24))
-    data.mkdir(parents=True, exist_ok=True)
-    path = data / "zenoh-users.txt"
-    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
-    with os.fdopen(fd, "w") as f:
-        f.write("\n".join([f"{login[0]}:{login[1]}", *lines]) + "\n")
-    os.chmod(path, 0o600)
-    return login, path
 
 
 @app.command()
@@ -327,9 +360,10 @@ def up(
 ) -> None:
     """Start the coordinator and N local workers; Ctrl-C (or SIGTERM) stops everything.
 
-    The Zenoh router admits only logins: a random one made at each start for the local workers
-    (in DATA/zenoh-users.txt, mode 0600), plus those of --auth-dictionary; every login may do
-    only what a worker does (Zenoh access control)."""
+    The Zenoh router admits only logins: a random one per local worker made at each start and
+    named by its id (in DATA/zenoh-users.txt, mode 0600), plus those of --auth-dictionary; every
+    login may do only what a worker does (Zenoh access control), and a worker id belongs to its
+    login (lease requests prove it)."""
     n = workers or os.cpu_count() or 1
     if not 0 <= workers <= 256:
         raise InputError("--workers", f"{workers} is not in [1, 256]")
@@ -338,18 +372,16 @@ def up(
     parse_http(http)
     # every option checked before anything is written into the data directory
     _coordinator_settings(data, [zenoh], prefix, lease_seconds, False, auth_dictionary, None)
-    login, users = _local_login(data, auth_dictionary)
-    settings = _coordinator_settings(data, [zenoh], prefix, lease_seconds, False, users, None)
-    from swarmpath.service.zenoh_config import worker_access_control
+    from swarmpath.cli.logins import local_logins, with_access_control
 
-    settings.zenoh_extra = {"access_control": worker_access_control(
-        prefix, usernames=[line.split(":", 1)[0]
-                           for line in users.read_text().splitlines() if ":" in line])}
+    logins, users = local_logins(data, LocalWorkers.ids(n), auth_dictionary)
+    settings = _coordinator_settings(data, [zenoh], prefix, lease_seconds, False, users, None)
+    settings.zenoh_extra = with_access_control(prefix, list(read_logins(users)), None)
     _logging(log_level)
     from swarmpath.service.coordinator import create_app
 
-    local = LocalWorkers(n, _connectable(settings.zenoh_listen[0]), prefix, slots, log_level,
-                         login, stacking)
+    local = LocalWorkers(logins, _connectable(settings.zenoh_listen[0]), prefix, slots,
+                         log_level, stacking)
     typer.echo(f"swarmpath up: http://{http}  zenoh {zenoh}  data {data}", err=True)
     _serve(create_app(settings, on_started=local.start, on_stopping=local.stop), http, log_level)
 

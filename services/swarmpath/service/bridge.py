@@ -76,6 +76,7 @@ class ZenohBridge:
         self._zenoh = zenoh
         log.info("%s", describe(self.config))
         self.core.publish = self.put
+        self.core.check_token = self.check_token
         for target, name in ((self._serve_work, "lease"), (self._serve_events, "events"),
                              (self._serve_scenarios, "scenarios")):
             t = threading.Thread(target=target, name=f"coordinator-{name}", daemon=True)
@@ -155,6 +156,21 @@ class ZenohBridge:
         """Bytes of result and progress messages waiting for the events thread."""
         with self._queued_lock:
             return self._queued[1]
+
+    def check_token(self, worker: str) -> None:
+        """Look a worker's liveliness token up (without waiting): if it is there, the worker is
+        admitted as when its token appeared (Coordinator._check_token rate-limits the calls)."""
+        if self._closed or self.session is None:
+            return
+
+        def found(reply: Any) -> None:
+            try:
+                if reply.ok is not None:
+                    self.core.worker_alive(Keys.last_chunk(str(reply.ok.key_expr)))
+            except Exception:  # pragma: no cover
+                log.exception("handling a liveliness reply failed")
+
+        self.session.liveliness().get(self.keys.worker_token(worker), found, timeout=5.0)
 
     def _on_liveliness(self, sample: Any) -> None:
         try:
@@ -279,3 +295,4 @@ class ZenohBridge:
             except Exception:  # pragma: no cover
                 log.debug("closing the zenoh session failed", exc_info=True)
         self.core.publish = lambda key, payload: None
+        self.core.check_token = lambda worker: None

@@ -26,6 +26,7 @@ from swarmpath.service import memdebug
 from swarmpath.service.bounded import BoundedRunner
 from swarmpath.service.capability import drop_proof
 from swarmpath.service.catalog import build_catalog
+from swarmpath.service.identity import read_logins, refusal
 from swarmpath.service.intake import ResultIntake
 from swarmpath.service.lease_sizer import LeaseSizer
 from swarmpath.service.maps import warm_importer
@@ -96,6 +97,12 @@ class Coordinator(ResultIntake):
         self.dashboard = Dashboard(self.store, Path(settings.data_dir) / "dashboard")
         self.sizer = LeaseSizer(settings.target_lease_seconds, settings.min_lease_runs)
         self.publish: Callable[[str, bytes], None] = publish or (lambda key, payload: None)
+        # looks a worker's liveliness token up; the answer comes as worker_alive (the bridge)
+        self.check_token: Callable[[str], None] = lambda worker: None
+        self._token_checks: OrderedDict[str, float] = OrderedDict()
+        self._checks_in = [0, 0]  # (second, token lookups in it)
+        # logins that may speak for workers (service/identity.py); none: nothing is checked
+        self.logins = read_logins(settings.dictionary_file) if settings.dictionary_file else {}
         self.heartbeat_seconds = settings.heartbeat_seconds or settings.lease_seconds / 3.0
         self.accepting = True
         self.started = time.time()
@@ -173,6 +180,34 @@ class Coordinator(ResultIntake):
     def is_alive(self, worker: str) -> bool:
         return self.worker_table.is_alive(worker)
 
+    #: A lease request of a worker without a table entry (its token was refused while the table
+    #: was full, or its entry made room for others) has its token looked up, at most once per
+    #: worker per TOKEN_CHECK_SECONDS and TOKEN_CHECKS_PER_SECOND in all, so that it is admitted
+    #: once there is room.
+    TOKEN_CHECK_SECONDS = 2.0
+    TOKEN_CHECKS_PER_SECOND = 20
+    _TOKEN_CHECKS_KEPT = 4096
+
+    def _check_token(self, worker: str, now: float) -> None:
+        with self._lock:
+            last = self._token_checks.get(worker)
+            if last is not None and now - last < self.TOKEN_CHECK_SECONDS:
+                return
+            second = int(now)
+            if self._checks_in[0] != second:
+                self._checks_in = [second, 0]
+            if self._checks_in[1] >= self.TOKEN_CHECKS_PER_SECOND:
+                return
+            self._checks_in[1] += 1
+            self._token_checks[worker] = now
+            self._token_checks.move_to_end(worker)
+            while len(self._token_checks) > self._TOKEN_CHECKS_KEPT:
+                self._token_checks.popitem(last=False)
+        try:
+            self.check_token(worker)
+        except Exception:
+            log.exception("looking up the liveliness token of %s failed", _short(worker, 128))
+
     def workers(self) -> list[WorkerStatus]:
         """The workers of the table, and any other worker holding a lease (e.g. one of a previous
         coordinator's life that has not reconnected yet)."""
@@ -222,15 +257,27 @@ class Coordinator(ResultIntake):
             self.stats["malformed"] += 1
             log.warning("dropped a malformed lease request: %s", _short(exc))
             return self._no_work(f"malformed lease request: {_short(exc, 200)}", 5.0)
-        self._seen(req.worker, now, host=req.host, pid=req.pid, slots=req.slots,
-                   platform=req.platform)
         if req.protocol != PROTOCOL_VERSION:
             return self._no_work(
                 f"protocol {req.protocol} not supported; this coordinator speaks "
                 f"{PROTOCOL_VERSION}", 30.0)
+        if self.logins:  # who may speak for this worker id (service/identity.py)
+            refused = refusal(req.worker, req.login, req.issued, req.proof, self.logins)
+            if refused is None and not self.worker_table.fresh(req.worker, req.issued):
+                refused = "a lease request of this worker seen before (replayed?)"
+            if refused is not None:
+                self.stats["unauthenticated"] += 1
+                if self.stats["unauthenticated"] in (1, 10, 100) or \
+                        self.stats["unauthenticated"] % 1000 == 0:
+                    log.warning("refused a lease request for worker %s: %s (%d so far)",
+                                _short(req.worker, 128), refused, self.stats["unauthenticated"])
+                return self._no_work(f"refused: {refused}", 5.0)
+        self._seen(req.worker, now, host=req.host, pid=req.pid, slots=req.slots,
+                   platform=req.platform, proven=True)
         if not self.accepting:
             return self._no_work("coordinator shutting down", 2.0)
         if self.settings.require_liveliness and not self.is_alive(req.worker):
+            self._check_token(req.worker, now)
             return self._no_work(f"no liveliness token seen for worker {req.worker} yet")
         self.sizer.slots = max(1, self.worker_table.alive_slots())
         try:

@@ -59,6 +59,10 @@ def metrics_text(core: Coordinator, now: float | None = None) -> str:
     metric("swarmpath_lease_requests_busy_total", "counter",
            "Lease requests answered no_work because results waited to be stored beyond the "
            "back-pressure bound (since this process started).", core.stats["busy"])
+    metric("swarmpath_lease_requests_unauthenticated_total", "counter",
+           "Lease requests refused because no valid proof of the login owning their worker id "
+           "came with them (service/identity.py; since this process started).",
+           core.stats["unauthenticated"])
     metric("swarmpath_messages_malformed_total", "counter",
            "Malformed messages dropped since this process started.", core.stats["malformed"])
     return "\n".join(lines) + "\n"

@@ -202,6 +202,12 @@ class LeaseRequest(Model):
     platform: Platform | None = Field(
         default=None, description="the worker's numeric platform (swarmpath.provenance), "
         "bounded; shown in GET /workers, never trusted for anything else")
+    login: str = Field(default="", max_length=128,
+                       description="the Zenoh login that owns `worker` (service/identity.py)")
+    issued: int = Field(default=0, ge=0, le=2**63 - 1,
+                        description="the worker's clock in ns, increasing request by request")
+    proof: str = Field(default="", max_length=64, description="HMAC-SHA256 of the login's "
+                       "password over the worker, login and issued (hex)")
 
 
 class Lease(Model):

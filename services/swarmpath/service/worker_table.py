@@ -3,11 +3,18 @@
 An entry is created only by a worker's liveliness token (Zenoh delivers tokens only from
 sessions the router admitted, i.e. with a login when authentication is on); any other message
 naming a worker (a lease request, results, progress) only refreshes an existing entry, so made-up
-ids cost nothing. A worker whose token went away stays listed for ``forget_seconds`` (its last
-state is still worth showing), then its entry is pruned. The table holds at most ``max_entries``
-workers: when full, the longest-gone entry makes room; when every entry is alive the newcomer is
-refused (it gets no leases) and ``refused`` counts it (``swarmpath_workers_refused_total``).
-Thread-safe."""
+ids cost nothing. An entry is *proven* once the worker made a valid lease request (with logins:
+one proven by the login that owns its id, service/identity.py); a token alone proves nothing.
+
+The table holds at most ``max_entries`` workers. When it is full a newcomer's token takes the
+place of the longest-gone entry, else of the oldest unproven one (a token flood is unproven: it
+cannot lock real workers out, issue 25); only when every entry is a proven live worker is the
+newcomer refused (it gets no leases) and ``refused`` counts it
+(``swarmpath_workers_refused_total``). A refused worker is admitted when it asks for work again
+and there is room (the coordinator then looks its token up).
+A token that leaves takes an unproven entry with it at once; a proven worker whose token went
+away stays listed for ``forget_seconds`` (its last state is still worth showing), then its entry
+is pruned. Thread-safe."""
 
 from __future__ import annotations
 
@@ -27,6 +34,8 @@ class WorkerEntry:
     gone_at: float | None = None
     extra: dict[str, str] = field(default_factory=dict)
     platform: dict[str, str] = field(default_factory=dict)
+    proven: bool = False  # a valid lease request was seen (a token alone proves nothing)
+    issued: int = 0  # the last accepted lease request's ``issued`` (replays are refused)
 
 
 class WorkerTable:
@@ -44,7 +53,7 @@ class WorkerTable:
             return len(self._entries)
 
     def alive(self, worker: str, now: float) -> bool:
-        """A liveliness token appeared. False when the table is full of live workers."""
+        """A liveliness token appeared. False when the table is full of proven live workers."""
         with self._lock:
             entry = self._entries.get(worker)
             if entry is None:
@@ -56,7 +65,10 @@ class WorkerTable:
             return True
 
     def _evict_one(self) -> bool:
+        """Make room: the longest-gone entry out, else the oldest unproven live one."""
         gone = [(e.gone_at or 0.0, w) for w, e in self._entries.items() if not e.alive]
+        if not gone:
+            gone = [(e.last_seen, w) for w, e in self._entries.items() if not e.proven]
         if not gone:
             return False
         del self._entries[min(gone)[1]]
@@ -65,17 +77,35 @@ class WorkerTable:
     def gone(self, worker: str, now: float) -> None:
         with self._lock:
             entry = self._entries.get(worker)
-            if entry is not None and entry.alive:
-                entry.alive, entry.gone_at = False, now
+            if entry is None or not entry.alive:
+                return
+            if not entry.proven:  # a token that never asked for work leaves no trace
+                del self._entries[worker]
+                return
+            entry.alive, entry.gone_at = False, now
+
+    def fresh(self, worker: str, issued: int) -> bool:
+        """Whether a lease request's ``issued`` is newer than the last one accepted for this
+        worker (then it is remembered); an unknown worker has none."""
+        with self._lock:
+            entry = self._entries.get(worker)
+            if entry is None:
+                return True
+            if issued <= entry.issued:
+                return False
+            entry.issued = issued
+            return True
 
     def seen(self, worker: str, now: float, host: str = "", pid: int = 0, slots: int = 0,
-             platform: dict[str, str] | None = None) -> None:
+             platform: dict[str, str] | None = None, proven: bool = False) -> None:
         """A message of a known worker: refresh it (unknown ids are ignored). ``platform`` is
-        already bounded (protocol.LeaseRequest validates it)."""
+        already bounded (protocol.LeaseRequest validates it); ``proven``: a valid lease
+        request."""
         with self._lock:
             entry = self._entries.get(worker)
             if entry is None:
                 return
+            entry.proven = entry.proven or proven
             entry.last_seen = max(entry.last_seen, now)
             if host:
                 entry.host = host[:255]

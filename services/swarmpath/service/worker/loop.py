@@ -18,6 +18,7 @@ from typing import Any
 
 from swarmpath.provenance import numeric_platform
 from swarmpath.service.capability import progress_proof
+from swarmpath.service.identity import Issuer, id_for
 from swarmpath.service.protocol import (
     BenchmarkCell,
     Keys,
@@ -40,8 +41,12 @@ class Worker(Pulling, Reporting):
 
     def __init__(self, settings: WorkerSettings):
         self.settings = settings
-        self.id = settings.worker_id or default_worker_id()
+        if settings.user:  # an id of the login (service/identity.py)
+            self.id = id_for(settings.user, settings.worker_id, default_worker_id())
+        else:
+            self.id = settings.worker_id or default_worker_id()
         Keys(settings.prefix).worker_token(self.id)  # validates the id
+        self._issued = Issuer()
         self.keys = Keys(settings.prefix)
         self.host = socket.gethostname()
         self._platform = numeric_platform()  # the slots run on this host, with this numpy

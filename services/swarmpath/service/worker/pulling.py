@@ -9,6 +9,7 @@ import time
 from collections.abc import Sequence
 from typing import Any
 
+from swarmpath.service.identity import Issuer, request_proof
 from swarmpath.service.protocol import (
     MAX_BUNDLE_LEASES,
     PROTOCOL_VERSION,
@@ -44,6 +45,7 @@ class Pulling(Reporting):
     _slots: list[Slot]
     _querier: Any
     scenarios: ByteLRU
+    _issued: Issuer
 
     def _wants_work(self) -> bool:
         """Pull while fewer groups are held (running or queued) than ready slots + prefetch
@@ -55,11 +57,18 @@ class Pulling(Reporting):
         return running + len(self._queue) < len(ready) + max(0, self.settings.prefetch)
 
     def request(self) -> bytes:
+        """A lease request; with a login, proven by its password (service/identity.py)."""
+        login, issued, proof = "", 0, ""
+        user, password = self.settings.user, self.settings.password
+        if user and password:
+            login, issued = user, self._issued()
+            proof = request_proof(password, self.id, login, issued)
         return encode(LeaseRequest(
             worker=self.id, max_runs=self.settings.max_runs,
             max_leases=max(1, min(self.settings.max_leases, MAX_BUNDLE_LEASES)),
             host=self.host, pid=os.getpid(), slots=len(self._slots), version=_version(),
-            protocol=PROTOCOL_VERSION, platform=self._platform,
+            protocol=PROTOCOL_VERSION, platform=self._platform, login=login, issued=issued,
+            proof=proof,
         ))
 
     def _ask(self) -> Lease | LeaseBundle | NoWork | None:
