@@ -26,7 +26,6 @@ from swarmpath.service import memdebug
 from swarmpath.service.bounded import BoundedRunner
 from swarmpath.service.capability import drop_proof
 from swarmpath.service.catalog import build_catalog
-from swarmpath.service.identity import read_logins, refusal
 from swarmpath.service.intake import ResultIntake
 from swarmpath.service.lease_sizer import LeaseSizer
 from swarmpath.service.maps import warm_importer
@@ -43,7 +42,6 @@ from swarmpath.service.protocol import (
     LeaseRequest,
     MapJobSpec,
     NoWork,
-    WorkerStatus,
     decode,
     encode,
 )
@@ -54,7 +52,7 @@ from swarmpath.service.store import FINAL_STATES, Store, StoreError
 from swarmpath.service.util import json_safe
 from swarmpath.service.util import short as _short
 from swarmpath.service.web.live import Dashboard
-from swarmpath.service.worker_table import WorkerTable
+from swarmpath.service.worker_admission import WorkerAdmission
 
 if TYPE_CHECKING:
     from swarmpath.service.bridge import ZenohBridge
@@ -79,7 +77,7 @@ __all__ = [
 ]
 
 
-class Coordinator(ResultIntake):
+class Coordinator(WorkerAdmission, ResultIntake):
     """The protocol logic (see the module docstring). Thread-safe: the store serializes its
     transactions; the registries here have their own lock."""
 
@@ -97,19 +95,13 @@ class Coordinator(ResultIntake):
         self.dashboard = Dashboard(self.store, Path(settings.data_dir) / "dashboard")
         self.sizer = LeaseSizer(settings.target_lease_seconds, settings.min_lease_runs)
         self.publish: Callable[[str, bytes], None] = publish or (lambda key, payload: None)
-        # looks a worker's liveliness token up; the answer comes as worker_alive (the bridge)
-        self.check_token: Callable[[str], None] = lambda worker: None
-        self._token_checks: OrderedDict[str, float] = OrderedDict()
-        self._checks_in = [0, 0]  # (second, token lookups in it)
-        # logins that may speak for workers (service/identity.py); none: nothing is checked
-        self.logins = read_logins(settings.dictionary_file) if settings.dictionary_file else {}
         self.heartbeat_seconds = settings.heartbeat_seconds or settings.lease_seconds / 3.0
         self.accepting = True
         self.started = time.time()
         self.stats: Counter[str] = Counter()
         self._lock = threading.Lock()
         self._final_lock = threading.RLock()
-        self.worker_table = WorkerTable(settings.max_workers, settings.forget_workers_seconds)
+        self._init_admission(settings)
         # uploads are parsed here, never in this process (started at the first upload)
         self.map_importer = BoundedRunner(settings.max_map_import_bytes,
                                           settings.max_map_import_seconds,
@@ -153,82 +145,6 @@ class Coordinator(ResultIntake):
         finally:
             self.store.close()
 
-    # ------------------------------------------------------------------------------ workers
-    def _seen(self, worker: str, now: float, **info: Any) -> None:
-        self.worker_table.seen(worker, now, **info)
-
-    def worker_alive(self, worker: str, now: float | None = None) -> None:
-        """A liveliness token appeared (or was there when we started)."""
-        now = time.time() if now is None else now
-        if self.worker_table.alive(worker, now):
-            log.info("worker %s is alive", worker)
-        elif self.worker_table.refused == 1 or self.worker_table.refused % 1000 == 0:
-            log.warning("worker table full (%d live workers): %s refused (%d so far)",
-                        self.worker_table.max_entries, worker, self.worker_table.refused)
-
-    def worker_mark_gone(self, worker: str) -> None:
-        """Liveliness lost: first half, instant (no store access; safe in a callback)."""
-        self.worker_table.gone(worker, time.time())
-
-    def worker_gone(self, worker: str, now: float | None = None) -> int:
-        """Liveliness lost: requeue the worker's unfinished runs at once."""
-        self.worker_mark_gone(worker)
-        n = self.store.requeue_worker(worker, now)
-        log.info("worker %s is gone%s", worker, f"; {n} runs requeued" if n else "")
-        return n
-
-    def is_alive(self, worker: str) -> bool:
-        return self.worker_table.is_alive(worker)
-
-    #: A lease request of a worker without a table entry (its token was refused while the table
-    #: was full, or its entry made room for others) has its token looked up, at most once per
-    #: worker per TOKEN_CHECK_SECONDS and TOKEN_CHECKS_PER_SECOND in all, so that it is admitted
-    #: once there is room.
-    TOKEN_CHECK_SECONDS = 2.0
-    TOKEN_CHECKS_PER_SECOND = 20
-    _TOKEN_CHECKS_KEPT = 4096
-
-    def _check_token(self, worker: str, now: float) -> None:
-        with self._lock:
-            last = self._token_checks.get(worker)
-            if last is not None and now - last < self.TOKEN_CHECK_SECONDS:
-                return
-            second = int(now)
-            if self._checks_in[0] != second:
-                self._checks_in = [second, 0]
-            if self._checks_in[1] >= self.TOKEN_CHECKS_PER_SECOND:
-                return
-            self._checks_in[1] += 1
-            self._token_checks[worker] = now
-            self._token_checks.move_to_end(worker)
-            while len(self._token_checks) > self._TOKEN_CHECKS_KEPT:
-                self._token_checks.popitem(last=False)
-        try:
-            self.check_token(worker)
-        except Exception:
-            log.exception("looking up the liveliness token of %s failed", _short(worker, 128))
-
-    def workers(self) -> list[WorkerStatus]:
-        """The workers of the table, and any other worker holding a lease (e.g. one of a previous
-        coordinator's life that has not reconnected yet)."""
-        activity = self.store.worker_activity()
-        known = self.worker_table.snapshot()
-        out = []
-        for worker in sorted(set(known) | set(activity)):
-            entry = known.get(worker)
-            act = activity.get(worker, {})
-            current = act.get("current_runs", [])
-            if entry is None and not current:
-                continue  # a worker of the past with nothing leased
-            out.append(WorkerStatus(
-                id=worker, host=entry.host if entry else "", pid=entry.pid if entry else 0,
-                slots=entry.slots if entry else 1, current_runs=current,
-                runs_done=int(act.get("runs_done", 0)),
-                last_seen=entry.last_seen if entry else 0.0, alive=bool(entry and entry.alive),
-                platform=entry.platform if entry else {},
-            ))
-        return out
-
     # ------------------------------------------------------------------------------ leasing
     #: Idle workers together ask for work about this often at most: an empty reply tells each
     #: to wait max(retry_after, live workers / this) seconds. A lease query costs the coordinator
@@ -261,17 +177,9 @@ class Coordinator(ResultIntake):
             return self._no_work(
                 f"protocol {req.protocol} not supported; this coordinator speaks "
                 f"{PROTOCOL_VERSION}", 30.0)
-        if self.logins:  # who may speak for this worker id (service/identity.py)
-            refused = refusal(req.worker, req.login, req.issued, req.proof, self.logins)
-            if refused is None and not self.worker_table.fresh(req.worker, req.issued):
-                refused = "a lease request of this worker seen before (replayed?)"
-            if refused is not None:
-                self.stats["unauthenticated"] += 1
-                if self.stats["unauthenticated"] in (1, 10, 100) or \
-                        self.stats["unauthenticated"] % 1000 == 0:
-                    log.warning("refused a lease request for worker %s: %s (%d so far)",
-                                _short(req.worker, 128), refused, self.stats["unauthenticated"])
-                return self._no_work(f"refused: {refused}", 5.0)
+        refused = self._request_refusal(req)  # may it speak for this worker id?
+        if refused is not None:
+            return self._no_work(f"refused: {refused}", 5.0)
         self._seen(req.worker, now, host=req.host, pid=req.pid, slots=req.slots,
                    platform=req.platform, proven=True)
         if not self.accepting:
