@@ -176,6 +176,7 @@ class TlsService(NamespacedService):
 
     def __init__(self, tmp: Path, net: Netns):
         super().__init__(tmp, net)
+        self.insecure = self.login = False  # the certificates are the logins
         self.zenoh = f"tls/{net.host_ip}:{free_port()}"
         self.certs = tmp / "certs"
         subprocess.run([str(ROOT / "deploy" / "tls" / "make-certs.sh"), str(self.certs),

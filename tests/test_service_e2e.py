@@ -53,6 +53,7 @@ class Service:
         # the coordinator without a Zenoh login (--insecure): these tests put a hostile client
         # on an open bus; tests/test_service_identity.py runs the default, with logins
         self.insecure = insecure
+        self.login = not insecure  # workers log in with the login the coordinator made
         self.data = tmp / "data"
         self.http = free_port()
         self.zport = free_port()
@@ -80,7 +81,7 @@ class Service:
         self.wait_for(lambda: self.get("/healthz").status_code == 200, 60, "coordinator up")
 
     def start_worker(self, name: str, *extra: str) -> None:
-        login = [] if self.insecure else ["--login-file", str(self.data / "zenoh-users.txt")]
+        login = ["--login-file", str(self.data / "zenoh-users.txt")] if self.login else []
         self.workers[name] = self._spawn(name, [
             "worker", "--connect", self.zenoh, "--id", name, "--grace", "2", *login, *extra,
         ])
