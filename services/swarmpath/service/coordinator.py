@@ -46,9 +46,10 @@ from swarmpath.service.protocol import (
     encode,
 )
 from swarmpath.service.recorder import Recorders
+from swarmpath.service.recorder.common import no_room
 from swarmpath.service.recorder.process import RecorderProcess
 from swarmpath.service.settings import DEFAULT_HTTP, CoordinatorSettings
-from swarmpath.service.store import FINAL_STATES, Store, StoreError
+from swarmpath.service.store import FINAL_STATES, Store, StoreError, StoreFull
 from swarmpath.service.util import json_safe
 from swarmpath.service.util import short as _short
 from swarmpath.service.web.live import Dashboard
@@ -102,6 +103,9 @@ class Coordinator(WorkerAdmission, ResultIntake):
         self._lock = threading.Lock()
         self._final_lock = threading.RLock()
         self._init_admission(settings)
+        self._lease_probe = 0.0  # last lease attempt while the store could not write
+        self._full_logged = -1e9  # monotonic time of the last "cannot write" log line
+        self._finish_after: dict[str, float] = {}  # job -> when its MCAP may be tried again
         # uploads are parsed here, never in this process (started at the first upload)
         self.map_importer = BoundedRunner(settings.max_map_import_bytes,
                                           settings.max_map_import_seconds,
@@ -188,12 +192,23 @@ class Coordinator(WorkerAdmission, ResultIntake):
             self._check_token(req.worker, now)
             return self._no_work(f"no liveliness token seen for worker {req.worker} yet")
         self.sizer.slots = max(1, self.worker_table.alive_slots())
+        problem = self.store.write_problem
+        if problem is not None and now - self._lease_probe < self.FULL_RETRY:
+            # no work while results could not be stored; one lease attempt per FULL_RETRY s
+            # finds out when the disk has room again
+            return self._no_work(f"the coordinator cannot store results now: {problem[1]}",
+                                 self.FULL_RETRY)
+        self._lease_probe = now
         try:
             leases = self.store.lease_many(
                 req.worker, req.max_runs, now, self.settings.lease_seconds,
                 self.heartbeat_seconds, max_leases=req.max_leases, runs_for=self.sizer.runs_for,
             )
-        except Exception as exc:  # store closed, disk full, ...: the worker retries
+        except StoreFull as exc:
+            self.store_full(exc, "no leases")
+            return self._no_work(f"the coordinator cannot store results now: {exc}",
+                                 self.FULL_RETRY)
+        except Exception as exc:  # store closed, ...: the worker retries
             log.exception("leasing failed")
             return self._no_work(f"coordinator error: {_short(exc, 200)}", 2.0)
         if not leases:
@@ -208,6 +223,19 @@ class Coordinator(WorkerAdmission, ResultIntake):
         if req.max_leases == 1:
             return encode(leases[0])
         return encode(LeaseBundle(leases=leases))
+
+    #: While the store cannot write (disk full), lease requests get no work and ask again
+    #: after this many seconds; one request in that time tries to lease (and so finds out).
+    FULL_RETRY = 5.0
+
+    def store_full(self, exc: StoreFull, what: str) -> None:
+        """A write refused for want of room: one ERROR line a minute, no traceback (the
+        condition is in /healthz and on the dashboard; everything is retried)."""
+        now = time.monotonic()
+        if now - self._full_logged >= 60.0:
+            self._full_logged = now
+            log.error("%s: %s (leasing paused; results are stored when they are sent again)",
+                      what, exc)
 
     def _send(self, key: str, payload: bytes) -> None:
         try:
@@ -254,11 +282,20 @@ class Coordinator(WorkerAdmission, ResultIntake):
         """Finish the job's MCAP (once). Returns its path."""
         with self._final_lock:
             if not self.recorders.ready(job_id):
+                if self._finish_after.get(job_id, 0.0) > time.monotonic():
+                    return None  # the disk was full a moment ago
                 try:
                     path = self.recorders.finish(job_id)
-                except Exception:
-                    log.exception("finalizing the MCAP of job %s failed", job_id)
+                except Exception as exc:
+                    if not no_room(exc):
+                        log.exception("finalizing the MCAP of job %s failed", job_id)
+                        return None
+                    self._finish_after[job_id] = time.monotonic() + self.FULL_RETRY
+                    if time.monotonic() - self._full_logged >= 60.0:
+                        self._full_logged = time.monotonic()
+                        log.error("the MCAP of job %s waits: the disk is full (%s)", job_id, exc)
                     return None
+                self._finish_after.pop(job_id, None)
                 status = self.store.job_status(job_id)
                 log.info("job %s %s; MCAP %s", job_id, status.state if status else "?", path)
                 self.dashboard.finished(job_id)
@@ -300,10 +337,21 @@ class Coordinator(WorkerAdmission, ResultIntake):
     def tick(self, now: float | None = None) -> None:
         """Every second: requeue expired leases, flush MCAP files, finalize finished jobs."""
         now = time.time() if now is None else now
-        n = self.store.requeue_expired(now)
+        try:
+            n = self.store.requeue_expired(now)
+        except StoreFull as exc:
+            self.store_full(exc, "expired leases not requeued")
+            n = 0
         if n:
             log.warning("%d runs requeued: their leases expired without a heartbeat", n)
-        self.recorders.tick()
+        try:
+            self.recorders.tick()
+        except OSError as exc:  # in-process recorders on a full disk: rebuilt when there is room
+            if not no_room(exc):
+                raise
+            if time.monotonic() - self._full_logged >= 60.0:
+                self._full_logged = time.monotonic()
+                log.error("MCAP files wait: the disk is full (%s)", exc)
         with self._final_lock:
             recording = list(self._recording)
         for job_id in recording:

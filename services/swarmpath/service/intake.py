@@ -32,6 +32,7 @@ from swarmpath.service.protocol import (
     encode,
 )
 from swarmpath.service.recorder import Recorders
+from swarmpath.service.recorder.common import no_room
 from swarmpath.service.recorder.process import RecorderProcess
 from swarmpath.service.result_columns import columns_key, columns_ok, decode_message, is_columns
 from swarmpath.service.result_frame import (
@@ -42,7 +43,7 @@ from swarmpath.service.result_frame import (
     proof_key,
 )
 from swarmpath.service.settings import CoordinatorSettings
-from swarmpath.service.store import FINAL_STATES, Store
+from swarmpath.service.store import FINAL_STATES, Store, StoreFull
 from swarmpath.service.store.columns import ResultColumns, from_frame, from_incoming, unproven
 from swarmpath.service.store.series import raw_series
 from swarmpath.service.util import short as _short
@@ -73,6 +74,7 @@ class ResultIntake:
     _seen: Callable[..., None]
     _send: Callable[[str, bytes], None]
     finalize: Callable[[str], Path | None]
+    store_full: Callable[[StoreFull, str], None]
 
     # ------------------------------------------------------------------------------ results
     def _job_info(self, job_id: str) -> dict[str, Any] | None:
@@ -260,7 +262,11 @@ class ResultIntake:
                         self.stats["duplicates_fast"] += len(c.runs)
                     else:
                         todo.append(c)
-        results = self.store.accept_columns(todo, now) if todo else []
+        try:
+            results = self.store.accept_columns(todo, now) if todo else []
+        except StoreFull as exc:  # nothing stored, nothing acknowledged: the workers re-send
+            self.store_full(exc, "results not stored")
+            return [None] * len(messages)
         accepted: dict[str, list[tuple[ResultColumns, list[int]]]] = {}
         with self._lock:
             for c, statuses in zip(todo, results, strict=True):
@@ -342,8 +348,11 @@ class ResultIntake:
                     pass
         try:
             self._record(job_id, accepted, now)
-        except Exception:
-            log.exception("recording results of job %s in its MCAP failed", job_id)
+        except Exception as exc:
+            if not no_room(exc):
+                log.exception("recording results of job %s in its MCAP failed", job_id)
+            elif isinstance(self.recorders, Recorders):  # rewritten from the store later
+                self.recorders.discard(job_id)
         try:
             self.dashboard.observe_runs(job_id, [
                 (c.cell, c.runs[k], c.status[k] == "ok", c.metrics[k], c.array("curve", k),
@@ -369,8 +378,13 @@ class ResultIntake:
             self.stats["malformed"] += 1
             log.warning("dropped progress for job %s published on %s", msg.job_id, key)
             return None
-        state = self.store.heartbeat(msg.lease_id, msg.worker, now, self.settings.lease_seconds,
-                                     seq=msg.seq, proof=msg.proof)
+        try:
+            state = self.store.heartbeat(msg.lease_id, msg.worker, now,
+                                         self.settings.lease_seconds, seq=msg.seq,
+                                         proof=msg.proof)
+        except StoreFull as exc:  # the lease is not renewed; the next progress tries again
+            self.store_full(exc, "progress not stored")
+            return None
         if state == "unknown":
             self.stats["unproven"] += 1
             return None

@@ -21,6 +21,7 @@ from swarmpath.service.http.middleware import BodyLimit
 from swarmpath.service.http.routes import ROUTERS
 from swarmpath.service.protocol import MAX_BODY_BYTES
 from swarmpath.service.settings import CoordinatorSettings
+from swarmpath.service.store import StoreFull
 from swarmpath.service.ticker import Ticker
 
 log = logging.getLogger("swarmpath.coordinator")
@@ -86,6 +87,13 @@ def create_app(
     @app.exception_handler(RequestValidationError)
     async def _invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
         return JSONResponse({"detail": validation_detail(list(exc.errors()))}, status_code=422)
+
+    @app.exception_handler(StoreFull)
+    async def _full(request: Request, exc: StoreFull) -> JSONResponse:
+        """A write the store could not make (disk full): 507, nothing was stored."""
+        return JSONResponse({"detail": f"{exc}: nothing was stored; free space on the "
+                                       "coordinator's disk and send it again"},
+                            status_code=507, headers={"Retry-After": "30"})
 
     routes = [route for router in ROUTERS for route in router.routes]
     handlers.install(app, routes)

@@ -4,7 +4,8 @@ are enums read from the registries (so generated clients and fuzzers build valid
 * 422 on every operation (invalid parameters or body, a body over 1 MB or that does not parse, a
   job over the cost limit), with the ``{"detail": [{"loc", "msg", "type"}]}`` shape;
 * 404 on every operation with a path parameter (unknown job, run or file);
-* 401 on the operations that need the bearer token (when one is configured);
+* 401 on the operations that need the bearer token (when one is configured), and 507 on them
+  (they write to the store, which cannot while its disk is full);
 * enums: ``algorithms`` (optimizer registry), ``functions`` (function registry; ranges such as
   ``F1-F13`` are accepted too), ``planners`` (planner registry), ``maps`` (preset maps, or an
   inline scenario object), ``transform``, ``backend``; the name lists say unique items.
@@ -93,7 +94,12 @@ def _add_responses(routes: Sequence[BaseRoute], paths: dict[str, Any]) -> None:
                     "description": "Unknown job, run or file",
                     "content": {"application/json": {"schema": _ERROR}},
                 })
-            if _needs_token(route):
+            if _needs_token(route):  # the mutating operations write to the store
+                responses.setdefault("507", {
+                    "description": "The coordinator's store cannot write (its disk is full): "
+                                   "nothing was stored; send it again once there is room",
+                    "content": {"application/json": {"schema": _ERROR}},
+                })
                 responses.setdefault("401", {
                     "description": "Missing or wrong 'Authorization: Bearer <token>' (when the "
                                    "coordinator has a token)",

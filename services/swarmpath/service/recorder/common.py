@@ -34,6 +34,38 @@ def chunk_compression(value: str | None = None) -> Any:
 
 
 # ------------------------------------------------------------------------------------ helpers
+def no_room(exc: BaseException) -> bool:
+    """Whether a write failed for want of disk space (ENOSPC, EDQUOT; also as the text of an
+    error passed on from the recorder process)."""
+    import errno
+
+    if isinstance(exc, OSError) and exc.errno in (errno.ENOSPC, errno.EDQUOT):
+        return True
+    return "No space left on device" in str(exc) or "Disk quota exceeded" in str(exc)
+
+
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+
+
+def intact(path: Path) -> bool:
+    """Whether a finished MCAP is whole: the magic at both ends, and a footer whose summary
+    section reads with statistics (a file truncated anywhere lacks one of them). Cheap: the
+    reader seeks to the footer and reads the summary only."""
+    from mcap.reader import SeekingReader
+
+    try:
+        with open(path, "rb") as f:
+            head = f.read(len(MCAP_MAGIC))
+            f.seek(-len(MCAP_MAGIC), os.SEEK_END)
+            if head != MCAP_MAGIC or f.read() != MCAP_MAGIC:
+                return False
+            f.seek(0)
+            summary = SeekingReader(f, validate_crcs=False).get_summary()
+    except Exception:  # any way of being unreadable
+        return False
+    return summary is not None and summary.statistics is not None
+
+
 def mcap_dir(data_dir: Path | str) -> Path:
     return Path(data_dir) / "mcap"
 

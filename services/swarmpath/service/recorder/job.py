@@ -443,6 +443,16 @@ class JobRecorder:
         os.replace(self.part, self.final)
         return self.final
 
+    def abandon(self) -> None:
+        """Stop after a write failed (disk full): close the file without writing more; the
+        .part is rewritten from the store by the job's next recorder."""
+        if not self.closed:
+            self.closed = True
+            try:
+                self._file.close()
+            except OSError:
+                pass
+
     def close(self) -> None:
         """Stop without finalizing (coordinator shutdown): flush and leave the .part file."""
         if not self.closed:

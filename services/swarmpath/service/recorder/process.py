@@ -30,11 +30,12 @@ from multiprocessing.connection import Connection
 from pathlib import Path
 from typing import Any
 
-from swarmpath.service.recorder.common import chunk_compression, final_path
+from swarmpath.service.recorder.common import chunk_compression, final_path, no_room
 
 log = logging.getLogger("swarmpath.recorder")
 
 CATCH_UP_SECONDS = 1.0  # every open job is caught up at least this often
+FULL_RETRY_SECONDS = 5.0  # a job's file that hit a full disk is tried again this much later
 REPLY_SECONDS = 600.0  # a finish or recover (a rebuild of a large job) may take this long
 
 
@@ -152,6 +153,21 @@ def serve(data_dir: str, synchronous: str, conn: Connection, recover: bool = Fal
     platforms: dict[str, dict[str, dict[str, str]]] = {}  # job -> worker -> platform, to note
     dirty: set[str] = set()
     caught_up = time.monotonic()
+    # Disk full: a job whose file could not be written is dropped and written again from the
+    # store after FULL_RETRY_SECONDS (job -> when), logged once a minute; the process goes on
+    # (it used to exit and be restarted, rebuilding every file into the full disk again).
+    blocked: dict[str, float] = {}
+    logged = [-1e9]
+
+    def full(exc: BaseException, job_id: str | None) -> None:
+        for job in [job_id] if job_id else [j for j in last if not recorders.is_open(j)]:
+            recorders.discard(job)
+            last.pop(job, None)
+            blocked[job] = time.monotonic() + FULL_RETRY_SECONDS
+        if time.monotonic() - logged[0] >= 60.0:
+            logged[0] = time.monotonic()
+            log.error("recorder: the disk is full (%s): MCAP files wait, rewritten from the "
+                      "store when there is room", exc)
 
     def catch_up(job_id: str) -> None:
         noted = platforms.pop(job_id, {})
@@ -207,7 +223,11 @@ def serve(data_dir: str, synchronous: str, conn: Connection, recover: bool = Fal
                         try:
                             reply = (True, handle(kind, args[0] if args else None))
                         except Exception as exc:  # the coordinator raises it; we go on
-                            log.exception("recorder: %s failed", kind)
+                            if no_room(exc):
+                                full(exc, args[0] if args and isinstance(args[0], str)
+                                     else None)
+                            else:
+                                log.exception("recorder: %s failed", kind)
                             reply = (False, f"{type(exc).__name__}: {exc}")
                         conn.send(reply)
                     if not conn.poll(0):
@@ -215,16 +235,28 @@ def serve(data_dir: str, synchronous: str, conn: Connection, recover: bool = Fal
             now = time.monotonic()
             if now - caught_up >= CATCH_UP_SECONDS:
                 dirty.update(last)
+                dirty.update(job for job, at in blocked.items() if at <= now)
                 caught_up = now
             for job_id in sorted(dirty):
+                if blocked.get(job_id, 0.0) > now:
+                    continue
                 try:
                     catch_up(job_id)
+                    blocked.pop(job_id, None)
                 except EOFError:
                     raise
-                except Exception:
-                    log.exception("recorder: writing job %s failed", job_id)
+                except Exception as exc:
+                    if not no_room(exc):
+                        log.exception("recorder: writing job %s failed", job_id)
+                        continue
+                    full(exc, job_id)
             dirty.clear()
-            recorders.tick()
+            try:
+                recorders.tick()
+            except OSError as exc:  # a file that cannot grow: dropped, rebuilt when there is room
+                if not no_room(exc):
+                    raise
+                full(exc, None)
     except (EOFError, OSError):  # the coordinator is gone: leave the .part files
         recorders.close()
         store.close()

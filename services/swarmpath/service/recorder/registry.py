@@ -3,6 +3,7 @@ finalized when the job ends, recovered after a restart."""
 
 from __future__ import annotations
 
+import logging
 import threading
 from collections.abc import Iterator
 from pathlib import Path
@@ -10,8 +11,10 @@ from typing import Any
 
 from mcap.writer import CompressionType
 
-from swarmpath.service.recorder.common import chunk_compression, final_path
+from swarmpath.service.recorder.common import chunk_compression, final_path, intact, no_room
 from swarmpath.service.recorder.job import FLUSH_INTERVAL, JobRecorder
+
+log = logging.getLogger("swarmpath.recorder")
 
 
 class Recorders:
@@ -50,11 +53,27 @@ class Recorders:
                 self.path(job_id), job_id, status.kind, spec.model_dump(mode="json"),
                 status.created, flush_interval=self.flush_interval, compression=self.compression,
             )
-            for record in self.store.iter_run_records(job_id):
-                rec.add(record)
-            rec.flush()
+            try:
+                for record in self.store.iter_run_records(job_id):
+                    rec.add(record)
+                rec.flush()
+            except BaseException:
+                rec.abandon()
+                raise
             self._open[job_id] = rec
             return rec
+
+    def is_open(self, job_id: str) -> bool:
+        with self._lock:
+            return job_id in self._open
+
+    def discard(self, job_id: str) -> None:
+        """Drop the job's recorder after a write failed (disk full): the next ``open`` (or
+        ``finish``) writes the file again from the store, so nothing is lost."""
+        with self._lock:
+            rec = self._open.pop(job_id, None)
+        if rec is not None:
+            rec.abandon()
 
     def add(self, job_id: str, record: dict[str, Any]) -> bool:
         with self._lock:
@@ -79,18 +98,36 @@ class Recorders:
                 for record in self.store.iter_run_records(job_id):
                     rec.add(record)
             summary = self.store.summary(job_id)
-            path = rec.finish(summary, status.state if status else "done")
+            try:
+                path = rec.finish(summary, status.state if status else "done")
+            except OSError:
+                self.discard(job_id)
+                raise
             del self._open[job_id]
             return path
 
     def tick(self) -> int:
-        """Flush every recorder whose interval elapsed (call about once a second)."""
+        """Flush every recorder whose interval elapsed (call about once a second). A recorder
+        that cannot write for want of room is discarded (its file is rebuilt from the store
+        later) and the first such error raised after the others were flushed."""
+        flushed, full = 0, None
         with self._lock:
-            return sum(rec.flush_if_due() for rec in self._open.values())
+            for job_id, rec in list(self._open.items()):
+                try:
+                    flushed += rec.flush_if_due()
+                except OSError as exc:
+                    if not no_room(exc):
+                        raise
+                    self.discard(job_id)
+                    full = full or exc
+        if full is not None:
+            raise full
+        return flushed
 
     def recover(self) -> list[str]:
         """After a restart: reopen (rebuild) unfinished jobs' files and finalize finished jobs
-        whose file is missing. Returns the job ids touched."""
+        whose file is missing or not whole (truncated: no footer or summary, :func:`intact`),
+        from the store. Returns the job ids touched."""
         touched = []
         for job_id in self.store.unfinished_jobs():
             self.open(job_id)
@@ -108,7 +145,13 @@ class Recorders:
                 if not page:
                     break
                 for status in page:
-                    if not self.ready(status.id):
+                    path = self.path(status.id)
+                    if not path.exists():
+                        yield status
+                    elif not intact(path):  # written again from the store by finish()
+                        log.warning("the MCAP of job %s is not whole (truncated?): rebuilding "
+                                    "it from the store", status.id)
+                        path.unlink()
                         yield status
                 offset += len(page)
 

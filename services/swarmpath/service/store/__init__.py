@@ -43,6 +43,7 @@ from swarmpath.service.store.base import (
     CellSpec,
     RunsFor,
     StoreError,
+    StoreFull,
 )
 from swarmpath.service.store.extend import ExtendError, ExtendMixin
 from swarmpath.service.store.jobs import JobsMixin
@@ -80,6 +81,7 @@ __all__ = [
     "RunsFor",
     "Store",
     "StoreError",
+    "StoreFull",
     "decode_series",
     "encode_series",
     "map_cell_summary",

@@ -6,6 +6,7 @@ import json
 import math
 import sqlite3
 import threading
+import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -138,6 +139,22 @@ class StoreError(RuntimeError):
     pass
 
 
+class StoreFull(StoreError):
+    """A write the store could not make because its disk (or SQLite's page limit) is full.
+    Nothing was changed; the same write succeeds once there is room."""
+
+
+#: SQLite's primary result code for "database or disk is full" (an ENOSPC on the database or
+#: its WAL is reported as this code too).
+SQLITE_FULL = 13
+
+
+def _is_full(exc: sqlite3.Error) -> bool:
+    code = getattr(exc, "sqlite_errorcode", None)
+    return (code is not None and code & 0xFF == SQLITE_FULL) or \
+        "database or disk is full" in str(exc)
+
+
 def _dumps(obj: Any) -> str:
     return json.dumps(obj, separators=(",", ":"), allow_nan=True)
 
@@ -183,6 +200,8 @@ class StoreBase:
         # job seq -> its race settings and blocks, or None (RacesMixin)
         self._race_contexts: dict[int, Any] = {}
         self._closed = False
+        # (since, message) while writes fail for want of room; None once one succeeds again
+        self.write_problem: tuple[float, str] | None = None
         self._migrate()
 
     # ------------------------------------------------------------------------------ plumbing
@@ -227,17 +246,42 @@ class StoreBase:
             relaxed = not durable and self.synchronous != "NORMAL"
             if relaxed:
                 self._db.execute("PRAGMA synchronous=NORMAL")
+            changes = self._db.total_changes
             try:
                 self._db.execute("BEGIN IMMEDIATE")
                 try:
                     yield self._db
+                    self._db.execute("COMMIT")
                 except BaseException:
-                    self._db.execute("ROLLBACK")
+                    if self._db.in_transaction:  # also after a COMMIT that failed
+                        try:
+                            self._db.execute("ROLLBACK")
+                        except sqlite3.Error:  # pragma: no cover - SQLite rolled back itself
+                            pass
                     raise
-                self._db.execute("COMMIT")
+            except sqlite3.Error as exc:
+                if not _is_full(exc):
+                    raise
+                self._full(exc)
+            else:  # a transaction that wrote something: there is room again
+                if self.write_problem is not None and self._db.total_changes != changes:
+                    self.write_problem = None
             finally:
                 if relaxed:
                     self._db.execute(f"PRAGMA synchronous={self.synchronous}")
+
+    def _full(self, exc: sqlite3.Error) -> None:
+        """Note that writes fail for want of room (``write_problem``) and raise StoreFull."""
+        import shutil
+
+        try:
+            free = f"{shutil.disk_usage(self.data_dir).free:,} bytes free"
+        except OSError:  # pragma: no cover
+            free = "free space unknown"
+        message = f"the store cannot write to {self.path} ({exc}; {free} on its disk)"
+        since = self.write_problem[0] if self.write_problem else time.time()
+        self.write_problem = (since, message)
+        raise StoreFull(message) from None
 
     @contextmanager
     def _read(self) -> Iterator[sqlite3.Connection]:

@@ -53,6 +53,24 @@
     fetch("/ui/config").then((r) => r.json()).then((c) => {
       if (c.token_required && !SP.token()) SP.askToken("This coordinator requires a token (SWARMPATH_TOKEN) to submit or cancel.");
     }).catch(() => {});
+    SP.watchHealth(h);
+  };
+
+  /* A banner while the coordinator's store cannot write (disk full: no leases, no new jobs),
+     checked every 10 s, gone once it can again. */
+  SP.watchHealth = function (header) {
+    const alert = document.createElement("div");
+    alert.id = "health-alert";
+    alert.className = "alert";
+    alert.hidden = true;
+    header.after(alert);
+    const check = () => fetch("/healthz").then((r) => r.json()).then((h) => {
+      const problem = h.store && !h.store.writable ? h.store.problem : null;
+      alert.hidden = !problem;
+      alert.textContent = problem ? "The coordinator cannot store results (no work is handed out, new jobs are refused): " + problem : "";
+    }).catch(() => {});
+    check();
+    setInterval(check, 10000);
   };
 
   SP.duration = function (s) {
