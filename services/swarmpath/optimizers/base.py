@@ -39,6 +39,10 @@ class Optimizer(ABC):
     choices: ClassVar[Mapping[str, tuple[str, ...]]] = {}
     #: Smallest population the algorithm works with.
     min_agents: ClassVar[int] = 2
+    #: Where the points it evaluates lie: ``"box"`` (every point inside the box: the
+    #: conformance gate checks it), or a sentence saying where else and why (then shown, not
+    #: checked).
+    bound_rule: ClassVar[str] = "box"
 
     def __init__(
         self,
@@ -103,6 +107,14 @@ class Optimizer(ABC):
             raise RuntimeError(f"all {self.T} iterations are done")
         self.t += 1
         self._iterate()
+
+    def expected_evaluations(self) -> tuple[int, int]:
+        """(fewest, most) evaluations a run counts over all ``T`` iterations: by default the
+        first population and one per agent per iteration, N (T + 1). An algorithm that spends
+        more (or a number that varies by run) says so here; the conformance gate holds it to
+        this (``swarmpath check optimizer``)."""
+        n = self.N * (self.T + 1)
+        return n, n
 
     @property
     def done(self) -> bool:

@@ -94,6 +94,12 @@ class FDO(Optimizer):
         if not 0.0 <= float(p["weight_factor"]) <= 1.0:
             raise ParameterError("FDO.weight_factor must be in [0, 1]")
 
+    def expected_evaluations(self) -> tuple[int, int]:
+        """Trial 1 of every bee each iteration, trials 2 and 3 only where they are tried: from
+        N (T + 1) up to N (2T + 1) (``split``: one of them) or N (3T + 1) (``nested``)."""
+        per_bee = 2 if self.p["trials"] == "split" else 3
+        return self.N * (self.T + 1), self.N * (per_bee * self.T + 1)
+
     def _initialize(self) -> None:
         self.X = self.random_population()
         self.F = self.evaluate(self.X)

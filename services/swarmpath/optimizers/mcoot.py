@@ -73,6 +73,10 @@ class MCOOT(COOT):
         self.jumpers = math.ceil(float(self.p["jump_rate"]) * self.Nc - 1e-9)
         return [("m_pick", (self.Nc,))] if self.jumpers else []
 
+    def expected_evaluations(self) -> tuple[int, int]:
+        n = (2 if self.p["opposition_init"] else 1) * self.N + self.T * (self.N + self.jumpers)
+        return n, n
+
     def _initialize(self) -> None:
         X = self.random_population()
         if not self.p["opposition_init"]:

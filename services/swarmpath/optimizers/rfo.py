@@ -105,6 +105,10 @@ class RFO(Optimizer):
         """How many foxes move in the local phase: round((1 - notice) N), MATLAB rounding."""
         return min(self.N, matlab_round((1.0 - float(self.p["notice"])) * self.N))
 
+    def expected_evaluations(self) -> tuple[int, int]:
+        n = self.N + self.T * (self.N - 1 + self.movers() + self.replaced())
+        return n, n
+
     # ------------------------------------------------------------------------------------------
     def _initialize(self) -> None:
         self.X = self.random_population()
