@@ -10,6 +10,7 @@ parameter and list what is valid.
 from __future__ import annotations
 
 import importlib
+import sys
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
@@ -143,6 +144,13 @@ def _module_of(entry: object) -> str:
     if isinstance(entry, type):
         return entry.__module__
     return str(getattr(entry, "origin_module", None) or type(entry).__module__)
+
+
+def caller_module(depth: int = 2) -> str:
+    """The module of the code that called the registering function (``depth`` frames up): the
+    origin of what it registers, whatever module defined the pieces (a plugin that builds its
+    function from swarmpath's kernels, a class made by ``type()``, is still the plugin)."""
+    return str(sys._getframe(depth).f_globals.get("__name__", ""))
 
 
 def origin_for(module: str) -> Origin:

@@ -16,7 +16,6 @@ users type (ranges, suites) are read by :mod:`swarmpath.functions.expand`.
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -26,7 +25,7 @@ from numpy.typing import NDArray
 
 from swarmpath.functions import definitions as d
 from swarmpath.functions.base import SHIFT_FRACTION, BenchmarkFunction
-from swarmpath.registry import ExtensionClash, Registry, origin_for
+from swarmpath.registry import ExtensionClash, Registry, caller_module, origin_for
 
 if TYPE_CHECKING:
     from swarmpath.plugins.origin import Origin
@@ -112,12 +111,6 @@ SUITES: Registry[Suite] = Registry("suite", "swarmpath.functions", ("suites",), 
 _SUITE_FUNCTIONS: dict[str, tuple[BenchmarkFunction, str]] = {}  # name -> (function, suite)
 
 
-def _caller_module(depth: int = 2) -> str:
-    """The module of the code that called the registering function (the origin of what it
-    registers: a plugin that builds its function from swarmpath's pieces is still the plugin)."""
-    return str(sys._getframe(depth).f_globals.get("__name__", ""))
-
-
 def register_function(
     function: BenchmarkFunction, origin: Origin | None = None
 ) -> BenchmarkFunction:
@@ -128,7 +121,7 @@ def register_function(
         raise TypeError(f"register_function takes a BenchmarkFunction, got {function!r}")
     if ":" in function.name:
         raise ValueError(f"{function.name!r}: names with ':' belong to suites (register_suite)")
-    return REGISTRY.register(function, origin or origin_for(_caller_module()))
+    return REGISTRY.register(function, origin or origin_for(caller_module()))
 
 
 def register_suite(suite: Suite, origin: Origin | None = None) -> Suite:
@@ -137,7 +130,7 @@ def register_suite(suite: Suite, origin: Origin | None = None) -> Suite:
     ``origin``: as for :func:`register_function`."""
     if not isinstance(suite, Suite):
         raise TypeError(f"register_suite takes a Suite, got {suite!r}")
-    origin = origin or origin_for(_caller_module())
+    origin = origin or origin_for(caller_module())
     names = [f.name for f in suite.functions]
     for name in names:
         if not name.startswith(f"{suite.name}:"):

@@ -9,7 +9,7 @@ theirs the same way and are listed after the built-ins.
 from __future__ import annotations
 
 from swarmpath.optimizers.base import Optimizer
-from swarmpath.registry import Registry
+from swarmpath.registry import Registry, caller_module, origin_for
 
 _MODULES = (
     "pso", "ssa", "fdo", "gwo", "ba", "mfb", "hpso_mfb", "coot", "mcoot", "icoot", "hpo", "ihpo",
@@ -25,7 +25,7 @@ def register(cls: type[Optimizer]) -> type[Optimizer]:
     other code is refused, naming both origins)."""
     if not (isinstance(cls, type) and issubclass(cls, Optimizer)):
         raise TypeError(f"register takes an Optimizer subclass, got {cls!r}")
-    return REGISTRY.register(cls)
+    return REGISTRY.register(cls, origin_for(caller_module()))
 
 
 def list_optimizers(builtin: bool | None = None) -> list[str]:

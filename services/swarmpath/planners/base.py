@@ -16,7 +16,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmpath.registry import ParamValue, Registry, resolve_params
+from swarmpath.registry import ParamValue, Registry, caller_module, origin_for, resolve_params
 from swarmpath.robot.kinematics import Pose
 from swarmpath.robot.sensors import SensorReading
 from swarmpath.world.geometry import ObstacleSet
@@ -117,7 +117,7 @@ def register_planner(cls: type[Planner]) -> type[Planner]:
     other code is refused, naming both origins)."""
     if not (isinstance(cls, type) and issubclass(cls, Planner)):
         raise TypeError(f"register_planner takes a Planner subclass, got {cls!r}")
-    return REGISTRY.register(cls)
+    return REGISTRY.register(cls, origin_for(caller_module()))
 
 
 register = register_planner  # the name the built-in modules use

@@ -1,5 +1,7 @@
-"""The catalog: what can be run (optimizers, functions, planners, maps) with their parameters,
-read from the registries."""
+"""The catalog: what can be run (optimizers, functions, suites, planners, maps) with their
+parameters, read from the registries; every optimizer, function, suite and planner with its
+origin (built-in, distribution and version, file) and the sha256 digest of its code, as
+``swarmpath plugins`` lists them on the coordinator's machine."""
 
 from __future__ import annotations
 
@@ -22,7 +24,10 @@ def warm_registries() -> None:
 
 def build_catalog() -> dict[str, Any]:
     from swarmpath.functions import get_function, get_suite, list_functions, list_suites
+    from swarmpath.functions.registry import SUITES, function_origin
     from swarmpath.optimizers import get_optimizer, list_optimizers
+    from swarmpath.optimizers.registry import REGISTRY as OPTIMIZERS
+    from swarmpath.plugins.catalog import origin_fields, problems
 
     out: dict[str, Any] = {"optimizers": [], "functions": [], "suites": [], "planners": [],
                            "maps": []}
@@ -32,13 +37,14 @@ def build_catalog() -> dict[str, Any]:
             "name": name, "summary": cls.summary, "reference": cls.reference,
             "min_agents": cls.min_agents, "params": dict(cls.defaults),
             "choices": {k: list(v) for k, v in cls.choices.items()},
+            **origin_fields(OPTIMIZERS.origin(name)),
         })
     for name in list_functions():
         fn = get_function(name)
         out["functions"].append({
             "name": name, "description": fn.description, "lower": fn.lower, "upper": fn.upper,
             "f_min_per_dim": fn.f_min_per_dim, "f_min_constant": fn.f_min_constant,
-            "noisy": fn.noisy,
+            "noisy": fn.noisy, **origin_fields(function_origin(name)),
         })
     for name in list_suites():
         suite = get_suite(name)
@@ -48,9 +54,11 @@ def build_catalog() -> dict[str, Any]:
             "functions": [f.name for f in suite.functions],
             "dims": None if dims is None else list(dims),
             "bounds": [suite.functions[0].lower, suite.functions[0].upper],
+            **origin_fields(SUITES.origin(name)),
         })
     try:
         from swarmpath.planners import get_planner, list_planners
+        from swarmpath.planners.base import REGISTRY as PLANNERS
 
         for name in list_planners():
             planner = get_planner(name)
@@ -58,9 +66,11 @@ def build_catalog() -> dict[str, Any]:
                 "name": name, "kind": planner.kind, "description": planner.description,
                 "reference": planner.reference, "params": dict(planner.defaults),
                 "choices": {k: list(v) for k, v in planner.choices.items()},
+                **origin_fields(PLANNERS.origin(name)),
             })
     except Exception as exc:
         out["planners_unavailable"] = _short(exc)
+    out["plugin_problems"] = problems()
     try:
         from swarmpath.world.presets import get_map, list_maps
 
