@@ -287,3 +287,50 @@ def test_broken_entry_point_is_left_out_and_reported(tmp_path):
     assert out.returncode == 0, out.stderr
     assert out.stdout.splitlines()[0] == "13"
     assert "AttributeError" in out.stdout and "left out" in out.stderr
+
+
+def _file_digest(path: Path) -> str:
+    """The documented digest of a one-file plugin, computed here from the definition."""
+    import hashlib
+
+    data = path.read_bytes()
+    return hashlib.sha256(path.name.encode() + b"\0" + str(len(data)).encode() + b"\0"
+                          + data).hexdigest()
+
+
+def test_plugins_lists_every_extension_with_origin_and_digest(tmp_path):
+    plugin = tmp_path / "my_plugin.py"
+    plugin.write_text(PLUGIN)
+    out = _run(["plugins", "--json", "--plugin", str(plugin)])
+    assert out.returncode == 0, out.stderr
+    rows = {(r["kind"], r["name"]): r for r in json.loads(out.stdout)["extensions"]}
+    mine = rows[("optimizer", "FileGWO")]
+    assert mine["source"] == "file" and mine["label"] == str(plugin)
+    assert mine["digest"] == _file_digest(plugin)
+    assert mine["defaults"] == rows[("optimizer", "GWO")]["defaults"]
+    assert mine["choices"]["leaders"] == ["authors", "elitist"]
+    assert rows[("function", "F14")]["digest"] == _file_digest(plugin)
+    assert rows[("optimizer", "GWO")]["origin"] == "built-in"
+    assert {("suite", "bbob"), ("planner", "ICOOT"), ("function", "F1")} <= set(rows)
+    text = _run(["plugins", "--only-plugins", "--plugin", str(plugin)])
+    lines = text.stdout.splitlines()
+    assert lines[0].split()[:4] == ["kind", "name", "source", "digest"]
+    assert [ln.split()[1] for ln in lines[1:]] == ["FileGWO", "F14"]
+    assert _file_digest(plugin)[:12] in lines[1]
+    plugin.write_text(PLUGIN + "\n# edited\n")  # another version of the code: another digest
+    again = json.loads(_run(["plugins", "--json", "--plugin", str(plugin)]).stdout)
+    edited = next(r for r in again["extensions"] if r["name"] == "FileGWO")
+    assert edited["digest"] == _file_digest(plugin) != mine["digest"]
+
+
+def test_catalog_carries_origins_and_digests():
+    from swarmpath.service.catalog import build_catalog
+
+    cat = build_catalog()
+    gwo = next(o for o in cat["optimizers"] if o["name"] == "GWO")
+    assert gwo["source"] == "built-in" and len(gwo["digest"]) == 64
+    assert gwo["digest"] == OPTIMIZERS.origin("GWO").digest
+    assert all(len(f["digest"]) == 64 for f in cat["functions"])
+    assert {s["origin"] for s in cat["suites"]} == {"built-in"}
+    assert all(p["source"] == "built-in" for p in cat["planners"])
+    assert cat["plugin_problems"] == []

@@ -22,7 +22,10 @@ from swarmpath.cli.core import InputError, app
 
 __all__ = ["InputError", "app", "main"]
 
-_COMMANDS = ("bench", "plan", "reproduce", "audit", "processes", "service", "upload", "results")
+_COMMANDS = (
+    "bench", "plan", "reproduce", "audit", "check", "processes", "service", "upload", "results",
+    "plugins",
+)
 
 for _name in _COMMANDS:
     importlib.import_module(f"swarmpath.cli.{_name}")
