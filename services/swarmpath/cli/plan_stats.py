@@ -98,14 +98,10 @@ def lines(tests: MapStatistics) -> list[str]:
             text += f"; Nemenyi CD = {f.cd:.3g}"
         out.append(text)
     alpha = tests.comparisons["length"].alpha
+    from swarmpath.evidence.benchmark_stats import across_line
+
     for measure, b in tests.bayes.items():
-        for v in b.across.values():
-            parts = [f"{a} {x['p_better']:.2f}/{x['p_equivalent']:.2f}/{x['p_worse']:.2f} "
-                     f"({x['verdict']})" for a, x in v.items()]
-            blocks = max((x["blocks"] for x in v.values()), default=0)
-            out.append(f"Bayesian signed-rank ({LABELS[measure]}) over {blocks} maps, "
-                       f"P(better/equivalent/worse) than {b.reference} ({b.stat}, "
-                       f"{b.rope.describe()}): " + "; ".join(parts))
+        out += [across_line(f"({LABELS[measure]})", "maps", b, v) for v in b.across.values()]
     out.append(
         f"+/=/-: significantly better / no significant difference / worse than {tests.reference}"
         f" (success: Fisher's exact test; length and gap over successful runs and time: "

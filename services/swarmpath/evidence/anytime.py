@@ -77,13 +77,17 @@ def bbob_targets() -> np.ndarray:
     return 10.0 ** np.linspace(2.0, -8.0, 51)
 
 
+def _best_so_far(t: RunTrace) -> np.ndarray:
+    return np.minimum.accumulate(np.where(np.isnan(t.errors), np.inf, t.errors))
+
+
 def runtimes(traces: Sequence[RunTrace], targets: np.ndarray) -> np.ndarray:
     """(runs, targets): the first evaluation count with error <= target (inf: never)."""
     out = np.full((len(traces), targets.size), np.inf)
     for i, t in enumerate(traces):
         if not t.errors.size:
             continue
-        best = np.minimum.accumulate(np.where(np.isnan(t.errors), np.inf, t.errors))
+        best = _best_so_far(t)
         # best is non-increasing: the first index with best <= target, by a search on -best
         idx = np.searchsorted(-best, -targets, side="left")
         hit = idx < best.size
@@ -136,7 +140,7 @@ def fixed_budget(traces: Sequence[RunTrace], budgets: np.ndarray) -> np.ndarray:
     for i, t in enumerate(traces):
         if not t.errors.size:
             continue
-        best = np.minimum.accumulate(np.where(np.isnan(t.errors), np.inf, t.errors))
+        best = _best_so_far(t)
         idx = np.searchsorted(t.evaluations, budgets, side="right") - 1
         ok = idx >= 0
         out[i, ok] = best[idx[ok]]
@@ -270,18 +274,9 @@ def study_groups(cells: Iterable[Any], agents: int, iterations: int,
 
 
 def groups_to_json(groups: Mapping[tuple[str, int], AnytimeGroup]) -> list[dict[str, Any]]:
-    from swarmpath.evidence.stats import json_number
+    from swarmpath.evidence.stats import json_clean
 
-    def clean(v: Any) -> Any:
-        if isinstance(v, float):
-            return json_number(v)
-        if isinstance(v, dict):
-            return {k: clean(x) for k, x in v.items()}
-        if isinstance(v, list):
-            return [clean(x) for x in v]
-        return v
-
-    return [clean({"function": f, "dim": d, **g.to_json()}) for (f, d), g in groups.items()]
+    return [json_clean({"function": f, "dim": d, **g.to_json()}) for (f, d), g in groups.items()]
 
 
 def grid_ecdf(points: np.ndarray, rows: Mapping[str, np.ndarray],

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from swarmpath.evidence.stats import ALPHA, STATS, describe, json_number, location
+from swarmpath.evidence.stats import ALPHA, STATS, describe, json_clean, location
 
 # swarmpath.evidence.compare loads scipy.stats (~0.8 s): only when statistics are run
 if TYPE_CHECKING:
@@ -126,51 +126,49 @@ def friedman_lines(tests: Statistics) -> list[str]:
     return lines
 
 
+def across_line(label: str, blocks_name: str, b: BayesComparison,
+                per: Mapping[str, Mapping[str, Any]]) -> str:
+    """One line of the signed-rank test over the blocks of a group (a dimension, the maps)."""
+    parts = [f"{a} {v['p_better']:.2f}/{v['p_equivalent']:.2f}/{v['p_worse']:.2f} "
+             f"({v['verdict']})" for a, v in per.items()]
+    blocks = max((v["blocks"] for v in per.values()), default=0)
+    return (f"Bayesian signed-rank {label} over {blocks} {blocks_name}, P(better/equivalent/"
+            f"worse) than {b.reference} ({b.stat}, {b.rope.describe()}): " + "; ".join(parts))
+
+
 def bayes_lines(tests: Statistics) -> list[str]:
     """Per dimension and algorithm: the Bayesian signed-rank test over the functions."""
     b = tests.bayes
     if b is None:
         return []
-    out = []
-    for dim, per in b.across.items():
-        parts = [f"{a} {v['p_better']:.2f}/{v['p_equivalent']:.2f}/{v['p_worse']:.2f} "
-                 f"({v['verdict']})" for a, v in per.items()]
-        blocks = max((v["blocks"] for v in per.values()), default=0)
-        out.append(f"Bayesian signed-rank D={dim} over {blocks} functions, P(better/equivalent/"
-                   f"worse) than {b.reference} ({b.stat}, {b.rope.describe()}): "
-                   + "; ".join(parts))
-    return out
+    return [across_line(f"D={dim}", "functions", b, per) for dim, per in b.across.items()]
+
+
+def _effects_text(tests: Statistics) -> str:
+    """What the rows A12, shift, 95% CI and P(b/e/w) mean (the terminal legend and captions)."""
+    ref = tests.comparison.reference
+    rope = f", {tests.bayes.rope.describe()}" if tests.bayes is not None else ""
+    return (f"A12: Vargha-Delaney probability that a run beats a run of {ref} (0.5: no effect); "
+            f"shift: Hodges-Lehmann estimate of (algorithm - {ref}) with its 95 % interval; "
+            f"P(b/e/w): posterior probabilities of better / practically equivalent / worse "
+            f"(Bayesian bootstrap of the {tests.stat}{rope}; decision at 0.95)")
 
 
 def legend(tests: Statistics) -> str:
     c = tests.comparison
     what = "median" if tests.stat == "median" else "avg"
-    rope = f", {tests.bayes.rope.describe()}" if tests.bayes is not None else ""
     return (
         f"+/=/-: significantly better / no significant difference / worse than {c.reference} "
         f"(two-sided Wilcoxon rank-sum test, Holm-adjusted over the table, alpha {c.alpha:g}); "
         f"* the best {what}, ~ not significantly worse than it (the same test; both bold); "
-        f"A12: P(a run beats a run of {c.reference}), 0.5 = no effect; shift: Hodges-Lehmann "
-        f"estimate of (algorithm - {c.reference}) with its 95 % interval; P(b/e/w): posterior "
-        f"probability of better / practically equivalent / worse (Bayesian bootstrap of the "
-        f"{tests.stat}{rope}); Friedman columns: mean rank over the functions (1 = best), +/- = "
-        f"differs from {c.reference} by Holm's post-hoc test"
+        f"{_effects_text(tests)}; Friedman columns: mean rank over the functions (1 = best), "
+        f"+/- = differs from {c.reference} by Holm's post-hoc test"
     )
 
 
 def tests_to_json(tests: Statistics) -> dict[str, Any]:
     """The study's tests as JSON: the comparison (every test, its p and Holm-adjusted p, its
     marker, the counts) and the Friedman test per dimension."""
-
-    def clean(v: Any) -> Any:
-        if isinstance(v, float):
-            return json_number(v)
-        if isinstance(v, dict):
-            return {k: clean(x) for k, x in v.items()}
-        if isinstance(v, list):
-            return [clean(x) for x in v]
-        return v
-
     doc = {
         "stat": tests.stat,
         "comparison": tests.comparison.to_json(key_fields=("function", "dim")),
@@ -180,21 +178,16 @@ def tests_to_json(tests: Statistics) -> dict[str, Any]:
     }
     if tests.bayes is not None:
         doc["bayes"] = tests.bayes.to_json(("function", "dim"), "dim")
-    return clean(doc)
+    return json_clean(doc)
 
 
 def latex_legend(tests: Statistics) -> str:
     """What a LaTeX table's bold cells, superscripts and effect rows mean (its caption)."""
     c = tests.comparison
     what = "median" if tests.stat == "median" else "mean"
-    rope = f", {tests.bayes.rope.describe()}" if tests.bayes is not None else ""
     return (
         f"Bold: the best {what} and those not significantly worse (two-sided Wilcoxon "
         f"rank-sum test against the best, Holm-adjusted, alpha {c.alpha:g}). Superscript "
         f"+/=/-: significantly better / no significant difference / worse than {c.reference} "
-        f"(the same test, Holm-adjusted over the table). A12: Vargha-Delaney probability that "
-        f"a run beats a run of {c.reference} (0.5: no effect); shift: Hodges-Lehmann estimate "
-        f"of (algorithm - {c.reference}) with its 95 % interval; P(b/e/w): posterior "
-        f"probabilities of better / practically equivalent / worse (Bayesian bootstrap of the "
-        f"{what}{rope}; decision at 0.95)."
+        f"(the same test, Holm-adjusted over the table). {_effects_text(tests)}."
     )

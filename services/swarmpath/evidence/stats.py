@@ -16,6 +16,7 @@ from __future__ import annotations
 import bisect
 import math
 from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -24,8 +25,8 @@ from numpy.typing import ArrayLike
 #: that modules which only name it do not load scipy.stats.
 ALPHA = 0.05
 
-__all__ = ["STATS", "describe", "json_number", "location", "rank", "resolve_reference",
-           "spread"]
+__all__ = ["STATS", "describe", "json_clean", "json_number", "location", "rank",
+           "resolve_reference", "spread"]
 
 #: The statistic a table reports and ranks by (``--stat``): mean with std, or median with IQR.
 STATS = ("mean", "median")
@@ -125,3 +126,14 @@ def json_number(v: float) -> float | str:
     if math.isfinite(v):
         return v
     return "nan" if math.isnan(v) else ("inf" if v > 0 else "-inf")
+
+
+def json_clean(v: Any) -> Any:
+    """``v`` with every float (in dicts and lists, at any depth) as :func:`json_number`."""
+    if isinstance(v, float):
+        return json_number(v)
+    if isinstance(v, dict):
+        return {k: json_clean(x) for k, x in v.items()}
+    if isinstance(v, list):
+        return [json_clean(x) for x in v]
+    return v
