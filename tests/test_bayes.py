@@ -111,3 +111,31 @@ def test_compare_bayes_table() -> None:
     assert doc["rope"] == "0.2" and doc["stat"] == "mean"
     assert {t["algorithm"] for t in doc["tests"]} == {"A", "B"}
     assert doc["across"][0]["dim"] == 10
+
+
+def test_median_is_drawn_exactly_from_its_beta_form() -> None:
+    """The weighted median under Dirichlet(1, ..., 1) weights, drawn from P(S_k >= 1/2) with
+    S_k ~ Beta(k, n - k), has the distribution of the brute-force one (weights drawn, cumulated,
+    the first value reaching 1/2)."""
+    rng = np.random.default_rng(5)
+    a = rng.lognormal(size=7)
+    ref = np.full(3, float(np.median(a)))
+    fast = bayes.cell_posterior(a, ref, bayes.Rope(0.05), "median", draws=200_000)
+    w = rng.standard_exponential((200_000, 7))
+    cum = np.cumsum(w / w.sum(axis=1, keepdims=True), axis=1)
+    d = np.sort(a)[(cum < 0.5).sum(axis=1)] - ref[0]
+    assert fast is not None
+    assert fast.p_better == pytest.approx(np.mean(d < -0.05), abs=0.005)
+    assert fast.p_equivalent == pytest.approx(np.mean(np.abs(d) <= 0.05), abs=0.005)
+
+
+def test_large_mean_cells_use_fewer_draws_but_the_same_model() -> None:
+    rng = np.random.default_rng(6)
+    x, y = rng.normal(0.0, 1.0, 3000), rng.normal(0.05, 1.0, 3000)
+    post = bayes.cell_posterior(x, y, bayes.Rope(0.02), draws=10_000)  # 2^22 / 3000 = 1398
+    var = sum(float(np.sum((v - v.mean()) ** 2)) / (v.size * (v.size + 1)) for v in (x, y))
+    dist = stats.norm(x.mean() - y.mean(), math.sqrt(var))
+    assert post is not None
+    assert post.p_better == pytest.approx(dist.cdf(-0.02), abs=0.03)
+    assert (post.p_better * bayes.MIN_DRAWS) == pytest.approx(round(post.p_better
+                                                                    * bayes.MIN_DRAWS))
