@@ -120,7 +120,7 @@ def _sphere(x):
 
 def test_broken_functions_fail_naming_the_property():
     batchy = BenchmarkFunction("batchy", lambda x: _sphere(x) - _sphere(x).mean(), -1.0, 1.0,
-                               0.0)
+                               0.0)  # a value depends on every point of the batch
     assert [p.name for p in check_function(batchy, raise_on_failure=False).failures] == [
         "deterministic", "minimum"]
     wrong_min = BenchmarkFunction("wrong-min", _sphere, -1.0, 1.0, 0.0, f_min_constant=1.0)

@@ -133,6 +133,11 @@ class Registry(Generic[T]):
         self._load()
         return name in self._entries
 
+    def registered(self, name: str) -> bool:
+        """Whether ``name`` is registered now, without loading anything (registering code uses
+        this: loading plugins from inside an import would run them half-imported)."""
+        return name in self._entries
+
 
 class ExtensionClash(ValueError):
     """Two pieces of code registered the same name; the message names both origins."""

@@ -139,7 +139,7 @@ def register_suite(suite: Suite, origin: Origin | None = None) -> Suite:
     unknown = set(suite.members) - set(names)
     if unknown:
         raise ValueError(f"suite {suite.name!r} lists members it does not have: {sorted(unknown)}")
-    if suite.name in REGISTRY:
+    if REGISTRY.registered(suite.name):
         raise ExtensionClash(f"suite {suite.name!r} from {origin.describe()} has the name of "
                              f"the function from {REGISTRY.origin(suite.name).describe()}")
     SUITES.register(suite, origin)  # a suite of that name from other code: ExtensionClash
