@@ -51,6 +51,8 @@ class Registry(Generic[T]):
         self._sequence: dict[int, int] = {}
         self._loaded = False
         self._loading = False
+        # name prefix -> (builds the entry for a name with it, origin of that code)
+        self._families: dict[str, tuple[Callable[[str], T], Origin]] = {}
 
     def register(self, entry: T, origin: Origin | None = None) -> T:
         """Add ``entry`` under its ``name`` (usable as a class decorator); returns it."""
@@ -118,15 +120,31 @@ class Registry(Generic[T]):
 
     def get(self, name: str) -> T:
         self._load()
-        try:
-            return self._entries[name]
-        except KeyError:
-            from swarmpath.names import unknown
+        entry = self._entries.get(name)
+        if entry is not None:
+            return entry
+        for prefix, (build, _origin) in self._families.items():
+            if name.startswith(prefix):
+                return build(name)  # raises self.error naming what is wrong
+        from swarmpath.names import unknown
 
-            raise self.error(unknown(self.kind, name, self.names())) from None
+        raise self.error(unknown(self.kind, name, self.names() + self.families()))
+
+    def add_family(self, prefix: str, build: Callable[[str], T]) -> None:
+        """Names ``<prefix><anything>`` mean ``build(name)`` (e.g. ``swarm:<optimizer>``, a
+        planner for every optimizer); they are not listed by :meth:`names`."""
+        self._families[prefix] = (build, origin_for(caller_module()))
+
+    def families(self) -> list[str]:
+        """The families as users write them: ``swarm:<name>``."""
+        self._load()
+        return [f"{prefix}<name>" for prefix in self._families]
 
     def origin(self, name: str) -> Origin:
         self.get(name)
+        for prefix, (_build, origin) in self._families.items():
+            if name not in self._origins and name.startswith(prefix):
+                return origin
         return self._origins[name]
 
     def __contains__(self, name: object) -> bool:

@@ -86,10 +86,27 @@ def _names(spec: str) -> list[str]:
 
 
 def resolve_planners(spec: str) -> list[str]:
-    """'ICOOT,mfb' -> registered names (case-insensitive, duplicates dropped); 'all' = all."""
-    from swarmpath.planners import list_planners
+    """'ICOOT,mfb,swarm:MyGWO' -> registered names (case-insensitive, duplicates dropped);
+    'all' = all registered; ``swarm:<optimizer>`` names the swarm local planner driven by any
+    registered optimizer."""
+    from swarmpath.planners import PlannerError, get_planner, list_planners
 
-    return resolve_names(spec, list_planners(), "--planners", "planner")
+    out: list[str] = []
+    for part in (p.strip() for p in spec.split(",")):
+        if part.lower().startswith("swarm:"):
+            try:
+                name = get_planner("swarm:" + part[len("swarm:"):]).name
+            except PlannerError as exc:
+                raise InputError("--planners", str(exc)) from None
+            names = [name]
+        elif part:
+            names = resolve_names(part, list_planners(), "--planners", "planner")
+        else:
+            continue
+        out += [n for n in names if n not in out]
+    if not out:
+        raise InputError("--planners", "no planner given")
+    return out
 
 
 def parse_params(text: str | None, planners: Sequence[str]) -> dict[str, dict[str, Any]]:

@@ -106,7 +106,7 @@ class Planner(ABC):
 
 
 # ----------------------------------------------------------------------------------- registry
-_MODULES = ("swarm_local", "rfo_gwo", "ompl_baselines")
+_MODULES = ("swarm_local", "swarm_family", "rfo_gwo", "ompl_baselines")
 REGISTRY: Registry[type[Planner]] = Registry(
     "planner", "swarmpath.planners", _MODULES, PlannerError, group="swarmpath.planners"
 )

@@ -67,6 +67,10 @@ Array = np.ndarray
 # and the robot touched the corner (rfogwo-map3, ICOOT seed 1, t = 234 s), and on mfb-static the
 # least body gap fell to 0.78 cm under a 1 cm safety distance. 1 cm: at most 1.4 cm.
 HIT_CELL = 0.01
+#: The planner family ``swarm:<optimizer>`` (:func:`swarm_planner`).
+SWARM = "swarm:"
+#: A ``swarm:<optimizer>`` planner's parameters for its optimizer: ``optimizer.<parameter>``.
+OPTIMIZER_PREFIX = "optimizer."
 CARROT_CLEARANCE = 0.01  # m: the known-map path keeps this much beyond the planner's margin
 
 
@@ -134,6 +138,8 @@ class SwarmLocalPlanner(SwarmMoveLimits):
     }
     #: Optimizer parameters of the preset (e.g. ICOOT's two leaders), merged under user ones.
     optimizer_params: ClassVar[dict[str, Any]] = {}
+    #: The optimizer class of a ``swarm:<optimizer>`` planner (None for the presets).
+    optimizer_class: ClassVar[type | None] = None
 
     @classmethod
     def check_params(cls, p):
@@ -151,15 +157,30 @@ class SwarmLocalPlanner(SwarmMoveLimits):
             if float(p[key]) < 0:
                 raise PlannerError(f"{cls.name}.{key} must be >= 0")
         try:
-            get_optimizer(str(p["optimizer"]))
+            opt_cls = get_optimizer(str(p["optimizer"]))
         except KeyError as exc:
             raise PlannerError(f"{cls.name}.optimizer: {exc.args[0]}") from None
+        fixed = cls.defaults["optimizer"]
+        if opt_cls.name != fixed:  # a table must name what ran: the planner named after it
+            raise PlannerError(
+                f"{cls.name}.optimizer: this planner runs {fixed}; the swarm local planner "
+                f"driven by {opt_cls.name} is the planner '{SWARM}{opt_cls.name}'")
+        try:
+            opt_cls.resolve_params(cls.optimizer_settings(p))
+        except ParameterError as exc:
+            raise PlannerError(f"{cls.name}: {exc}") from None
         if p["backend"] == "numba":
             try:
                 import numba  # noqa: F401
             except ImportError:
                 raise PlannerError(f"{cls.name}.backend: 'numba' needs numba installed "
                                    "(pip install 'swarmpath[fast]')") from None
+
+    @classmethod
+    def optimizer_settings(cls, p: dict[str, Any]) -> dict[str, Any]:
+        """The optimizer's parameters: the preset's, under the ``optimizer.<name>`` ones."""
+        return {**cls.optimizer_params, **{k[len(OPTIMIZER_PREFIX):]: v for k, v in p.items()
+                                           if k.startswith(OPTIMIZER_PREFIX)}}
 
     @classmethod
     def knows_static_map(cls, p):
@@ -224,7 +245,8 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         opt_cls = get_optimizer(str(self.p["optimizer"]))
         try:
             self._opt_params = opt_cls.resolve_params(
-                {k: v for k, v in self.optimizer_params.items() if k in opt_cls.defaults}
+                {k: v for k, v in self.optimizer_settings(self.p).items()
+                 if k in opt_cls.defaults}
             )
         except ParameterError as exc:
             raise PlannerError(str(exc)) from None

@@ -96,6 +96,19 @@ def _planners(builtin: bool | None) -> list[Extension]:
         rows.append(_row("planner", name, planners.origin(name), summary=cls.description,
                          reference=cls.reference, defaults=dict(cls.defaults),
                          choices={k: list(v) for k, v in cls.choices.items()}))
+    if builtin is not False:  # the families (swarm:<optimizer>), built-in code
+        for family in planners.families():
+            prefix = family.removesuffix("<name>")
+            example = planners.get(prefix + "PSO")
+            rows.append(_row(
+                "planner", family.replace("<name>", "<optimizer>"), planners.origin(prefix + "PSO"),
+                summary="the seeds' swarm local planner driven by any registered optimizer "
+                "(its parameters: the planner's, and the optimizer's as optimizer.<name>)",
+                reference=example.reference.split(";")[0],
+                defaults={k: v for k, v in example.defaults.items()
+                          if k != "optimizer" and not k.startswith("optimizer.")},
+                choices={k: list(v) for k, v in example.choices.items()
+                         if not k.startswith("optimizer.")}))
     return rows
 
 

@@ -68,6 +68,11 @@ def build_catalog() -> dict[str, Any]:
                 "choices": {k: list(v) for k, v in planner.choices.items()},
                 **origin_fields(PLANNERS.origin(name)),
             })
+        out["planner_families"] = [
+            {"name": family.replace("<name>", "<optimizer>"), "optimizers": list_optimizers(),
+             "description": "the seeds' swarm local planner driven by any registered optimizer",
+             **origin_fields(PLANNERS.origin(family.replace("<name>", "PSO")))}
+            for family in PLANNERS.families()]
     except Exception as exc:
         out["planners_unavailable"] = _short(exc)
     out["plugin_problems"] = problems()

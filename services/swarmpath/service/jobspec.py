@@ -342,7 +342,21 @@ class MapJobSpec(Model):
     @field_validator("planners")
     @classmethod
     def _known_planners(cls, v: list[str]) -> list[str]:
-        _unknown_names(v, list(_planner_registry().list_planners()), "planner")
+        registry = _planner_registry()
+        known = list(registry.list_planners())
+        problems: list[tuple[Loc, str]] = []
+        for i, name in enumerate(v):
+            if name in known:
+                continue
+            try:  # a family member (swarm:<optimizer>) is built on demand
+                if registry.get_planner(name).name == name:
+                    continue
+            except ValueError as exc:
+                problems.append(((i,), str(exc)))
+                continue
+            problems.append(((i,), f"unknown planner {name!r}"))
+        if problems:
+            raise FieldProblems(problems)
         _unique(v, "planner")
         return v
 
