@@ -158,3 +158,13 @@ def test_nav2_maps_report_costmap_costs_and_their_frame():
     assert out.frame_origin == [-10.0, -10.0]
     preset = Episode(get_map("mfb-static"), "OMPL-BITstar", 1, params={"iterations": 500}).run()
     assert preset.costmap_cost_mean is None and preset.frame_origin is None
+
+
+def test_the_dashboard_scene_names_a_nav2_maps_frame():
+    from pathlib import Path
+
+    from swarmpath.service.web.scene import scene
+    from swarmpath.world.importers import load_ros_map
+
+    s = scene(load_ros_map(Path(__file__).parent / "data" / "tb3_sandbox.yaml").scenario)
+    assert (s["frame"], s["origin"]) == ("map", [-10.0, -10.0])

@@ -140,6 +140,7 @@ def test_scene_routes(client, app):
     assert client.get(f"/ui/jobs/{job}/scene?run=5").status_code == 404
     s = client.get(f"/ui/jobs/{job}/scene?cell=0&t_end=5").json()
     assert s["dynamic"] and s["motion"]["times"] == []  # no run yet: no track to show
+    assert (s["frame"], s["origin"]) == ("scenario", [0.0, 0.0])  # a preset has no other frame
     work_off(core)
     s = client.get(f"/ui/jobs/{job}/scene?cell=0&t_end=5").json()
     assert s["motion"]["offsets"] and s["motion"]["times"][-1] == 5.0

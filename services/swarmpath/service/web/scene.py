@@ -29,7 +29,8 @@ def _r(v: Any) -> Any:
 
 
 def scene(scenario: Any) -> dict[str, Any]:
-    """Static geometry: size, start, goal, robot radius and every obstacle at t = 0."""
+    """Static geometry: size, start, goal, robot radius and every obstacle at t = 0 (scenario
+    frame), and the map's own frame with its origin (nav2 maps: "map" and the YAML origin)."""
     obstacles = []
     for ob in scenario.obstacles:
         item: dict[str, Any] = {"shape": ob.shape, "moving": bool(ob.is_moving)}
@@ -42,6 +43,9 @@ def scene(scenario: Any) -> dict[str, Any]:
         "name": scenario.name, "size": _r(scenario.size), "start": _r(scenario.start),
         "goal": _r(scenario.goal), "robot_radius": float(scenario.robot.radius),
         "dynamic": bool(scenario.is_dynamic), "obstacles": obstacles,
+        # the chart draws the scenario frame; a nav2 map's own frame is this far off
+        "frame": scenario.grid.frame if scenario.grid is not None else "scenario",
+        "origin": _r(scenario.grid.origin) if scenario.grid is not None else [0.0, 0.0],
     }
 
 

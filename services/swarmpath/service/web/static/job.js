@@ -197,7 +197,8 @@
         const leg = document.createElement("p"); leg.className = "legend";
         leg.innerHTML = planners.map((p) => `<span style="color:${color(p, planners)}">&#9632; ${SP.esc(p)}</span>`).join(" ")
           + " &nbsp; dashed: failed run; &#10005; where a run touched an obstacle; &#9633; end of a stalled (purple) or timed-out (orange) run"
-          + (r.data.dynamic ? "; orange lines: moving obstacles' tracks (run 0's world)" : "");
+          + (r.data.dynamic ? "; orange lines: moving obstacles' tracks (run 0's world)" : "")
+          + (r.data.frame && r.data.frame !== "scenario" ? `; positions from the map's lower-left corner: in the ${SP.esc(r.data.frame)} frame add the origin (${r.data.origin.map((v) => SP.num(v, 3)).join(", ")})` : "");
         sec.querySelector(".mapchart").appendChild(leg);
       }
       for (const [what, label] of [["length", "path length (m), successful runs"], ["gap", "gap to the optimum, successful runs"], ["seconds", "planning time (s)"]]) {
