@@ -82,7 +82,15 @@ def upload_map(
     typer.echo(info["id"])
     typer.echo(f"map {info['id']}: {info['name']}, {info['size'][0]:g} x {info['size'][1]:g} m, "
                f"{info['obstacles']} obstacles, default start {_point(info['start'])} goal "
-               f"{_point(info['goal'])}", err=True)
+               f"{_point(info['goal'])}" + _frame(info), err=True)
+
+
+def _frame(info: Any) -> str:
+    """Which frame the start and goal are in (a nav2 map's own, with its origin)."""
+    frame = info.get("frame") or "scenario"
+    if frame == "scenario":
+        return ""
+    return f" ({frame} frame; the map's lower-left corner is at {_point(info['origin'])})"
 
 
 def _point(xy: Any) -> str:
