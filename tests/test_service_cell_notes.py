@@ -21,7 +21,8 @@ from swarmpath.service.cell_notes import (
     note_metrics,
 )
 from swarmpath.service.http.app import create_app
-from swarmpath.service.protocol import Lease, LeaseRequest, decode_work_reply, encode
+from swarmpath.service.protocol import Keys, Lease, LeaseRequest, decode_work_reply, encode
+from swarmpath.service.scenarios import ByteLRU, answer, resolve
 from swarmpath.service.settings import CoordinatorSettings
 from swarmpath.service.worker import execute_lease, pack_lease_columns
 
@@ -44,12 +45,23 @@ def _work_off(client: Any) -> int:
     core = client.app.state.core
     core.publish = lambda key, payload: None
     core.worker_alive("w1")
+    cache = ByteLRU(10_000_000)
+
+    def fetch(key: str, payload: bytes) -> bytes:
+        return answer(key, payload, core.store.lease_scenario_ref, core.store.lease_scenario,
+                      cache)
+
     done = 0
     while True:
         reply = decode_work_reply(core.handle_lease_request(
             encode(LeaseRequest(worker="w1", max_runs=10))))
         if not isinstance(reply, Lease):
             return done
+        # a scenario over INLINE_SCENARIO_BYTES (an uploaded nav2 map with its grid) travels by
+        # reference: fetched as the worker fetches it, through the coordinator's answer
+        ref = getattr(reply.spec, "scenario_ref", None)
+        if ref is not None:
+            reply = resolve(reply, Keys().scenario(ref.sha256), fetch, cache)
         results = execute_lease(reply)
         triples = [(reply.lease_id, reply.capability, data) for _run, data in results]
         for payload in pack_lease_columns("w1", triples):

@@ -117,7 +117,7 @@ def scenario_costmap(scenario: Any) -> Costmap:
     shape = (round(scenario.size[1] / res), round(scenario.size[0] / res))
     static = scenario.static_obstacles()
     blocked = _cells_inside(shape, res, static.polygons, static.circles)
-    unknown = _cells_inside(shape, res, grid.unknown, np.zeros((0, 3)))
+    unknown = _cells_inside(shape, res, grid.unknown_polygons(), np.zeros((0, 3)))
     costs = inflation_costs(blocked & ~unknown, unknown, res, scenario.robot.radius)
     return Costmap(costs, res)
 

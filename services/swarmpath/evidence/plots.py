@@ -417,7 +417,8 @@ def _grid_obstacles(ax: Any, scenario: Any, grid: Any, origin: tuple[float, floa
                   [np.cos(np.linspace(0, 2 * np.pi, 64)), np.sin(np.linspace(0, 2 * np.pi, 64))]))
               for o in static]
     union = unary_union(shapes) if shapes else None
-    unknown = unary_union([ShapelyPolygon(p) for p in grid.unknown]) if grid.unknown else None
+    unknown = (unary_union([ShapelyPolygon(p) for p in grid.unknown_polygons()])
+               if grid.unknown else None)
     if union is not None:
         mapped = union.difference(unknown) if unknown is not None else union
         patch(moved(mapped), fc=OCCUPIED_RGB, ec="none")

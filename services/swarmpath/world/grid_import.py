@@ -201,8 +201,9 @@ def _build(
         goal = g0 if goal is None else goal
     grid_source = None
     if frame is not None:
-        unknown = tuple(tuple((float(x) * res, float(y) * res) for x, y in poly)
-                        for poly in grid_polygons(data == UNKNOWN))
+        # one tile for the whole grid: the fewest polygons (only drawn and rasterized back)
+        unknown = tuple(tuple((int(x), int(y)) for x, y in poly)
+                        for poly in grid_polygons(data == UNKNOWN, tile=max(data.shape)))
         grid_source = GridSource(frame, offset, res, unknown)
     scenario = Scenario(
         name=name,

@@ -151,9 +151,10 @@ class GridModel(_Strict):
     origin: Vec2 = Field(description="Position of the scenario's (0, 0) in that frame, metres "
                          "(a ROS map's YAML origin x, y).")
     resolution: Pos = Field(description="Cell size in metres.")
-    unknown: list[Annotated[list[Vec2], Field(min_length=3)]] = Field(
-        default_factory=list, description="Cells of unknown occupancy as polygons (scenario "
-        "frame); drawn grey, used by the costmap metrics; not obstacles by themselves.")
+    unknown: list[Annotated[list[tuple[int, int]], Field(min_length=3)]] = Field(
+        default_factory=list, description="Cells of unknown occupancy as polygons in cell "
+        "units (corner (i, j) is the scenario point (i, j) * resolution); drawn grey, used by "
+        "the costmap metrics; not obstacles by themselves.")
 
 
 class ScenarioModel(_Strict):

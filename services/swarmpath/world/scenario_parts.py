@@ -220,7 +220,8 @@ class GridSource:
     ``frame`` names the map's own frame (``"map"`` for ROS maps, whose YAML ``origin`` places
     the lower-left pixel); ``origin`` is that frame's position of the scenario's (0, 0), so
     ``map_xy = scenario_xy + origin``. ``resolution`` is the cell size (m); ``unknown`` the
-    cells of unknown occupancy as orthogonal polygons in the scenario frame (drawn grey by the
+    cells of unknown occupancy as orthogonal polygons in cell units (integer corners: vertex
+    (i, j) is the scenario point (i, j) * resolution; compact and exact) (drawn grey by the
     plots, used by the costmap metrics; the planners never see it: with the importer's default
     those cells are obstacles too). Not validated beyond its shape: the importer makes it.
     """
@@ -228,13 +229,17 @@ class GridSource:
     frame: str
     origin: Point
     resolution: float
-    unknown: tuple[tuple[Point, ...], ...] = ()
+    unknown: tuple[tuple[tuple[int, int], ...], ...] = ()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "origin", _point(self.origin, "grid.origin"))
         object.__setattr__(self, "resolution", float(self.resolution))
         object.__setattr__(self, "unknown", tuple(
-            tuple(_point(p, "grid.unknown[]") for p in poly) for poly in self.unknown))
+            tuple((int(p[0]), int(p[1])) for p in poly) for poly in self.unknown))
+
+    def unknown_polygons(self) -> list[Array]:
+        """The unknown cells' polygons in scenario-frame metres."""
+        return [np.asarray(poly, dtype=np.float64) * self.resolution for poly in self.unknown]
 
     def to_map_frame(self, xy: ArrayLike) -> Array:
         """Scenario-frame points (..., 2) in the map frame."""
