@@ -16,11 +16,11 @@ from swarmpath.optimizers import (
 
 REGISTERED = [
     "PSO", "SSA", "FDO", "GWO", "BA", "MFB", "HPSO-MFB", "COOT", "mCOOT", "ICOOT", "HPO", "IHPO",
-    "RFO",
+    "RFO", "RS",
 ]
 
 
-def test_registered_names_are_exactly_the_thirteen():
+def test_registered_names_are_exactly_the_built_ins():
     assert sorted(list_optimizers()) == sorted(REGISTERED)
 
 
@@ -97,6 +97,9 @@ def test_shifted_is_reproducible_and_shift_shared_across_algorithms(algo):
 
 def test_converges_on_2d_sphere(algo):
     res = minimize(algo, "F1", dim=2, agents=20, iterations=200, runs=4, seed=1)
+    if algo == "RS":  # does not converge: the least of 4,020 uniform points (P(f > 100) ~ e^-31)
+        assert np.all(res.best_fitness < 100), res.best_fitness
+        return
     # F1 starts around 1e3-1e4 on [-100, 100]^2; every algorithm must get close to 0.
     assert np.all(res.best_fitness < 1e-2), res.best_fitness
 
