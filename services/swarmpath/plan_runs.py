@@ -48,7 +48,8 @@ def run_episode(task: EpisodeTask, on_step: Callable[[], None] | None = None) ->
         if ep is not None:
             try:
                 out = ep.outcome().to_dict()
-                out.update(success=False, reason=reason)
+                out.update(success=False, reason=reason, failure_class="error",
+                           failure_detail=reason)
                 return out
             except Exception:
                 pass
@@ -59,6 +60,7 @@ def run_episode(task: EpisodeTask, on_step: Callable[[], None] | None = None) ->
             "ompl_smoothness": 0.0, "min_clearance": None, "steps": 0, "iterations": 0,
             "seconds": 0.0, "travel_time": 0.0, "optimum": None, "gap": None,
             "planned_length": None, "robot_driven_contacts": 0, "obstacle_driven_contacts": 0,
+            "failure_class": "error", "failure_detail": reason,
             "cpu_seconds": 0.0,
             "path": [[float(scenario.start[0]), float(scenario.start[1]), 0.0]],
         }

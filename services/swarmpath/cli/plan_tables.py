@@ -45,6 +45,7 @@ def render_cell(cell: CellResult, row: dict[str, Any], reason: str | None = None
         table.add_column("Planned (m)", justify="right", no_wrap=True)
     failed = any(not r["success"] for r in cell.runs)
     if failed:
+        table.add_column("Failure", no_wrap=True)
         table.add_column("Reason")
     for r in cell.runs:
         gap = None if r["gap"] is None else 100.0 * r["gap"]
@@ -55,7 +56,8 @@ def render_cell(cell: CellResult, row: dict[str, Any], reason: str | None = None
         if planned:
             cols.append(_num(r.get("planned_length")))
         if failed:
-            cols.append("" if r["success"] else str(r["reason"]))
+            cols.extend(("", "") if r["success"] else (str(r.get("failure_class") or ""),
+                                                       _why(r)))
         table.add_row(*cols)
     gap_mean = None if row["gap_mean"] is None else 100.0 * row["gap_mean"]
     mean = ["Mean", _num(row["length_mean"]), _num(row["error_mean"]),
@@ -65,8 +67,35 @@ def render_cell(cell: CellResult, row: dict[str, Any], reason: str | None = None
     if planned:
         mean.append("")
     if failed:
-        mean.append("")
+        mean.extend(("", ""))
     table.add_row(*mean, style="bold", end_section=True)
+    return table
+
+
+def _why(r: dict[str, Any]) -> str:
+    """A failed run's reason and, when classified, where and for how long."""
+    detail = r.get("failure_detail")
+    reason = str(r["reason"])
+    return f"{reason}: {detail}" if detail and detail != reason else reason
+
+
+def render_failures(rows: Sequence[dict[str, Any]]) -> Table | None:
+    """Why the runs failed, per planner x map: the count of each failure class
+    (:mod:`swarmpath.planners.failures`); None when every run succeeded."""
+    from swarmpath.failure_classes import FAILURE_CLASSES
+
+    seen = {k for r in rows for k in (r.get("failure_classes") or {})}
+    if not seen:
+        return None
+    kinds = [k for k in FAILURE_CLASSES if k in seen] + sorted(seen - set(FAILURE_CLASSES))
+    table = Table(title="Why runs failed", box=box.SIMPLE_HEAD, pad_edge=False)
+    for name in ("Map", "Planner", "Failed", *kinds):
+        table.add_column(name, justify="left" if name in ("Map", "Planner") else "right",
+                         no_wrap=True)
+    for row in rows:
+        counts = row.get("failure_classes") or {}
+        table.add_row(str(row["map"]), str(row["planner"]), f"{row['runs'] - row['successes']}/"
+                      f"{row['runs']}", *(str(counts.get(k, 0)) for k in kinds))
     return table
 
 
@@ -145,12 +174,17 @@ def print_tables(cells: Sequence[CellResult], spec: PlanSpec, seconds: float) ->
         highlight=False,
     )
     console.print(quality)
+    why = render_failures(summarize([r for c in cells for r in c.runs]))
+    if why is not None:
+        console.print(why)
     if spec.buckets:
         from swarmpath.evidence.buckets import bucket_rows
 
         console.print(render_buckets(bucket_rows([r for c in cells for r in c.runs],
                                                  spec.buckets)))
-    console.print(legend_text(["Collisions", "Gap (%)", "CPU time (s)", "clearance_mean",
+    console.print(legend_text(["Collisions", "Gap (%)", "CPU time (s)",
+                               *(["failure_classes"] if why is not None else []),
+                               "clearance_mean",
                                "curvature_max", "cusps", "danger_share", "velocity_smoothness",
                                "angular_smoothness", "jerk", "costmap_cost_mean"]),
                   markup=False, highlight=False)

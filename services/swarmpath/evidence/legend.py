@@ -43,6 +43,11 @@ NOTES: dict[str, str] = {
                          "planner benchmark reports them; means over successful runs",
     "jerk": "mean magnitude of the jerk, the rate of change of acceleration (m/s^3), mean over "
             "successful runs",
+    "failure_classes": "why the runs that did not reach the goal failed (docs/planners.md, "
+                       "\"Why runs fail\"): collision, gave-up, short-of-goal, or, at a time or "
+                       "step limit, progressing (still getting closer), blocked-by-mover, "
+                       "boxed-in (hardly moved), oscillating (back and forth within 2 m) or "
+                       "wandering (moved far without getting closer)",
     "rank": "rank of avg among the algorithms on this function and dimension (1 = best)",
     "origin_suspect": "true when runs reached exact zeros or values below 1e-100 on a function "
                       "whose optimum is at the origin (usually a move that scales positions "

@@ -23,12 +23,16 @@ import numpy as np
 
 from swarmpath import metrics, path_metrics
 from swarmpath.optimizers.streams import OPTIMIZER, SIMULATION, run_generator
+from swarmpath.planners import failures
 from swarmpath.planners.base import Planner, get_planner
+from swarmpath.planners.cost_to_go import CostToGo
 from swarmpath.planners.simulator import Simulator
 from swarmpath.world.geometry import collides
 from swarmpath.world.optimum import DEFAULT_BUDGET, MAX_DISKS, shortest_path
 from swarmpath.world.scenario import Scenario
 
+#: Decisions a run may take at least (:class:`Episode`'s default ``step_limit`` grows with the
+#: time limit: one decision per simulated step).
 DEFAULT_STEP_LIMIT = 2000
 #: A static goal is reached when the robot's centre is this close to it (m): the exact
 #: optimum's own tolerance, so no successful path can end short of the goal and be shorter than
@@ -37,7 +41,9 @@ FINISH_TOLERANCE = 1e-9
 #: RunOutcome fields measured on the host (wall and CPU time): the only ones that may differ
 #: between two executions of the same run.
 TIMING_FIELDS = ("seconds", "cpu_seconds")
-DEFAULT_TIME_FACTOR = 6.0  # time limit: this many times the straight-line travel time, plus 60 s
+#: Time limit: this many times the travel time of the exact optimum (the straight line when the
+#: map has none), plus 60 s.
+DEFAULT_TIME_FACTOR = 6.0
 
 
 @dataclass
@@ -90,6 +96,10 @@ class RunOutcome:
     #: with a frame of its own (nav2: "map") puts the scenario's (0, 0) here in that frame, so
     #: ``map_xy = path_xy + frame_origin`` (None: no other frame).
     frame_origin: list[float] | None = None
+    #: Why a failed run failed (:mod:`swarmpath.planners.failures`: a class of
+    #: ``FAILURE_CLASSES`` and where / for how long); None for a success.
+    failure_class: str | None = None
+    failure_detail: str | None = None
     path: list[list[float]] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
@@ -160,7 +170,7 @@ class Episode:
         seed: int,
         run: int = 0,
         params: Mapping[str, Any] | None = None,
-        step_limit: int = DEFAULT_STEP_LIMIT,
+        step_limit: int | None = None,
         time_limit: float | None = None,
         optimum_budget: float | None = DEFAULT_BUDGET,
     ):
@@ -175,11 +185,21 @@ class Episode:
         sensors = scenario.sensors or cls.default_sensors
         self.sim = Simulator(scenario, run_generator(seed, run, SIMULATION), sensors,
                              guard=cls.guarded)
-        self.step_limit = step_limit
         if time_limit is None:
-            straight = math.dist(scenario.start, scenario.goal)
-            time_limit = DEFAULT_TIME_FACTOR * straight / scenario.robot.linear_speed + 60.0
+            # the way to go is the exact optimum where the map has one: on a maze it is many
+            # times the straight line (maze512-32-9 #500: 193 m for 120 m)
+            way = math.dist(scenario.start, scenario.goal)
+            optimum = optimum_of(scenario, optimum_budget)[0]
+            if optimum is not None:
+                way = max(way, optimum)
+            time_limit = DEFAULT_TIME_FACTOR * way / scenario.robot.linear_speed + 60.0
         self.time_limit = float(time_limit)
+        if step_limit is None:
+            # every decision drives at least one simulated step (a planner that drives none
+            # is stopped by this count)
+            step_limit = max(DEFAULT_STEP_LIMIT,
+                             math.ceil(self.time_limit / scenario.time_step - 1e-9))
+        self.step_limit = int(step_limit)
         self._goal_moves = scenario.goal_motion is not None
         self.steps = 0
         self.iterations = 0
@@ -269,6 +289,7 @@ class Episode:
         costs = self._costs(path)
         optimum = scenario_optimum(self.scenario, self.optimum_budget)
         gap = metrics.gap(length, optimum) if (success and optimum) else None
+        failure = None if success else self._failure(path, reason, int(collisions))
         return RunOutcome(
             planner=planner_name or self.planner.name,
             map=self.scenario.name,
@@ -296,5 +317,51 @@ class Episode:
             costmap_cost_mean=costs[0],
             costmap_cost_max=costs[1],
             frame_origin=None if grid is None else list(grid.origin),
+            failure_class=None if failure is None else failure.kind,
+            failure_detail=None if failure is None else failure.detail,
             path=[[float(x), float(y), float(t)] for x, y, t in path],
         )
+
+    def _failure(self, path: np.ndarray, reason: str, collisions: int) -> failures.Failure:
+        """The class of this failed run (:func:`swarmpath.planners.failures.classify`)."""
+        world, scenario, radius = self.sim.world, self.scenario, self.sim.radius
+        to_go: np.ndarray | None = None
+        if not self._goal_moves:
+            field_ = cost_to_go_of(scenario)
+            if field_ is not None:
+                to_go = failures.along_free_space(field_(path[:, :2]))
+        along = to_go is not None
+        if to_go is None:
+            goals = (np.array([world.goal_at(float(t)) for t in path[:, 2]]) if self._goal_moves
+                     else np.asarray(scenario.goal, dtype=float))
+            to_go = np.hypot(*(path[:, :2] - goals).T)
+        mover_gap = None
+        moving = np.array([scenario.obstacles[k].is_moving for k in world.set_order], dtype=bool)
+        if moving.any():
+            def mover_gap(t: float, xy: np.ndarray) -> float:
+                movers = failures.movers_of(world.obstacles_at(t), moving)
+                return float(movers.point_clearance(xy[None, :])[0]) - radius
+        end = float(np.hypot(*(path[-1, :2] - world.goal_at(float(path[-1, 2])))))
+        return failures.classify(path, reason, collisions, radius, np.asarray(to_go), along,
+                                 self._goal_moves, self.sim.goal_tolerance, end, mover_gap)
+
+
+_FIELDS: OrderedDict[Scenario, CostToGo | None] = OrderedDict()
+
+
+def cost_to_go_of(scenario: Scenario) -> CostToGo | None:
+    """The free-space distance to a static goal on the static map, the robot radius kept
+    (remembered for the last few scenarios; None when the goal has no free cell around it)."""
+    if scenario in _FIELDS:
+        _FIELDS.move_to_end(scenario)
+        return _FIELDS[scenario]
+    try:
+        field_: CostToGo | None = CostToGo(
+            scenario.static_obstacles(), scenario.size, np.asarray(scenario.goal, dtype=float),
+            scenario.robot.radius)
+    except ValueError:
+        field_ = None
+    _FIELDS[scenario] = field_
+    while len(_FIELDS) > _OPTIMA_KEPT:
+        _FIELDS.popitem(last=False)
+    return field_

@@ -16,7 +16,8 @@ keys), shared by ``swarmpath plan`` and the REST service. Rules:
 * ``min_clearance`` is the smallest over all runs; every value is JSON-safe (no NaN or inf:
   ``None`` instead).
 
-``failures`` counts the runs per failure reason (empty when every run succeeded).
+``failures`` counts the runs per failure reason (empty when every run succeeded) and
+``failure_classes`` per class of :mod:`swarmpath.planners.failures` (why they failed).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from collections.abc import Iterable, Mapping
 from typing import Any
 
 from swarmpath.evidence.stats import describe
+from swarmpath.failure_classes import count_classes
 from swarmpath.path_metrics import PATH_METRICS
 
 __all__ = ["PATH_METRICS", "finite_or_none", "json_safe", "path_metric_means", "summarize",
@@ -130,6 +132,8 @@ def summarize_cell(runs: Iterable[Any]) -> dict[str, Any]:
         "gap_max": gap["max"],
         **path_metric_means(ok),
         "failures": failures,
+        "failure_classes": count_classes(_get(r, "failure_class") for r in rows
+                                         if not _get(r, "success")),
     })
 
 

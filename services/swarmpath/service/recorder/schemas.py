@@ -61,6 +61,9 @@ MAP_RESULT_SCHEMA: dict[str, Any] = {
         "iterations": {"type": "integer"},
         "optimum": {"type": "number"},
         "gap": {"type": "number"},
+        "failure_class": {"type": "string",
+                          "description": "why a failed run failed (docs/planners.md)"},
+        "failure_detail": {"type": "string", "description": "where and for how long"},
     },
 }
 

@@ -10,6 +10,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from swarmpath.evidence.audit import origin_suspect
+from swarmpath.failure_classes import count_classes
 from swarmpath.path_metrics import PATH_METRICS
 from swarmpath.service.cell_notes import CellNotes, cell_notes, job_warnings
 from swarmpath.service.racing import RACE_COLUMNS, apply_race
@@ -73,6 +74,9 @@ def map_cell_summary(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
         "travel_time_mean": _mean(_numbers(ok, "travel_time")),
         **{key: _mean(_numbers(ok, key)) for key in PATH_METRICS},
         **{key: _total(runs, key) for key in ("robot_driven_contacts", "obstacle_driven_contacts")},
+        # why the failed runs failed (planners.failures), JSON only (a dict is no CSV cell)
+        "failure_classes": count_classes(m.get("failure_class") for m in runs
+                                         if m.get("success") is False),
     }
 
 

@@ -11,6 +11,8 @@ from typing import Any
 
 import numpy as np
 
+from swarmpath.failure_classes import known_class
+
 GRID_POINTS = 64  # iterations sampled per convergence curve
 PATH_POINTS = 150  # points kept per map path
 MAX_OUTLIERS = 40  # outliers listed per box (the most extreme ones)
@@ -104,8 +106,13 @@ def _number(v: Any) -> float | None:
 
 
 def failure_kind(metrics: Mapping[str, Any]) -> str:
-    """Why a map run failed, in one word: collision, stall (the planner gave up or stopped
-    moving), timeout (time or step limit), or other."""
+    """Why a map run failed, in one word: its ``failure_class`` (:mod:`swarmpath.planners.
+    failures`: collision, oscillating, boxed-in, progressing, ...); for runs recorded without
+    one, from the reason: collision, stall (the planner gave up or stopped moving), timeout
+    (time or step limit), or other."""
+    kind = known_class(metrics.get("failure_class"))
+    if kind is not None:
+        return kind
     reason = str(metrics.get("reason") or "")
     if (_number(metrics.get("collisions")) or 0) > 0 or reason.startswith("collided"):
         return "collision"

@@ -237,7 +237,7 @@
       if (!p.success && p.failure !== "collision" && p.points.length) {  // where it stopped
         const e = p.points[p.points.length - 1];
         const mk = el("rect", { x: e[0] - r * 0.7, y: e[1] - r * 0.7, width: 1.4 * r, height: 1.4 * r, class: "sp-failure sp-" + (p.failure || "other") }, g);
-        el("title", {}, mk).textContent = `run ${p.run}: ${p.reason || p.failure}`;
+        el("title", {}, mk).textContent = `run ${p.run}: ${p.failure || "failed"}${p.reason ? " (" + p.reason + ")" : ""}`;
       }
     }
     el("circle", { cx: scene.start[0], cy: scene.start[1], r: 0.015 * Math.max(w, h), class: "sp-start" }, world);

@@ -16,8 +16,9 @@
       `<tr><th class="l">${SP.esc(k)}</th><td class="l">${SP.esc(typeof v === "number" ? SP.num(v, 6) : v)}</td></tr>`).join("");
   }
 
-  function failure(run) {  // as the job page's aggregates name it
+  function failure(run) {  // as the job page's aggregates name it (series.failure_kind)
     if (run.success !== false) return null;
+    if (run.failure_class) return run.failure_class;
     const reason = String(run.reason || "");
     if (run.collisions > 0 || reason.startsWith("collided")) return "collision";
     if (reason.includes("gave up") || reason.includes("stall")) return "stall";
@@ -30,7 +31,8 @@
     const run = r.data;
     SP.q("#status").textContent = `${run.cell}, run ${run.run}: ${run.state}`;
     metrics(run);
-    const reason = run.failure || (run.success === false ? run.reason : "");
+    const why = run.failure_class ? `${run.failure_class} (${run.reason}${run.failure_detail ? ": " + run.failure_detail : ""})` : run.reason;
+    const reason = run.failure || (run.success === false ? why : "");
     SP.q("#failure").textContent = reason ? "Failure: " + reason : "";
     if (run.curve) {
       const x = run.curve.map((_, i) => i + 1);
