@@ -26,7 +26,8 @@ def test_pair_scores_pair_runs_by_index_ties_half_and_drop_failed_runs():
 
 
 def _capital_loop(z, m, alpha):
-    """W-S & R's hedged capital with the predictable plug-in bets, one pair at a time."""
+    """W-S & R's hedged capital (half the larger of the two bets' capitals) with the predictable
+    plug-in bets, one pair at a time."""
     up = down = 1.0
     total = sq = 0.0
     s2_prev = 0.25
@@ -35,7 +36,7 @@ def _capital_loop(z, m, alpha):
         lam = math.sqrt(2 * math.log(2 / alpha) / (s2_prev * t * math.log(1 + t)))
         up *= 1 + min(lam, BET_CAP / m) * (x - m)
         down *= 1 - min(lam, BET_CAP / (1 - m)) * (x - m)
-        out.append(0.5 * up + 0.5 * down)
+        out.append(0.5 * max(up, down))
         total += x
         mu = (0.5 + total) / (t + 1)
         sq += (x - mu) ** 2
@@ -53,8 +54,22 @@ def test_rejection_times_are_where_the_plain_loop_capital_first_reaches_one_over
     assert rejection_times(z, [m], 0.05)[0] == expected
 
 
+def test_the_confidence_set_is_an_interval_after_every_pair():
+    """What an equivalence decided from its two end points relies on: no m inside the set's
+    hull has been rejected (checked on a grid, for sequences with ties, after every prefix)."""
+    rng = np.random.default_rng(5)
+    grid = np.linspace(0.005, 0.995, 199)
+    for _ in range(60):
+        n = int(rng.integers(5, 120))
+        z = rng.choice([0.0, 0.5, 1.0], size=n, p=rng.dirichlet([1.0, 1.0, 1.0]))
+        alpha = float(10 ** rng.uniform(-4, -1))
+        for t in (n // 3, n):
+            alive = np.flatnonzero(rejection_times(z[:t], grid, alpha) == 0)
+            assert alive.size and alive[-1] - alive[0] + 1 == alive.size
+
+
 def test_a_sweep_is_decided_for_the_winner_in_twenty_pairs_at_the_table_level():
-    # K_t(1/2) = (1.5^t + 0.5^t) / 2 once the bets hit their cap: 1/alpha = 1300 at t = 20
+    # K_t(1/2) = 1.5^t / 2 once the bets hit their cap: 1/alpha = 1300 at t = 20
     d = decide(np.ones(40), 0.05 / 65)
     assert (d.decision, d.better, d.at) == ("different", "a", 20)
     d = decide(np.zeros(40), 0.05 / 65)

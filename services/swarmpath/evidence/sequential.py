@@ -24,11 +24,14 @@ Ramdas ("Estimating means of bounded random variables by betting", J. R. Stat. S
 1-27, hedged capital process, section 4, with the predictable plug-in bets of eq. (26)) applies
 without any assumption on the algorithms' distributions: for a candidate m,
 
-    K_t(m) = 1/2 prod_{i<=t} (1 + l+_i(m) (Z_i - m)) + 1/2 prod_{i<=t} (1 - l-_i(m) (Z_i - m))
+    K+_t(m) = prod_{i<=t} (1 + l+_i(m) (Z_i - m)),   K-_t(m) = prod_{i<=t} (1 - l-_i(m) (Z_i - m))
 
-is a nonnegative martingale when theta = m, so by Ville's inequality it ever reaches 1/alpha with
+are nonnegative martingales when theta = m, so is their mean, and by Ville's inequality the
+hedged capital K_t(m) = max(K+_t(m), K-_t(m)) / 2 (at most that mean) ever reaches 1/alpha with
 probability at most alpha. The set {m : K_s(m) < 1/alpha for every s <= t} is the confidence
-sequence; it is an interval (the hedged capital is quasi-convex in m). Bets:
+sequence. It is an interval: K+ does not increase with m and K- does not decrease, so the max
+is quasi-convex in m (W-S & R's hedged process; the mean itself is not quasi-convex, and an
+equivalence decided from two rejected end points needs the interval). Bets:
 l_t = sqrt(2 log(2/alpha) / (s2_{t-1} t log(1 + t))), l+ = min(l, c/m), l- = min(l, c/(1 - m)),
 c = 1/2, with the running mean mu_t = (1/2 + sum Z)/(t + 1) and variance
 s2_t = (1/4 + sum (Z_i - mu_i)^2)/(t + 1). Every bet uses only earlier pairs: that is what makes
@@ -97,9 +100,9 @@ def _log_capitals(z: Array, m: Array, alpha: float) -> tuple[Array, Array]:
 
 
 def _log_capital(z: Array, m: Array, alpha: float) -> Array:
-    """log K_t(m), the hedged capital (the mean of the two bets): shape (n, len(m))."""
+    """log K_t(m), the hedged capital (half the larger bet): shape (n, len(m))."""
     log_up, log_down = _log_capitals(z, m, alpha)
-    return np.asarray(np.logaddexp(log_up, log_down) - math.log(2.0))
+    return np.asarray(np.maximum(log_up, log_down) - math.log(2.0))
 
 
 def rejection_times(z: ArrayLike, m: ArrayLike, alpha: float) -> NDArray[np.int64]:
