@@ -52,25 +52,29 @@ from swarmpath.optimizers import list_optimizers, minimize
 def error(args: argparse.Namespace) -> None:
     settings = RaceSettings(max_runs=args.max_runs, alpha=args.alpha, min_runs=10, batch=10)
     functions = [f"F{i}" for i in range(1, 14)]
-    print("| optimizer | races | false differences | rate |\n| --- | ---: | ---: | ---: |")
-    total = wrong = 0
+    print(f"{args.seeds} seed pairs x F1-F13 x {len(list_optimizers())} optimizers, max_runs "
+          f"{args.max_runs}, min_runs 10, batch 10, alpha {args.alpha} per race\n")
+    print("| optimizer | races | of them not all ties | false differences | rate |\n"
+          "| --- | ---: | ---: | ---: | ---: |")
+    total = wrong = varied = 0
     for name in list_optimizers():
-        races = false = 0
+        races = false = live = 0
         for f in functions:
             for s in range(args.seeds):
                 a = minimize(name, f, 5, 10, 50, seed=1000 + s, runs=args.max_runs).best_fitness
                 b = minimize(name, f, 5, 10, 50, seed=9000 + s, runs=args.max_runs).best_fitness
                 race = race_block({"A": a, "B": b}, ["A", "B"], settings, 1)
                 races += 1
+                live += bool(np.any(a != b))  # every pair tied: a difference is impossible
                 false += race.duels[0].result.decision == "different"
-        total += races
-        wrong += false
-        print(f"| {name} | {races} | {false} | {false / races:.3f} |")
+        total, wrong, varied = total + races, wrong + false, varied + live
+        print(f"| {name} | {races} | {live} | {false} | {false / races:.3f} |")
         note(f"{name}: {false}/{races}")
-    rate = wrong / total
-    half = 1.96 * math.sqrt(rate * (1 - rate) / total) if wrong else 3.0 / total
-    print(f"| all | {total} | {wrong} | {rate:.4f} (95 % MC: {max(rate - half, 0):.4f}-"
-          f"{rate + half:.4f}; alpha {args.alpha}) |")
+    for label, n in (("all", total), ("not all ties", varied)):
+        rate = wrong / n
+        half = 1.96 * math.sqrt(rate * (1 - rate) / n) if wrong else 3.0 / n
+        print(f"| {label} | {n} | | {wrong} | {rate:.4f} (95 % MC: {max(rate - half, 0):.4f}-"
+              f"{rate + half:.4f}; alpha {args.alpha}) |")
 
 
 def power(args: argparse.Namespace) -> None:
