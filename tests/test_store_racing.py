@@ -137,6 +137,19 @@ def test_a_race_needs_two_algorithms_and_a_benchmark_job():
     assert any(e["loc"][-1] == "racing" for e in err.value.errors())
 
 
+def test_a_budget_race_compares_the_algorithms_of_a_function_despite_their_iterations():
+    """With budget_evals each algorithm runs the iterations spending the budget (FDO, mCOOT and
+    GWO count evaluations differently): they still race in one block per function and dim."""
+    spec = parse_job_spec({**SPEC, "algorithms": ["FDO", "mCOOT", "GWO"],
+                           "budget_evals": "200xD"})
+    cells = [(i, c.model_dump()) for i, c in enumerate(expand_cells(spec))]
+    assert len({c["iterations"] for _, c in cells}) == 3
+    blocks = group_blocks(cells, None, "reference")
+    functions = [[cells[i][1]["function"] for i, _ in m] for m in blocks.members.values()]
+    assert functions == [["F1"] * 3, ["F10"] * 3]
+    assert blocks.comparisons == 4
+
+
 def test_the_stored_spec_names_max_runs():
     spec = parse_job_spec(SPEC)
     assert spec.racing is not None and spec.racing.max_runs == 60

@@ -20,8 +20,9 @@ from pydantic import Field, field_validator
 from swarmpath.evidence.racing import PAIRS, RaceSettings, comparisons_per_block
 from swarmpath.service.model import MAX_RUNS_PER_CELL, Model
 
-#: Cell spec fields that tell the algorithms of a block apart (the rest is the block).
-_MEMBER_FIELDS = ("algorithm", "params")
+#: Cell spec fields that tell the algorithms of a block apart (the rest is the block): with an
+#: evaluation budget each algorithm has its own iterations (those spending the budget).
+_MEMBER_FIELDS = ("algorithm", "params", "iterations")
 
 
 class RacingSpec(Model):
