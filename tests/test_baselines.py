@@ -33,3 +33,49 @@ def test_random_search_draws_uniform_points_and_reports_their_minimum():
             assert stats.kstest(u, "uniform").pvalue > 1e-4
     # the runs are independent streams: no two runs drew the same points
     assert not np.allclose(X[0], X[1])
+
+
+def test_cmaes_restarts_leave_each_run_its_own_numbers():
+    """IPOP restarts happen at different times in different runs (lambda then differs): a run
+    alone, in a batch, reordered and stacked with another function gives the same numbers."""
+    from swarmpath.optimizers import minimize, minimize_many
+
+    kw = dict(dim=3, agents=7, iterations=400, seed=4)
+    batch = minimize("CMA-ES", "F9", runs=4, **kw)
+    for r in (0, 3):
+        alone = minimize("CMA-ES", "F9", run_ids=[r], **kw)
+        assert np.array_equal(alone.curve[0], batch.curve[r])
+    picked = minimize("CMA-ES", "F9", run_ids=[2, 0], **kw)
+    assert np.array_equal(picked.curve, batch.curve[[2, 0]])
+    stacked = minimize_many("CMA-ES", ["F9", "F10"], runs=4, **kw)[0]
+    assert np.array_equal(stacked.curve, batch.curve)
+    assert np.all(batch.evaluations == 7 * 401)
+
+
+def test_cmaes_ipop_restarts_with_doubled_population():
+    from swarmpath.functions import get_function
+    from swarmpath.optimizers import BenchmarkProblem
+
+    fn = get_function("F9")  # Rastrigin: converges to local minima, so it restarts
+    problem = BenchmarkProblem.build(fn, 4, [0, 1, 2], seed=2)
+    opt = create("CMA-ES", problem, agents=10, iterations=600, streams=RunStreams.for_runs(2, 3))
+    lam0 = 4 + int(3 * np.log(4))
+    while not opt.done:
+        opt.step()
+    assert np.all(opt.restarts >= 1)
+    assert np.array_equal(opt.lam, lam0 * 2 ** opt.restarts)
+    none = create("CMA-ES", problem, agents=10, iterations=600,
+                  streams=RunStreams.for_runs(2, 3), params={"restarts": "none"})
+    while not none.done:
+        none.step()
+    # without restarts a run ends at its first stop: fewer evaluations, the same start
+    assert np.all(none.evaluations < 10 * 601) and np.all(none.restarts == 0)
+
+
+def test_cmaes_solves_rotated_ill_conditioned_functions_where_swarms_stall():
+    from swarmpath.optimizers import minimize
+
+    res = minimize("CMA-ES", "bbob:f10", dim=10, agents=10, iterations=1500, runs=3, seed=1)
+    assert np.all(res.best_fitness < 1e-8)  # rotated ellipsoid, condition 1e6
+    gwo = minimize("GWO", "bbob:f10", dim=10, agents=10, iterations=1500, runs=3, seed=1)
+    assert np.all(gwo.best_fitness > 1e2)
