@@ -79,3 +79,44 @@ def test_cmaes_solves_rotated_ill_conditioned_functions_where_swarms_stall():
     assert np.all(res.best_fitness < 1e-8)  # rotated ellipsoid, condition 1e6
     gwo = minimize("GWO", "bbob:f10", dim=10, agents=10, iterations=1500, runs=3, seed=1)
     assert np.all(gwo.best_fitness > 1e2)
+
+
+def test_the_quantum_does_not_change_the_algorithm():
+    """agents is only the evaluation quantum of a generational algorithm: the same planned
+    budget cut into other iterations gives the same runs (the curve is sampled elsewhere)."""
+    from swarmpath.optimizers import minimize
+
+    for algo in ("CMA-ES", "L-SHADE", "jSO"):
+        a = minimize(algo, "F10", dim=5, agents=20, iterations=99, runs=2, seed=3)  # 2,000
+        b = minimize(algo, "F10", dim=5, agents=50, iterations=39, runs=2, seed=3)  # 2,000
+        assert np.array_equal(a.best_fitness, b.best_fitness), algo
+        assert np.array_equal(a.curve[:, 3::5], b.curve[:, 0::2]), algo  # at 100, 200, ...
+
+
+def test_linear_population_size_reduction_follows_the_evaluations():
+    problem, _ = _recording(lambda X: np.sum(X**2, axis=-1), runs=2, dim=10)
+    opt = create("L-SHADE", problem, agents=60, iterations=199, streams=RunStreams.for_runs(1, 2))
+    sizes = []
+    while not opt.done:
+        opt.step()
+        sizes.append((int(opt.spent[0]), opt.size))
+    assert opt.n_init == 180 and opt.planned == 12_000
+    assert np.all(opt.evaluations == 12_000)
+    for spent, size in sizes[5:]:  # after each generation N = round(180 - 176 NFE / 12,000)
+        assert abs(size - (180 - 176 * spent / 12_000)) <= 1 + 176 * 180 / 12_000
+    assert opt.size == 4 and np.all(np.diff([s for _, s in sizes]) <= 0)
+    jso = create("jSO", problem, agents=60, iterations=199, streams=RunStreams.for_runs(1, 2))
+    jso.initialize()
+    assert jso.n_init == round(25 * np.log(10) * np.sqrt(10)) == 182
+
+
+def test_shade_family_bounds_rule_and_archive():
+    problem, seen = _recording(lambda X: np.sum((X - 4.9) ** 2, axis=-1), runs=3, dim=6)
+    opt = create("L-SHADE", problem, agents=40, iterations=80, streams=RunStreams.for_runs(5, 3))
+    while not opt.done:
+        opt.step()
+    X = np.concatenate(seen, axis=1)
+    assert X.min() >= -5 and X.max() <= 5  # midway between parent and bound, never outside
+    assert np.all(opt.best_fitness < 1e-3)  # optimum near the upper bound is reached
+    assert np.all(opt.archive_count <= opt.archive_size)
+    assert opt.archive_size == int(opt.size * 2.6)

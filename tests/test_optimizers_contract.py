@@ -16,7 +16,7 @@ from swarmpath.optimizers import (
 
 REGISTERED = [
     "PSO", "SSA", "FDO", "GWO", "BA", "MFB", "HPSO-MFB", "COOT", "mCOOT", "ICOOT", "HPO", "IHPO",
-    "RFO", "RS", "CMA-ES",
+    "RFO", "RS", "CMA-ES", "L-SHADE", "jSO",
 ]
 
 

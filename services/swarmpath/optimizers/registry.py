@@ -13,7 +13,7 @@ from swarmpath.registry import Registry, caller_module, origin_for
 
 _MODULES = (
     "pso", "ssa", "fdo", "gwo", "ba", "mfb", "hpso_mfb", "coot", "mcoot", "icoot", "hpo", "ihpo",
-    "rfo", "rs", "cmaes",
+    "rfo", "rs", "cmaes", "lshade", "jso",
 )
 REGISTRY: Registry[type[Optimizer]] = Registry(
     "optimizer", "swarmpath.optimizers", _MODULES, KeyError, group="swarmpath.optimizers"
