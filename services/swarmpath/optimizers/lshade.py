@@ -44,7 +44,7 @@ TERMINAL = -1.0
 
 def c_round(x: float) -> int:
     """C's round() for x >= 0 (half away from zero), which the authors' codes use."""
-    return int(math.floor(x + 0.5))
+    return math.floor(x + 0.5)
 
 
 class SHADEFamily(Generational):
@@ -152,8 +152,8 @@ class SHADEFamily(Generational):
         if not wins.any():
             return
         delta = np.where(better, delta, 0.0)
-        infinite = np.isinf(delta)
-        delta = np.where(infinite.any(axis=1)[:, None], infinite.astype(float), delta)
+        infinite: NDArray[np.bool_] = np.isinf(delta)
+        delta = np.where(np.any(infinite, axis=1)[:, None], infinite.astype(float), delta)
         weights = delta / np.where(wins, delta.sum(axis=1), 1.0)[:, None]
         f, cr = self.f_used, self.cr_used
         lehmer_f = np.sum(weights * f * f, axis=1) / np.maximum(np.sum(weights * f, axis=1),
@@ -188,7 +188,7 @@ class SHADEFamily(Generational):
     def _trials(self, nfes: int) -> None:
         """The next generation's trial vectors, one per individual."""
         assert self.fit is not None
-        R, n, d = self.R, self.size, self.d
+        n, d = self.size, self.d
         H = self.memory_f.shape[1]
         u_slot, u_f, u_best, u_r1, u_r2, u_j = self.rng.random_parts(6, n)
         z_cr = self.rng.normal(n)
