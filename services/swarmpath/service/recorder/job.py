@@ -295,8 +295,8 @@ class JobRecorder:
             "frame_id": map_frame(map_), "collisions": str(metrics.get("collisions", "")),
             "length": str(metrics.get("length", "")),
         })
-        path = record.get("path") or []
-        if path:
+        path = record.get("path")  # a list, or an array (in-process records): no truthiness
+        if path is not None and len(path):
             self._draw_run(record, planner, map_, path, scenario)
 
     def _map_offset(self, name: str, width: float) -> float:
