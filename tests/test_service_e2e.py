@@ -272,6 +272,19 @@ def test_malformed_requests_are_422_naming_the_field(service):
     assert service.get("/jobs/doesnotexist").status_code == 404
 
 
+def test_a_request_for_another_host_name_is_refused(service):
+    """DNS rebinding (issue 25, failure 6): `swarmpath coordinator` on 127.0.0.1 answers its own
+    names only; a page of evil.example rebound to 127.0.0.1 sends ``Host: evil.example``."""
+    c = service.http_client
+    before = len(c.get("/jobs").json())
+    r = c.post("/jobs", json=BENCH, headers={"Host": f"evil.example:{service.http}"})
+    assert r.status_code == 400 and "--allowed-host" in r.json()["detail"], r.text
+    assert len(c.get("/jobs").json()) == before
+    for host in (f"localhost:{service.http}", f"127.0.0.1:{service.http}"):
+        assert service.get("/healthz", headers={"Host": host}).status_code == 200
+    assert c.get("/").headers["content-security-policy"].startswith("default-src 'self'")
+
+
 GARBAGE = textwrap.dedent("""
     import json, sys, time, zenoh
     endpoint, job = sys.argv[1], sys.argv[2]

@@ -94,6 +94,13 @@ def _coordinator_settings(
     )
 
 
+def _allowed_hosts(http: str, names: list[str] | None) -> list[str]:
+    from swarmpath.service.http.middleware import allowed_hosts
+
+    env = [n.strip() for n in os.environ.get("SWARMPATH_ALLOWED_HOSTS", "").split(",")]
+    return allowed_hosts(parse_http(http)[0], [n for n in [*(names or []), *env] if n])
+
+
 def _serve(app_: Any, http: str, log_level: str) -> None:
     import uvicorn
 
@@ -132,6 +139,13 @@ StackingOpt = Annotated[
     bool, typer.Option("--stacking/--no-stacking",
                        help="Run a bundle's leases that differ only in the function as one batch.")
 ]
+AllowedHostOpt = Annotated[
+    list[str] | None,
+    typer.Option("--allowed-host", metavar="NAME",
+                 help="A Host name the HTTP side answers besides loopback's and the --http "
+                      "address (repeat; also SWARMPATH_ALLOWED_HOSTS, comma-separated; '*': "
+                      "any). Other Host headers get a 400 (DNS rebinding).")
+]
 ZConfOpt = Annotated[
     Path | None, typer.Option("--zenoh-config", help="JSON file of extra Zenoh settings.")
 ]
@@ -158,6 +172,7 @@ def coordinator(
     ] = False,
     shm: ShmOpt = False,
     zenoh_config: ZConfOpt = None,
+    allowed_host: AllowedHostOpt = None,
     log_level: LogOpt = "info",
 ) -> None:
     """Run the coordinator: REST API, job queue and the Zenoh router (no local workers).
@@ -172,6 +187,7 @@ def coordinator(
         raise InputError("--insecure", "--auth-dictionary makes workers log in: choose one")
     settings = _coordinator_settings(data, zenoh, prefix, lease_seconds, shm, auth_dictionary,
                                      zenoh_config)
+    settings.allowed_hosts = _allowed_hosts(http, allowed_host)
     _logging(log_level)
     if insecure:
         warning = ("INSECURE (--insecure): no Zenoh login; any process that reaches "
@@ -356,6 +372,7 @@ def up(
                           "local workers' own random login."),
     ] = None,
     stacking: StackingOpt = True,
+    allowed_host: AllowedHostOpt = None,
     log_level: LogOpt = "info",
 ) -> None:
     """Start the coordinator and N local workers; Ctrl-C (or SIGTERM) stops everything.
@@ -377,6 +394,7 @@ def up(
     logins, users = local_logins(data, LocalWorkers.ids(n), auth_dictionary)
     settings = _coordinator_settings(data, [zenoh], prefix, lease_seconds, False, users, None)
     settings.zenoh_extra = with_access_control(prefix, list(read_logins(users)), None)
+    settings.allowed_hosts = _allowed_hosts(http, allowed_host)
     _logging(log_level)
     from swarmpath.service.coordinator import create_app
 

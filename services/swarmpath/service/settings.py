@@ -79,6 +79,10 @@ class CoordinatorSettings:
     max_map_import_bytes: int = field(default_factory=lambda: int(_env_number(
         "SWARMPATH_MAX_MAP_IMPORT_BYTES", DEFAULT_MAX_MAP_IMPORT_BYTES)))
 
+    # Host names the HTTP side answers (http/middleware.py, allowed_hosts): the CLI sets them
+    # from --http and --allowed-host / SWARMPATH_ALLOWED_HOSTS; None: not checked
+    allowed_hosts: list[str] | None = None
+
     def zenoh_config(self) -> dict[str, Any]:
         return router_config(
             self.zenoh_listen, shm=self.shm, dictionary_file=self.dictionary_file,

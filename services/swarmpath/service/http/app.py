@@ -17,7 +17,7 @@ from swarmpath.service.catalog import warm_registries
 from swarmpath.service.coordinator import Coordinator
 from swarmpath.service.http import handlers, openapi
 from swarmpath.service.http.errors import validation_detail
-from swarmpath.service.http.middleware import BodyLimit
+from swarmpath.service.http.middleware import BodyLimit, HostCheck, SecurityHeaders
 from swarmpath.service.http.routes import ROUTERS
 from swarmpath.service.protocol import MAX_BODY_BYTES
 from swarmpath.service.settings import CoordinatorSettings
@@ -83,6 +83,9 @@ def create_app(
         settings.max_map_upload_bytes,
         f"max_map_upload_bytes={settings.max_map_upload_bytes} "
         "(SWARMPATH_MAX_MAP_UPLOAD_BYTES)")})
+    if settings.allowed_hosts is not None:  # the CLI always sets them (tests may not)
+        app.add_middleware(HostCheck, names=settings.allowed_hosts)
+    app.add_middleware(SecurityHeaders)  # outermost: on every answer, refusals included
 
     @app.exception_handler(RequestValidationError)
     async def _invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
