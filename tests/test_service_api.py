@@ -722,6 +722,9 @@ def test_cli_client_commands(cli, tmp_path):
     assert status.exit_code == 0 and job in status.stdout and "queued" in status.stdout
     listing = cli("status", "--json")
     assert json.loads(listing.stdout)["jobs"][0]["id"] == job
+    contents = json.loads(listing.stdout)["jobs"][0]["contents"]  # what the job runs (issue 25)
+    assert contents == "GWO, PSO x F1, F9 x D 3"  # SPEC
+    assert contents in cli("status").stdout
     csv = cli("results", job, "--format", "csv")
     assert csv.exit_code == 0 and csv.stdout.startswith("algorithm,function,dim")
     table = cli("results", job)

@@ -62,12 +62,14 @@ def test_upload_list_read_and_use_in_a_job_across_a_restart(data_dir: Path) -> N
         assert status["runs_total"] == 2
         spec = client.app.state.core.store.job_spec(job_id)  # type: ignore[attr-defined]
         first, second = spec.maps  # the job carries the scenarios, not references
-        assert first["name"] == arena["id"] and first["start"] == [0.75, 1.25]
+        # named as uploaded (the job page shows the name), the id in the description
+        assert first["name"] == "arena" and first["start"] == [0.75, 1.25]
+        assert first["description"].startswith(f"uploaded map {arena['id']}")
         # GET /maps and a job's start/goal are in the map's own frame (nav2: its YAML origin);
         # the job's scenario keeps the scenario frame
         assert (arena["frame"], arena["origin"]) == ("scenario", [0.0, 0.0])
         assert (tb3["frame"], tb3["origin"]) == ("map", [-10.0, -10.0])
-        assert second["name"] == tb3["id"] and second["goal"] == pytest.approx(
+        assert second["name"] == "tb3" and second["goal"] == pytest.approx(
             [tb3["goal"][0] + 10.0, tb3["goal"][1] + 10.0])
         assert second["grid"]["origin"] == [-10.0, -10.0]
 
@@ -179,7 +181,7 @@ def test_a_job_on_an_uploaded_map_is_worked_off(data_dir: Path) -> None:
         status = client.get(f"/jobs/{job['id']}").json()
         assert status["state"] == "done" and status["runs_done"] + status["runs_failed"] == 2
         rows = client.get(f"/jobs/{job['id']}/summary").json()["rows"]
-        assert rows[0]["map"] == arena["id"] and rows[0]["runs"] == 2
+        assert rows[0]["map"] == "arena" and rows[0]["runs"] == 2  # named as uploaded
         assert rows[0]["success_rate"] == 1.0 and rows[0]["collisions"] == 0
         assert rows[0]["gap_mean"] > 0  # the workers computed the uploaded map's exact optimum
 
@@ -231,3 +233,31 @@ def test_the_grid_limits_are_coordinator_settings_named_in_the_413(data_dir: Pat
         assert r.status_code == 413
         msg = r.json()["detail"][0]["msg"]
         assert "max_obstacles=3" in msg and "max_map_obstacles" in msg
+
+
+def test_a_job_names_its_uploaded_maps_as_they_were_uploaded(data_dir: Path) -> None:
+    """A job page named an uploaded map by its id (issue 25): the job's scenario keeps the
+    upload's name (the id in its description), and ``name (id)`` only when another map of the
+    job has that name; job lists say what the job runs."""
+    with TestClient(_app(data_dir)) as client:
+        ids = [client.post("/maps", json={"name": "arena", "format": "movingai", "map": ARENA,
+                                          "resolution": res}).json()["id"] for res in (0.5, 1.0)]
+        job = client.post("/jobs", json={
+            "kind": "map", "planners": ["OMPL-RRTstar"], "runs": 1,
+            "maps": ["mfb-static", {"map": ids[0]}, {"map": ids[1]}]})
+        assert job.status_code == 201, job.text
+        spec = client.app.state.core.store.job_spec(job.json()["id"])  # type: ignore[attr-defined]
+        assert [m if isinstance(m, str) else m["name"] for m in spec.maps] == [
+            "mfb-static", "arena", f"arena ({ids[1]})"]
+        assert spec.maps[2]["description"].startswith(f"uploaded map {ids[1]}: imported from")
+        twice = client.post("/jobs", json={"kind": "map", "planners": ["OMPL-RRTstar"],
+                                           "maps": [{"map": ids[0]}, {"map": ids[0]}]})
+        assert twice.status_code == 422 and "duplicate map" in twice.text
+        line = f"OMPL-RRTstar x mfb-static, arena, arena ({ids[1]})"
+        assert client.get("/jobs").json()[0]["contents"] == line
+        assert client.get(f"/jobs/{job.json()['id']}").json()["contents"] == line
+        bench = client.post("/jobs", json={
+            "kind": "benchmark", "algorithms": ["GWO", "PSO"], "dims": [10, 30], "runs": 2,
+            "functions": ["F1-F13", "bbob:f1", "bbob:f2"], "agents": 6, "iterations": 3})
+        assert client.get(f"/jobs/{bench.json()['id']}").json()["contents"] == \
+            "GWO, PSO x F1-F13, bbob:f1-bbob:f2 x D 10, 30"

@@ -144,3 +144,21 @@ def test_openapi_documents_errors_and_enumerates_names(client):
     assert maps["planners"]["items"]["enum"] == list(list_planners())
     preset = [b for b in maps["maps"]["items"]["anyOf"] if b.get("type") == "string"]
     assert preset[0]["enum"] == list(list_maps())
+
+
+def test_the_201_answers_are_typed_in_openapi(client):
+    """A client generated from /openapi.json knows the new job's id (the 201 of POST /jobs was
+    untyped, issue 25) and an uploaded map's; the answers have what the schemas say."""
+    spec = client.get("/openapi.json").json()
+    schemas = spec["components"]["schemas"]
+    for path, model, required in (("/jobs", "JobCreated", {"id", "state", "runs_total"}),
+                                  ("/maps", "MapInfo", {"id", "name", "size", "start", "goal"})):
+        created = spec["paths"][path]["post"]["responses"]["201"]["content"]
+        assert created["application/json"]["schema"] == {"$ref": f"#/components/schemas/{model}"}
+        assert required <= set(schemas[model]["required"])
+    assert schemas["JobCreated"]["properties"]["id"]["type"] == "string"
+    r = client.post("/jobs", json={"kind": "benchmark", "algorithms": ["GWO"], "functions": ["F1"],
+                                   "dims": [2], "runs": 2, "agents": 6, "iterations": 3})
+    assert r.status_code == 201 and set(r.json()) == {"id", "state", "runs_total"}
+    listed = spec["paths"]["/maps"]["get"]["responses"]["200"]["content"]["application/json"]
+    assert listed["schema"]["items"] == {"$ref": "#/components/schemas/MapInfo"}

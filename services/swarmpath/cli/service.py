@@ -68,7 +68,7 @@ def _table(title: str, columns: list[str], rows: list[dict[str, Any]]) -> Any:
 
 
 _TEXT_COLUMNS = {"algorithm", "function", "planner", "map", "id", "kind", "state", "host",
-                 "worker", "current_runs"}
+                 "worker", "current_runs", "contents"}
 
 
 def _cell(v: Any) -> str:
@@ -242,8 +242,8 @@ def status(
     rows = [{**j, "runs": f"{j['runs_done'] + j['runs_failed']}/{j['runs_total']}",
              "failed": j["runs_failed"], "created": _when(j["created"]),
              "finished": _when(j["finished"])} for j in jobs]
-    console.print(_table("jobs", ["id", "kind", "state", "runs", "failed", "created", "finished"],
-                         rows))
+    console.print(_table("jobs", ["id", "kind", "contents", "state", "runs", "failed", "created",
+                                  "finished"], rows))
     console.print(legend_text(["failed"]), markup=False, highlight=False)
     if job is None:
         workers = [{**w, "alive": "yes" if w["alive"] else "no",

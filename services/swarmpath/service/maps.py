@@ -218,8 +218,9 @@ def import_bounded(runner: BoundedRunner, up: Nav2Upload | MovingAIUpload,
 
 def resolve_refs(spec: MapJobSpec,
                  lookup: Callable[[str], dict[str, Any] | None]) -> MapJobSpec:
-    """The job with every ``{"map": id, ...}`` replaced by the stored scenario (named by the id;
-    ``start`` / ``goal`` applied and checked); raises :class:`FieldProblems` at
+    """The job with every ``{"map": id, ...}`` replaced by the stored scenario (named as it was
+    uploaded, ``name (id)`` when another map of the job has that name; its description names
+    the id; ``start`` / ``goal`` applied and checked); raises :class:`FieldProblems` at
     ``maps.i.map`` / ``maps.i.start`` / ``maps.i.goal``."""
     from swarmpath.world.scenario import scenario_problems
     from swarmpath.world.scenario_io import ScenarioError, scenario_from_dict
@@ -228,6 +229,8 @@ def resolve_refs(spec: MapJobSpec,
         return spec
     problems: list[tuple[tuple[str | int, ...], str]] = []
     maps: list[Any] = []
+    taken = {m if isinstance(m, str) else str(m.get("name")) for m in spec.maps
+             if not isinstance(m, MapRef) and isinstance(m, str | dict)}
     for i, entry in enumerate(spec.maps):
         if not isinstance(entry, MapRef):
             maps.append(entry)
@@ -236,7 +239,11 @@ def resolve_refs(spec: MapJobSpec,
         if stored is None:
             problems.append(((i, "map"), f"unknown map id {entry.map!r} (see GET /maps)"))
             continue
-        doc = dict(stored, name=entry.map)
+        name = str(stored.get("name") or entry.map)
+        name = name if name not in taken else f"{name} ({entry.map})"
+        taken.add(name)
+        doc = dict(stored, name=name, description=f"uploaded map {entry.map}: "
+                   f"{stored.get('description', '')}".rstrip(": "))
         # start and goal in the map's own frame (a nav2 map's YAML origin), as GET /maps
         # reports them; the scenario keeps its own frame (0, 0 = the lower-left corner)
         ox, oy = (float(v) for v in (stored.get("grid") or {}).get("origin") or (0.0, 0.0))
@@ -252,8 +259,5 @@ def resolve_refs(spec: MapJobSpec,
         maps.append(doc)
     if problems:
         raise FieldProblems(problems)
-    names = [m if isinstance(m, str) else m["name"] for m in maps]
-    if len(set(names)) != len(names):
-        raise FieldProblems([((), "two maps have the same name: give each uploaded map once")])
     return spec.model_copy(update={"maps": maps})
 

@@ -442,6 +442,8 @@ class JobStatus(Model):
     created: float = Field(description="Unix time; created_at is the same in ISO 8601")
     started: float | None = None
     finished: float | None = None
+    contents: str | None = Field(default=None, description="what the job runs, one line "
+                                 "(`GWO, PSO x F1-F13 x D 30`, `MFB x mfb-static`)")
 
     @computed_field  # type: ignore[prop-decorator]
     @property

@@ -18,6 +18,30 @@ class _Open(BaseModel):
     model_config = ConfigDict(extra="allow")
 
 
+class JobCreated(BaseModel):
+    """``POST /jobs`` 201: the new job's id (``GET /jobs/{id}``), its state and run count."""
+
+    id: str = Field(description="the job id: GET /jobs/{id}, /summary, /runs, /mcap")
+    state: Literal["queued", "running", "done", "failed", "cancelled"]
+    runs_total: int
+
+
+class MapInfo(_Open):
+    """``POST /maps`` 201 and ``GET /maps``: an uploaded map (a job names it by ``id``);
+    positions in the map's own frame (``frame``, its ``origin``: a nav2 map's YAML origin)."""
+
+    id: str = Field(description='name it in a map job: {"map": id, "start"?, "goal"?}')
+    name: str
+    format: Literal["nav2", "movingai"]
+    created: float
+    size: list[float] = Field(description="[w, h] in metres")
+    frame: str
+    origin: list[float]
+    start: list[float] = Field(description="the default start")
+    goal: list[float] = Field(description="the default goal")
+    obstacles: int
+
+
 class Summary(_Open):
     """``GET /jobs/{id}/summary``: the CLI's table (partial while the job runs)."""
 

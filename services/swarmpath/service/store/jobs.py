@@ -8,6 +8,7 @@ import time
 import uuid
 from typing import Any
 
+from swarmpath.service.job_contents import contents
 from swarmpath.service.protocol import (
     BenchmarkJobSpec,
     JobState,
@@ -98,7 +99,27 @@ class JobsMixin(StoreBase):
         args += [max(0, int(limit)), max(0, int(offset))]
         with self._read() as db:
             rows = db.execute(sql, args).fetchall()
-        return [self._status(r) for r in rows]
+        return [self._status(r).model_copy(update={"contents": self._contents_of(r)})
+                for r in rows]
+
+    def job_contents(self, job_id: str) -> str | None:
+        """What the job runs, in one line (:mod:`swarmpath.service.job_contents`)."""
+        with self._read() as db:
+            row = db.execute("SELECT id, spec FROM jobs WHERE id = ?", (job_id,)).fetchone()
+        return None if row is None else self._contents_of(row)
+
+    _CONTENTS_KEPT = 4096
+
+    def _contents_of(self, row: sqlite3.Row) -> str:
+        """A job's contents line, parsed once per job (a spec never changes; the cache is
+        bounded and starts over when full)."""
+        cache: dict[str, str] = self.__dict__.setdefault("_contents_cache", {})
+        line = cache.get(row["id"])
+        if line is None:
+            if len(cache) >= self._CONTENTS_KEPT:
+                cache.clear()
+            line = cache[row["id"]] = contents(json.loads(row["spec"]))
+        return line
 
     def cancel(self, job_id: str, now: float | None = None) -> JobState | None:
         """Cancel a queued or running job (its leases end, nothing more is leased or accepted).

@@ -7,6 +7,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from swarmpath.service.cost import check as check_cost
 from swarmpath.service.http.deps import CoreDep, Limit, Offset, authorized, status_or_404
+from swarmpath.service.http.models import JobCreated
 from swarmpath.service.maps import resolve_refs
 from swarmpath.service.protocol import (
     MAX_RUNS_PER_CELL,
@@ -22,7 +23,8 @@ router = APIRouter(tags=["jobs"])
 _STATE = Literal["queued", "running", "done", "failed", "cancelled"]
 
 
-@router.post("/jobs", status_code=201, dependencies=[Depends(authorized)])
+@router.post("/jobs", status_code=201, dependencies=[Depends(authorized)],
+             response_model=JobCreated)
 def submit_job(
     spec: Annotated[BenchmarkJobSpec | MapJobSpec, Body(discriminator="kind")],
     core: CoreDep,
@@ -59,7 +61,8 @@ def list_jobs(
 
 @router.get("/jobs/{job_id}")
 def job_status(job_id: str, core: CoreDep) -> JobStatus:
-    return status_or_404(core, job_id)
+    status = status_or_404(core, job_id)
+    return status.model_copy(update={"contents": core.store.job_contents(job_id)})
 
 
 @router.delete("/jobs/{job_id}", dependencies=[Depends(authorized)])

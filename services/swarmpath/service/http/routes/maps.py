@@ -7,6 +7,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Body, Depends, HTTPException
 
 from swarmpath.service.http.deps import CoreDep, Limit, Offset, authorized
+from swarmpath.service.http.models import MapInfo
 from swarmpath.service.maps import (
     MapUploadError,
     MovingAIUpload,
@@ -17,7 +18,8 @@ from swarmpath.service.maps import (
 router = APIRouter(tags=["maps"])
 
 
-@router.post("/maps", status_code=201, dependencies=[Depends(authorized)])
+@router.post("/maps", status_code=201, dependencies=[Depends(authorized)],
+             response_model=MapInfo)
 async def upload_map(
     up: Annotated[Nav2Upload | MovingAIUpload, Body(discriminator="format")], core: CoreDep,
 ) -> dict[str, Any]:
@@ -43,7 +45,7 @@ async def upload_map(
     return info
 
 
-@router.get("/maps")
+@router.get("/maps", response_model=list[MapInfo])
 def list_maps(
     core: CoreDep,
     limit: Limit = 100,
