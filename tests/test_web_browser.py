@@ -121,6 +121,7 @@ def browser():
     for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
                 "--window-size=1400,1000", "--no-proxy-server"):
         opts.add_argument(arg)
+    opts.set_capability("goog:loggingPrefs", {"browser": "ALL"})  # CSP reports in the console
     driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=opts)
     driver.set_page_load_timeout(WAIT)
     try:
@@ -426,3 +427,154 @@ def test_token_is_asked_for_and_sent(tmp_path, browser, monkeypatch):
         browser.execute_script("localStorage.clear()")
         srv.should_exit = True
         thread.join(timeout=WAIT)
+
+
+# ----------------------------------------------------------------------- issue 25: rough edges
+def page_ready(browser, url: str, page: str, css: str) -> list:
+    """The browser console's messages while ``page`` loads and draws ``css``."""
+    browser.get_log("browser")  # forget what earlier pages said
+    browser.get(url + page)
+    wait_for(browser, css)
+    return [e["message"] for e in browser.get_log("browser")]
+
+
+def test_every_page_draws_under_its_content_security_policy(server, jobs, browser):
+    """Every page is served with the dashboard's CSP (no inline script or style, no framing)
+    and the other security headers, and draws without one CSP violation in the console (the
+    pages set styles through the CSSOM); the favicon is served and linked."""
+    import httpx
+
+    from swarmpath.service.http.middleware import DASHBOARD_CSP
+
+    url, _app = server
+    pages = {"/": "#jobs tbody tr", "/ui/workers": "#workers tbody tr",
+             "/ui/submit": "#submit-form input[name=algorithms]",
+             f"/ui/jobs/{jobs['benchmark']}": "#charts .conv svg",
+             f"/ui/jobs/{jobs['map']}": "#maps section .mapchart svg",
+             f"/ui/jobs/{jobs['benchmark']}/runs/0": "#plot g.sp-series",
+             f"/ui/jobs/{jobs['map']}/runs/6": "#plot svg .sp-robot"}
+    for page, css in pages.items():
+        r = httpx.get(url + page)
+        assert r.headers["content-security-policy"] == DASHBOARD_CSP, page
+        assert r.headers["x-frame-options"] == "DENY"
+        assert r.headers["x-content-type-options"] == "nosniff"
+        said = page_ready(browser, url, page, css)
+        violations = [m for m in said if "Content Security Policy" in m]
+        assert not violations, (page, violations)
+        icon = browser.find_element(By.CSS_SELECTOR, "link[rel=icon]").get_attribute("href")
+        assert icon.endswith("/static/favicon.svg")
+    for path in ("/favicon.ico", "/static/favicon.svg"):
+        r = httpx.get(url + path)
+        assert r.status_code == 200 and r.headers["content-type"] == "image/svg+xml"
+        assert r.content.startswith(b"<svg")
+    # progress bars keep their width without an inline style attribute
+    browser.get(url + "/")
+    bar = wait_for(browser, f'#jobs tr[data-job="{jobs["benchmark"]}"] .bar > span')[0]
+    assert browser.execute_script("return arguments[0].style.width", bar) == "100%"
+
+
+def test_numbers_read_as_the_cli_prints_them(server, jobs, browser):
+    """A small standard deviation keeps its significant digits (GWO F1 showed 0.004 (0)); the
+    gap is in percent, as the CLI prints it (the dashboard showed 0.022 where the CLI said 2.26);
+    the jobs list says what each job runs."""
+    url, app = server
+    browser.get(f"{url}/ui/jobs/{jobs['benchmark']}")
+    wait_for(browser, "#pivot tbody tr")
+    assert browser.execute_script("return [SP.sig(0.004, 2), SP.sig(0.0041234, 2), "
+                                  "SP.sig(123.456, 3), SP.sig(0, 2), SP.sig(2.5e-7, 2)]") == [
+        "0.004", "0.0041", "123", "0", "2.5e-7"]
+    view = app.state.core.dashboard.aggregates(jobs["benchmark"]).view()
+    for g in view["groups"]:
+        row = browser.find_element(By.CSS_SELECTOR, f'#pivot tr[data-group="{g["function"]}/'
+                                                    f'{g["dim"]}"]')
+        for td, a in zip(row.find_elements(By.TAG_NAME, "td")[2:], BENCH["algorithms"],
+                         strict=True):
+            std = g["algorithms"][a]["describe"]["std"]
+            shown = td.text.split("(", 1)[1].split(")", 1)[0]
+            assert shown == browser.execute_script("return SP.sig(arguments[0], 2)", std)
+            assert (shown == "0") == (std == 0)
+    browser.get(f"{url}/ui/jobs/{jobs['map']}")
+    rows = wait_for(browser, "#cells tbody tr", len(MAP["maps"]) * len(MAP["planners"]))
+    header = texts(browser.find_elements(By.CSS_SELECTOR, "#cells thead th"))
+    assert header[7] == "gap % (median)"
+    view = app.state.core.dashboard.aggregates(jobs["map"]).view()
+    for row in rows:
+        tds = texts(row.find_elements(By.TAG_NAME, "td"))
+        cell = next(g for g in view["groups"] if g["map"] == tds[0])["planners"][tds[1]]
+        if cell["box"].get("gap"):
+            assert float(tds[7].split("\n")[0].rstrip("+=-")) == pytest.approx(
+                100 * cell["box"]["gap"]["median"], abs=0.006)
+    browser.get(url + "/")
+    wait_for(browser, "#jobs tbody tr")
+    contents = {r.get_attribute("data-job"): r.find_element(By.CSS_SELECTOR, "td.contents").text
+                for r in browser.find_elements(By.CSS_SELECTOR, "#jobs tbody tr")}
+    assert contents[jobs["benchmark"]] == "GWO, PSO, ICOOT x F1, F8 x D 2, 5"
+    assert contents[jobs["map"]] == "MFB, OMPL-RRTstar x mfb-static, mfb-dynamic"
+
+
+def test_maps_are_uploaded_and_chosen_in_the_submit_form(server, browser):
+    """The dashboard uploads a MovingAI map and a nav2 map (YAML + image), lists the uploaded
+    maps beside the presets, submits a job on one, and the job's pages name it as uploaded, not
+    by its id; a nav2 upload without its image is refused at the form."""
+    url, app = server
+    data = Path(__file__).parent / "data"
+    browser.get(url + "/ui/submit")
+    wait_for(browser, "#submit-form input[name=algorithms]")
+    form = browser.find_element(By.ID, "submit-form")
+    browser.find_element(By.CSS_SELECTOR, "input[name=kind][value=map]").click()
+    form.find_element(By.NAME, "up_yaml").send_keys(str(data / "tb3_sandbox.yaml"))
+    browser.find_element(By.ID, "upload-button").click()
+    wait_for(browser, '[data-error="upload"]:not(:empty)')  # no image chosen
+    form.find_element(By.NAME, "up_image").send_keys(str(data / "tb3_sandbox.pgm"))
+    browser.find_element(By.ID, "upload-button").click()
+    nav_id = wait_for(browser, "#uploaded-id")[0].text
+    assert app.state.core.store.map_info(nav_id)["name"] == "tb3_sandbox"
+    Select(form.find_element(By.NAME, "up_format")).select_by_value("movingai")
+    form.find_element(By.NAME, "up_map").send_keys(str(data / "arena.map"))
+    resolution = form.find_element(By.NAME, "up_resolution")
+    resolution.clear()
+    resolution.send_keys("0.5")
+    browser.find_element(By.ID, "upload-button").click()
+    WebDriverWait(browser, WAIT).until(
+        lambda d: d.find_element(By.ID, "uploaded-id").text not in ("", nav_id))
+    arena_id = browser.find_element(By.ID, "uploaded-id").text
+    chosen = [i.get_attribute("value") for i in
+              form.find_elements(By.CSS_SELECTOR, "input[name=uploaded]:checked")]
+    assert chosen == [nav_id, arena_id]  # each upload is chosen for the job
+    form.find_element(By.CSS_SELECTOR, f'input[name=uploaded][value="{nav_id}"]').click()
+    form.find_element(By.CSS_SELECTOR, "input[name=planners][value=OMPL-RRTstar]").click()
+    runs = form.find_element(By.NAME, "map_runs")
+    runs.clear()
+    runs.send_keys("1")
+    browser.find_element(By.ID, "submit-button").click()
+    job = wait_for(browser, "#new-job")[0].text
+    spec = app.state.core.store.job_spec(job)
+    assert [m["name"] for m in spec.maps] == ["arena"]
+    assert spec.maps[0]["description"].startswith(f"uploaded map {arena_id}")
+    work_off(app.state.core)
+    browser.get(f"{url}/ui/jobs/{job}")
+    row = wait_for(browser, "#cells tbody tr")[0]
+    assert row.find_elements(By.TAG_NAME, "td")[0].text == "arena"
+    shown = browser.find_element(By.TAG_NAME, "body").text
+    assert arena_id not in shown.replace(f"uploaded map {arena_id}", "")
+    # a page opened before the upload lists it once reloaded
+    browser.get(url + "/ui/submit")
+    labels = [e.get_attribute("textContent").strip()
+              for e in wait_for(browser, "#uploaded-maps label", 2)]
+    assert any(t.startswith("arena") for t in labels), labels
+
+
+def test_a_store_that_cannot_write_shows_a_banner(server, browser):
+    """Disk full (issue 25, failure 7): every page says so until the store can write again."""
+    url, app = server
+    store = app.state.core.store
+    store.write_problem = (time.time(), "the store cannot write to swarmpath.sqlite3 "
+                                        "(database or disk is full; 0 bytes free on its disk)")
+    try:
+        browser.get(url + "/ui/workers")
+        alert = wait_for(browser, "#health-alert:not([hidden])")[0]
+        assert "database or disk is full" in alert.text and "no work is handed out" in alert.text
+    finally:
+        store.write_problem = None
+    WebDriverWait(browser, WAIT).until(  # checked every 10 s
+        lambda d: d.find_element(By.ID, "health-alert").get_attribute("hidden") is not None)

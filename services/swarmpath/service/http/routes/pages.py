@@ -3,7 +3,8 @@
 :mod:`.dashboard`).
 
 ``GET /`` jobs, ``/ui/jobs/{id}`` a job, ``/ui/jobs/{id}/runs/{run_id}`` a run, ``/ui/workers``,
-``/ui/submit``; ``/static/{name}`` serves only the files shipped in ``static/``."""
+``/ui/submit``; ``/static/{name}`` serves only the files shipped in ``static/``, and
+``/favicon.ico`` their icon."""
 
 from __future__ import annotations
 
@@ -17,7 +18,8 @@ router = APIRouter(include_in_schema=False)
 
 STATIC = Path(str(resources.files("swarmpath.service.web") / "static"))
 _TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=utf-8",
-          ".css": "text/css; charset=utf-8", ".txt": "text/plain; charset=utf-8"}
+          ".css": "text/css; charset=utf-8", ".txt": "text/plain; charset=utf-8",
+          ".svg": "image/svg+xml"}
 #: Every file the pages may load (nothing else under the package is reachable).
 ASSETS = {p.name: p for p in STATIC.iterdir() if p.suffix in _TYPES} if STATIC.is_dir() else {}
 
@@ -50,6 +52,13 @@ def workers_page() -> FileResponse:
 @router.get("/ui/submit")
 def submit_page() -> FileResponse:
     return _page("submit")
+
+
+@router.get("/favicon.ico")
+def favicon() -> FileResponse:
+    """The icon browsers ask for on their own (the pages name /static/favicon.svg)."""
+    return FileResponse(ASSETS["favicon.svg"], media_type=_TYPES[".svg"],
+                        headers={"Cache-Control": "max-age=86400"})
 
 
 @router.get("/static/{name}")

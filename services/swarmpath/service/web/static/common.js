@@ -89,6 +89,25 @@
     if (a !== 0 && (a >= 1e5 || a < 1e-3)) return v.toExponential(digits === undefined ? 2 : digits);
     return String(+v.toFixed(digits === undefined ? 4 : digits));
   };
+  /* n significant digits (a small std is 0.0041, not 0): plain for 1e-3 <= |v| < 1e5. */
+  SP.sig = function (v, n) {
+    if (v === null || v === undefined) return "";
+    if (typeof v === "string") return v;
+    if (!isFinite(v)) return String(v);
+    if (v === 0) return "0";
+    const a = Math.abs(v);
+    n = n === undefined ? 3 : n;
+    if (a >= 1e5 || a < 1e-3) return v.toExponential(n - 1);
+    return String(Number(v.toPrecision(n)));
+  };
+  /* A box plot's statistics times k (a gap fraction shown in percent). */
+  SP.scaled = function (stats, k) {
+    if (!stats) return stats;
+    const out = Object.assign({}, stats);
+    for (const key of ["lo", "hi", "q1", "q3", "median", "mean", "min", "max"]) if (typeof out[key] === "number") out[key] = k * out[key];
+    if (Array.isArray(out.outliers)) out.outliers = out.outliers.map((v) => k * v);
+    return out;
+  };
   SP.esc = (s) => String(s === null || s === undefined ? "" : s).replace(/[&<>"']/g,
     (c) => ({ "&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;", "'": "&#39;" })[c]);
   SP.q = (sel, root) => (root || document).querySelector(sel);

@@ -59,7 +59,7 @@
         const c = g.algorithms[a], d = c && c.describe;
         const m = (st.markers[g.function + "/" + g.dim] || {})[a];
         const run = c && c.best_run !== null && c.best_run !== undefined ? c.cell * data.runs_per_cell + c.best_run : null;
-        const value = d ? SP.num(d.avg, 3) + " (" + SP.num(d.std, 2) + ")" : "-";
+        const value = d ? SP.num(d.avg, 3) + " (" + SP.sig(d.std, 2) + ")" : "-";
         html += `<td class="${g.best.includes(a) ? "best" : ""}">${run === null ? value
           : `<a class="run-link" title="open the best run" href="/ui/jobs/${encodeURIComponent(id)}/runs/${run}">${value}</a>`}`
           + `${m ? `<span class="marker">${m}</span>` : ""}${effect((st.effects || {})[g.function + "/" + g.dim], a)}</td>`;
@@ -128,7 +128,7 @@
     html += `</tbody></table>`;
     if (st.reference) html += `<p class="legend">Markers: Fisher's exact test of each planner's success rate against ${SP.esc(st.reference)} (Holm-adjusted, alpha ${st.alpha}): + significantly higher, = no significant difference, - significantly lower.</p>`;
     html += `<h2>Per planner and map</h2><table id="cells"><thead><tr><th class="l">map</th><th class="l">planner</th>
-      <th>runs</th><th>failed</th><th>success_rate</th><th>collisions</th><th>length (median)</th><th>gap (median)</th>
+      <th>runs</th><th>failed</th><th>success_rate</th><th>collisions</th><th>length (median)</th><th>gap % (median)</th>
       <th>planning s (median)</th><th>CPU s (median)</th><th class="l">why runs did not reach the goal</th></tr></thead><tbody>`;
     for (const g of data.groups) for (const p of planners) {
       const c = g.planners[p]; if (!c) continue;
@@ -136,7 +136,7 @@
       const mark = (what) => { const m = ((st[what + "_markers"] || {})[g.map] || {})[p]; return (m ? `<span class="marker">${m}</span>` : "") + effect((st[what + "_effects"] || {})[g.map], p); };
       html += `<tr><td class="l">${SP.esc(g.map)}</td><td class="l">${SP.esc(p)}</td><td>${c.runs}</td><td>${c.crashed}</td>
         <td>${c.success_rate === null ? "" : SP.num(c.success_rate, 3)}</td><td>${c.collisions}</td><td>${med(c.box.length)}${mark("length")}</td>
-        <td${c.box.gap || !c.optimum_reason ? "" : ` class="l note" title="no exact optimum: ${SP.esc(c.optimum_reason)}"`}>${c.box.gap ? med(c.box.gap) + mark("gap") : (c.optimum_reason ? `no optimum: ${SP.esc(c.optimum_reason)}` : "")}</td><td>${med(c.box.seconds)}${mark("seconds")}</td><td>${med(c.box.cpu_seconds)}</td>
+        <td${c.box.gap || !c.optimum_reason ? "" : ` class="l note" title="no exact optimum: ${SP.esc(c.optimum_reason)}"`}>${c.box.gap ? SP.num(100 * c.box.gap.median, 2) + mark("gap") : (c.optimum_reason ? `no optimum: ${SP.esc(c.optimum_reason)}` : "")}</td><td>${med(c.box.seconds)}${mark("seconds")}</td><td>${med(c.box.cpu_seconds)}</td>
         <td class="l">${Object.entries(c.failures).map(([k, n]) => `${n} ${k}`).join(", ")}</td></tr>`;
     }
     html += `</tbody></table>`;
@@ -195,15 +195,16 @@
       if (r.ok) {
         SP.mapChart(sec.querySelector(".mapchart"), r.data, paths);
         const leg = document.createElement("p"); leg.className = "legend";
-        leg.innerHTML = planners.map((p) => `<span style="color:${color(p, planners)}">&#9632; ${SP.esc(p)}</span>`).join(" ")
+        leg.innerHTML = planners.map((p) => `<span data-planner="${SP.esc(p)}">&#9632; ${SP.esc(p)}</span>`).join(" ")
           + " &nbsp; dashed: failed run; &#10005; where a run touched an obstacle; &#9633; end of a stalled (purple) or timed-out (orange) run"
           + (r.data.dynamic ? "; orange lines: moving obstacles' tracks (run 0's world)" : "")
           + (r.data.frame && r.data.frame !== "scenario" ? `; positions from the map's lower-left corner: in the ${SP.esc(r.data.frame)} frame add the origin (${r.data.origin.map((v) => SP.num(v, 3)).join(", ")})` : "");
+        for (const span of leg.querySelectorAll("span[data-planner]")) span.style.color = color(span.dataset.planner, planners);  /* CSSOM: no inline style under the CSP */
         sec.querySelector(".mapchart").appendChild(leg);
       }
-      for (const [what, label] of [["length", "path length (m), successful runs"], ["gap", "gap to the optimum, successful runs"], ["seconds", "planning time (s)"]]) {
-        SP.boxChart(sec.querySelector(".box-" + what), { title: label, empty: what === "gap" ? "no gap: no optimum with moving obstacles, or no successful run" : "no successful run", ylabel: what === "seconds" ? "s" : what === "gap" ? "gap" : "m", width: 420, height: 200,
-          boxes: planners.map((p) => ({ name: p, color: color(p, planners), stats: g.planners[p] && g.planners[p].box[what] })) });
+      for (const [what, label] of [["length", "path length (m), successful runs"], ["gap", "gap to the optimum (%), successful runs"], ["seconds", "planning time (s)"]]) {
+        SP.boxChart(sec.querySelector(".box-" + what), { title: label, empty: what === "gap" ? "no gap: no optimum with moving obstacles, or no successful run" : "no successful run", ylabel: what === "seconds" ? "s" : what === "gap" ? "gap %" : "m", width: 420, height: 200,
+          boxes: planners.map((p) => ({ name: p, color: color(p, planners), stats: g.planners[p] && (what === "gap" ? SP.scaled(g.planners[p].box.gap, 100) : g.planners[p].box[what]) })) });
       }
     }
   }

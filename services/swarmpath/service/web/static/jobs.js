@@ -9,7 +9,7 @@
   main.insertAdjacentHTML("beforeend", `<p><label>State <select id="filter">${states.map((s) =>
     `<option${s === filter ? " selected" : ""}>${s}</option>`).join("")}</select></label>
     <span class="muted" id="live"></span></p>
-    <table id="jobs"><thead><tr><th class="l">job</th><th class="l">kind</th><th class="l">state</th>
+    <table id="jobs"><thead><tr><th class="l">job</th><th class="l">kind</th><th class="l">contents</th><th class="l">state</th>
     <th class="l">progress</th><th>runs</th><th>failed</th><th>runs/s</th><th>ETA</th><th class="l">created</th><th></th></tr></thead>
     <tbody></tbody></table><p class="err" id="error"></p>`);
   let last = null;
@@ -24,14 +24,16 @@
       const active = j.state === "queued" || j.state === "running";
       return `<tr data-job="${SP.esc(j.id)}" data-state="${j.state}">
         <td class="l"><a href="/ui/jobs/${encodeURIComponent(j.id)}">${SP.esc(j.id)}</a></td>
-        <td class="l">${j.kind}</td><td class="l"><span class="state state-${j.state}">${j.state}</span></td>
-        <td class="l"><span class="bar"><span style="width:${(100 * j.progress).toFixed(1)}%"></span></span>
+        <td class="l">${j.kind}</td><td class="l contents">${SP.esc(j.contents || "")}</td><td class="l"><span class="state state-${j.state}">${j.state}</span></td>
+        <td class="l"><span class="bar"><span data-progress="${(100 * j.progress).toFixed(1)}"></span></span>
           ${(100 * j.progress).toFixed(1)}%</td>
         <td>${done} / ${j.runs_total}</td><td>${j.runs_failed}</td>
         <td class="rate">${j.state === "running" ? SP.num(j.rate, 1) : ""}</td>
         <td class="eta">${active ? SP.duration(j.eta) : ""}</td><td class="l">${SP.time(j.created)}</td>
         <td>${active ? `<button class="cancel" data-job="${SP.esc(j.id)}">cancel</button>` : ""}</td></tr>`;
     }).join("");
+    /* widths through the CSSOM: the dashboard's CSP allows no inline style attribute */
+    for (const bar of SP.q("#jobs tbody").querySelectorAll("[data-progress]")) bar.style.width = bar.dataset.progress + "%";
   }
 
   SP.q("#filter").onchange = (e) => {

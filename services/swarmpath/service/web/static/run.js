@@ -7,7 +7,7 @@
   const id = decodeURIComponent(parts[3]), runId = parseInt(parts[5], 10);
   const main = SP.q("#main");
   SP.q("h1").innerHTML = `Run ${runId} of job <a href="/ui/jobs/${encodeURIComponent(id)}">${SP.esc(id)}</a>`;
-  main.insertAdjacentHTML("beforeend", `<div class="grid"><div class="card" id="plot" style="width:560px"></div>
+  main.insertAdjacentHTML("beforeend", `<div class="grid"><div class="card run-plot" id="plot"></div>
     <div><table id="metrics"><tbody></tbody></table><p class="err" id="failure"></p><div id="position"></div></div></div>`);
 
   function metrics(run) {
@@ -55,7 +55,7 @@
         SP.q("#time-label").textContent = `t = ${t.toFixed(2)} s`;
       };
       const ctl = document.createElement("p");
-      ctl.innerHTML = `<input type="range" id="time" min="0" max="${tEnd}" step="${Math.max(tEnd / 500, 0.001)}" value="${tEnd}" style="width:400px"> <span id="time-label"></span>`;
+      ctl.innerHTML = `<input type="range" id="time" min="0" max="${tEnd}" step="${Math.max(tEnd / 500, 0.001)}" value="${tEnd}"> <span id="time-label"></span>`;
       SP.q("#plot").after(ctl);
       SP.q("#time").oninput = (e) => draw(parseFloat(e.target.value));
       draw(tEnd);

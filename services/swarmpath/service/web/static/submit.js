@@ -1,5 +1,6 @@
-/* Submit page: a form built from /catalog (names, parameters and their defaults) and the job
-   specs' defaults (/ui/config), posting to /jobs; each validation error is shown at its field. */
+/* Submit page: a form built from /catalog (names, parameters and their defaults), the job
+   specs' defaults (/ui/config) and the uploaded maps (/maps), posting to /jobs; each validation
+   error is shown at its field. A map can be uploaded here too (POST /maps) and is then chosen. */
 (function () {
   "use strict";
   SP.header("submit");
@@ -24,7 +25,63 @@
       }).join("") + `<div class="err" data-error="params.${SP.esc(item.name)}"></div></fieldset>`;
   }
 
-  function build(cat, cfg) {
+  function uploaded(maps) {
+    return `<div class="choices" data-field="uploaded" id="uploaded-maps">` + maps.map(uploadedChoice).join("")
+      + `</div>`;
+  }
+  function uploadedChoice(m) {
+    const size = m.size ? ` ${SP.num(m.size[0], 3)} x ${SP.num(m.size[1], 3)} m` : "";
+    return `<label title="${SP.esc(m.id)}: ${SP.esc(m.format)},${SP.esc(size)}, ${m.obstacles} obstacles"><input type="checkbox" name="uploaded" value="${SP.esc(m.id)}"> ${SP.esc(m.name)} <span class="muted">(uploaded)</span></label>`;
+  }
+  function uploadFields() {
+    return `<fieldset id="upload"><legend>Upload a map</legend>
+      <label>format <select name="up_format"><option value="nav2">nav2 (map YAML + its image)</option><option value="movingai">MovingAI .map</option></select></label>
+      <label>name <input type="text" name="up_name" placeholder="the file's name"></label>
+      <span class="up-nav2"><label>YAML <input type="file" name="up_yaml" accept=".yaml,.yml"></label>
+      <label>image <input type="file" name="up_image" accept=".pgm,.png,.bmp"></label></span>
+      <span class="up-movingai" hidden><label>.map <input type="file" name="up_map" accept=".map"></label>
+      <label>metres per cell <input type="text" name="up_resolution" value="1"></label></span>
+      <button type="button" id="upload-button">Upload</button> <span id="upload-result"></span>
+      <div class="err" data-error="upload"></div></fieldset>`;
+  }
+
+  /* base64 of a file's bytes (in slices: String.fromCharCode takes a bounded argument list) */
+  async function base64(file) {
+    const bytes = new Uint8Array(await file.arrayBuffer());
+    let text = "";
+    for (let i = 0; i < bytes.length; i += 0x8000) text += String.fromCharCode.apply(null, bytes.subarray(i, i + 0x8000));
+    return btoa(text);
+  }
+
+  async function upload(form) {
+    const box = form.querySelector('[data-error="upload"]'), result = SP.q("#upload-result");
+    box.textContent = ""; result.textContent = "uploading...";
+    const fmt = form.querySelector("[name=up_format]").value;
+    const file = (n) => form.querySelector(`[name=${n}]`).files[0];
+    const main = fmt === "nav2" ? file("up_yaml") : file("up_map");
+    if (!main || (fmt === "nav2" && !file("up_image"))) {
+      result.textContent = "";
+      box.textContent = fmt === "nav2" ? "choose the map's YAML and its image" : "choose a .map file";
+      return;
+    }
+    const name = value(form, "up_name") || main.name.replace(/\.[^.]*$/, "").replace(/[^A-Za-z0-9_.-]/g, "-");
+    const body = fmt === "nav2"
+      ? { name: name, format: "nav2", yaml: await main.text(), image: await base64(file("up_image")) }
+      : { name: name, format: "movingai", map: await main.text(), resolution: asNumber(value(form, "up_resolution")) };
+    const r = await SP.api("/maps", { method: "POST", json: body });
+    if (!r.ok) {
+      result.textContent = `rejected (${r.status})`;
+      const detail = r.data && r.data.detail;
+      box.textContent = Array.isArray(detail) ? detail.map((e) => `${(e.loc || []).slice(1).join(".")}: ${e.msg}`).join("; ")
+        : String(typeof detail === "string" ? detail : JSON.stringify(detail));
+      return;
+    }
+    SP.q("#uploaded-maps").insertAdjacentHTML("beforeend", uploadedChoice(r.data));
+    SP.q("#uploaded-maps").lastElementChild.querySelector("input").checked = true;
+    result.innerHTML = `uploaded <span id="uploaded-id">${SP.esc(r.data.id)}</span> (${SP.esc(r.data.name)}), chosen below the presets`;
+  }
+
+  function build(cat, cfg, maps) {
     const b = cfg.defaults.benchmark, m = cfg.defaults.map;
     main.insertAdjacentHTML("beforeend", `<form class="submit" id="submit-form" novalidate>
       <label><input type="radio" name="kind" value="benchmark" checked> benchmark job</label>
@@ -43,6 +100,8 @@
       <fieldset id="map-fields" hidden><legend>Map</legend>
         <b>planners</b>${checks("planners", cat.planners, (p) => p.description)}
         <b>maps</b>${checks("maps", cat.maps, (x) => x.description)}
+        <b>uploaded maps</b>${uploaded(maps)}
+        ${uploadFields()}
         ${number("map_runs", m.runs, "runs per cell")}${number("map_seed", m.seed, "seed")}
         ${number("map_reference", "", "reference planner for the statistics (empty: the last one)")}
         ${number("optimum_budget", "", "time budget of each map's exact optimum, s (empty: 30)")}
@@ -55,12 +114,16 @@
     form.addEventListener("change", (e) => {
       SP.q("#benchmark-fields").hidden = kind() !== "benchmark";
       SP.q("#map-fields").hidden = kind() !== "map";
+      const fmt = form.querySelector("[name=up_format]").value;
+      form.querySelector(".up-nav2").hidden = fmt !== "nav2";
+      form.querySelector(".up-movingai").hidden = fmt !== "movingai";
       if (e.target.name === "algorithms" || e.target.name === "planners") {
         const fs = form.querySelector(`fieldset.params[data-member="${CSS.escape(e.target.value)}"][data-kind="${kind()}"]`);
         if (fs) fs.hidden = !e.target.checked;
       }
     });
     form.onsubmit = (e) => { e.preventDefault(); send(form, kind()); };
+    SP.q("#upload-button").onclick = () => upload(form);
     SP.q("#status").textContent = "";
     document.body.dataset.loaded = "1";
   }
@@ -93,7 +156,8 @@
         ...(value(form, "reference") ? { reference: value(form, "reference") } : {}) };
     }
     const planners = checked(form, "planners");
-    return { kind: "map", planners: planners, maps: checked(form, "maps"), runs: asNumber(value(form, "map_runs")),
+    const maps = [...checked(form, "maps"), ...checked(form, "uploaded").map((id) => ({ map: id }))];
+    return { kind: "map", planners: planners, maps: maps, runs: asNumber(value(form, "map_runs")),
       seed: asNumber(value(form, "map_seed")), params: params(form, "map", planners),
       ...(value(form, "map_reference") ? { reference: value(form, "map_reference") } : {}),
       ...(value(form, "optimum_budget") ? { optimum_budget: asNumber(value(form, "optimum_budget")) } : {}) };
@@ -129,7 +193,7 @@
     }
   }
 
-  Promise.all([SP.api("/catalog"), SP.api("/ui/config")]).then(([c, g]) => {
-    if (c.ok && g.ok) build(c.data, g.data); else SP.q("#status").textContent = "could not load /catalog";
+  Promise.all([SP.api("/catalog"), SP.api("/ui/config"), SP.api("/maps?limit=1000")]).then(([c, g, m]) => {
+    if (c.ok && g.ok) build(c.data, g.data, m.ok ? m.data : []); else SP.q("#status").textContent = "could not load /catalog";
   });
 })();
