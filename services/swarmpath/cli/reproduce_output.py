@@ -68,19 +68,19 @@ def _beyond(row: Row) -> str:
 
 
 def _reason_mark(row: Row, notes: list[str]) -> str:
+    """The footnote number of the row's reason (one note for cells sharing a reason)."""
     if row.reason is None:
         return "UNEXPLAINED" if row.unexplained else ""
-    text = f"{row.key}: {row.reason}"
+    text = row.reason + (f" (evidence: `{row.evidence}`)" if row.evidence else "")
     claim = row.claim
     if claim is not None and not row.holds:
         states = f"`{claim.direction}`" + (
             f" with exceedance `{claim.exceedance}`" if claim.exceedance else "")
         text = (f"{row.key}: DOES NOT HOLD (it explains {states}; the cell is "
-                f"`{row.verdict}`, beyond max / min {_beyond(row)}): {row.reason}")
-    if row.evidence:
-        text += f" (evidence: `{row.evidence}`)"
-    notes.append(text)
-    return f"[{len(notes)}]" + (" UNEXPLAINED" if row.unexplained else "")
+                f"`{row.verdict}`, beyond max / min {_beyond(row)}): {text}")
+    if text not in notes:
+        notes.append(text)
+    return f"[{notes.index(text) + 1}]" + (" UNEXPLAINED" if row.unexplained else "")
 
 
 def grid(tab: reference.Table, rows: Sequence[Row], markers: Markers
