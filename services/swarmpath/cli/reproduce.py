@@ -245,7 +245,7 @@ def narrowing(table: reference.Table, setting: dict[str, Any]) -> list[str]:
                                ("--functions", "functions", table.functions)):
         if list(setting.get(key, names)) != list(names):
             out += [option, ",".join(setting[key])]
-    if "origin_check" not in setting:
+    if "origin_check" not in setting and not _suites(setting):
         out.append("--no-origin-check")
     return out
 
