@@ -327,3 +327,14 @@ def test_cells_keep_each_runs_curve_for_the_plots():
     runs = report.plot_runs([cell])
     assert [r["run"] for r in runs] == [0, 1, 2]
     assert [r["best_fitness"] for r in runs] == [float(v) for v in ref.best_fitness]
+
+
+def test_baselines_join_any_study_and_the_reference_stays_the_users():
+    result = invoke("-a", "GWO,RS", "-f", "F1,bbob:f3", "-d", "3", "--baselines", "--json",
+                    "--runs", "2", "--agents", "6", "--iterations", "8", "-j", "1")
+    assert result.exit_code == 0, result.stderr
+    doc = json.loads(result.stdout)
+    assert doc["settings"]["algorithms"] == ["GWO", "RS", "CMA-ES", "L-SHADE", "jSO"]
+    assert doc["settings"]["reference"] == "RS"  # the last algorithm named, not a baseline
+    for cell in doc["cells"]:
+        assert cell["evaluations"] == 2 * 6 * 9  # every algorithm spends the study's budget

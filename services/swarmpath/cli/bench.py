@@ -317,6 +317,11 @@ def bench(
         bool, typer.Option("--anytime", help="Also print per function and dimension the "
                            "fixed-target (ERT) and fixed-budget tables and the ECDF's area.")
     ] = False,
+    baselines: Annotated[
+        bool, typer.Option("--baselines", help="Add the strong baselines CMA-ES (IPOP), "
+                           "L-SHADE, jSO and RS (random search) to the algorithms; the markers "
+                           "still compare against the last algorithm you named.")
+    ] = False,
 ) -> None:
     """Run optimizers on benchmark functions; print min/max/avg/std (or median/IQR) per function
     and dimension, with Wilcoxon rank-sum markers, effect sizes and Bayesian probabilities
@@ -325,7 +330,8 @@ def bench(
     the_rope = check_rope(rope)
     check_format(fmt, ("table", "latex"))
     spec = make_spec(algorithms, functions, dims, runs, agents, iterations, seed, shifted, params,
-                     reference, transform, backend, instances, budget_evals, pool_instances)
+                     reference, transform, backend, instances, budget_evals, pool_instances,
+                     baselines)
     check_range("--jobs", jobs, 0, parallel.MAX_JOBS)
     if plot is not None:
         plot = plot_dir(plot, "--plot")

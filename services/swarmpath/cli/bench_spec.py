@@ -15,6 +15,7 @@ from swarmpath.cli.core import InputError, parse_params_option, resolve_names
 from swarmpath.functions import expand_function_names, get_function
 from swarmpath.functions.suites.base import MAX_INSTANCE, with_instances
 from swarmpath.optimizers import ParameterError, get_optimizer, list_optimizers
+from swarmpath.optimizers.registry import BASELINES
 from swarmpath.optimizers.api import (
     MAX_AGENTS,
     MAX_DIM,
@@ -170,8 +171,11 @@ def make_spec(
     instances: str | None = None,
     budget_evals: str | None = None,
     pool_instances: bool = False,
+    baselines: bool = False,
 ) -> BenchSpec:
-    """Validate the command's options; raises :class:`InputError` naming the bad one."""
+    """Validate the command's options; raises :class:`InputError` naming the bad one.
+    ``baselines`` appends the strong baselines (:data:`~swarmpath.optimizers.registry.BASELINES`)
+    not already listed; the reference stays the last algorithm the user named."""
     kind = resolve_transform_option(shifted, transform)
     algos = resolve_algorithms(algorithms)
     from swarmpath.evidence.stats import resolve_reference
@@ -180,6 +184,8 @@ def make_spec(
         ref = resolve_reference(algos, reference)
     except ValueError as exc:
         raise InputError("--reference", str(exc)) from None
+    if baselines:
+        algos += [b for b in BASELINES if b not in algos]
     ids = parse_instances(instances)
     fns = instances_of(resolve_functions(functions), ids)
     if pool_instances and ids is None:

@@ -15,6 +15,9 @@ _MODULES = (
     "pso", "ssa", "fdo", "gwo", "ba", "mfb", "hpso_mfb", "coot", "mcoot", "icoot", "hpo", "ihpo",
     "rfo", "rs", "cmaes", "lshade", "jso",
 )
+#: The strong baselines a study can add to its algorithms (``swarmpath bench --baselines``):
+#: Hansen's CMA-ES (IPOP), the CEC winners L-SHADE (2014) and jSO (2017), uniform random search.
+BASELINES: tuple[str, ...] = ("CMA-ES", "L-SHADE", "jSO", "RS")
 REGISTRY: Registry[type[Optimizer]] = Registry(
     "optimizer", "swarmpath.optimizers", _MODULES, KeyError, group="swarmpath.optimizers"
 )

@@ -37,6 +37,8 @@ TABLES: tuple[str, ...] = (
     "ihpo-maps",
     "rfogwo-maps",
     "mfb-maps",
+    "jso-cec2017-d10",
+    "jso-cec2017-d30",
 )
 ILLEGIBLE = "illegible"
 REASONS_FILE = "reasons.yaml"
