@@ -15,7 +15,6 @@ from swarmpath.cli.core import InputError, parse_params_option, resolve_names
 from swarmpath.functions import expand_function_names, get_function
 from swarmpath.functions.suites.base import MAX_INSTANCE, with_instances
 from swarmpath.optimizers import ParameterError, get_optimizer, list_optimizers
-from swarmpath.optimizers.registry import BASELINES
 from swarmpath.optimizers.api import (
     MAX_AGENTS,
     MAX_DIM,
@@ -24,6 +23,7 @@ from swarmpath.optimizers.api import (
     resolve_transform,
 )
 from swarmpath.optimizers.budget import budget_at, parse_budget, study_iterations
+from swarmpath.optimizers.registry import BASELINES
 
 MAX_RUNS = 10_000
 
