@@ -65,6 +65,9 @@ def test_audit_command_covers_every_optimizer():
     for r in rows.values():
         assert r["plain_runs"] == 4
         assert set(r["transforms"]) == {"shift", "shift+rotate"}
+        shift = list(r["transforms"]["shift"]["decades_lost"].values())
+        assert r["centre_bias_index"] == pytest.approx(10 ** float(np.mean(shift)))
+        assert r["centre_biased"] == (r["centre_bias_index"] > au.KUDELA_BIASED)
         for t in r["transforms"].values():
             lost = list(t["decades_lost"].values())
             assert t["median_decades_lost"] == pytest.approx(float(np.median(lost)))
@@ -126,3 +129,24 @@ def test_benchmark_rows_carry_the_decades_lost_under_shift():
     assert row.extra["shifted_runs"] == moved
     assert au.shift_suspect(row.extra["decades_lost_shift"])
     assert au.decades_lost("F1", 30, plain, moved) == pytest.approx(27.0)
+
+
+def test_kudela_index_is_the_geometric_mean_of_the_shift_ratios_and_flags_hpo():
+    from swarmpath.evidence.audit import audit as run_audit
+
+    values = {}
+    functions = ["F1", "F9", "F10"]
+    for algo in ("HPO", "CMA-ES"):
+        for f in functions:
+            for t in ("none", "shift", "shift+rotate"):
+                res = minimize(algo, f, dim=5, agents=20, iterations=150, runs=4, seed=3,
+                               transform=t)
+                values[(algo, f, 5, t)] = list(res.best_fitness)
+    rows = {r.algorithm: r for r in run_audit(values, ["HPO", "CMA-ES"], functions, [5])}
+    for r in rows.values():
+        ratios = [au.mean_gap(f, 5, values[(r.algorithm, f, 5, "shift")])
+                  / au.mean_gap(f, 5, values[(r.algorithm, f, 5, "none")]) for f in functions]
+        geometric = math.exp(sum(math.log(q) for q in ratios) / len(ratios))  # no overflow
+        assert r.centre_bias_index() == pytest.approx(geometric)
+    assert rows["HPO"].centre_biased()  # its hunter pulls toward 0 (docs/algorithms.md)
+    assert not rows["CMA-ES"].centre_biased()

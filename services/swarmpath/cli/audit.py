@@ -29,13 +29,14 @@ from swarmpath.cli.study_options import (
     IterationsOpt,
     SeedOpt,
 )
-from swarmpath.evidence.audit import AUDIT_TRANSFORMS, AuditRow, Key, audit
+from swarmpath.evidence.audit import AUDIT_TRANSFORMS, KUDELA_BIASED, AuditRow, Key, audit
 from swarmpath.optimizers import ParameterError
 
 FORMATS = ("table", "markdown")
 HEADER = (
     "optimizer", "D", "shift: median decades lost", "> 1", "> 3",
     "shift+rotate: median decades lost", "> 1", "> 3", "plain runs at exactly 0",
+    "Kudela index", "centre-biased",
 )
 
 
@@ -47,6 +48,7 @@ def audit_lines(rows: list[AuditRow], markdown: bool) -> list[str]:
         for t in AUDIT_TRANSFORMS[1:]:
             cells += [f"{r.median(t):+.1f}", str(r.losing(t, 1.0)), str(r.losing(t, 3.0))]
         cells.append(f"{r.exact_zeros} of {r.plain_runs}")
+        cells += [f"{r.centre_bias_index():.3g}", "yes" if r.centre_biased() else "no"]
         body.append(cells)
     if markdown:
         out = ["| " + " | ".join(HEADER) + " |", "|" + "---|" * len(HEADER)]
@@ -94,8 +96,9 @@ def audit_command(
 ) -> None:
     """Run every optimizer plain, shifted and shifted+rotated; print per optimizer the decades
     lost (median over functions of log10 of the mean-gap ratio), the functions losing more than
-    1 and 3 decades, and the plain runs that ended at exactly 0. With --maps: the planners'
-    invariance certificate (swarmpath.evidence.map_audit)."""
+    1 and 3 decades, the plain runs that ended at exactly 0, and Kudela's centre-bias index
+    (geometric mean of the shifted / plain mean-gap ratios; biased above 10). With --maps: the
+    planners' invariance certificate (swarmpath.evidence.map_audit)."""
     if maps is not None:
         from swarmpath.cli.audit_maps import map_audit
 
@@ -135,7 +138,10 @@ def audit_command(
         print(line)
     print(f"\n{base.runs} runs per cell, {base.agents} agents, {base.iterations} iterations, "
           f"seed {base.seed}; decades lost = log10(mean gap transformed / mean gap plain), "
-          f"gap = best - f_min, mean gaps below 1e-300 counted as 1e-300; {seconds:.0f} s")
+          f"gap = best - f_min, mean gaps below 1e-300 counted as 1e-300; Kudela index = "
+          f"geometric mean over the functions of mean gap shifted / mean gap plain, "
+          f"centre-biased above {KUDELA_BIASED:g} (Kudela, Nat. Mach. Intell. 2022; "
+          f"arXiv:2301.01984); {seconds:.0f} s")
 
 
 def _finite(v: object) -> object:

@@ -8,6 +8,13 @@ plain), the gap being best - f_min (f_min per dimension for F8) and a mean gap b
 the audit reports the median over functions of the decades lost, the number of functions losing
 more than one and more than three decades, and how many plain runs ended at exactly 0.
 
+Kudela's centre-bias index (J. Kudela, "A critical problem in benchmarking and analysis of
+evolutionary computation methods", Nature Machine Intelligence 4 (2022) 1238-1245, and "The
+evolutionary computation methods no one should use", arXiv:2301.01984, 2023) is the geometric
+mean over the functions (his 13: F1-F13) of mean error shifted / mean error unshifted, i.e.
+10 ** (mean decades lost under ``shift``): :meth:`AuditRow.centre_bias_index`; above
+:data:`KUDELA_BIASED` (10) the method is centre-biased by his criterion.
+
 A cell is *origin-suspect* by measurement (:func:`shift_suspect`, what ``swarmpath reproduce``
 marks) when it loses more than :data:`SUSPECT_DECADES` decades under ``shift`` -- the same runs
 and seeds with the optimum moved -- i.e. when the optimizer owes more than a factor 1000 of its
@@ -34,6 +41,8 @@ AUDIT_TRANSFORMS: tuple[str, ...] = ("none", "shift", "shift+rotate")
 GAP_FLOOR = 1e-300
 SUSPECT_BELOW = 1e-100
 SUSPECT_DECADES = 3.0
+#: Kudela's threshold: an index above it marks a centre-biased method
+KUDELA_BIASED = 10.0
 ORIGIN_MARK = "°"
 ORIGIN_FOOTNOTE = (
     f"{ORIGIN_MARK} origin-suspect: exact zeros or values below {SUSPECT_BELOW:g} on a function "
@@ -97,6 +106,14 @@ class AuditRow:
     def median(self, transform: str) -> float:
         return float(np.median(list(self.decades[transform].values())))
 
+    def centre_bias_index(self, transform: str = "shift") -> float:
+        """Kudela's index: the geometric mean over the functions of mean gap ``transform`` /
+        mean gap plain (10 ** the mean decades lost)."""
+        return float(10.0 ** np.mean(list(self.decades[transform].values())))
+
+    def centre_biased(self) -> bool:
+        return self.centre_bias_index() > KUDELA_BIASED
+
     def losing(self, transform: str, more_than: float) -> int:
         return sum(d > more_than for d in self.decades[transform].values())
 
@@ -106,6 +123,8 @@ class AuditRow:
             "dim": self.dim,
             "exact_zeros": self.exact_zeros,
             "plain_runs": self.plain_runs,
+            "centre_bias_index": self.centre_bias_index(),
+            "centre_biased": self.centre_biased(),
             "transforms": {
                 t: {
                     "median_decades_lost": self.median(t),
