@@ -121,9 +121,14 @@ def submit(
             raise
         typer.echo(job["id"])
         typer.echo(f"job {job['id']}: {job['runs_total']} runs, {job['state']}", err=True)
-        if not wait:
-            return
-        status = _wait_with_progress(client, job["id"], job["runs_total"])
+        if wait:
+            _wait_and_report(client, job)
+
+
+def _wait_and_report(client: Any, job: dict[str, Any]) -> None:
+    """--wait of submit and extend: a progress bar until the job ends, its counts, exit 1
+    unless it is done."""
+    status = _wait_with_progress(client, job["id"], job["runs_total"])
     typer.echo(f"job {status['id']}: {status['state']} ({status['runs_done']} done, "
                f"{status['runs_failed']} failed)", err=True)
     if status["state"] != "done":
@@ -154,13 +159,8 @@ def extend(
         typer.echo(f"job {new['id']}: extends {job} to {runs} runs per cell, "
                    f"{new['reused']} runs reused, {new['runs_total']} runs, {new['state']}",
                    err=True)
-        if not wait:
-            return
-        status = _wait_with_progress(client, new["id"], new["runs_total"])
-    typer.echo(f"job {status['id']}: {status['state']} ({status['runs_done']} done, "
-               f"{status['runs_failed']} failed)", err=True)
-    if status["state"] != "done":
-        raise typer.Exit(1)
+        if wait:
+            _wait_and_report(client, new)
 
 
 def trajectory_notes(spec: dict[str, Any]) -> list[str]:
