@@ -58,7 +58,7 @@ def test_simulated_workers_complete_a_job_exactly_once(tmp_path):
         store.close()
     assert [r["run_id"] for r in runs] == list(range(180))
     assert all(r["state"] == "done" and len(r["curve"]) == 50 and len(r["best_position"]) == 2
-               and r["worker"].startswith("sim") for r in runs)
+               and r["worker"].startswith("farm-sim") for r in runs)  # ids of the farm's login
     # runs of one template differ (each run's numbers are its own), as real runs do
     assert len({r["curve"][-1] for r in runs}) == 180
     db = sqlite3.connect(tmp_path / "data" / "this-k3" / "store" / "swarmpath.sqlite3")

@@ -188,9 +188,14 @@ def fake_registries(monkeypatch):
                     raise ValueError(f"FAKE has no parameter {key!r}; valid: w1")
             return dict(params)
 
+    def get_planner(name):  # as the registry: an unknown name is a ValueError naming it
+        if name not in ("ICOOT", "MFB"):
+            raise ValueError(f"unknown planner {name!r}")
+        return FakePlanner
+
     planners = types.ModuleType("swarmpath.planners")
     planners.list_planners = lambda: ["ICOOT", "MFB"]
-    planners.get_planner = lambda name: FakePlanner
+    planners.get_planner = get_planner
     presets = types.ModuleType("swarmpath.world.presets")
     presets.list_maps = lambda: ["mfb-static", "mfb-dynamic"]
     monkeypatch.setitem(sys.modules, "swarmpath.planners", planners)

@@ -187,7 +187,9 @@ def test_a_wrong_hash_or_a_refusal_fails_the_runs_with_the_reason(data_dir: Path
                              (refuse, "did not send scenario")):
             with pytest.raises(ScenarioUnavailable, match=words) as exc:
                 resolve(lease, key, fetch, cache)
-            assert map_id in str(exc.value)
+            # the cell names the map as it was uploaded (its name, not the id)
+            assert isinstance(lease.spec, MapCell) and lease.spec.map == "pillars"
+            assert f"map {lease.spec.map}:" in str(exc.value)
             reasons.append(str(exc.value))
         assert cache.size == 0  # nothing unchecked is kept
         # the worker reports such a lease as failed runs with the reason (as Worker._take does)
@@ -331,7 +333,7 @@ def test_the_worker_fails_a_lease_whose_scenario_is_refused_and_goes_on(data_dir
         assert key.endswith(wrong.job_id) and head.lease_id == wrong.lease_id
         assert set(head.status) == {"failed"} and head.runs == wrong.runs
         failure = head.failure[0] or ""
-        assert f"map {map_id}: the coordinator did not send scenario" in failure
+        assert f"map {spec.map}: the coordinator did not send scenario" in failure
         assert "refused: lease" in failure and "has no scenario" in failure
         worker._take([good])
         (queued,), = worker._queue

@@ -69,7 +69,8 @@ _PACKAGE = Path(__file__).resolve().parent
 def compiled_sources(package: Path = _PACKAGE) -> list[Path]:
     """The files numba's kernels are compiled from (or take constants from): the whole of
     ``swarmpath.optimizers`` and ``swarmpath.functions``, the planners' ``compiled*.py`` and
-    ``world/optimum_compiled*.py`` (the planners' aim calls the shortest path's kernels), sorted
+    ``world/*_compiled*.py`` (the planners' aim calls the shortest path's kernels; the clearance
+    grid's kernels check every path), sorted
     within each group. Every module with an ``@njit(cache=True)`` kernel must be one of them
     (``tests/test_compiled_cache.py`` checks it)."""
     root = package.parent.parent  # services/swarmpath (or a copy of it)
@@ -77,7 +78,7 @@ def compiled_sources(package: Path = _PACKAGE) -> list[Path]:
         sorted((root / "optimizers").rglob("*.py")),
         sorted((root / "functions").rglob("*.py")),
         sorted((root / "planners").glob("compiled*.py")),
-        sorted((root / "world").glob("optimum_compiled*.py")),
+        sorted((root / "world").glob("*_compiled*.py")),
     )
     return [path for group in groups for path in group]
 
