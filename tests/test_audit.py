@@ -150,3 +150,39 @@ def test_kudela_index_is_the_geometric_mean_of_the_shift_ratios_and_flags_hpo():
         assert r.centre_bias_index() == pytest.approx(geometric)
     assert rows["HPO"].centre_biased()  # its hunter pulls toward 0 (docs/algorithms.md)
     assert not rows["CMA-ES"].centre_biased()
+
+
+def test_a_centred_suite_instance_is_the_instance_moved_so_its_optimum_is_the_origin():
+    from swarmpath.functions.registry import suite_of
+
+    for name in ("bbob:f3@i7", "bbob:f20@i2", "cec2017:F5", "cec2022:F12"):
+        fn, centred = get_function(name), get_function(name + "@centre")
+        d = 10
+        x = np.random.default_rng(1).uniform(-5.0, 5.0, (6, d))
+        assert centred.name == name + "@centre" and suite_of(centred.name) == suite_of(name)
+        assert np.array_equal(centred.optimum(d), np.zeros(d))
+        assert centred.kernel(np.zeros((1, d)))[0] == pytest.approx(0.0, abs=1e-9)
+        np.testing.assert_array_equal(centred.kernel(x), fn.kernel(x + fn.optimum(d)))
+        np.testing.assert_array_equal(centred.value(x), fn.value(x + fn.optimum(d)))
+        assert not np.allclose(centred.kernel(x), fn.kernel(x))
+    with pytest.raises(KeyError, match="F1@centre"):
+        get_function("F1@centre")  # F1 has no instance to centre: F1 is centred already
+
+
+def test_audit_on_suite_instances_compares_each_with_its_centred_copy():
+    args = ["audit", "-a", "HPO,RS", "-f", "bbob:f1,bbob:f2", "--instances", "1-2", "-d", "3",
+            "--runs", "2", "--iterations", "60", "-j", "1"]
+    out = runner.invoke(app, [*args, "--json"])
+    assert out.exit_code == 0, out.output
+    doc = json.loads(out.stdout)
+    assert doc["settings"]["functions"] == ["bbob:f1", "bbob:f1@i2", "bbob:f2", "bbob:f2@i2"]
+    rows = {r["algorithm"]: r for r in doc["rows"]}
+    for r in rows.values():
+        assert set(r["transforms"]) == {"shift"}  # an instance is rotated already
+        lost = r["transforms"]["shift"]["decades_lost"]
+        assert list(lost) == doc["settings"]["functions"]
+        assert r["centre_bias_index"] == pytest.approx(10 ** float(np.mean(list(lost.values()))))
+    assert rows["HPO"]["centre_biased"] and not rows["RS"]["centre_biased"]
+    table = runner.invoke(app, args)
+    assert table.exit_code == 0 and "@centre" in table.stdout
+    assert table.stdout.splitlines()[1].split()[5:8] == ["-", "-", "-"]

@@ -147,7 +147,9 @@ def audit(
     dims: Sequence[int],
 ) -> list[AuditRow]:
     """One row per (algorithm, dim) from the best values of every (algorithm, function, dim,
-    transform) of :data:`AUDIT_TRANSFORMS`."""
+    transform) of :data:`AUDIT_TRANSFORMS` that was run (every function needs 'none'; for a
+    suite function 'none' is its instance translated to the origin and 'shift' the instance
+    itself, as ``swarmpath audit`` runs them)."""
     rows = []
     for a in algorithms:
         for d in dims:
@@ -157,7 +159,8 @@ def audit(
                 row.exact_zeros += sum(v == 0.0 for v in plain)
                 row.plain_runs += len(plain)
                 for t in AUDIT_TRANSFORMS[1:]:
-                    row.decades.setdefault(t, {})[f] = decades_lost(f, d, plain,
-                                                                    values[(a, f, d, t)])
+                    if (a, f, d, t) in values:  # a suite function has no shift+rotate
+                        row.decades.setdefault(t, {})[f] = decades_lost(
+                            f, d, plain, values[(a, f, d, t)])
             rows.append(row)
     return rows

@@ -190,6 +190,12 @@ def get_function(name: str) -> BenchmarkFunction:
     SUITES.names()  # the suites (built-in and plugins') are loaded
     if name in _SUITE_FUNCTIONS:
         return _SUITE_FUNCTIONS[name][0]
+    from swarmpath.functions.suites.base import CENTRE_SUFFIX
+
+    if name.endswith(CENTRE_SUFFIX):  # an instance translated to the origin
+        centred = getattr(get_function(name.removesuffix(CENTRE_SUFFIX)), "centred_copy", None)
+        if centred is not None:
+            return centred()
     base, sep, instance = name.rpartition("@i")
     if sep and base in _SUITE_FUNCTIONS and instance.isdigit():
         with_instance = getattr(_SUITE_FUNCTIONS[base][0], "with_instance", None)
@@ -206,6 +212,9 @@ def get_function(name: str) -> BenchmarkFunction:
 
 def suite_of(name: str) -> str | None:
     """The suite a function name belongs to (None for a stand-alone function)."""
+    from swarmpath.functions.suites.base import CENTRE_SUFFIX
+
+    name = name.removesuffix(CENTRE_SUFFIX)
     base = name.rpartition("@i")[0] if "@i" in name else name
     SUITES.names()
     entry = _SUITE_FUNCTIONS.get(name) or _SUITE_FUNCTIONS.get(base)

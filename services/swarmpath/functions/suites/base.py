@@ -11,6 +11,14 @@ Names: ``<suite>:<function>`` is instance 1 (``bbob:f3``, ``cec2017:F5``), and
 ``<suite>:<function>@i<k>`` instance k (``bbob:f3@i7``). A study's ``instances`` expand a suite
 function into its instances; the instance is part of the function's name from there on, so the
 job spec, the cells, the results, the store and the MCAP files carry it unchanged.
+
+``<name>@centre`` (``bbob:f3@i7@centre``) is the same instance translated so that its optimum
+is the origin, the centre of the suite's symmetric box: x -> f(x + x_opt). Its landscape,
+rotations and f_opt are the instance's; only where the optimum sits changes. It is the control
+``swarmpath audit`` compares an instance with (Kudela's centre bias on BBOB and CEC: how much
+an optimizer gains when the optimum is put back at the centre). Every BBOB and CEC function is
+defined on all of R^d, so the translated one is too (BBOB's boundary penalty f_pen stays where
+the instance has it, in the untranslated coordinates).
 """
 
 from __future__ import annotations
@@ -32,13 +40,16 @@ Values = Callable[[Array, int], Array]
 Optimum = Callable[[int, int], tuple[Array, float]]
 
 INSTANCE_SEPARATOR = "@i"
+#: the suffix naming an instance translated so that its optimum is the origin
+CENTRE_SUFFIX = "@centre"
 #: the largest instance id a study may name (COCO's seeds are f + 10000 i: far from overflow)
 MAX_INSTANCE = 1_000_000
 _INSTANCE = re.compile(r"^(?P<base>.+)@i(?P<instance>[0-9]+)$")
 
 
 def split_instance(name: str) -> tuple[str, int | None]:
-    """('bbob:f3', 7) for 'bbob:f3@i7'; (name, None) for a name without an instance."""
+    """('bbob:f3', 7) for 'bbob:f3@i7'; (name, None) for a name without an instance (a
+    centred name too: pooling instances never mixes it with the instance it was made from)."""
     m = _INSTANCE.match(name)
     if m is None:
         return name, None
@@ -58,11 +69,15 @@ class SuiteError:
     optimum: Callable[[int, int], tuple[Array, float]]
     instance: int
     check: Callable[[int], None]
+    centred: bool = False  # evaluated at x + x_opt: the optimum at the origin
 
     def __call__(self, x: Array) -> Array:
         d = int(x.shape[-1])
         self.check(d)
-        return np.asarray(self.values(x, d, self.instance) - self.optimum(d, self.instance)[1])
+        x_opt, f_opt = self.optimum(d, self.instance)
+        if self.centred:
+            x = x + x_opt
+        return np.asarray(self.values(x, d, self.instance) - f_opt)
 
 
 @dataclass(frozen=True)
@@ -82,13 +97,14 @@ class SuiteFunction(BenchmarkFunction):
     min_dim: int = 2
     instances: tuple[int, ...] | None = None
     error_floor: float = 0.0
+    centred: bool = False  # the instance translated so that its optimum is the origin
     values_of: Callable[[Array, int, int], Array] | None = field(default=None, compare=False)
     optimum_of: Callable[[int, int], tuple[Array, float]] | None = field(
         default=None, compare=False)
 
     @property
     def base_name(self) -> str:
-        return split_instance(self.name)[0]
+        return split_instance(self.name.removesuffix(CENTRE_SUFFIX))[0]
 
     def check_dim(self, dim: int) -> None:
         if self.dimensions is not None and dim not in self.dimensions:
@@ -112,14 +128,26 @@ class SuiteFunction(BenchmarkFunction):
         assert self.values_of is not None and self.optimum_of is not None
         name = self.base_name if instance == 1 else instance_name(self.base_name, instance)
         kernel = SuiteError(self.values_of, self.optimum_of, int(instance), self.check_dim)
-        return replace(self, name=name, instance=int(instance), kernel=kernel)
+        return replace(self, name=name, instance=int(instance), kernel=kernel, centred=False)
+
+    def centred_copy(self) -> SuiteFunction:
+        """This instance translated so that its optimum is the origin, named
+        ``<name>@centre`` (see the module docstring)."""
+        if self.centred:
+            return self
+        assert self.values_of is not None and self.optimum_of is not None
+        kernel = SuiteError(self.values_of, self.optimum_of, self.instance, self.check_dim,
+                            centred=True)
+        return replace(self, name=self.name + CENTRE_SUFFIX, kernel=kernel, centred=True)
 
     def value(self, X: ArrayLike) -> Array:
         """f(X) itself (f_opt included) for X of shape (..., d): the reference's number."""
         x = np.asarray(X, dtype=float)
         d = int(x.shape[-1])
         self.check_dim(d)
-        assert self.values_of is not None
+        assert self.values_of is not None and self.optimum_of is not None
+        if self.centred:
+            x = x + self.optimum_of(d, self.instance)[0]
         return np.asarray(self.values_of(x, d, self.instance), dtype=float)
 
     def f_opt(self, dim: int) -> float:
@@ -130,7 +158,8 @@ class SuiteFunction(BenchmarkFunction):
     def x_opt(self, dim: int) -> Array:
         self.check_dim(dim)
         assert self.optimum_of is not None
-        return np.array(self.optimum_of(dim, self.instance)[0], dtype=float)
+        x_opt = np.array(self.optimum_of(dim, self.instance)[0], dtype=float)
+        return np.zeros_like(x_opt) if self.centred else x_opt
 
     # BenchmarkFunction's view: the kernel is the error, so the minimum is 0 at x_opt.
     def f_min_for(self, dim: int) -> float:
