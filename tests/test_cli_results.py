@@ -94,6 +94,38 @@ def test_results_and_status_tables_explain_their_columns(service):
     assert "failed: runs that crashed" in status and "gap_mean" not in status
 
 
+@pytest.mark.parametrize("width", [80, 200, 400])
+def test_summary_tables_fit_the_terminal_and_cut_no_header(service, monkeypatch, width):
+    """A map summary has ~48 columns: printed as one table every header was cut to '…' even at
+    400 columns (issue 25). Now the columns are split over tables no wider than the terminal,
+    each repeating planner and map; columns empty in every row are named, not printed."""
+    from rich.console import Console
+
+    cli, http, _core = service
+    job = finished(service, {**MAPS, "planners": ["OMPL-RRTstar", "OMPL-BITstar"], "params": {
+        "OMPL-RRTstar": {"iterations": 1000}, "OMPL-BITstar": {"iterations": 1000}}})
+    monkeypatch.setattr(service_cli, "_console", lambda: Console(width=width))
+    result = cli("results", job)
+    assert result.exit_code == 0, result.stderr
+    summary = http.get(f"/jobs/{job}/summary").json()
+    rows = summary["rows"]
+    empty = [c for c in summary["columns"]
+             if c not in ("planner", "map") and all(r.get(c) is None for r in rows)]
+    assert "costmap_cost_mean" in empty  # mfb-static is not a nav2 map
+    text = result.stdout
+    tables = text.split(f"job {job} (map)")[1:]
+    assert len(tables) > 1 if width < 400 else len(tables) >= 1
+    header_lines = [t.splitlines()[2] for t in tables]  # title, top rule, the header row
+    headers = [h.strip() for line in header_lines for h in line.strip("┃").split("┃")]
+    shown = [c for c in summary["columns"] if c not in empty]
+    assert sorted(set(headers)) == sorted(shown)  # every non-empty column, whole
+    assert headers.count("planner") == headers.count("map") == len(tables)
+    assert "…" not in text
+    assert max(len(line) for line in text.splitlines() if "┃" in line or "│" in line) <= width
+    assert "OMPL-BITstar" in text and "OMPL-RRTstar" in text
+    assert "empty in every row, left out: " + ", ".join(empty) in " ".join(text.split())
+
+
 def test_legend_follows_the_columns_it_is_given():
     from swarmpath.evidence.legend import NOTES, legend
 

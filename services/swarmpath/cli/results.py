@@ -104,14 +104,23 @@ def _summary(client: Any, job: str, format: str) -> None:
     title = (f"job {job} ({summary['kind']}): {summary['state']}, "
              f"{summary['runs_done'] + summary['runs_failed']}/{summary['runs_total']} runs"
              + (" (partial)" if summary["partial"] else ""))
+    from swarmpath.cli.table_fit import fitted_tables
+
     console = svc._console()
-    console.print(svc._table(title, summary["columns"], summary["rows"]))
+    tables, empty = fitted_tables(title, summary["columns"], summary["rows"], console.width,
+                                  svc._cell, svc._TEXT_COLUMNS)
+    for table in tables:
+        console.print(table)
+    if empty:
+        console.print(f"empty in every row, left out: {', '.join(empty)}", highlight=False,
+                      markup=False)
     from swarmpath.service.cell_notes import note_lines
     from swarmpath.service.summary_stats import statistics_lines
 
     for line in statistics_lines(summary) + note_lines(summary):
         console.print(line, highlight=False, markup=False)
-    console.print(legend_text(summary["columns"]), markup=False, highlight=False)
+    shown = [c for c in summary["columns"] if c not in empty]
+    console.print(legend_text(shown), markup=False, highlight=False)
 
 
 def _runs(client: Any, job: str, format: str, output: Path | None) -> None:
