@@ -172,6 +172,24 @@ def test_a_reason_explains_only_the_direction_it_states():
     assert flipped.to_json("benchmark")["reason_explains"] == WORSE
 
 
+def test_a_reason_that_does_not_hold_is_printed_as_failing_only_where_the_cell_needs_one():
+    from swarmpath.cli import reproduce_output as output
+
+    key = reference.cell_key("icoot-table2", "SSA", "F3", 30)
+    worse_reason = {key: Reason("because", "swarmpath bench ...", WORSE)}
+    flipped = _row("F3", "SSA", [1.0], worse_reason)  # better: needs a reason, this one fails
+    _, (line,), (note,) = output.grid(T2, [flipped], {})
+    assert line[-1] == "[1] UNEXPLAINED"
+    assert note.startswith(f"{key}: DOES NOT HOLD (it explains `worse`; the cell is `better`")
+    # the published mean in the interval: no reason is needed, the reason is not a failure
+    spread = _row("F3", "SSA", [1000.0, 1200.0, 1400.0, 1600.0, 1300.0, 1250.0], worse_reason)
+    assert spread.verdict == CONSISTENT and not spread.holds and not spread.unexplained
+    _, (line,), (note,) = output.grid(T2, [spread], {})
+    assert line[-1] == "[1]"
+    assert note.startswith(f"{key}: not needed here (it explains `worse`; the cell is "
+                           "`consistent`")
+
+
 def test_a_tail_reason_holds_only_for_the_runs_it_describes():
     key = reference.cell_key("icoot-table2", "COOT", "F1", 30)
     none = {key: Reason("sampling", "swarmpath reproduce ...", BETTER, "none")}

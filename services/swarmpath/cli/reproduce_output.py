@@ -76,7 +76,11 @@ def _reason_mark(row: Row, notes: list[str]) -> str:
     if claim is not None and not row.holds:
         states = f"`{claim.direction}`" + (
             f" with exceedance `{claim.exceedance}`" if claim.exceedance else "")
-        text = (f"{row.key}: DOES NOT HOLD (it explains {states}; the cell is "
+        # a cell within the tolerance needs no reason: one written for another run count
+        # (or a copied column) is shown as not needed, not as failing
+        status = ("DOES NOT HOLD" if row.verdict in reproduction.DIFFERENT
+                  else "not needed here")
+        text = (f"{row.key}: {status} (it explains {states}; the cell is "
                 f"`{row.verdict}`, beyond max / min {_beyond(row)}): {text}")
     if text not in notes:
         notes.append(text)
