@@ -234,6 +234,38 @@ def test_runs_export_errors_name_the_option(service, tmp_path):
     assert result.exit_code == 2 and "benchmark job" in result.stderr
 
 
+def test_results_output_format_follows_its_extension(service, tmp_path):
+    """README's `results JOB --runs -o runs.parquet` wrote CSV into the .parquet file (issue
+    25): without --format the extension decides; a --format the extension contradicts is
+    refused naming --output; the summary goes into -o too (it went to stdout)."""
+    import pyarrow.parquet as pq
+
+    cli, http, _core = service
+    job = finished(service, BENCH)
+    result = cli("results", job, "--runs", "-o", str(tmp_path / "runs.parquet"))
+    assert result.exit_code == 0, result.stderr
+    assert pq.read_table(tmp_path / "runs.parquet").num_rows == 12
+    assert cli("results", job, "--runs", "-o", str(tmp_path / "runs.json")).exit_code == 0
+    assert len(json.loads((tmp_path / "runs.json").read_text())) == 12
+    assert cli("results", job, "--runs", "-o", str(tmp_path / "runs.txt")).exit_code == 0
+    assert (tmp_path / "runs.txt").read_text().count("\n") == 13  # csv: header and 12 rows
+    bad = cli("results", job, "--runs", "--format", "csv", "-o", str(tmp_path / "r.parquet"))
+    assert bad.exit_code == 2 and "--output" in bad.stderr and "parquet" in bad.stderr
+    assert not (tmp_path / "r.parquet").exists()
+    summary = http.get(f"/jobs/{job}/summary").json()
+    assert cli("results", job, "-o", str(tmp_path / "summary.json")).exit_code == 0
+    assert json.loads((tmp_path / "summary.json").read_text())["rows"] == summary["rows"]
+    assert cli("results", job, "-o", str(tmp_path / "summary.csv")).exit_code == 0
+    assert (tmp_path / "summary.csv").read_text().splitlines()[0].startswith("algorithm,")
+    table = cli("results", job, "-o", str(tmp_path / "summary.txt"))
+    assert table.exit_code == 0 and table.stdout == ""
+    assert "GWO" in (tmp_path / "summary.txt").read_text()
+    wrong = cli("results", job, "-o", str(tmp_path / "summary.parquet"))
+    assert wrong.exit_code == 2 and "--format" in wrong.stderr
+    missing = cli("results", "nosuchjob", "-o", str(tmp_path / "none.json"))
+    assert missing.exit_code == 2 and not (tmp_path / "none.json").exists()
+
+
 def test_results_plot_writes_the_figures_of_a_job(service, tmp_path):
     cli, _http, _core = service
     job = finished(service, BENCH)

@@ -3,6 +3,7 @@ in IOHprofiler's format and its figures (a REST client like the other service co
 
 from __future__ import annotations
 
+import io
 import json
 import sys
 from pathlib import Path
@@ -24,6 +25,23 @@ def _call(fn: Any, *args: Any) -> Any:
     except Exception as exc:
         svc._fail(exc)
         raise
+
+
+#: The format an output file's extension names (``-o runs.parquet`` wrote CSV into it, issue 25).
+EXTENSIONS = {".csv": "csv", ".json": "json", ".parquet": "parquet", ".pq": "parquet",
+              ".tex": "latex"}
+
+
+def _format(format: str | None, runs: bool, output: Path | None) -> str:
+    """``--format`` as given, else the one the output file's extension names, else the default
+    (table; csv with --runs); a file whose extension names another format is refused."""
+    named = EXTENSIONS.get(output.suffix.lower()) if output is not None else None
+    if format is None:
+        return named or ("csv" if runs else "table")
+    if named is not None and named != format and format not in ("ioh", "ioh-info"):
+        raise InputError("--output", f"{str(output)!r} names {named} by its extension, but "
+                         f"--format is {format}: change one of them")
+    return "csv" if runs and format == "table" else format
 
 
 def _check(format: str, runs: bool, output: Path | None) -> None:
@@ -48,11 +66,13 @@ def _check(format: str, runs: bool, output: Path | None) -> None:
 def results(
     job: Annotated[str, typer.Argument(metavar="JOB", help="A job id.")],
     format: Annotated[
-        str,
+        str | None,
         typer.Option("--format", help="Summary: table, json, csv or latex (a booktabs table). "
                      "With --runs: csv, json or parquet. ioh: the curves as IOHprofiler files "
-                     "(-o DIR; ioh-info: the older .info form)."),
-    ] = "table",
+                     "(-o DIR; ioh-info: the older .info form). Default: the one -o's "
+                     "extension names (.csv, .json, .parquet, .tex), else table (csv with "
+                     "--runs).", show_default=False),
+    ] = None,
     runs: Annotated[
         bool, typer.Option("--runs", help="One row per run (identity, metrics, curve or path).")
     ] = False,
@@ -70,8 +90,7 @@ def results(
     url: svc.UrlOpt = None,
 ) -> None:
     """The job's summary table (partial while it runs), its runs, IOHprofiler files, figures."""
-    if runs and format == "table":
-        format = "csv"
+    format = _format(format, runs, output)
     _check(format, runs, output)
     if plot is not None:
         plot_dir(plot, "--plot")
@@ -86,27 +105,39 @@ def results(
             _ioh(client, job, output, format)  # type: ignore[arg-type]
         elif runs:
             _runs(client, job, format, output)
+        elif output is not None:  # rendered first: a job that does not exist leaves no file
+            text = io.StringIO()
+            _summary(client, job, format, text)
+            output.write_text(text.getvalue(), encoding="utf-8")
+            typer.echo(f"{output} ({format})", err=True)
         else:
             _summary(client, job, format)
 
 
-def _summary(client: Any, job: str, format: str) -> None:
+def _summary(client: Any, job: str, format: str, file: Any = None) -> None:
+    """The summary in ``format`` on stdout, or into ``file`` (-o: it was ignored before)."""
+    out = file or sys.stdout
     if format == "csv":
-        sys.stdout.write(_call(client.summary_csv, job))
+        out.write(_call(client.summary_csv, job))
         return
     summary = _call(client.summary, job)
     if format == "json":
-        typer.echo(json.dumps(summary, indent=2))
+        out.write(json.dumps(summary, indent=2) + "\n")
         return
     if format == "latex":
-        sys.stdout.write(summary_latex(job, summary))
+        out.write(summary_latex(job, summary))
         return
     title = (f"job {job} ({summary['kind']}): {summary['state']}, "
              f"{summary['runs_done'] + summary['runs_failed']}/{summary['runs_total']} runs"
              + (" (partial)" if summary["partial"] else ""))
     from swarmpath.cli.table_fit import fitted_tables
 
-    console = svc._console()
+    if file is None:
+        console = svc._console()
+    else:
+        from rich.console import Console
+
+        console = Console(file=file, width=200)
     tables, empty = fitted_tables(title, summary["columns"], summary["rows"], console.width,
                                   svc._cell, svc._TEXT_COLUMNS)
     for table in tables:
