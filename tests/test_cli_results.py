@@ -469,7 +469,15 @@ def test_openapi_describes_summary_runs_and_run(service):
     assert "algorithm" not in run and run["planner"] == "OMPL-RRTstar" and run["path"]
 
 
-def test_download_layout_shows_the_files_topics_and_plots_curves(service, tmp_path):
+def _leaves(node):
+    if isinstance(node, str):
+        return [node]
+    return _leaves(node["first"]) + _leaves(node["second"])
+
+
+def test_download_layout_shows_the_files_topics_and_only_their_panels(service, tmp_path):
+    """A layout names only topics its file has (issue 25: the benchmark layout had a 3D panel
+    on /tf, which benchmark files lack; the map layout plotted /curves, which map files lack)."""
     from swarmpath.service import foxglove
     from swarmpath.service.recorder import CURVE_SCHEMA, WORLD_FRAME
 
@@ -485,18 +493,24 @@ def test_download_layout_shows_the_files_topics_and_plots_curves(service, tmp_pa
     shown = set(scene["topics"])
     assert shown == {t for t in topics if t.startswith(foxglove.SCENE_TOPIC_PREFIXES)}
     assert {"/tf", "/map/mfb-static/occupancy", "/scene/OMPL-RRTstar/mfb-static"} <= shown
+    assert "/curves" not in topics and set(panels) == {"3D!swarmpath", "RawMessages!swarmpath"}
+    assert panels["RawMessages!swarmpath"]["topicPath"] in topics
+    assert sorted(_leaves(doc["layout"])) == sorted(panels)  # every panel placed, none missing
 
-    def leaves(node):
-        if isinstance(node, str):
-            return [node]
-        return leaves(node["first"]) + leaves(node["second"])
-
-    assert sorted(leaves(doc["layout"])) == sorted(panels)  # every panel placed, none missing
+    bench = finished(service, BENCH)
+    assert cli("download", bench, "-o", str(tmp_path), "--layout").exit_code == 0
+    doc = json.loads((tmp_path / f"{bench}.layout.json").read_text())
+    topics = foxglove.mcap_topics(tmp_path / f"{bench}.mcap")
+    panels = doc["configById"]
+    assert not any(t.startswith(foxglove.SCENE_TOPIC_PREFIXES) for t in topics)
+    assert set(panels) == {"Plot!swarmpath", "RawMessages!swarmpath"}
+    assert sorted(_leaves(doc["layout"])) == sorted(panels)
     (plot,) = panels["Plot!swarmpath"]["paths"]
     topic, field = plot["value"].removesuffix("[:]").split(".")
-    assert (topic, panels["Plot!swarmpath"]["xAxisVal"]) == ("/curves", "index")
+    assert topic in topics and (topic, panels["Plot!swarmpath"]["xAxisVal"]) == ("/curves", "index")
     assert CURVE_SCHEMA["properties"][field]["type"] == "array"
     assert json.loads(foxglove.LAYOUT_FILE.read_text()) == foxglove.layout()
+    assert sorted(_leaves(foxglove.layout()["layout"])) == sorted(foxglove.PANEL_TOPICS)
 
 
 def test_runs_of_a_job_not_run_yet_export_with_empty_metrics(service, tmp_path):

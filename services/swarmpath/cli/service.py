@@ -280,8 +280,9 @@ def download(
     ] = None,
     layout: Annotated[
         bool,
-        typer.Option("--layout", help="Also write a Foxglove layout (3D scene with this file's "
-                     "topics, Plot of /curves) next to it as JOB.layout.json."),
+        typer.Option("--layout", help="Also write a Foxglove layout next to it as "
+                     "JOB.layout.json: a 3D scene with this file's topics (map jobs), a Plot "
+                     "of /curves (benchmark jobs), the /results message."),
     ] = False,
     url: UrlOpt = None,
 ) -> None:

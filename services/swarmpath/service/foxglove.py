@@ -206,14 +206,37 @@ LAYOUT_FILE = Path(__file__).with_name("foxglove_layout.json")
 SCENE_TOPIC_PREFIXES = ("/tf", "/map/", "/scene/", "/paths/")
 
 
-def layout(topics: Sequence[str] = ()) -> dict[str, Any]:
-    """The shipped layout with the scene topics of one file (``topics``) visible in 3D."""
+#: The topic each panel of the shipped layout shows; a file without it does not get the panel
+#: (a benchmark file has no scene, a map file no curves: issue 25).
+PANEL_TOPICS = {"3D!swarmpath": SCENE_TOPIC_PREFIXES, "Plot!swarmpath": ("/curves",),
+                "RawMessages!swarmpath": ("/results",)}
+
+
+def layout(topics: Sequence[str] | None = None) -> dict[str, Any]:
+    """The shipped layout (``topics`` None), or the one for a file with these ``topics``: its
+    scene topics visible in 3D, and only the panels whose topics the file has."""
     doc: dict[str, Any] = json.loads(LAYOUT_FILE.read_text(encoding="utf-8"))
+    if topics is None:
+        return doc
     panel = doc["configById"]["3D!swarmpath"]
-    for topic in topics:
-        if topic.startswith(SCENE_TOPIC_PREFIXES):
-            panel["topics"][topic] = {"visible": True}
+    panel["topics"] = {t: {"visible": True} for t in topics if t.startswith(SCENE_TOPIC_PREFIXES)}
+    gone = {name for name, prefixes in PANEL_TOPICS.items()
+            if not any(t.startswith(prefixes) for t in topics)}
+    if len(gone) < len(PANEL_TOPICS):  # a file with none of them keeps the whole layout
+        for name in gone:
+            del doc["configById"][name]
+        doc["layout"] = _without(doc["layout"], gone)
     return doc
+
+
+def _without(node: Any, gone: set[str]) -> Any:
+    """A mosaic layout tree without the panels ``gone`` (a split losing a side is its other)."""
+    if isinstance(node, str):
+        return None if node in gone else node
+    first, second = _without(node["first"], gone), _without(node["second"], gone)
+    if first is None or second is None:
+        return second if first is None else first
+    return {**node, "first": first, "second": second}
 
 
 def mcap_topics(path: Path) -> list[str]:
