@@ -103,9 +103,13 @@ def _gaps(points: Array, obstacles_at: Callable[[float], ObstacleSet] | Obstacle
         return clearance.point_clearances(obstacles_at, points[:, :2]) - radius
     out = np.empty(len(points))
     times, inverse = np.unique(points[:, 2], return_inverse=True)
+    # rows grouped by their snapshot: a static world hands out one for every time (one call)
+    snapshots: dict[int, tuple[ObstacleSet, list[int]]] = {}
     for k, t in enumerate(times):
-        rows = inverse == k
         obs = obstacles_at(float(t))
+        snapshots.setdefault(id(obs), (obs, []))[1].append(k)
+    for obs, ks in snapshots.values():
+        rows = np.isin(inverse, ks)
         out[rows] = (np.inf if obs.is_empty
                      else clearance.point_clearances(obs, points[rows, :2]) - radius)
     return out

@@ -319,7 +319,7 @@ class Episode:
             frame_origin=None if grid is None else list(grid.origin),
             failure_class=None if failure is None else failure.kind,
             failure_detail=None if failure is None else failure.detail,
-            path=[[float(x), float(y), float(t)] for x, y, t in path],
+            path=np.asarray(path, dtype=np.float64).tolist(),  # rows of Python floats
         )
 
     def _failure(self, path: np.ndarray, reason: str, collisions: int) -> failures.Failure:

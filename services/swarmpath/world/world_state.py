@@ -64,6 +64,7 @@ class WorldState:
         self.set_order: tuple[int, ...] = tuple(circles + polys)
         self._base = obstacle_set(obs)
         self._static = scenario.static_obstacles()
+        self._any_moving = any(o.is_moving for o in obs)  # else every snapshot is ``_base``
 
         # Movers: index 0..n_obs-1 = obstacles in set order, then the goal (if it moves).
         motions: list[MotionSpec | None] = [obs[k].motion for k in self.set_order]
@@ -181,7 +182,7 @@ class WorldState:
     def obstacles_at(self, t: float) -> ObstacleSet:
         """All obstacles (not inflated) at time ``t`` >= 0, past or future."""
         t = self._check_t(t)
-        if not any(o.is_moving for o in self.scenario.obstacles):
+        if not self._any_moving:
             return self._base
         off, _ = self._movers(t)
         nc = self._base.circles.shape[0]
