@@ -67,42 +67,6 @@ def test_icoot_and_ihpo_are_reproducible():
         assert a.path == b.path
 
 
-def swarm_local_planners():
-    from swarmpath.planners import get_planner, list_planners
-    from swarmpath.planners.swarm_local import SwarmLocalPlanner
-
-    return [n for n in list_planners() if issubclass(get_planner(n), SwarmLocalPlanner)]
-
-
-@pytest.mark.parametrize("name", swarm_local_planners())
-def test_knowledge_map_hands_the_static_map_and_sensors_does_not(name):
-    scenario = get_map("mfb-static")
-    sensing = Episode(scenario, name, seed=1).planner
-    assert sensing.static_map is None and len(sensing._prior) == 0
-    knowing = Episode(scenario, name, seed=1, params={"knowledge": "map"}).planner
-    assert knowing.static_map is not None
-    centres = knowing.static_map.circles
-    assert len(centres) == len(scenario.obstacles)
-    # every static obstacle is known from the start, all round
-    prior = knowing._prior
-    d = np.hypot(prior[:, None, 0] - centres[:, 0], prior[:, None, 1] - centres[:, 1])
-    assert np.all(np.sum(np.abs(d - centres[:, 2]) < 1e-9, axis=0) >= 60)
-
-
-def test_knowing_the_map_turns_the_first_aim_off_the_blocked_straight_line():
-    # mfb-static: the circle at (2, 2.3) blocks the diagonal; the robot senses it only after
-    # driving about a metre, a planner that knows the map heads around it from the start
-    scenario = get_map("mfb-static")
-    world = (0.0, 0.0, 10.0, 10.0)
-    start, goal = np.array([0.0, 0.0]), np.array([10.0, 10.0])
-    sensing = Episode(scenario, "MFB", seed=1).planner
-    aim = sensing._aim(start, goal, np.zeros((0, 2)), 0.51, world)
-    assert np.degrees(np.arctan2(aim[1], aim[0])) == pytest.approx(45.0)
-    knowing = Episode(scenario, "MFB", seed=1, params={"knowledge": "map"}).planner
-    aim = knowing._aim(start, goal, knowing._prior, 0.51, world)
-    assert abs(np.degrees(np.arctan2(aim[1], aim[0])) - 45.0) > 5.0
-
-
 def test_knowing_the_map_shortens_the_mfb_path_without_touching():
     sensing, _ = decisions("MFB", steps=120)
     knowing, _ = decisions("MFB", params={"knowledge": "map"}, steps=120)

@@ -56,6 +56,7 @@ from swarmpath.optimizers.base import ParameterError
 from swarmpath.planners import local, sensed_map, swarm_aim
 from swarmpath.planners.base import Decision, Observation, PlannerError, register
 from swarmpath.planners.swarm_escape import Escape
+from swarmpath.planners.swarm_guide import Guide
 from swarmpath.planners.swarm_moves import SwarmMoveLimits
 from swarmpath.planners.swarm_search import searcher
 from swarmpath.robot.sensors import get_sensor_model
@@ -115,6 +116,12 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         "patience": 0,  # stop the swarm after this many iterations without improvement (0: off)
         "tolerance": 1e-6,  # relative improvement that counts for ``patience``
         "knowledge": "sensors",  # "map": the static obstacles are known from the start
+        # knowledge = "map": the global guide (planners.swarm_guide): the exact shortest path
+        # ("optimum"; the cost-to-go's when that gives up) or the cost-to-go's descent, keeping
+        # the planner's safety + carrot_clearance beyond the robot radius (as the known path
+        # does); planned again when the robot is guide_rejoin off it
+        "guide": "optimum",
+        "guide_rejoin": 0.3,  # m
         "aim_hits": "known",  # the known path avoids: "known" (all remembered) or "near"
         "contact_band": 0.2,  # m beyond the body: no move closes on a sensed point this near
         # s without getting closer to the goal by ``escape_progress``: then the known path also
@@ -133,6 +140,7 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         "heuristic": ("visibility", "euclidean"),
         "aim": ("shortcut", "carrot"),
         "knowledge": ("sensors", "map"),
+        "guide": ("optimum", "cost-to-go"),
         "aim_hits": ("known", "near"),
         "backend": BACKENDS,
     }
@@ -153,7 +161,7 @@ class SwarmLocalPlanner(SwarmMoveLimits):
                     "memory", "moving_memory", "trail", "lead", "consistency", "track_gap",
                     "track_scans", "predict", "surface", "carrot_clearance", "rejoin", "hold_angle",
                     "hold_min", "patience", "tolerance", "contact_band", "escape",
-                    "escape_progress", "give_way", "give_way_spread"):
+                    "escape_progress", "give_way", "give_way_spread", "guide_rejoin"):
             if float(p[key]) < 0:
                 raise PlannerError(f"{cls.name}.{key} must be >= 0")
         try:
@@ -192,11 +200,14 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         backend = str(self.p["backend"])
         if backend == "numba":
             _load_kernel()  # compiled or loaded from numba's cache here, not in a decision
-        # knowledge = "map": the static obstacles' surfaces, sampled like sensor hits, are known
-        # for the whole run (as if every static surface had been sensed before the start)
+        # knowledge = "map": the guide to the goal on the static map, whose surfaces near the
+        # robot, sampled like sensor hits, are known at every decision (``_prior``)
         self._prior = np.zeros((0, 2))
+        self._guide: Guide | None = None
         if static_map is not None:
-            self._prior = sensed_map.surface_points(static_map, HIT_CELL)
+            clearance = self._guide_clearance(scenario, static_map)
+            self._guide = Guide(scenario, static_map, scenario.robot.radius, clearance,
+                                str(self.p["guide"]), float(self.p["guide_rejoin"]), None, backend)
         self._memory: list[tuple[float, Array, np.ndarray]] = []  # (time, hits, moving)
         self._last_scan: tuple[float, Array] | None = None
         self._scan: tuple[Array, NDArray[np.bool_]] = (np.zeros((0, 2)), np.zeros(0, dtype=bool))
@@ -254,6 +265,19 @@ class SwarmLocalPlanner(SwarmMoveLimits):
                                 self._streams, backend, str(self.p["repair"]),
                                 str(self.p["objective"]))
 
+    def _guide_clearance(self, scenario: Any, static_map: Any) -> float:
+        """m beyond the robot radius the guide keeps: the largest safety the planner keeps near
+        this map (``_safety``: a diff drive's, or the corner safety on a map with corners or
+        with coarse steps) + ``carrot_clearance``, the known path's rule."""
+        robot = scenario.robot
+        if robot.model == "diff-drive":
+            safety = float(self.p["diff_drive_safety"])
+        elif static_map.polygons or scenario.time_step * robot.linear_speed > 0.05 + 1e-9:
+            safety = float(self.p["corner_safety"])
+        else:
+            safety = float(self.p["safety"])
+        return safety + float(self.p["carrot_clearance"])
+
     # ----------------------------------------------------------------------------- deciding
     def _hold(self, p: Array, aim: Array, ctx: local.StepContext) -> bool:
         """Keep driving to the last swarm waypoint: still ahead, still feasible in the current
@@ -271,6 +295,9 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         return swarm_aim.clear(held, ctx)
 
     def decide(self, obs: Observation) -> Decision:
+        if self._guide is not None:  # the static surfaces within every reach of this decision
+            self._prior = self._guide.near(np.array([obs.pose.x, obs.pose.y]),
+                                           float(self.p["step"]) + float(self.p["lookahead"]))
         return self._keep_off(obs, self._give_way(obs, self._cut(obs, self._decide(obs))))
 
     def _decide(self, obs: Observation) -> Decision:
@@ -301,14 +328,18 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         # map), not only around the hits near enough to touch a candidate (``aim_hits = "near"``):
         # with those alone it ran into obstacles already sensed farther on (icoot-map2, ICOOT,
         # seed 1: 10.2 % above the optimum, 6.4 % with everything known; docs/planners.md).
-        escaping = self._escape.stalled(obs.time, float(np.hypot(*(goal - p))))
-        if escaping:  # ``escape``: the path also avoids every static point sensed since the start
-            known = np.concatenate([known, self._escape.points()])
-        if self.p["aim_hits"] == "known" or escaping:
-            known = sensed_map.condense(known, p, np.inf, float(self.p["map_cell"]), backend)
+        if self._guide is not None:  # knowledge = "map": a point of the guide
+            aim = self._guide.aim(p, goal, plan_hits, margin, float(self.p["lookahead"]),
+                                  str(self.p["aim"]))
         else:
-            known = plan_hits
-        aim = self._aim(p, goal, plan_hits, margin, (0.0, 0.0, float(w), float(h)), known)
+            escaping = self._escape.stalled(obs.time, float(np.hypot(*(goal - p))))
+            if escaping:  # ``escape``: the path also avoids every static point sensed so far
+                known = np.concatenate([known, self._escape.points()])
+            if self.p["aim_hits"] == "known" or escaping:
+                known = sensed_map.condense(known, p, np.inf, float(self.p["map_cell"]), backend)
+            else:
+                known = plan_hits
+            aim = self._aim(p, goal, plan_hits, margin, (0.0, 0.0, float(w), float(h)), known)
         to_goal = float(np.hypot(*(goal - p)))
         lower = np.maximum(p - reach, [0.0, 0.0])
         upper = np.minimum(p + reach, [w, h])
