@@ -57,47 +57,84 @@ def run_tasks(
     task). ``on_done(task)`` is called in this process when a task finished. The first task that
     raises stops the others and its exception is raised here.
     """
-    if jobs < 1:
-        raise ValueError("jobs must be >= 1")
-    report = on_progress or _ignore
-    if jobs == 1 or len(tasks) <= 1:
-        out = []
-        for task in tasks:
-            out.append(compute(task, report))
-            if on_done is not None:
-                on_done(task)
-        return out
-    ctx = multiprocessing.get_context("spawn")
-    progress = ctx.Queue()
-    pool = ProcessPoolExecutor(min(jobs, len(tasks)), mp_context=ctx, initializer=_init_child,
-                               initargs=(progress,))
-    results: dict[int, R] = {}
-    sent = received = 0  # progress put on the queue by the children / taken from it here
-    try:
-        with _single_threaded_children():
-            futures: dict[Future[tuple[R, int, int]], int] = {
-                pool.submit(_child, compute, task): i for i, task in enumerate(tasks)
-            }
-        pending = set(futures)
-        while pending:
-            finished, pending = wait(pending, timeout=PROGRESS_SECONDS,
-                                     return_when=FIRST_COMPLETED)
-            received += _drain(progress, report)
-            for future in finished:
-                i = futures[future]
-                results[i], put, rest = future.result()  # a task's exception is raised here
-                sent += put
-                report(rest)
+    with TaskPool(min(jobs, max(len(tasks), 1)) if jobs >= 1 else jobs) as pool:
+        return pool.run(compute, tasks, on_progress, on_done)
+
+
+class TaskPool:
+    """Child processes kept for several batches of tasks (:meth:`run`), so that a computation in
+    rounds (``swarmpath bench --race``) pays for starting them once. Use it as a context
+    manager; ``jobs`` = 1 computes in this process. The children start with the first batch of
+    more than one task."""
+
+    def __init__(self, jobs: int):
+        if jobs < 1:
+            raise ValueError("jobs must be >= 1")
+        self.jobs = jobs
+        self._pool: ProcessPoolExecutor | None = None
+        self._progress: Any = None
+
+    def __enter__(self) -> TaskPool:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._progress.close()
+            self._pool = None
+
+    def run(
+        self,
+        compute: Compute[T, R],
+        tasks: Sequence[T],
+        on_progress: Callable[[int], None] | None = None,
+        on_done: Callable[[T], None] | None = None,
+    ) -> list[R]:
+        """:func:`run_tasks` of one batch on this pool's processes."""
+        report = on_progress or _ignore
+        if self.jobs == 1 or (self._pool is None and len(tasks) <= 1):
+            out = []
+            for task in tasks:
+                out.append(compute(task, report))
                 if on_done is not None:
-                    on_done(tasks[i])
-        received += _drain(progress, report, sent - received)  # what is still in flight
-    except BaseException:
-        _stop(pool)
-        raise
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
-        progress.close()
-    return [results[i] for i in range(len(tasks))]
+                    on_done(task)
+            return out
+        if self._pool is None:
+            ctx = multiprocessing.get_context("spawn")
+            self._progress = ctx.Queue()
+            with _single_threaded_children():
+                self._pool = ProcessPoolExecutor(self.jobs, mp_context=ctx,
+                                                 initializer=_init_child,
+                                                 initargs=(self._progress,))
+        pool, progress = self._pool, self._progress
+        results: dict[int, R] = {}
+        sent = received = 0  # progress put on the queue by the children / taken from it here
+        try:
+            with _single_threaded_children():
+                futures: dict[Future[tuple[R, int, int]], int] = {
+                    pool.submit(_child, compute, task): i for i, task in enumerate(tasks)
+                }
+            pending = set(futures)
+            while pending:
+                finished, pending = wait(pending, timeout=PROGRESS_SECONDS,
+                                         return_when=FIRST_COMPLETED)
+                received += _drain(progress, report)
+                for future in finished:
+                    i = futures[future]
+                    results[i], put, rest = future.result()  # a task's exception is raised here
+                    sent += put
+                    report(rest)
+                    if on_done is not None:
+                        on_done(tasks[i])
+            received += _drain(progress, report, sent - received)  # what is still in flight
+        except BaseException:
+            _stop(pool)
+            self.close()
+            raise
+        return [results[i] for i in range(len(tasks))]
 
 
 def _ignore(_n: int) -> None:
