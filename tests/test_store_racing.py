@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from pydantic import ValidationError
 
+from swarmpath.evidence.race_report import RACE_COLUMNS
 from swarmpath.evidence.racing import race_block
 from swarmpath.optimizers import minimize
 from swarmpath.service.protocol import expand_cells, parse_job_spec
@@ -162,7 +163,7 @@ def test_a_raced_summary_has_the_race_markers_and_runs(tmp_path):
         drain(store, job)
         summary = store.summary(job)
         race = store.race(job)
-    assert summary["columns"][-3:] == ["race_runs", "race_state", "race_round"]
+    assert summary["columns"][-len(RACE_COLUMNS):] == list(RACE_COLUMNS)
     assert summary["statistics"]["race"] == race
     comparison = summary["statistics"]["comparison"]
     assert comparison["reference"] == "GWO" and comparison["correction"] == "bonferroni"

@@ -253,6 +253,13 @@ def summary_latex(job: str, summary: dict[str, Any]) -> str:
              "practically equivalent / worse (Bayesian bootstrap of the mean, rope 1 % of the "
              "larger distance to the optimum). Bold: the best mean and those not significantly "
              "worse." if reference else "")
+    if st.get("race") and reference:
+        from swarmpath.evidence.race_report import race_legend
+
+        tests = (f" Superscript {race_legend(st['race'], reference)}. A12: Vargha-Delaney effect "
+                 "size; P(b/e/w): posterior probabilities of better / practically equivalent / "
+                 "worse (Bayesian bootstrap of the mean, rope 1 % of the larger distance to the "
+                 "optimum). Bold: the best mean.")
     caption = (f"swarmpath job {job} ({summary['kind']}{state}): {what}; up to {runs} runs per "
                f"cell.{tests}")
     return latex.grid_to_latex(grid, caption, f"tab:swarmpath-{job}")

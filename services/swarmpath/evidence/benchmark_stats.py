@@ -37,6 +37,9 @@ class Statistics:
     stat: str = "mean"
     #: (function, dim) -> the best algorithms by ``stat`` (ties all)
     best: dict[tuple[str, int], set[str]] = field(default_factory=dict)
+    #: a raced study's race document (evidence.race_report.with_race): its markers are the
+    #: comparison's, its cells' runs, decisions and rounds are in the tables
+    race: dict[str, Any] | None = None
 
     @property
     def reference(self) -> str:
@@ -144,19 +147,27 @@ def bayes_lines(tests: Statistics) -> list[str]:
     return [across_line(f"D={dim}", "functions", b, per) for dim, per in b.across.items()]
 
 
-def _effects_text(tests: Statistics) -> str:
-    """What the rows A12, shift, 95% CI and P(b/e/w) mean (the terminal legend and captions)."""
+def _effects_text(tests: Statistics, raced: bool = False) -> str:
+    """What the rows A12, shift, 95% CI and P(b/e/w) mean (the terminal legend and captions);
+    ``raced``: the rows of a raced table (no shift: its interval assumes a fixed sample size)."""
     ref = tests.comparison.reference
     rope = f", {tests.bayes.rope.describe()}" if tests.bayes is not None else ""
+    shift = "" if raced else (f"shift: Hodges-Lehmann estimate of (algorithm - {ref}) with its "
+                              "95 % interval; ")
     return (f"A12: Vargha-Delaney probability that a run beats a run of {ref} (0.5: no effect); "
-            f"shift: Hodges-Lehmann estimate of (algorithm - {ref}) with its 95 % interval; "
-            f"P(b/e/w): posterior probabilities of better / practically equivalent / worse "
+            f"{shift}P(b/e/w): posterior probabilities of better / practically equivalent / worse "
             f"(Bayesian bootstrap of the {tests.stat}{rope}; decision at 0.95)")
 
 
 def legend(tests: Statistics) -> str:
     c = tests.comparison
     what = "median" if tests.stat == "median" else "avg"
+    if tests.race is not None:
+        from swarmpath.evidence.race_report import race_legend
+
+        return (f"{race_legend(tests.race, c.reference)}; * the best {what} (bold); "
+                f"{_effects_text(tests, raced=True)}; Friedman columns: mean rank over the "
+                f"functions (1 = best), +/- = differs from {c.reference} by Holm's post-hoc test")
     return (
         f"+/=/-: significantly better / no significant difference / worse than {c.reference} "
         f"(two-sided Wilcoxon rank-sum test, Holm-adjusted over the table, alpha {c.alpha:g}); "
@@ -169,15 +180,24 @@ def legend(tests: Statistics) -> str:
 def tests_to_json(tests: Statistics) -> dict[str, Any]:
     """The study's tests as JSON: the comparison (every test, its p and Holm-adjusted p, its
     marker, the counts) and the Friedman test per dimension."""
+    if tests.race is not None:
+        from swarmpath.evidence.race_report import comparison_json
+
+        comparison = comparison_json(tests.race, tests.comparison.algorithms,
+                                     tests.comparison.reference)
+    else:
+        comparison = tests.comparison.to_json(key_fields=("function", "dim"))
     doc = {
         "stat": tests.stat,
-        "comparison": tests.comparison.to_json(key_fields=("function", "dim")),
+        "comparison": comparison,
         "friedman": [{"dim": d, **f.to_json()} for d, f in tests.friedman.items()],
         "similar": [{"function": f, "dim": d, "best": sorted(tests.best.get((f, d), ())),
                      "algorithms": sorted(names)} for (f, d), names in tests.similar.items()],
     }
     if tests.bayes is not None:
         doc["bayes"] = tests.bayes.to_json(("function", "dim"), "dim")
+    if tests.race is not None:
+        doc["race"] = tests.race
     return json_clean(doc)
 
 
@@ -185,6 +205,11 @@ def latex_legend(tests: Statistics) -> str:
     """What a LaTeX table's bold cells, superscripts and effect rows mean (its caption)."""
     c = tests.comparison
     what = "median" if tests.stat == "median" else "mean"
+    if tests.race is not None:
+        from swarmpath.evidence.race_report import race_legend
+
+        return (f"Bold: the best {what}. Superscript {race_legend(tests.race, c.reference)}. "
+                f"{_effects_text(tests, raced=True)}.")
     return (
         f"Bold: the best {what} and those not significantly worse (two-sided Wilcoxon "
         f"rank-sum test against the best, Holm-adjusted, alpha {c.alpha:g}). Superscript "

@@ -140,6 +140,8 @@ class Comparison:
     alpha: float
     lower_is_better: bool
     tests: tuple[PairTest, ...]
+    #: how the markers' error rate is held over the table (a race's: Bonferroni)
+    correction: str = "holm"
     _index: dict[tuple[Hashable, str], PairTest] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -171,7 +173,7 @@ class Comparison:
 
         return {
             "test": self.test, "reference": self.reference, "alpha": self.alpha,
-            "correction": "holm", "lower_is_better": self.lower_is_better,
+            "correction": self.correction, "lower_is_better": self.lower_is_better,
             "counts": self.counts(),
             "tests": [
                 {**key_dict(t.key), "algorithm": t.algorithm, "n": t.n,

@@ -14,7 +14,7 @@ from __future__ import annotations
 import re
 from collections.abc import Sequence
 
-from swarmpath.evidence.tables import EFFECT_ROWS, Grid, TCell
+from swarmpath.evidence.tables import NOTE_ROWS, Grid, TCell
 
 PACKAGES = ("booktabs",)
 _SPECIAL = {
@@ -77,7 +77,7 @@ def grid_to_latex(grid: Grid, caption: str, label: str | None = None,
     body = []
     last = len(grid.rows) - 1
     for i, row in enumerate(grid.rows):
-        effect = grid.labels == 3 and row[2].text in EFFECT_ROWS
+        effect = grid.labels == 3 and row[2].text in NOTE_ROWS
         cells = [cell_text(c.text) for c in row[:grid.labels]]
         cells += [_cell(c, grid.markers and not effect) for c in row[grid.labels:]]
         body.append(" & ".join(cells) + r" \\")

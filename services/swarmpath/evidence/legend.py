@@ -64,6 +64,14 @@ NOTES: dict[str, str] = {
     "race_state": "racing (more rounds to come), decided (every comparison of the cell was "
                   "decided) or max_runs (the cell reached the job's runs undecided)",
     "race_round": "the round (0 = the first, min_runs) in which the cell stopped",
+    "race_decision": "the race's decision against the reference: different (the marker says "
+                     "which is better), equivalent (within the race's margin) or open",
+    "race_theta": "the share of paired runs (run r against the reference's run r) this "
+                  "algorithm won, ties half: the race's estimate of P(its run beats the "
+                  "reference's)",
+    "race_low": "lower end of that probability's anytime-valid interval (the race's confidence "
+                "sequence at alpha over the study's comparisons)",
+    "race_high": "upper end of that interval",
     "success_marker": "+/=/- against the reference planner's success rate (Fisher's exact test, "
                       "Holm-adjusted over the table, alpha 0.05)",
     "length_marker": "+/=/- against the reference planner's path lengths (Wilcoxon rank-sum "

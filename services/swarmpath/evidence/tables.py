@@ -5,11 +5,13 @@ its runs, :func:`study_rows`) and for a job's REST summary (its rows): the stati
 :func:`swarmpath.evidence.stats.describe`, ``origin_suspect``, the test against the reference
 (``marker``, ``p_holm``), its effect sizes (``a12``, ``shift``, ``shift_low``, ``shift_high``),
 the Bayesian posterior (``p_better``, ``p_equivalent``, ``p_worse``, ``verdict``) and whether
-the cell is the best or statistically similar to it (``best``, ``similar``).
+the cell is the best or statistically similar to it (``best``, ``similar``); a raced study's
+rows add ``race_*`` (:data:`swarmpath.evidence.race_report.RACE_COLUMNS`).
 
 :func:`benchmark_grid` lays them out: per function and dimension the rows min, max and the
 location and spread of ``--stat`` (avg and std, or median and iqr), then, with a reference, the
-rows A12, shift, 95 % CI and P(b/e/w); one column per algorithm. Pure functions, no I/O.
+rows A12, shift, 95 % CI and P(b/e/w) (a raced study: A12, A paired, P(b/e/w) and race); one
+column per algorithm. Pure functions, no I/O.
 """
 
 from __future__ import annotations
@@ -29,6 +31,13 @@ BEST_MARK, SIMILAR_MARK = "*", "~"
 #: The rows of each function and dimension, per --stat.
 STAT_ROWS = {"mean": ("min", "max", "avg", "std"), "median": ("min", "max", "median", "iqr")}
 EFFECT_ROWS = ("A12", "shift", "95% CI", "P(b/e/w)")
+#: A raced study's rows after the location and spread (evidence.race_report): no fixed-sample
+#: interval; the race's paired score with its confidence-sequence interval, and per cell its
+#: runs, its decision against the reference and the round it stopped in.
+RACE_ROWS = ("A12", "A paired", "P(b/e/w)", "race")
+#: Every row name that carries no location (no marks, no marker).
+NOTE_ROWS = frozenset(EFFECT_ROWS + RACE_ROWS)
+_DECISIONS = {"different": "diff", "equivalent": "equiv", "open": "open"}
 
 
 @dataclass(frozen=True)
@@ -91,10 +100,30 @@ def effect_text(row: Mapping[str, Any], name: str, digits: int = 2) -> str:
         if lo is None or hi is None:
             return ""
         return f"[{format_value(lo, digits)}, {format_value(hi, digits)}]"
+    if name == "A paired":
+        theta, lo, hi = (_num(row.get(k)) for k in ("race_theta", "race_low", "race_high"))
+        if theta is None:
+            return ""
+        return f"{theta:.2f}" + ("" if lo is None or hi is None else f" [{lo:.2f}, {hi:.2f}]")
+    if name == "race":
+        return race_text(row)
     ps = [_num(row.get(k)) for k in ("p_better", "p_equivalent", "p_worse")]
     if any(p is None for p in ps):
         return ""
     return "/".join(f"{p:.2f}" for p in ps if p is not None)
+
+
+def race_text(row: Mapping[str, Any]) -> str:
+    """A raced cell's runs, decision against the reference and stopping round: ``40 diff r3``
+    (the reference: ``40 r3``), ``60 open racing`` while it races on."""
+    runs = row.get("race_runs")
+    if runs is None:
+        return ""
+    decision = row.get("race_decision")
+    word = "" if decision is None else _DECISIONS.get(str(decision), str(decision)) + " "
+    stop = row.get("race_round")
+    when = "racing" if row.get("race_state") == "racing" or stop is None else f"r{stop}"
+    return f"{runs} {word}{when}"
 
 
 def benchmark_grid(
@@ -111,6 +140,8 @@ def benchmark_grid(
     stats = STAT_ROWS[stat]
     loc_name = stats[2]
     origin = any(r.get("origin_suspect") for r in rows)
+    raced = any(r.get("race_runs") is not None for r in rows)
+    notes = RACE_ROWS if raced else EFFECT_ROWS
     grid = Grid(["F", "D", "", *algorithms], ["l", "r", "l", *("r" * len(algorithms))],
                 mark_width=2 if origin else 1, markers=compared and len(algorithms) > 1)
     from swarmpath.evidence.audit import ORIGIN_MARK
@@ -119,15 +150,16 @@ def benchmark_grid(
         present = [by_key.get((function, dim, a)) for a in algorithms]
         lines = list(stats)
         if grid.markers:
-            lines += list(EFFECT_ROWS)
+            lines += list(notes)
         for i, name in enumerate(lines):
             cells = []
             for a, r in zip(algorithms, present, strict=True):
                 if r is None:
                     cells.append(TCell("-"))
                     continue
-                if name in EFFECT_ROWS:
-                    cells.append(TCell(effect_text(r, name, digits) if a != reference else ""))
+                if name in notes:
+                    shown = a != reference or name == "race"
+                    cells.append(TCell(effect_text(r, name, digits) if shown else ""))
                     continue
                 text = format_value(_num(r.get(name)), digits)
                 if name != loc_name:
@@ -153,7 +185,7 @@ def to_rich(grid: Grid, title: str | None = None, caption: str | None = None) ->
     for name, align in zip(grid.header, grid.align, strict=True):
         table.add_column(name, justify="right" if align == "r" else "left", no_wrap=True)
     for i, row in enumerate(grid.rows):
-        effect = row[2].text in EFFECT_ROWS
+        effect = row[2].text in NOTE_ROWS
         texts = [Text(c.text) for c in row[:3]]
         for c in row[3:]:
             s = c.text
@@ -173,6 +205,11 @@ def study_rows(cells: Iterable[Any], tests: Any = None, origin: bool = False
 
     out = []
     index = tests.bayes.index() if tests is not None and tests.bayes is not None else {}
+    race = None
+    if tests is not None and getattr(tests, "race", None):
+        from swarmpath.evidence.race_report import cell_fields
+
+        race = cell_fields(tests.race, tests.reference)
     for c in cells:
         key = (c.function, c.dim)
         row: dict[str, Any] = {"algorithm": c.algorithm, "function": c.function, "dim": c.dim,
@@ -181,6 +218,8 @@ def study_rows(cells: Iterable[Any], tests: Any = None, origin: bool = False
             row["origin_suspect"] = origin_suspect(c.function, c.best_fitness)
         if tests is not None:
             row.update(test_fields(tests, key, c.algorithm, index))
+            if race:
+                row.update(race.get((c.function, c.dim, c.algorithm), ({}, None))[0])
         out.append(row)
     mark_best(out, tests.stat if tests is not None else "mean")
     return out

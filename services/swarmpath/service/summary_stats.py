@@ -15,6 +15,7 @@ from typing import Any
 from swarmpath.evidence import report
 from swarmpath.evidence.compare_maps import MEASURES, SAMPLED
 from swarmpath.evidence.compare_maps import map_statistics as map_tests
+from swarmpath.evidence.race_report import race_line
 from swarmpath.evidence.tables import test_fields
 
 #: Columns added to the benchmark rows, after the existing ones: the test against the reference,
@@ -123,17 +124,3 @@ def statistics_lines(summary: Mapping[str, Any]) -> list[str]:
     if st.get("race"):
         lines.append(race_line(st["race"]))
     return lines
-
-
-def race_line(race: Mapping[str, Any]) -> str:
-    """One line on a race: cells stopped, runs used against the unraced study's."""
-    cells = [c for b in race["blocks"] for c in b["cells"]]
-    used = sum(c["runs"] for c in cells)
-    full = race["settings"]["max_runs"] * len(cells)
-    stopped = sum(not c["racing"] for c in cells)
-    decided = sum(c["reason"] == "decided" for c in cells)
-    s = race["settings"]
-    return (f"race (alpha {s['alpha']:g} over {race['comparisons']} comparisons, min_runs "
-            f"{s['min_runs']}, batch {s['batch']}, margin {s['margin']:g}): {stopped}/"
-            f"{len(cells)} cells stopped ({decided} decided), {used} runs of {full} "
-            f"({full / max(used, 1):.1f}x fewer)")

@@ -11,7 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from swarmpath.evidence.racing import BlockRace, RaceSettings, race_block
+from swarmpath.evidence.race_report import block_json, first_round_json
+from swarmpath.evidence.racing import RaceSettings, race_block
 from swarmpath.service.racing import Blocks, RacingSpec, group_blocks
 from swarmpath.service.store.base import StoreBase, _dumps
 
@@ -90,7 +91,7 @@ class RacesMixin(StoreBase):
                 total += allowance - counts[i][0]
         if total:
             db.execute("UPDATE jobs SET runs_total = runs_total + ? WHERE seq = ?", (total, seq))
-        doc = _block_json(race, members) if race is not None else {"error": True}
+        doc = block_json(race, members) if race is not None else {"error": True}
         db.execute(
             "INSERT INTO races (job_seq, block, state, finished, updated) VALUES (?, ?, ?, ?, ?) "
             "ON CONFLICT (job_seq, block) DO UPDATE SET state = excluded.state, "
@@ -114,27 +115,10 @@ class RacesMixin(StoreBase):
         settings, blocks = ctx
         out = []
         for block, members in blocks.members.items():
-            state = states.get(block) or _first_round(settings, members)
+            state = states.get(block) or first_round_json(settings, members)
             for cell in state.get("cells", []):
                 cell["key"], cell["finished_runs"] = runs[cell["cell"]]
             out.append({"block": json.loads(block), **state})
         return {"settings": settings.to_json(), "comparisons": blocks.comparisons,
                 "blocks": out}
 
-
-def _block_json(race: BlockRace, members: list[tuple[int, str]]) -> dict[str, Any]:
-    return {
-        "rounds": race.rounds,
-        "finished": race.finished,
-        "cells": [{"cell": i, "algorithm": name, "runs": race.allowance[name],
-                   "racing": race.racing[name], "stopped_round": race.stopped_round[name],
-                   "reason": race.stop_reason[name]} for i, name in members],
-        "duels": [d.to_json() for d in race.duels],
-    }
-
-
-def _first_round(settings: RaceSettings, members: list[tuple[int, str]]) -> dict[str, Any]:
-    return {"rounds": 0, "finished": False, "duels": [],
-            "cells": [{"cell": i, "algorithm": name, "runs": settings.allowance(0),
-                       "racing": True, "stopped_round": None, "reason": None}
-                      for i, name in members]}

@@ -10,10 +10,10 @@ from collections.abc import Sequence
 from typing import Any
 
 from swarmpath.evidence.audit import origin_suspect
+from swarmpath.evidence.race_report import RACE_COLUMNS, apply_race
 from swarmpath.failure_classes import count_classes
 from swarmpath.path_metrics import PATH_METRICS
 from swarmpath.service.cell_notes import CellNotes, cell_notes, job_warnings
-from swarmpath.service.racing import RACE_COLUMNS, apply_race
 from swarmpath.service.store.base import StoreBase, _safe
 from swarmpath.service.summary_stats import (
     BENCHMARK_TEST_COLUMNS,
@@ -184,7 +184,7 @@ class SummariesMixin(StoreBase):
                 job_spec.get("reference"),
             )
             race = self.race(job_id) if job_spec.get("racing") else None
-            if race is not None:  # the race decided the markers (service.racing.apply_race)
+            if race is not None:  # the race decided the markers (evidence.race_report)
                 statistics.update(apply_race(rows, race, job_spec["algorithms"],
                                              job_spec.get("reference")))
         else:
