@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any
@@ -24,7 +24,7 @@ from rich.measure import Measurement
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from swarmpath import __version__
-from swarmpath.cli import parallel
+from swarmpath.cli import bench_race, parallel
 from swarmpath.cli.bench_spec import BenchSpec, check_range, make_spec
 from swarmpath.cli.core import InputError, app, plot_dir
 from swarmpath.cli.study_options import (
@@ -46,8 +46,10 @@ from swarmpath.cli.study_options import (
 )
 from swarmpath.evidence import anytime, audit, report
 from swarmpath.evidence.benchmark_stats import bayes_lines, latex_legend
+from swarmpath.evidence.race_report import race_line, with_race
 from swarmpath.functions import get_function
 from swarmpath.optimizers import ParameterError, minimize_many
+from swarmpath.parallel import TaskPool
 from swarmpath.provenance import numeric_platform
 
 #: Rough CPU seconds per population element and iteration (23 ms per run of 30 x 30 x 500).
@@ -74,27 +76,33 @@ class Task:
         return len(self.functions) * len(self.run_ids)
 
 
-def plan_tasks(spec: BenchSpec, cells: Sequence[tuple[str, int, str]] | None = None) -> list[Task]:
-    """The tasks computing ``cells`` (default: every cell of ``spec``), largest first.
+CellKey = tuple[str, int, str]  # (function, dim, algorithm)
 
-    Per algorithm and dimension, the noiseless functions share a stack and each noisy one (F7)
-    gets its own (``minimize_many`` never stacks it). A task holds at most ``BATCH_ELEMENTS``
-    array elements per population (and per convergence-curve array), so memory stays bounded
-    whatever the runs, dimensions or iterations.
+
+def plan_tasks(spec: BenchSpec, cells: Sequence[CellKey] | None = None,
+               ranges: Mapping[CellKey, tuple[int, int]] | None = None) -> list[Task]:
+    """The tasks computing ``cells`` (default: every cell of ``spec``), largest first: runs
+    0..runs-1 of each, or ``ranges[cell]`` = (first run, end) (a race's next round).
+
+    Per algorithm, dimension and run range, the noiseless functions share a stack and each noisy
+    one (F7) gets its own (``minimize_many`` never stacks it). A task holds at most
+    ``BATCH_ELEMENTS`` array elements per population (and per convergence-curve array), so
+    memory stays bounded whatever the runs, dimensions or iterations.
     """
     keys = spec.cells() if cells is None else list(cells)
-    groups: dict[tuple[str, int], list[str]] = {}
+    groups: dict[tuple[str, int, int, int], list[str]] = {}
     for function, dim, algorithm in keys:
-        groups.setdefault((algorithm, dim), []).append(function)
+        first, end = (0, spec.runs) if ranges is None else ranges[(function, dim, algorithm)]
+        groups.setdefault((algorithm, dim, first, end), []).append(function)
     tasks: list[Task] = []
-    for (algorithm, dim), functions in groups.items():
+    for (algorithm, dim, first, end), functions in groups.items():
         noisy = [f for f in functions if get_function(f).noisy]
         stacks = [[f for f in functions if f not in noisy], *[[f] for f in noisy]]
         for stack in filter(None, stacks):
             per_row = max(spec.agents * dim, spec.iterations_for(algorithm, dim))
-            size = max(1, min(spec.runs, BATCH_ELEMENTS // (len(stack) * per_row)))
-            for start in range(0, spec.runs, size):
-                ids = tuple(range(start, min(start + size, spec.runs)))
+            size = max(1, min(end - first, BATCH_ELEMENTS // (len(stack) * per_row)))
+            for start in range(first, end, size):
+                ids = tuple(range(start, min(start + size, end)))
                 tasks.append(Task(algorithm, dim, tuple(stack), ids))
     # largest first, so that the processes finish together (stable: table order among equals)
     tasks.sort(key=lambda t: -t.rows * t.dim)
@@ -105,22 +113,26 @@ def run_bench(
     spec: BenchSpec,
     on_step: Callable[[int], None] | None = None,
     jobs: int = 1,
-    cells: Sequence[tuple[str, int, str]] | None = None,
+    cells: Sequence[CellKey] | None = None,
     on_done: Callable[[Task], None] | None = None,
+    ranges: Mapping[CellKey, tuple[int, int]] | None = None,
+    pool: TaskPool | None = None,
 ) -> list[report.Cell]:
-    """Every cell of the study (or the given ``cells``), in table order and ranked.
+    """Every cell of the study (or the given ``cells``, each with the runs of ``ranges``), in
+    table order and ranked.
 
     The tasks of :func:`plan_tasks` run in this process (``jobs`` = 1) or in ``jobs`` spawned
-    processes (:mod:`swarmpath.cli.parallel`); each run depends only on (spec, seed, run), so the
-    numbers are the same for any ``jobs``. ``on_step(rows)`` reports (function, run) rows that
-    advanced one iteration, ``on_done(task)`` a finished task; both are called in this process.
+    processes (:mod:`swarmpath.cli.parallel`; or on ``pool``'s); each run depends only on
+    (spec, seed, run), so the numbers are the same for any ``jobs`` and any ranges.
+    ``on_step(rows)`` reports (function, run) rows that advanced one iteration,
+    ``on_done(task)`` a finished task; both are called in this process.
     """
     keys = spec.cells() if cells is None else list(cells)
-    tasks = plan_tasks(spec, keys)
-    done = parallel.run_tasks(
-        _compute, [(spec, t) for t in tasks], jobs, on_step,
-        None if on_done is None else (lambda job: on_done(job[1])),
-    )
+    tasks = plan_tasks(spec, keys, ranges)
+    finished = None if on_done is None else (lambda job: on_done(job[1]))
+    jobs_ = [(spec, t) for t in tasks]
+    done = (parallel.run_tasks(_compute, jobs_, jobs, on_step, finished) if pool is None
+            else pool.run(_compute, jobs_, on_step, finished))
     parts: dict[tuple[str, str, int], list[Any]] = {}
     for results in done:
         for res in results:
@@ -185,7 +197,7 @@ def run_cell(
     return cell
 
 
-def caption(spec: BenchSpec, seconds: float | None) -> str:
+def caption(spec: BenchSpec, seconds: float | None, race: dict[str, Any] | None = None) -> str:
     moved = "" if spec.transform == "none" else f", transform {spec.transform}"
     backend = "" if spec.backend == "numpy" else f", backend {spec.backend}"
     length = (f"{spec.iterations} iterations" if spec.budget_evals is None else
@@ -198,7 +210,11 @@ def caption(spec: BenchSpec, seconds: float | None) -> str:
         if spec.instances is not None:
             errors += (f", instances {_ranges(spec.instances)}"
                        + (" pooled" if spec.pool_instances else ""))
-    setting = (f"{spec.runs} runs, {spec.agents} agents, {length}, seed {spec.seed}"
+    runs = f"{spec.runs} runs"
+    if race is not None:
+        used = sum(c["runs"] for b in race["blocks"] for c in b["cells"])
+        runs = f"raced: at most {spec.runs} runs a cell, {used} in all"
+    setting = (f"{runs}, {spec.agents} agents, {length}, seed {spec.seed}"
                f"{moved}{backend}{errors}")
     if seconds is None:  # a paper's caption: what was run
         dims = ", ".join(str(d) for d in spec.dims)
@@ -322,6 +338,12 @@ def bench(
                            "L-SHADE, jSO and RS (random search) to the algorithms; the markers "
                            "still compare against the last algorithm you named.")
     ] = False,
+    race: bench_race.RaceOpt = False,
+    race_alpha: bench_race.RaceAlphaOpt = None,
+    race_min_runs: bench_race.RaceMinRunsOpt = None,
+    race_batch: bench_race.RaceBatchOpt = None,
+    race_margin: bench_race.RaceMarginOpt = None,
+    race_pairs: bench_race.RacePairsOpt = None,
 ) -> None:
     """Run optimizers on benchmark functions; print min/max/avg/std (or median/IQR) per function
     and dimension, with Wilcoxon rank-sum markers, effect sizes and Bayesian probabilities
@@ -333,12 +355,19 @@ def bench(
                      reference, transform, backend, instances, budget_evals, pool_instances,
                      baselines)
     check_range("--jobs", jobs, 0, parallel.MAX_JOBS)
+    racing = bench_race.race_settings(spec, race, race_alpha, race_min_runs, race_batch,
+                                      race_margin, race_pairs)
     if plot is not None:
         plot = plot_dir(plot, "--plot")
     stderr = Console(stderr=True)
     started = time.perf_counter()
+    the_race = None
     try:
-        cells = _run_with_progress(spec, stderr, jobs or auto_jobs(spec))
+        if racing is None:
+            cells = _run_with_progress(spec, stderr, jobs or auto_jobs(spec))
+        else:
+            cells, the_race = bench_race.race_with_progress(spec, racing, stderr,
+                                                            jobs or auto_jobs(spec))
     except ParameterError as exc:  # a check only the optimizer's constructor makes
         raise InputError("--params", str(exc)) from None
     if spec.pool_instances:
@@ -347,6 +376,8 @@ def bench(
         cells = pool(cells)
     seconds = time.perf_counter() - started
     tests = report.statistics(cells, spec.algorithms, spec.reference, stat=stat, rope=the_rope)
+    if the_race is not None:  # the race's decisions, not rank-sum tests after optional stopping
+        tests = with_race(tests, the_race)
     groups = (anytime.study_groups(cells, spec.agents, spec.iterations)
               if as_json or plot is not None or show_anytime else {})
     if plot is not None:
@@ -366,12 +397,18 @@ def bench(
         doc = report.study_to_json(spec.settings(), cells, seconds, __version__, tests)
         doc["platform"] = numeric_platform()
         doc["anytime"] = anytime.groups_to_json(groups)
+        if the_race is not None:
+            doc["settings"]["racing"] = the_race["settings"]
+            doc["race"] = the_race
+            doc["race_summary"] = bench_race.race_summary(the_race)
         sys.stdout.write(json.dumps(doc, allow_nan=False) + "\n")
         return
     if fmt == "latex":
         sys.stdout.write(latex_table(spec, cells, tests))
         return
     print_tables(spec, cells, seconds, tests)
+    if the_race is not None:
+        Console().print(race_line(the_race), highlight=False)
     if show_anytime:
         print_anytime(groups, spec.algorithms)
 
@@ -396,7 +433,7 @@ def latex_table(spec: BenchSpec, cells: Sequence[report.Cell], tests: report.Sta
     multi = len(spec.algorithms) > 1
     grid = report.study_grid(cells, spec.algorithms, tests=tests if multi else None,
                              origin=spec.transform == "none")
-    text = caption(spec, None) + (f". {latex_legend(tests)}" if multi else ".")
+    text = caption(spec, None, tests.race) + (f". {latex_legend(tests)}" if multi else ".")
     return latex.grid_to_latex(grid, text, "tab:swarmpath-bench")
 
 
@@ -415,7 +452,7 @@ def print_tables(
         width = Measurement.get(console, console.options.update(width=100_000), table).maximum
         console = Console(width=max(80, width))
     console.print(table)
-    console.print(caption(spec, seconds), highlight=False)
+    console.print(caption(spec, seconds, tests.race if tests else None), highlight=False)
     if plain and report.origin_suspects(cells):
         console.print(audit.ORIGIN_FOOTNOTE, highlight=False)
     if multi:
