@@ -325,3 +325,35 @@ def test_a_jobs_first_results_are_not_read_back_from_the_store(client, app, monk
     del dash._jobs[job]  # evicted while running: the next batch rebuilds it
     second = one_lease()
     assert dash.aggregates(job).finished_runs() == first + second and reads == [job]
+
+
+RACED = {"kind": "benchmark", "algorithms": ["PSO", "GWO"], "functions": ["F10"], "dims": [5],
+         "runs": 60, "agents": 8, "iterations": 30, "seed": 3,
+         "racing": {"min_runs": 10, "batch": 10}}
+
+
+def test_a_raced_job_page_holds_every_run_the_race_gives(client, app, monkeypatch):
+    """The page is opened when each cell may have 10 runs (the first round); the race then gives
+    them more, up to the job's runs: every finished run is on the page, fed live and built from
+    the store, and the page says the job races (the job page then shows GET /jobs/{id}/race)."""
+    from swarmpath.service.web import live
+
+    monkeypatch.setattr(live, "VIEW_SECONDS", 0.0)
+    core = app.state.core
+    job = client.post("/jobs", json=RACED).json()["id"]
+    first = client.get(f"/ui/jobs/{job}/data").json()
+    assert first["racing"] is True and first["finished"] == 0
+    work_off(core)
+    status = client.get(f"/jobs/{job}").json()
+    race = client.get(f"/jobs/{job}/race").json()
+    runs = {c["algorithm"]: c["runs"] for c in race["blocks"][0]["cells"]}
+    assert status["state"] == "done" and max(runs.values()) > 10  # the race went past round 0
+    data = client.get(f"/ui/jobs/{job}/data").json()
+    assert data["finished"] == status["runs_done"] == sum(runs.values())
+    for a, cell in data["groups"][0]["algorithms"].items():
+        assert cell["runs"] == runs[a]
+    cold = Dashboard(core.store).aggregates(job)  # as after a restart
+    assert cold is not None and cold.finished_runs() == sum(runs.values())
+    assert cold.view()["racing"] is True
+    plain = client.post("/jobs", json={k: v for k, v in RACED.items() if k != "racing"}).json()
+    assert client.get(f"/ui/jobs/{plain['id']}/data").json()["racing"] is False

@@ -63,9 +63,10 @@ class JobAggregates:
     """The dashboard's state of one job (see the module docstring). Thread-safe."""
 
     def __init__(self, job_id: str, kind: str, cells: Sequence[Mapping[str, Any]],
-                 seed: int = 0, reference: str | None = None):
+                 seed: int = 0, reference: str | None = None, racing: bool = False):
         self.job_id = job_id
         self.reference = reference  # the statistics' reference (None: the last one listed)
+        self.racing = racing  # a raced job: the page shows its race (GET /jobs/{id}/race)
         self.kind = kind
         self.version = 0  # bumped by every add(): a client's cached copy is current if equal
         self.loading = False  # being read from the store: the view is still incomplete
@@ -260,7 +261,7 @@ class JobAggregates:
         return {"job_id": self.job_id, "kind": "benchmark", "version": self.version,
                 "loading": self.loading, "finished": self.finished,
                 "runs_per_cell": self.runs_per_cell, "legend": legend(BENCHMARK_LEGEND),
-                "algorithms": algorithms, "groups": list(groups.values()),
+                "racing": self.racing, "algorithms": algorithms, "groups": list(groups.values()),
                 "statistics": benchmark_statistics(samples, groups, algorithms,
                                                    self.reference)}
 

@@ -109,8 +109,7 @@ class Dashboard:
             with self._lock:
                 job = self._jobs.get(job_id)
                 if job is None:
-                    job = JobAggregates(job_id, status.kind, cells, spec.seed,
-                                        getattr(spec, "reference", None))
+                    job = _job_aggregates(job_id, status.kind, cells, spec)
                     self._jobs[job_id] = job
                     if adding and status.state not in FINAL_STATES \
                             and status.runs_done + status.runs_failed == adding:
@@ -159,8 +158,7 @@ class Dashboard:
             else:
                 if job.finished_runs():  # a stale file: start again from the store
                     job.set_loading(False)
-                    job = JobAggregates(job_id, status.kind, cells, spec.seed,
-                                        getattr(spec, "reference", None))
+                    job = _job_aggregates(job_id, status.kind, cells, spec)
                     job.set_loading(True)
                     with self._lock:
                         self._jobs[job_id] = job
@@ -392,3 +390,14 @@ class Dashboard:
 
 def _encode(view: Mapping[str, Any]) -> bytes:
     return json.dumps(json_safe(dict(view)), separators=(",", ":")).encode()
+
+
+def _job_aggregates(job_id: str, kind: str, cells: list[dict[str, Any]], spec: Any
+                    ) -> JobAggregates:
+    """A job's empty aggregates. A raced job's cells hold as many runs as the job's ``runs``
+    (its ``max_runs``), not their allowance so far: the race gives them more as it goes."""
+    racing = getattr(spec, "racing", None) is not None
+    if racing:
+        cells = [{**c, "runs": spec.runs} for c in cells]
+    return JobAggregates(job_id, kind, cells, spec.seed, getattr(spec, "reference", None),
+                         racing=racing)
