@@ -243,6 +243,56 @@ def test_benchmark_job_page_table_curves_and_boxes(server, jobs, browser):
     assert "/runs/" in browser.current_url
 
 
+# a race of three rounds and more (FDO decided after 40 runs, PSO after 30: see test_bench_race)
+RACED = {"kind": "benchmark", "algorithms": ["FDO", "PSO", "GWO"], "functions": ["F1", "F10"],
+         "dims": [5], "runs": 60, "agents": 8, "iterations": 30, "seed": 3,
+         "racing": {"min_runs": 10, "batch": 10}}
+
+
+def test_raced_job_page_shows_the_race(server, browser):
+    """Per cell its runs, state and round, per pair its verdict, round, pairs and interval, the
+    runs spent against the unraced job's, and the table's markers are the race's decisions."""
+    import httpx
+
+    url, app = server
+    r = httpx.post(f"{url}/jobs", json=RACED)
+    assert r.status_code == 201, r.text
+    job = r.json()["id"]
+    work_off(app.state.core)
+    race = httpx.get(f"{url}/jobs/{job}/race").json()
+    browser.get(f"{url}/ui/jobs/{job}")
+    pairs = wait_for(browser, "#race-pairs tbody tr", 4)
+    assert len(pairs) == sum(len(b["duels"]) for b in race["blocks"]) == 4
+    shown = {row.get_attribute("data-pair"): row.text for row in pairs}
+    markers = {}
+    for b in race["blocks"]:
+        f, d = b["block"]["function"], b["block"]["dim"]
+        for duel in b["duels"]:
+            text = shown[f"{f}/{d}/{duel['a']}/{duel['b']}"]
+            verdict = (f"{duel['better']} better" if duel["decision"] == "different"
+                       else duel["decision"])
+            assert f"{duel['a']} vs {duel['b']}" in text and verdict in text
+            assert f"r{duel['round']}" in text and f"{duel['theta']:.3f}" in text
+            assert duel["b"] == "GWO"
+            markers[(f, duel["a"])] = duel["marker"]
+        row = browser.find_element(By.CSS_SELECTOR, f'#race-cells tr[data-block="{f}/{d}"]')
+        for c in b["cells"]:
+            cell = row.find_element(By.CSS_SELECTOR, f'td[data-algorithm="{c["algorithm"]}"]')
+            assert cell.text == f"{c['runs']} · {c['reason']} r{c['stopped_round']}"
+    used = sum(c["runs"] for b in race["blocks"] for c in b["cells"])
+    assert used < 6 * 60
+    assert f"{used} runs of {6 * 60}" in browser.find_element(By.ID, "race-line").text
+    for row in browser.find_elements(By.CSS_SELECTOR, "#pivot tbody tr"):
+        f = row.get_attribute("data-group").split("/")[0]
+        cells = row.find_elements(By.CSS_SELECTOR, "td")[2:]
+        for a, cell in zip(RACED["algorithms"], cells, strict=True):
+            got = cell.find_elements(By.CSS_SELECTOR, ".marker")
+            assert (got[0].text if got else None) == markers.get((f, a))
+    legend = browser.find_element(By.CSS_SELECTOR, "#content p.legend").text
+    assert "the race's decisions" in legend and "Wilcoxon" not in legend
+    shot(browser, "job-raced")
+
+
 def test_map_job_page_paths_failures_and_boxes(server, jobs, browser):
     url, app = server
     browser.get(f"{url}/ui/jobs/{jobs['map']}")

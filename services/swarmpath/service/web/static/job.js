@@ -10,6 +10,7 @@
   main.insertAdjacentHTML("beforeend", `<p id="summary"></p><p class="downloads" id="downloads"></p>
     <div id="content"></div><p class="legend" id="notes"></p><dl class="legend" id="legend"></dl>`);
   let etag = null, colors = {}, status = null, loading = false;
+  let race = null; /* a raced job's GET /jobs/{id}/race, fetched with each new data */
 
   function color(name, list) {
     if (!(name in colors)) colors[name] = SP.color(list.indexOf(name));
@@ -43,7 +44,8 @@
     const e = per && per[name];
     if (!e) return "";
     const p = (v) => (v === null || v === undefined ? "-" : v.toFixed(2));
-    const title = e.shift !== undefined ? `Hodges-Lehmann shift ${SP.num(e.shift, 3)} [${SP.num(e.shift_low, 3)}, ${SP.num(e.shift_high, 3)}]` : "";
+    /* a raced job: no shift interval (it assumes a fixed number of runs) */
+    const title = !race && e.shift !== undefined ? `Hodges-Lehmann shift ${SP.num(e.shift, 3)} [${SP.num(e.shift_low, 3)}, ${SP.num(e.shift_high, 3)}]` : "";
     return `<div class="effect" title="${title}">A12 ${p(e.a12)}` + (e.p_better !== undefined
       ? ` &middot; P ${p(e.p_better)}/${p(e.p_equivalent)}/${p(e.p_worse)}` : "") + `</div>`;
   }
@@ -51,13 +53,14 @@
   function pivot(data) {
     const st = data.statistics || { markers: {}, counts: {}, friedman: {} };
     const algs = data.algorithms;
+    const raced = race && st.reference ? raceMarkers(race, st.reference) : null;
     let html = `<h2>Best fitness: mean (std) over runs</h2><table id="pivot"><thead><tr><th class="l">function</th><th>dim</th>`
       + algs.map((a) => `<th>${SP.esc(a)}</th>`).join("") + `</tr></thead><tbody>`;
     for (const g of data.groups) {
       html += `<tr data-group="${g.function}/${g.dim}"><td class="l">${g.function}</td><td>${g.dim}</td>`;
       for (const a of algs) {
         const c = g.algorithms[a], d = c && c.describe;
-        const m = (st.markers[g.function + "/" + g.dim] || {})[a];
+        const m = ((race ? raced.markers : st.markers)[g.function + "/" + g.dim] || {})[a];
         const run = c && c.best_run !== null && c.best_run !== undefined ? c.cell * data.runs_per_cell + c.best_run : null;
         const value = d ? SP.num(d.avg, 3) + " (" + SP.sig(d.std, 2) + ")" : "-";
         html += `<td class="${g.best.includes(a) ? "best" : ""}">${run === null ? value
@@ -69,7 +72,7 @@
     html += "</tbody><tfoot>";
     if (st.reference) {
       html += `<tr><th class="l" colspan="2">+/=/- vs ${SP.esc(st.reference)}</th>` + algs.map((a) => {
-        const c = st.counts[a];
+        const c = (raced ? raced.counts : st.counts)[a];
         return `<td>${c ? `${c["+"]}/${c["="]}/${c["-"]}` : "ref."}</td>`;
       }).join("") + "</tr>";
       for (const dim in st.friedman) {
@@ -79,14 +82,63 @@
       }
     }
     html += "</tfoot></table>";
-    if (st.reference) html += `<p class="legend">Bold: lowest mean. Markers: Wilcoxon rank-sum test of each algorithm's best fitness against ${SP.esc(st.reference)} (Holm-adjusted over the table, alpha ${st.alpha}): + significantly better, = no significant difference, - significantly worse. A12: Vargha-Delaney effect size, the probability that a run beats a run of ${SP.esc(st.reference)} (0.5: no effect; hover for the Hodges-Lehmann shift and its 95 % interval). P: posterior probabilities of better / practically equivalent / worse (Bayesian bootstrap of the mean, rope ${SP.esc(st.rope || "")} of the larger distance to the optimum). Mean rank: Friedman ranks of the means over the functions (1 = best).</p>`;
+    if (raced) html += `<p class="legend">Bold: lowest mean. Markers: the race's decisions against ${SP.esc(st.reference)} (below): + better, - worse, = not decided different (equivalent, or still open). A12: Vargha-Delaney effect size, the probability that a run beats a run of ${SP.esc(st.reference)}. P: posterior probabilities of better / practically equivalent / worse (Bayesian bootstrap of the mean, rope ${SP.esc(st.rope || "")} of the larger distance to the optimum). Mean rank: Friedman ranks of the means over the functions (1 = best).</p>`;
+    else if (st.reference) html += `<p class="legend">Bold: lowest mean. Markers: Wilcoxon rank-sum test of each algorithm's best fitness against ${SP.esc(st.reference)} (Holm-adjusted over the table, alpha ${st.alpha}): + significantly better, = no significant difference, - significantly worse. A12: Vargha-Delaney effect size, the probability that a run beats a run of ${SP.esc(st.reference)} (0.5: no effect; hover for the Hodges-Lehmann shift and its 95 % interval). P: posterior probabilities of better / practically equivalent / worse (Bayesian bootstrap of the mean, rope ${SP.esc(st.rope || "")} of the larger distance to the optimum). Mean rank: Friedman ranks of the means over the functions (1 = best).</p>`;
+    return html;
+  }
+
+  /* A race's markers against the reference per "function/dim" and their +/=/- counts. */
+  function raceMarkers(r, ref) {
+    const markers = {}, counts = {};
+    for (const b of r.blocks) {
+      const key = b.block.function + "/" + b.block.dim;
+      for (const d of b.duels) {
+        let name = null, m = d.marker;
+        if (d.b === ref) name = d.a;
+        else if (d.a === ref) { name = d.b; m = { "+": "-", "-": "+", "=": "=" }[m]; }
+        if (name === null) continue;
+        (markers[key] = markers[key] || {})[name] = m;
+        const c = (counts[name] = counts[name] || { "+": 0, "=": 0, "-": 0 });
+        c[m] += 1;
+      }
+    }
+    return { markers: markers, counts: counts };
+  }
+
+  /* The race (docs/statistics.md, Racing): a summary line, per function and dimension each
+     cell's runs, state and stopping round, and each pair's verdict, round and interval. */
+  function raceTables(r, algs) {
+    const s = r.settings;
+    const cells = r.blocks.flatMap((b) => b.cells);
+    const used = cells.reduce((n, c) => n + c.runs, 0), full = s.max_runs * cells.length;
+    const stopped = cells.filter((c) => !c.racing).length, decided = cells.filter((c) => c.reason === "decided").length;
+    let html = `<h2>Race</h2><p id="race-line">alpha ${s.alpha} over ${r.comparisons} comparisons (Bonferroni), min_runs ${s.min_runs}, batch ${s.batch}, margin ${s.margin}, at most ${s.max_runs} runs a cell: ${stopped}/${cells.length} cells stopped (${decided} decided), <b>${used} runs of ${full}</b> (${(full / Math.max(used, 1)).toFixed(1)}x fewer)</p>`;
+    html += `<table id="race-cells"><thead><tr><th class="l">function</th><th>dim</th>` + algs.map((a) => `<th>${SP.esc(a)}</th>`).join("") + `<th>rounds</th></tr></thead><tbody>`;
+    for (const b of r.blocks) {
+      const by = {}; for (const c of b.cells) by[c.algorithm] = c;
+      html += `<tr data-block="${SP.esc(b.block.function)}/${b.block.dim}"><td class="l">${SP.esc(b.block.function)}</td><td>${b.block.dim}</td>` + algs.map((a) => {
+        const c = by[a];
+        if (!c) return "<td>-</td>";
+        const state = c.racing ? "racing" : `${c.reason} r${c.stopped_round}`;
+        return `<td data-algorithm="${SP.esc(a)}" title="${c.finished_runs} runs finished">${c.runs} &middot; ${SP.esc(state)}</td>`;
+      }).join("") + `<td>${b.rounds}${b.finished ? "" : "+"}</td></tr>`;
+    }
+    html += `</tbody></table><table id="race-pairs"><thead><tr><th class="l">function</th><th>dim</th><th class="l">pair</th><th class="l">verdict</th><th>round</th><th>pairs</th><th>P(a's run beats b's) [interval]</th></tr></thead><tbody>`;
+    for (const b of r.blocks) for (const d of b.duels) {
+      const verdict = d.decision === "different" ? `${d.better} better` : d.decision;
+      const theta = d.theta === null ? "" : `${d.theta.toFixed(3)} [${SP.num(d.low, 3)}, ${SP.num(d.high, 3)}]`;
+      html += `<tr data-pair="${SP.esc(b.block.function)}/${b.block.dim}/${SP.esc(d.a)}/${SP.esc(d.b)}"><td class="l">${SP.esc(b.block.function)}</td><td>${b.block.dim}</td>
+        <td class="l">${SP.esc(d.a)} vs ${SP.esc(d.b)}</td><td class="l verdict-${d.decision}">${SP.esc(verdict)} <span class="marker">${d.marker}</span></td>
+        <td>${d.round === null ? (b.finished ? "-" : "open") : "r" + d.round}</td><td>${d.pairs}</td><td>${theta}</td></tr>`;
+    }
+    html += `</tbody></table><p class="legend">Cells: the runs the race gave each (at most ${s.max_runs}), and whether it still races or why it stopped (decided: every comparison it is part of is decided; max_runs: it reached the job's runs undecided) in round rK (min_runs + K x batch runs). Pairs: each comparison's verdict (different: the better one named; equivalent: within the margin of 1/2; open: not decided), the round that decided it, the paired runs it used, and the share of paired runs (run r against run r) a won, ties half, with its anytime-valid confidence-sequence interval at alpha over the job's comparisons (docs/statistics.md, Racing). The markers in the table above are these decisions, not rank-sum tests (their p-values are not valid after stopping early).</p>`;
     return html;
   }
 
   function renderBenchmark(data) {
     const algs = data.algorithms;
     const content = SP.q("#content");
-    content.innerHTML = pivot(data) + `<h2>Convergence and best fitness per function and dimension</h2><div id="charts"></div>`;
+    content.innerHTML = pivot(data) + (race ? raceTables(race, algs) : "") + `<h2>Convergence and best fitness per function and dimension</h2><div id="charts"></div>`;
     const charts = SP.q("#charts");
     for (const g of data.groups) {
       const row = document.createElement("div");
@@ -225,6 +277,10 @@
     const r = due ? await SP.api(`/ui/jobs/${encodeURIComponent(id)}/data`, { headers: headers }) : { status: 304 };
     if (r.status === 200) {
       etag = r.headers.get("etag");
+      if (r.data.racing) {
+        const rr = await SP.api(`/jobs/${encodeURIComponent(id)}/race`);
+        race = rr.ok ? rr.data : null;
+      }
       if (r.data.kind === "benchmark") renderBenchmark(r.data); else await renderMap(r.data);
       SP.q("#legend").innerHTML = (r.data.legend || []).map(([c, t]) => `<dt>${SP.esc(c)}</dt><dd>${SP.esc(t)}</dd>`).join("");
       SP.q("#notes").textContent = r.data.kind === "benchmark"
