@@ -190,3 +190,24 @@ def test_a_reproduction_table_on_a_suite_runs_its_budget_and_pooled_instances():
     assert sorted({(c.function, c.algorithm) for c in cells}) == [
         ("bbob:f1", "GWO"), ("bbob:f1", "PSO"), ("bbob:f7", "GWO"), ("bbob:f7", "PSO")]
     assert all(len(c.best_fitness) == 4 and max(c.evaluations) <= 120 for c in cells)
+
+
+def test_a_table_s_error_floor_makes_errors_below_it_equal():
+    """cmaes-pycma-bbob-d5 states COCO's 1e-8: a run at 1e-14 against a published 0 is equal
+    there, and hundreds of decades worse without it (bbob resolves errors to the last bit)."""
+    from swarmpath.evidence.reference import BenchmarkTable
+    from swarmpath.evidence.reproduction import benchmark_rows
+
+    def table(setting_extra):
+        return BenchmarkTable(
+            name="floor-demo", source={}, setting={"runs": 3, "agents": 5, "iterations": 5,
+                                                   "dims": [5], **setting_extra},
+            algorithms=("CMA-ES",), functions=("bbob:f1",), stats=("min", "max", "avg", "std"),
+            notes=(), cell_notes={},
+            cells={("bbob:f1", "CMA-ES"): {"min": 0.0, "max": 0.0, "avg": 0.0, "std": 0.0}})
+
+    runs = {("bbob:f1", "CMA-ES"): [1e-14, 2e-14, 3e-14]}
+    (floored,) = benchmark_rows(table({"error_floor": 1e-8}), runs, {})
+    (raw,) = benchmark_rows(table({}), runs, {})
+    assert floored.log10_ratio == 0.0 and floored.verdict in ("matches", "consistent")
+    assert raw.log10_ratio > 10 and raw.verdict == "worse"

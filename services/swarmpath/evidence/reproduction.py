@@ -8,7 +8,8 @@ cell). ``swarmpath reproduce`` runs the study and calls these; the statistics of
 Benchmark cells are compared on ``f - f_min`` (so F8, whose minimum is -418.98 x dim, compares
 gaps to the optimum; for every other function f_min = 0), every value raised to the function's
 floating-point floor (the value its kernel returns at the optimum, times 4; the smallest normal
-float where that is 0), so that two values at the floor are equal. The log ratio is
+float where that is 0; a table's ``setting.error_floor`` where larger, e.g. COCO's final
+target 1e-8 for bbob errors), so that two values at the floor are equal. The log ratio is
 ``log10(measured mean / published mean)``; the tolerance is one decade, except for F8 (a factor
 1.1, :data:`TOLERANCE`): F8's gap of a random point is only about twice a typical published
 gap, so a decade around it (0 to -11,900 at 30 dims) accepts every run an optimizer can end
@@ -197,7 +198,8 @@ def benchmark_rows(
     rows = []
     for function in table.functions:
         fmin = get_function(function).f_min_for(dim)
-        floor = function_floor(function, dim)
+        # a table may state the precision its errors were recorded at (bbob: COCO's 1e-8)
+        floor = max(function_floor(function, dim), float(table.setting.get("error_floor", 0.0)))
         tol = tolerance_for(function)
         for algorithm in table.algorithms:
             values = runs.get((function, algorithm))
