@@ -71,7 +71,7 @@ def test_json_document_has_exactly_runs_summary_statistics_and_maps():
                     "--seed", "3", "--params", fast("OMPL-RRTstar", "OMPL-BITstar"), "--json")
     assert result.exit_code == 0, result.stderr
     doc = json.loads(result.stdout)
-    assert set(doc) == {"runs", "summary", "statistics", "maps", "buckets"}
+    assert set(doc) == {"runs", "summary", "statistics", "maps", "buckets", "extensions"}
     assert doc["buckets"] == []  # no --scen: no MovingAI buckets
     assert doc["maps"] == [{"map": "mfb-static", "optimum": doc["runs"][0]["optimum"],
                             "optimum_reason": None, "octile": None, "bucket": None,

@@ -111,7 +111,10 @@ def test_benchmark_job_file(store):
     final_meta = metadata["swarmpath.summary"]
     assert final_meta["state"] == "done" and final_meta["runs_written"] == "20"
     assert len(json.loads(final_meta["summary"])["rows"]) == 4
-    assert summary.statistics.metadata_count == 2
+    pins = {k: json.loads(v) for k, v in metadata["swarmpath.extensions"].items()}
+    assert set(pins) == {"optimizer:GWO", "optimizer:PSO", "function:F1", "function:F9"}
+    assert all(p["source"] == "built-in" and len(p["digest"]) == 64 for p in pins.values())
+    assert summary.statistics.metadata_count == 3  # job, extensions, summary
 
 
 def test_a_run_is_written_once(store, tmp_path):

@@ -50,6 +50,7 @@ from swarmpath.evidence.race_report import race_line, with_race
 from swarmpath.functions import get_function
 from swarmpath.optimizers import ParameterError, minimize_many
 from swarmpath.parallel import TaskPool
+from swarmpath.plugins.pins import study_pins
 from swarmpath.provenance import numeric_platform
 
 #: Rough CPU seconds per population element and iteration (23 ms per run of 30 x 30 x 500).
@@ -401,6 +402,7 @@ def bench(
             doc["settings"]["racing"] = the_race["settings"]
             doc["race"] = the_race
             doc["race_summary"] = bench_race.race_summary(the_race)
+        doc["extensions"] = study_pins(spec.algorithms, spec.functions)
         sys.stdout.write(json.dumps(doc, allow_nan=False) + "\n")
         return
     if fmt == "latex":

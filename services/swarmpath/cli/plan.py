@@ -203,7 +203,8 @@ def simulated_world(scenario: Any, seed: int, run: int) -> Any:
 def document(cells: Sequence[CellResult], reference: str | None = None,
              spec: PlanSpec | None = None) -> dict[str, Any]:
     """The ``--json`` document: exactly {"runs": [...], "summary": [...], "statistics": {...},
-    "maps": [...], "buckets": [...]} (statistics:
+    "maps": [...], "buckets": [...], "extensions": {...}} (extensions: each planner's origin
+    and code digest, swarmpath.plugins.pins.study_pins; statistics:
     :meth:`swarmpath.evidence.compare_maps.MapStatistics.to_json`; maps: per map its exact
     optimum, the reason when there is none, the .scen octile optimum and bucket; buckets: success
     and gap per planner and MovingAI bucket, :func:`swarmpath.evidence.buckets.bucket_rows`,
@@ -228,9 +229,11 @@ def document(cells: Sequence[CellResult], reference: str | None = None,
         maps.append({"map": name, "optimum": value, "optimum_reason": reason,
                      "octile": octile.get(name), "bucket": buckets.get(name),
                      **frame_entry(scenario)})
+    from swarmpath.plugins.pins import study_pins
+
     return {"runs": runs, "summary": summarize(runs),
             "statistics": map_statistics(runs, planners, reference).to_json(), "maps": maps,
-            "buckets": bucket_rows(runs, buckets)}
+            "buckets": bucket_rows(runs, buckets), "extensions": study_pins(planners=planners)}
 
 
 def frame_entry(scenario: Any) -> dict[str, Any]:

@@ -68,7 +68,7 @@ def _table(title: str, columns: list[str], rows: list[dict[str, Any]]) -> Any:
 
 
 _TEXT_COLUMNS = {"algorithm", "function", "planner", "map", "id", "kind", "state", "host",
-                 "worker", "current_runs", "contents"}
+                 "worker", "current_runs", "contents", "extension", "origin", "digest"}
 
 
 def _cell(v: Any) -> str:
@@ -245,6 +245,14 @@ def status(
     console.print(_table("jobs", ["id", "kind", "contents", "state", "runs", "failed", "created",
                                   "finished"], rows))
     console.print(legend_text(["failed"]), markup=False, highlight=False)
+    for j in jobs:  # a job no live worker can run says why
+        if j.get("waiting"):
+            console.print(f"job {j['id']} waiting: {j['waiting']}", markup=False,
+                          highlight=False)
+    if job is not None and data.get("pins"):
+        console.print(_table("pinned extensions", ["extension", "origin", "digest"], [
+            {"extension": k, "origin": p.get("origin", ""), "digest": p.get("digest", "")[:12]}
+            for k, p in sorted(data["pins"].items())]))
     if job is None:
         workers = [{**w, "alive": "yes" if w["alive"] else "no",
                     "current_runs": len(w["current_runs"]),

@@ -103,6 +103,8 @@ class Coordinator(WorkerAdmission, ResultIntake):
         self._lock = threading.Lock()
         self._final_lock = threading.RLock()
         self._init_admission(settings)
+        # a job no live worker can run says so (state waiting; swarmpath.plugins.pins)
+        self.store.live_extensions = self.worker_table.alive_extensions
         self._lease_probe = 0.0  # last lease attempt while the store could not write
         self._full_logged = -1e9  # monotonic time of the last "cannot write" log line
         self._finish_after: dict[str, float] = {}  # job -> when its MCAP may be tried again
@@ -185,7 +187,7 @@ class Coordinator(WorkerAdmission, ResultIntake):
         if refused is not None:
             return self._no_work(f"refused: {refused}", 5.0)
         self._seen(req.worker, now, host=req.host, pid=req.pid, slots=req.slots,
-                   platform=req.platform, proven=True)
+                   platform=req.platform, proven=True, extensions=req.extensions)
         if not self.accepting:
             return self._no_work("coordinator shutting down", 2.0)
         if self.settings.require_liveliness and not self.is_alive(req.worker):
@@ -203,6 +205,7 @@ class Coordinator(WorkerAdmission, ResultIntake):
             leases = self.store.lease_many(
                 req.worker, req.max_runs, now, self.settings.lease_seconds,
                 self.heartbeat_seconds, max_leases=req.max_leases, runs_for=self.sizer.runs_for,
+                extensions=req.extensions,
             )
         except StoreFull as exc:
             self.store_full(exc, "no leases")

@@ -342,19 +342,22 @@ class MapJobSpec(Model):
     @field_validator("planners")
     @classmethod
     def _known_planners(cls, v: list[str]) -> list[str]:
+        from swarmpath.names import unknown
+
         registry = _planner_registry()
         known = list(registry.list_planners())
         problems: list[tuple[Loc, str]] = []
         for i, name in enumerate(v):
             if name in known:
                 continue
-            try:  # a family member (swarm:<optimizer>) is built on demand
-                if registry.get_planner(name).name == name:
+            if name.startswith("swarm:"):  # the family: swarm:<any registered optimizer>
+                try:
+                    registry.get_planner(name)
                     continue
-            except ValueError as exc:
-                problems.append(((i,), str(exc)))
-                continue
-            problems.append(((i,), f"unknown planner {name!r}"))
+                except ValueError as exc:
+                    problems.append(((i,), str(exc)))
+                    continue
+            problems.append(((i,), unknown("planner", name, [*known, "swarm:<optimizer>"])))
         if problems:
             raise FieldProblems(problems)
         _unique(v, "planner")

@@ -40,7 +40,9 @@ _ID_RE = re.compile(ID_PATTERN)
 
 ParamValue = bool | int | float | str
 Scalar = bool | int | float | str | None
-JobState = Literal["queued", "running", "done", "failed", "cancelled"]
+#: "waiting" is never stored: a queued or running job that no live worker can run now (its
+#: status says why; swarmpath.service.store.extensions)
+JobState = Literal["queued", "running", "done", "failed", "cancelled", "waiting"]
 RunState = Literal["queued", "leased", "done", "failed", "cancelled"]
 AckStatus = Literal["accepted", "duplicate", "stale"]
 LeaseState = Literal["active", "done", "expired", "released", "cancelled", "unknown"]

@@ -31,6 +31,7 @@ from pydantic import (
     computed_field,
 )
 
+from swarmpath.plugins.pins import clean_extensions
 from swarmpath.provenance import clean_platform
 from swarmpath.service.cell_notes import CellNotes
 from swarmpath.service.jobspec import (
@@ -183,6 +184,7 @@ class RunRequest(Model):
 
 
 Platform = Annotated[dict[str, Any], AfterValidator(clean_platform)]
+Extensions = Annotated[dict[str, str], AfterValidator(clean_extensions)]
 
 
 class LeaseRequest(Model):
@@ -202,6 +204,11 @@ class LeaseRequest(Model):
     platform: Platform | None = Field(
         default=None, description="the worker's numeric platform (swarmpath.provenance), "
         "bounded; shown in GET /workers, never trusted for anything else")
+    extensions: Extensions | None = Field(
+        default=None, description="what the worker can run: '<kind>:<name>' (optimizer, "
+        "function, suite, planner) -> the first 16 hex digits of its code's sha256 "
+        "(swarmpath.plugins.pins); it is leased only cells whose pinned extensions it has. "
+        "null: it advertises nothing and is leased only cells of built-ins")
     login: str = Field(default="", max_length=128,
                        description="the Zenoh login that owns `worker` (service/identity.py)")
     issued: int = Field(default=0, ge=0, le=2**63 - 1,
@@ -233,6 +240,11 @@ class Lease(Model):
         description="the lease's secret: sent only in this reply, never put on the bus; results "
         "and progress of the lease prove it (HMAC), and so does the coordinator when it ends it",
     )
+
+    pins: dict[str, str] = Field(
+        default_factory=dict, description="the cell's extensions ('<kind>:<name>') and the "
+        "sha256 of their code the job was pinned to: a worker whose code differs does not run "
+        "the lease (it is not a failure; the runs go to another worker)")
 
     def run_ids(self) -> list[int]:
         return [self.cell_index * self.runs_per_cell + r for r in self.runs]
@@ -444,6 +456,13 @@ class JobStatus(Model):
     finished: float | None = None
     contents: str | None = Field(default=None, description="what the job runs, one line "
                                  "(`GWO, PSO x F1-F13 x D 30`, `MFB x mfb-static`)")
+    waiting: str | None = Field(
+        default=None, description="state 'waiting': why no live worker can run the job now "
+        "(e.g. 'no live worker has optimizer MyGWO (digest 3f2a9c1b4d5e)')")
+    pins: dict[str, dict[str, str]] = Field(
+        default_factory=dict, description="the job's extensions ('<kind>:<name>') pinned at "
+        "submission: source (built-in, distribution, file, module), origin, version and the "
+        "sha256 of their code; only workers with the same code run its cells")
 
     @computed_field  # type: ignore[prop-decorator]
     @property

@@ -36,6 +36,9 @@ class WorkerEntry:
     platform: dict[str, str] = field(default_factory=dict)
     proven: bool = False  # a valid lease request was seen (a token alone proves nothing)
     issued: int = 0  # the last accepted lease request's ``issued`` (replays are refused)
+    #: what its lease requests advertised (swarmpath.plugins.pins; bounded by the protocol),
+    #: None when they advertised nothing
+    extensions: dict[str, str] | None = None
 
 
 class WorkerTable:
@@ -97,7 +100,8 @@ class WorkerTable:
             return True
 
     def seen(self, worker: str, now: float, host: str = "", pid: int = 0, slots: int = 0,
-             platform: dict[str, str] | None = None, proven: bool = False) -> None:
+             platform: dict[str, str] | None = None, proven: bool = False,
+             extensions: dict[str, str] | object | None = ...) -> None:
         """A message of a known worker: refresh it (unknown ids are ignored). ``platform`` is
         already bounded (protocol.LeaseRequest validates it); ``proven``: a valid lease
         request."""
@@ -115,6 +119,14 @@ class WorkerTable:
                 entry.slots = max(1, min(int(slots), MAX_SLOTS))
             if platform:
                 entry.platform = dict(platform)
+            if extensions is not ...:  # only lease requests say what a worker runs
+                entry.extensions = None if extensions is None else dict(
+                    extensions)  # type: ignore[call-overload]
+
+    def alive_extensions(self) -> dict[str, dict[str, str] | None]:
+        """What each live, proven worker advertised (None: nothing)."""
+        with self._lock:
+            return {w: e.extensions for w, e in self._entries.items() if e.alive and e.proven}
 
     def platform(self, worker: str) -> dict[str, str]:
         """The numeric platform a worker last reported (empty if none or unknown)."""

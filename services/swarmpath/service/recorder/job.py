@@ -116,6 +116,7 @@ class JobRecorder:
         compression: CompressionType | None = None,
         clock: Callable[[], float] = time.monotonic,
         fast: bool = True,
+        pins: dict[str, dict[str, str]] | None = None,
     ):
         """``fast=False``: the plain mcap ``Writer`` instead of :class:`FastWriter` (the same
         bytes, slower; for the test that compares them)."""
@@ -167,6 +168,10 @@ class JobRecorder:
                 "created_ns": str(self.base_ns),
             },
         )
+        if pins:  # the code the job was pinned to: each extension's origin, version, digest
+            self._writer.add_metadata("swarmpath.extensions", {
+                key: json.dumps(pin, sort_keys=True, separators=(",", ":"))
+                for key, pin in sorted(pins.items())})
         self._file.flush()
         self.closed = False
 

@@ -52,6 +52,7 @@ class Recorders:
             rec = JobRecorder(
                 self.path(job_id), job_id, status.kind, spec.model_dump(mode="json"),
                 status.created, flush_interval=self.flush_interval, compression=self.compression,
+                pins=status.pins,
             )
             try:
                 for record in self.store.iter_run_records(job_id):

@@ -31,7 +31,8 @@ Layout: :mod:`.base` (schema, connection, transactions), :mod:`.jobs`, :mod:`.le
 :mod:`.results` (fencing), :mod:`.runs` (run views and records), :mod:`.summaries` (tables, CSV),
 :mod:`.series` (binary run series), :mod:`.maps` (uploaded maps),
 :mod:`.scenarios` (a lease's scenario by reference), :mod:`.races` (rounds of raced jobs),
-:mod:`.extend` (a finished job extended to more runs).
+:mod:`.extend` (a finished job extended to more runs), :mod:`.extensions` (which workers
+can run which cells: pinned extensions).
 :class:`Store` combines them.
 """
 
@@ -46,6 +47,7 @@ from swarmpath.service.store.base import (
     StoreFull,
 )
 from swarmpath.service.store.extend import ExtendError, ExtendMixin
+from swarmpath.service.store.extensions import ExtensionsMixin
 from swarmpath.service.store.jobs import JobsMixin
 from swarmpath.service.store.leases import LeasesMixin
 from swarmpath.service.store.maps import MapsMixin
@@ -64,7 +66,7 @@ from swarmpath.service.store.summaries import (
 
 
 class Store(JobsMixin, ScenariosMixin, LeasesMixin, ResultsMixin, RunViewsMixin, SummariesMixin,
-            MapsMixin, RacesMixin, ExtendMixin):
+            MapsMixin, RacesMixin, ExtendMixin, ExtensionsMixin):
     """See the module docstring. ``now`` arguments are Unix seconds (default: ``time.time()``)."""
 
 

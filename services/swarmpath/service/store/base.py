@@ -7,7 +7,7 @@ import math
 import sqlite3
 import threading
 import time
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Self
@@ -19,7 +19,7 @@ from swarmpath.service.protocol import (
     MapCell,
 )
 
-SCHEMA_VERSION = 2  # 2: leases.capability, leases.beat
+SCHEMA_VERSION = 3  # 2: leases.capability, leases.beat; 3: jobs.pins
 DB_NAME = "swarmpath.sqlite3"
 CACHE_KIB = 2048  # SQLite page cache of the connection, KiB (bounded; its default is 2,000)
 #: Page size of a new store file. A result row (a 500-point curve: ~4.3 KB) overflows a 4 KiB
@@ -52,7 +52,8 @@ CREATE TABLE IF NOT EXISTS jobs (
     lease_turn    INTEGER NOT NULL DEFAULT 0,          -- fairness: turn of its last lease
     created       REAL NOT NULL,
     started       REAL,
-    finished      REAL
+    finished      REAL,
+    pins          TEXT NOT NULL DEFAULT '{}'            -- extensions pinned at submission
 );
 CREATE INDEX IF NOT EXISTS jobs_by_state ON jobs (state, lease_turn, seq);
 CREATE TABLE IF NOT EXISTS cells (
@@ -200,6 +201,9 @@ class StoreBase:
         # job seq -> its race settings and blocks, or None (RacesMixin)
         self._race_contexts: dict[int, Any] = {}
         self._closed = False
+        #: () -> {live worker: what it advertised, or None}; set by the coordinator: a job's
+        #: status then says when no live worker can run it (store.extensions)
+        self.live_extensions: Callable[[], Mapping[str, Mapping[str, str] | None]] | None = None
         # (since, message) while writes fail for want of room; None once one succeeds again
         self.write_problem: tuple[float, str] | None = None
         self._migrate()
@@ -220,9 +224,13 @@ class StoreBase:
                     "INSERT OR IGNORE INTO meta (key, value) VALUES (?, '0')",
                     [(f"counter.{c}",) for c in (*_COUNTERS, "lease_turn")],
                 )
-            elif int(row[0]) == 1:  # leases granted before capabilities can prove nothing
-                db.execute("ALTER TABLE leases ADD COLUMN capability TEXT NOT NULL DEFAULT ''")
-                db.execute("ALTER TABLE leases ADD COLUMN beat INTEGER NOT NULL DEFAULT 0")
+            elif int(row[0]) in (1, 2):
+                if int(row[0]) == 1:  # leases granted before capabilities can prove nothing
+                    db.execute("ALTER TABLE leases ADD COLUMN capability TEXT NOT NULL "
+                               "DEFAULT ''")
+                    db.execute("ALTER TABLE leases ADD COLUMN beat INTEGER NOT NULL DEFAULT 0")
+                # jobs from before pins pinned nothing: any worker having the names runs them
+                db.execute("ALTER TABLE jobs ADD COLUMN pins TEXT NOT NULL DEFAULT '{}'")
                 db.execute("UPDATE meta SET value = ? WHERE key = 'schema_version'",
                            (str(SCHEMA_VERSION),))
             elif int(row[0]) != SCHEMA_VERSION:

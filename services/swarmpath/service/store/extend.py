@@ -40,7 +40,8 @@ class ExtendMixin(StoreBase):
                 raise ExtendError(f"job {job_id} has {old['runs_per_cell']} runs per cell: "
                                   f"extend it to at least that many, not {runs}")
             spec = _with_runs(json.loads(old["spec"]), runs)
-            new_id, seq = self._insert_job(db, spec, now)  # type: ignore[attr-defined]
+            pins = json.loads(old["pins"] or "{}")  # the same code as the job it extends
+            new_id, seq = self._insert_job(db, spec, now, pins)  # type: ignore[attr-defined]
             if [r[0] for r in db.execute("SELECT key FROM cells WHERE job_seq = ? ORDER BY idx",
                                          (old["seq"],))] != [
                     r[0] for r in db.execute("SELECT key FROM cells WHERE job_seq = ? ORDER BY idx",

@@ -8,6 +8,7 @@ import time
 import uuid
 from typing import Any
 
+from swarmpath.plugins.pins import pin_names, spec_requirements
 from swarmpath.service.job_contents import contents
 from swarmpath.service.protocol import (
     BenchmarkJobSpec,
@@ -29,7 +30,8 @@ class JobsMixin(StoreBase):
     def create_job(
         self, spec: BenchmarkJobSpec | MapJobSpec | dict[str, Any], now: float | None = None
     ) -> str:
-        """Store a validated spec and its cells; returns the job id once committed."""
+        """Store a validated spec and its cells, its extensions pinned to the origins and code
+        digests this process has (swarmpath.plugins.pins); returns the job id once committed."""
         if isinstance(spec, dict):
             spec = parse_job_spec(spec)
         now = time.time() if now is None else now
@@ -38,8 +40,11 @@ class JobsMixin(StoreBase):
 
     @staticmethod
     def _insert_job(db: sqlite3.Connection, spec: BenchmarkJobSpec | MapJobSpec,
-                    now: float) -> tuple[str, int]:
-        """The job's row and its cells' rows, in the caller's transaction: (id, seq)."""
+                    now: float, pins: dict[str, dict[str, str]] | None = None) -> tuple[str, int]:
+        """The job's row and its cells' rows, in the caller's transaction: (id, seq). ``pins``:
+        the job's pinned extensions (default: pinned now)."""
+        if pins is None:
+            pins = pin_names(spec_requirements(spec))
         cells = expand_cells(spec)
         for _ in range(10):
             job_id = uuid.uuid4().hex[:12]
@@ -49,9 +54,9 @@ class JobsMixin(StoreBase):
             raise StoreError("could not allocate a job id")
         cur = db.execute(
             "INSERT INTO jobs (id, kind, spec, state, runs_per_cell, cells_total, runs_total,"
-            " created) VALUES (?, ?, ?, 'queued', ?, ?, ?, ?)",
+            " created, pins) VALUES (?, ?, ?, 'queued', ?, ?, ?, ?, ?)",
             (job_id, spec.kind, spec.model_dump_json(), spec.runs, len(cells), runs_total(spec),
-             now),
+             now, json.dumps(pins, sort_keys=True)),
         )
         seq = int(cur.lastrowid or 0)
         db.executemany(
@@ -65,19 +70,32 @@ class JobsMixin(StoreBase):
             row = db.execute("SELECT spec FROM jobs WHERE id = ?", (job_id,)).fetchone()
         return None if row is None else load_job_spec(row["spec"])
 
-    @staticmethod
-    def _status(row: sqlite3.Row) -> JobStatus:
+    def _status(self, row: sqlite3.Row) -> JobStatus:
+        pins = json.loads(row["pins"] or "{}")
+        state, waiting = row["state"], None
+        if state not in FINAL_STATES and self.live_extensions is not None:
+            waiting = self._waiting(row, pins, self.live_extensions())
+            if waiting is not None:
+                state = "waiting"
         return JobStatus(
             id=row["id"],
             kind=row["kind"],
-            state=row["state"],
+            state=state,
             runs_total=row["runs_total"],
             runs_done=row["runs_done"],
             runs_failed=row["runs_failed"],
             created=row["created"],
             started=row["started"],
             finished=row["finished"],
+            waiting=waiting,
+            pins=pins,
         )
+
+    def job_pins(self, job_id: str) -> dict[str, dict[str, str]]:
+        """The extensions the job was pinned to at submission (empty for an unknown job)."""
+        with self._read() as db:
+            row = db.execute("SELECT pins FROM jobs WHERE id = ?", (job_id,)).fetchone()
+        return {} if row is None else dict(json.loads(row["pins"] or "{}"))
 
     def job_status(self, job_id: str) -> JobStatus | None:
         with self._read() as db:
@@ -88,19 +106,22 @@ class JobsMixin(StoreBase):
         self, state: str | None = None, limit: int = 100, offset: int = 0
     ) -> list[JobStatus]:
         """Jobs, newest first, optionally only those in ``state``."""
-        if state is not None and state not in JOB_STATES:
-            raise ValueError(f"unknown state {state!r}; valid: {', '.join(JOB_STATES)}")
+        if state is not None and state not in (*JOB_STATES, "waiting"):
+            raise ValueError(f"unknown state {state!r}; valid: {', '.join(JOB_STATES)}, waiting")
         sql = "SELECT * FROM jobs"
         args: list[Any] = []
-        if state is not None:
+        if state == "waiting":  # computed, not stored: among the jobs that are not final
+            sql += " WHERE state IN ('queued', 'running')"
+        elif state is not None:
             sql += " WHERE state = ?"
             args.append(state)
         sql += " ORDER BY seq DESC LIMIT ? OFFSET ?"
         args += [max(0, int(limit)), max(0, int(offset))]
         with self._read() as db:
             rows = db.execute(sql, args).fetchall()
-        return [self._status(r).model_copy(update={"contents": self._contents_of(r)})
-                for r in rows]
+        out = [self._status(r).model_copy(update={"contents": self._contents_of(r)})
+               for r in rows]
+        return [s for s in out if s.state == "waiting"] if state == "waiting" else out
 
     def job_contents(self, job_id: str) -> str | None:
         """What the job runs, in one line (:mod:`swarmpath.service.job_contents`)."""

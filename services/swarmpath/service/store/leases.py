@@ -7,7 +7,7 @@ import json
 import sqlite3
 import time
 import uuid
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from swarmpath.service.capability import new_capability, progress_ok
@@ -18,8 +18,11 @@ from swarmpath.service.protocol import (
 )
 from swarmpath.service.scenarios import by_reference
 from swarmpath.service.store.base import CellSpec, RunsFor, StoreBase, _dumps
+from swarmpath.service.store.extensions import can_run, cell_pins
 
 _STOP = object()  # _pick_runs: the sizer ends the bundle
+#: lease_many's ``extensions`` default: lease any cell (callers that have no worker to ask)
+ANY_WORKER = object()
 
 
 class LeasesMixin(StoreBase):
@@ -51,6 +54,7 @@ class LeasesMixin(StoreBase):
         *,
         max_leases: int = 1,
         runs_for: RunsFor | None = None,
+        extensions: Mapping[str, str] | object | None = ANY_WORKER,
     ) -> list[Lease]:
         """Up to ``max_leases`` leases for ``worker`` in one transaction (a bundle), each of up to
         ``max_runs`` runs of one cell; empty when nothing is leasable.
@@ -60,7 +64,9 @@ class LeasesMixin(StoreBase):
         ``runs_for(cell_spec, remaining, bundle)``, when given, sizes each lease: how many runs of
         the cell picked (``remaining``: the job's runs not leased yet, requeued ones included;
         ``bundle``: the leases already granted by this call); 0 ends the bundle (never asked for
-        the first lease, which has at least one run).
+        the first lease, which has at least one run). ``extensions``: what the worker advertised
+        (swarmpath.plugins.pins; None: nothing, it runs the built-ins): only cells whose
+        pinned extensions it has are leased (default: any cell, for callers without workers).
 
         The transaction is not waited on to reach the disk (``_tx(durable=False)``): after a
         power cut the lease may be gone, its runs are leased again, and the worker's results
@@ -75,7 +81,7 @@ class LeasesMixin(StoreBase):
         with self._tx(durable=False) as db:
             while len(out) < max_leases:
                 lease = self._lease_one(db, worker, max_runs, now, lease_seconds, hb, runs_for,
-                                        out)
+                                        out, extensions)
                 if lease is None:
                     break
                 out.append(lease)
@@ -91,14 +97,19 @@ class LeasesMixin(StoreBase):
         heartbeat_seconds: float,
         runs_for: RunsFor | None,
         bundle: list[Lease],
+        extensions: Mapping[str, str] | object | None = ANY_WORKER,
     ) -> Lease | None:
         jobs = db.execute(
-            "SELECT seq, id, runs_per_cell, spec FROM jobs "
+            "SELECT seq, id, runs_per_cell, spec, pins FROM jobs "
             "WHERE state IN ('queued', 'running') ORDER BY lease_turn, seq"
         ).fetchall()
         for job in jobs:
             seq = job["seq"]
-            picked = self._pick_runs(db, seq, max_runs, runs_for, bundle)
+            check = None
+            if extensions is not ANY_WORKER:
+                check = can_run(json.loads(job["pins"] or "{}"),
+                                extensions)  # type: ignore[arg-type]
+            picked = self._pick_runs(db, seq, max_runs, runs_for, bundle, check)
             if picked is _STOP:
                 return None
             if picked is None:
@@ -134,6 +145,7 @@ class LeasesMixin(StoreBase):
                 lease_seconds=lease_seconds,
                 heartbeat_seconds=heartbeat_seconds,
                 capability=capability,
+                pins=cell_pins(json.loads(job["pins"] or "{}"), spec),
             )
         return None
 
@@ -170,22 +182,20 @@ class LeasesMixin(StoreBase):
         max_runs: int,
         runs_for: RunsFor | None = None,
         bundle: Sequence[Lease] = (),
+        check: Callable[[CellSpec], bool] | None = None,
     ) -> tuple[int, str, CellSpec, list[int]] | object | None:
         """(cell index, key, spec, runs) to lease from job ``seq``; None when it has nothing
-        leasable, ``_STOP`` when ``runs_for`` ends the bundle."""
-        first = db.execute(
-            "SELECT cell_idx FROM requeue WHERE job_seq = ? ORDER BY cell_idx, run LIMIT 1", (seq,)
-        ).fetchone()
+        leasable (that ``check`` accepts), ``_STOP`` when ``runs_for`` ends the bundle."""
+        first = self._first_cell(db, seq, check, "SELECT DISTINCT cell_idx FROM requeue "
+                                 "WHERE job_seq = ? ORDER BY cell_idx")
         if first is not None:
-            cell_idx = first[0]
+            cell_idx = first
         else:
-            cell = db.execute(
-                "SELECT idx FROM cells WHERE job_seq = ? AND next_run < runs ORDER BY idx LIMIT 1",
-                (seq,),
-            ).fetchone()
+            cell = self._first_cell(db, seq, check, "SELECT idx FROM cells WHERE job_seq = ? "
+                                    "AND next_run < runs ORDER BY idx")
             if cell is None:
                 return None
-            cell_idx = cell[0]
+            cell_idx = cell
         key, spec = self._cell_spec(db, seq, cell_idx)
         if runs_for is not None:
             n = int(runs_for(spec, self._remaining(db, seq), bundle))
@@ -217,6 +227,17 @@ class LeasesMixin(StoreBase):
             "UPDATE cells SET next_run = ? WHERE job_seq = ? AND idx = ?", (stop, seq, cell_idx)
         )
         return cell_idx, key, spec, list(range(start, stop))
+
+    def _first_cell(self, db: sqlite3.Connection, seq: int,
+                    check: Callable[[CellSpec], bool] | None, sql: str) -> int | None:
+        """The first cell index ``sql`` lists (for job ``seq``) that ``check`` accepts."""
+        if check is None:
+            row = db.execute(sql + " LIMIT 1", (seq,)).fetchone()
+            return None if row is None else int(row[0])
+        for (idx,) in db.execute(sql, (seq,)).fetchall():
+            if check(self._cell_spec(db, seq, idx)[1]):
+                return int(idx)
+        return None
 
     def heartbeat(
         self, lease_id: str, worker: str, now: float | None = None, lease_seconds: float = 60.0,

@@ -215,6 +215,7 @@ class SummariesMixin(StoreBase):
             "rows": [_safe(r) for r in rows],
             "statistics": statistics,
             **({} if kind == "benchmark" else {"warnings": job_warnings(notes)}),
+            "pins": json.loads(job["pins"] or "{}"),  # the code it ran (swarmpath.plugins.pins)
         }
 
     def summary_csv(self, job_id: str) -> str | None:

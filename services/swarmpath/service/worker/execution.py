@@ -66,6 +66,9 @@ def execute_lease(
 
     Raises :class:`Cancelled` when ``cancelled()`` turns true. ``progress(n)`` is called with the
     number of iterations (benchmark) or planner steps (map) done so far in the lease."""
+    from swarmpath.service.worker.extensions import check_pins
+
+    check_pins(lease.pins, lease.cell)  # ExtensionUnavailable: reported as such, never failed
     if isinstance(lease.spec, BenchmarkCell):
         results = _benchmark(lease, lease.spec, cancelled, progress)
     else:

@@ -28,6 +28,7 @@ from swarmpath.service.protocol import (
 )
 from swarmpath.service.scenarios import ByteLRU
 from swarmpath.service.worker.execution import benchmark_batches
+from swarmpath.service.worker.extensions import Capabilities
 from swarmpath.service.worker.pulling import Pulling
 from swarmpath.service.worker.reporting import Reporting, _Active, _Pending
 from swarmpath.service.worker.settings import WorkerSettings, default_worker_id
@@ -70,6 +71,7 @@ class Worker(Pulling, Reporting):
         self._last_ack = time.monotonic()
         self._last_busy = 0.0
         self.scenarios = ByteLRU(settings.scenario_cache_bytes)  # fetched scenarios by hash
+        self.capabilities = Capabilities()  # what it can run (plugins loaded now)
 
     # ------------------------------------------------------------------------------ control
     def stop(self) -> None:

@@ -22,6 +22,11 @@ from swarmpath.service.protocol import (
 )
 from swarmpath.service.scenarios import ByteLRU, ScenarioUnavailable, resolve
 from swarmpath.service.worker.execution import failed_lease
+from swarmpath.service.worker.extensions import (
+    Capabilities,
+    ExtensionUnavailable,
+    check_pins,
+)
 from swarmpath.service.worker.reporting import Reporting, _Active
 from swarmpath.service.worker.slots import Slot
 
@@ -46,6 +51,7 @@ class Pulling(Reporting):
     _querier: Any
     scenarios: ByteLRU
     _issued: Issuer
+    capabilities: Capabilities
 
     def _wants_work(self) -> bool:
         """Pull while fewer groups are held (running or queued) than ready slots + prefetch
@@ -68,7 +74,7 @@ class Pulling(Reporting):
             max_leases=max(1, min(self.settings.max_leases, MAX_BUNDLE_LEASES)),
             host=self.host, pid=os.getpid(), slots=len(self._slots), version=_version(),
             protocol=PROTOCOL_VERSION, platform=self._platform, login=login, issued=issued,
-            proof=proof,
+            proof=proof, extensions=self.capabilities.advertisement(),
         ))
 
     def _ask(self) -> Lease | LeaseBundle | NoWork | None:
@@ -124,7 +130,7 @@ class Pulling(Reporting):
         mine = [lease for lease in leases if lease.worker == self.id]
         if len(mine) < len(leases):  # pragma: no cover - we asked for ourselves
             log.warning("ignored %d leases granted to another worker", len(leases) - len(mine))
-        mine = self._with_scenarios(mine)
+        mine = self._with_scenarios(self._with_code(mine))
         if not mine:
             return
         with self._lock:
@@ -134,6 +140,20 @@ class Pulling(Reporting):
                 log.debug("lease %s: %s runs %s", lease.lease_id, lease.cell, lease.runs)
             self._queue.append(mine)
         self._dispatch()
+
+    def _with_code(self, leases: Sequence[Lease]) -> list[Lease]:
+        """The leases whose pinned extensions this worker has; the others are not held (they
+        expire and go to another worker: never failed for want of code)."""
+        out = []
+        for lease in leases:
+            try:
+                check_pins(lease.pins, lease.cell)
+            except ExtensionUnavailable as exc:
+                log.warning("lease %s not run: %s", lease.lease_id, exc)
+                self.capabilities.refuse(lease.pins, str(exc))
+                continue
+            out.append(lease)
+        return out
 
     def _with_scenarios(self, leases: Sequence[Lease]) -> list[Lease]:
         """The leases with their scenarios by reference in place (cached or fetched); a lease

@@ -21,6 +21,7 @@ from swarmpath.service.protocol import (
     decode,
 )
 from swarmpath.service.worker.execution import Cancelled, _result
+from swarmpath.service.worker.extensions import unavailable
 from swarmpath.service.worker.packing import fit_result, pack_lease_columns
 from swarmpath.service.worker.settings import WorkerSettings
 from swarmpath.service.worker.slots import NotRun, Outcomes, Slot
@@ -66,6 +67,7 @@ class Reporting:
     _queue: deque[list[Lease]]
     _pending: dict[tuple[str, int], _Pending]
     _dropped: set[str]
+    capabilities: Any  # worker.extensions.Capabilities
     unproven_drops: int
     _session: Any
     _zenoh: Any
@@ -95,6 +97,9 @@ class Reporting:
                 self._active.pop(lease.lease_id, None)
                 if isinstance(outcome, Cancelled | NotRun) or dropped:
                     log.info("lease %s (%s) dropped", lease.lease_id, lease.cell)
+                elif unavailable(outcome):  # no code for it in the slot: not a failed run
+                    log.warning("lease %s not run: %s", lease.lease_id, outcome)
+                    self.capabilities.refuse(lease.pins, str(outcome))
                 elif isinstance(outcome, BaseException):
                     text = f"{type(outcome).__name__}: {outcome}"
                     log.error("lease %s failed as a whole: %s", lease.lease_id, text)

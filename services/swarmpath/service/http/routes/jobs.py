@@ -20,7 +20,7 @@ from swarmpath.service.store import ExtendError
 
 router = APIRouter(tags=["jobs"])
 
-_STATE = Literal["queued", "running", "done", "failed", "cancelled"]
+_STATE = Literal["queued", "running", "done", "failed", "cancelled", "waiting"]
 
 
 @router.post("/jobs", status_code=201, dependencies=[Depends(authorized)],

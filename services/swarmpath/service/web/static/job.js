@@ -30,11 +30,15 @@
   function renderStatus(s) {
     status = s;
     const done = s.runs_done + s.runs_failed;
-    const active = s.state === "queued" || s.state === "running";
+    const active = s.state === "queued" || s.state === "running" || s.state === "waiting";
+    const pins = Object.entries(s.pins || {}).filter(([, p]) => p.source !== "built-in");
     SP.q("#status").innerHTML = `<span class="state state-${s.state}" id="job-state">${s.state}</span>
       ${s.kind} job, ${done} / ${s.runs_total} runs finished (${s.runs_failed} crashed),
       created ${SP.time(s.created)}${s.finished ? ", ended " + SP.time(s.finished) : ""}
-      ${active ? '<button class="cancel" id="cancel">cancel</button>' : ""}`;
+      ${active ? '<button class="cancel" id="cancel">cancel</button>' : ""}
+      ${s.waiting ? `<p class="waiting" id="job-waiting">waiting: ${SP.esc(s.waiting)}</p>` : ""}
+      ${pins.length ? `<p class="pins" id="job-pins">plugins: ${pins.map(([k, p]) =>
+        `${SP.esc(k)} (${SP.esc(p.origin)}, ${SP.esc(p.digest.slice(0, 12))})`).join(", ")}</p>` : ""}`;
     const b = SP.q("#cancel");
     if (b) b.onclick = async () => { const r = await SP.cancelJob(id); if (r.ok) renderStatus(r.data); };
   }
@@ -269,7 +273,8 @@
   async function refresh() {
     const s = await SP.api("/jobs/" + encodeURIComponent(id));
     if (!s.ok) { SP.q("#status").textContent = `job ${id}: ${s.status} ${JSON.stringify(s.data && s.data.detail)}`; return; }
-    const ended = status && (status.state === "queued" || status.state === "running") && !(s.data.state === "queued" || s.data.state === "running");
+    const live = (st) => st === "queued" || st === "running" || st === "waiting";
+    const ended = status && live(status.state) && !live(s.data.state);
     renderStatus(s.data);
     if (!SP.q("#downloads").innerHTML) downloads(s.data.kind);
     const due = tick++ % DATA_EVERY === 0 || ended || etag === null || loading;
@@ -290,7 +295,7 @@
       loading = !!r.data.loading;
       if (loading) SP.q("#notes").textContent = "Still reading this job's stored runs (after a coordinator restart): the charts fill in as they are read.";
     }
-    if (loading || (status && (status.state === "queued" || status.state === "running"))) setTimeout(refresh, 2000);
+    if (loading || (status && ["queued", "running", "waiting"].includes(status.state))) setTimeout(refresh, 2000);
     else document.body.dataset.loaded = "1";
   }
   refresh();

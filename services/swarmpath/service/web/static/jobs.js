@@ -3,7 +3,7 @@
   "use strict";
   SP.header("jobs");
   const main = SP.q("#main");
-  const states = ["all", "queued", "running", "done", "failed", "cancelled"];
+  const states = ["all", "queued", "waiting", "running", "done", "failed", "cancelled"];
   const params = new URLSearchParams(location.search);
   let filter = params.get("state") || "all";
   main.insertAdjacentHTML("beforeend", `<p><label>State <select id="filter">${states.map((s) =>
@@ -21,10 +21,11 @@
     SP.q("#live").textContent = "updated " + SP.time(snapshot.time);
     SP.q("#jobs tbody").innerHTML = rows.map((j) => {
       const done = j.runs_done + j.runs_failed;
-      const active = j.state === "queued" || j.state === "running";
+      const active = j.state === "queued" || j.state === "running" || j.state === "waiting";
+      const why = j.waiting ? ` title="${SP.esc(j.waiting)}"` : "";
       return `<tr data-job="${SP.esc(j.id)}" data-state="${j.state}">
         <td class="l"><a href="/ui/jobs/${encodeURIComponent(j.id)}">${SP.esc(j.id)}</a></td>
-        <td class="l">${j.kind}</td><td class="l contents">${SP.esc(j.contents || "")}</td><td class="l"><span class="state state-${j.state}">${j.state}</span></td>
+        <td class="l">${j.kind}</td><td class="l contents">${SP.esc(j.contents || "")}</td><td class="l"><span class="state state-${j.state}"${why}>${j.state}</span>${j.waiting ? `<div class="waiting">${SP.esc(j.waiting)}</div>` : ""}</td>
         <td class="l"><span class="bar"><span data-progress="${(100 * j.progress).toFixed(1)}"></span></span>
           ${(100 * j.progress).toFixed(1)}%</td>
         <td>${done} / ${j.runs_total}</td><td>${j.runs_failed}</td>
