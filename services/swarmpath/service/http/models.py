@@ -22,7 +22,8 @@ class JobCreated(BaseModel):
     """``POST /jobs`` 201: the new job's id (``GET /jobs/{id}``), its state and run count."""
 
     id: str = Field(description="the job id: GET /jobs/{id}, /summary, /runs, /mcap")
-    state: Literal["queued", "running", "done", "failed", "cancelled"]
+    state: Literal["queued", "running", "done", "failed", "cancelled", "waiting"] = Field(
+        description="'waiting': no live worker has the job's pinned extensions yet")
     runs_total: int
 
 
