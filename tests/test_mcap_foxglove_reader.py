@@ -55,7 +55,9 @@ def topics(report: dict[str, Any]) -> dict[str, dict[str, Any]]:
     return {c["topic"]: c for c in report["channels"]}
 
 
-def check_common(report: dict[str, Any], compression: str = COMPRESSIONS[0]) -> None:
+def check_common(report: dict[str, Any], compression: str = COMPRESSIONS[0],
+                 pinned: bool = True) -> None:
+    """``pinned``: the file is a stored job's (its extensions pinned), not a bare recorder's."""
     assert report["library"].startswith(f"swarmpath {__version__}")
     names = {"none": ""}  # how the MCAP chunk record names no compression
     assert report["chunks"] >= 1
@@ -67,8 +69,12 @@ def check_common(report: dict[str, Any], compression: str = COMPRESSIONS[0]) -> 
         assert fg.check_foxglove_rules(channel["schema"]) == [], channel["topic"]
     job = report["metadata"]["swarmpath.job"]
     assert job["swarmpath_version"] == __version__ and json.loads(job["spec"])
-    indexes = report["metadataIndexes"]
+    indexes = list(report["metadataIndexes"])
     assert indexes[0] == "swarmpath.job" and indexes[-1] == "swarmpath.summary"
+    if pinned:  # the job's pinned extensions (origin, version, digest) right after it
+        assert indexes.pop(1) == "swarmpath.extensions"
+        pins = {k: json.loads(v) for k, v in report["metadata"]["swarmpath.extensions"].items()}
+        assert pins and all(len(p["digest"]) == 64 for p in pins.values())
     # one swarmpath.run per map run, one swarmpath.platform per worker and platform that sent
     # results (written by a live coordinator, not by a rebuild from the store)
     assert set(indexes[1:-1]) <= {"swarmpath.run", "swarmpath.platform"}
@@ -121,7 +127,7 @@ def test_a_map_job_file_passes_the_foxglove_reader(tmp_path):
         assert recorder.add(map_record("job1", run, T0 + 1 + run))
     recorder.finish()
     report = accepted(tmp_path / "m.mcap")
-    check_common(report)
+    check_common(report, pinned=False)
     by_topic = topics(report)
     assert by_topic["/results"]["messages"] == 3
     # Foxglove's well-known schemas, by exact name, on the map, scene and trajectory topics
