@@ -45,6 +45,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from service import TABLE2_ALGORITHMS, TABLE2_FUNCTIONS, Up, elapsed, note
 
 from swarmpath.evidence import report
+from swarmpath.evidence.race_report import block_json
 from swarmpath.evidence.racing import RaceSettings, race_block
 from swarmpath.optimizers import list_optimizers, minimize
 
@@ -130,7 +131,98 @@ def _full_values_from_up(up: Up, job: str) -> dict[tuple[str, str], list[float]]
         offset += len(items)
 
 
+def replayed_race(values: dict[tuple[str, str], list[float]], settings: RaceSettings
+                  ) -> dict[str, Any]:
+    """The race of Table 2 replayed over the full study's runs (run r of a cell is the same run
+    raced or not, and a raced job's race is this replay: tests/test_service_racing.py,
+    tests/test_bench_race.py), as ``GET /jobs/{id}/race`` shows a job's."""
+    comparisons = len(TABLE2_FUNCTIONS) * (len(TABLE2_ALGORITHMS) - 1)
+    blocks = []
+    for f in TABLE2_FUNCTIONS:
+        per = {a: np.where(np.isnan(v := np.asarray(values[(a, f)], dtype=float)), np.inf, v)
+               for a in TABLE2_ALGORITHMS}
+        race = race_block(per, TABLE2_ALGORITHMS, settings, comparisons)
+        members = list(enumerate(TABLE2_ALGORITHMS))
+        blocks.append({"block": {"function": f, "dim": 30}, **block_json(race, members)})
+    return {"settings": settings.to_json(), "comparisons": comparisons, "blocks": blocks}
+
+
+def _decisions(race: dict[str, Any]) -> list[Any]:
+    """A race's allowances, stops and duels per function (what a replay must reproduce)."""
+    return [(b["block"]["function"],
+             sorted((c["algorithm"], c["runs"], c["reason"], c["stopped_round"])
+                    for c in b["cells"]), b["duels"]) for b in race["blocks"]]
+
+
+def agreement(race: dict[str, Any], values: dict[tuple[str, str], list[float]],
+              max_runs: int) -> None:
+    """Runs used, and every raced +/=/- against the full study's (rank-sum, Holm over the
+    table, alpha 0.05, what ``swarmpath bench`` prints), the disagreements listed."""
+    samples = {(a, f, 30): values[(a, f)][:max_runs] for a in TABLE2_ALGORITHMS
+               for f in TABLE2_FUNCTIONS}
+    tests = report.benchmark_tests(samples, TABLE2_ALGORITHMS, None)
+    cells = [c for b in race["blocks"] for c in b["cells"]]
+    used = sum(c["runs"] for c in cells)
+    full = len(cells) * max_runs
+    s = race["settings"]
+    decided = sum(c["reason"] == "decided" for c in cells)
+    print(f"race: alpha {s['alpha']} over {race['comparisons']} comparisons, min_runs "
+          f"{s['min_runs']}, batch {s['batch']}, margin {s['margin']}, max_runs {max_runs}: "
+          f"**{used} runs of {full} ({full / used:.1f}x fewer)**, {decided}/{len(cells)} cells "
+          f"decided")
+    agree = n = 0
+    rows, kinds = [], {"different": 0, "equivalent": 0, "open": 0}
+    for b in race["blocks"]:
+        f = b["block"]["function"]
+        runs = {c["algorithm"]: c["runs"] for c in b["cells"]}
+        for d in b["duels"]:
+            t = tests.comparison.get((f, 30), d["a"])
+            full_marker = t.marker if t is not None else None
+            n += 1
+            kinds[d["decision"]] += 1
+            agree += d["marker"] == full_marker
+            if d["marker"] != full_marker:
+                interval = ("" if d["theta"] is None else
+                            f", theta {d['theta']:.3f} [{d['low']:.3f}, {d['high']:.3f}]")
+                rows.append(f"| {f} | {d['a']} | {d['marker']} ({d['decision']}, "
+                            f"{runs[d['a']]} runs{interval}) | {full_marker} (A12 "
+                            f"{t.a12 if t is not None else float('nan'):.3f}, p_holm "
+                            f"{t.p_holm if t is not None else float('nan'):.2g}) |")
+    print(f"decisions: {kinds['different']} different, {kinds['equivalent']} equivalent, "
+          f"{kinds['open']} open at max_runs; **verdicts agreeing with the full {max_runs}-run "
+          f"study: {agree}/{n} ({100 * agree / n:.1f} %)**\n")
+    per_function = " | ".join(f"{b['block']['function']} {sum(c['runs'] for c in b['cells'])}"
+                              for b in race["blocks"])
+    print(f"runs per function (6 cells): {per_function}\n")
+    if rows:
+        print("| function | algorithm vs ICOOT | raced | full study |\n| --- | --- | --- | --- |")
+        print("\n".join(rows))
+    print()
+
+
+def _bench_values(doc: dict[str, Any]) -> dict[tuple[str, str], list[float]]:
+    """Each cell's best values of a ``swarmpath bench --json`` document (null: NaN)."""
+    return {(c["algorithm"], c["function"]): [math.nan if v is None else float(v)
+                                              for v in c["best_fitness"]] for c in doc["cells"]}
+
+
 def table2(args: argparse.Namespace) -> None:
+    settings = RaceSettings(max_runs=args.max_runs, alpha=0.05, min_runs=10, batch=10,
+                            margin=args.margin)
+    if args.replay:
+        doc = json.loads(Path(args.full).read_text())
+        values = _bench_values(doc)
+        short = [k for k, v in values.items() if len(v) < args.max_runs]
+        if short:
+            raise SystemExit(f"--full has fewer than {args.max_runs} runs in {short[:3]}")
+        print(f"replayed over `{args.full.name}` ({doc['settings']['runs']} runs a cell, seed "
+              f"{doc['settings']['seed']}, swarmpath {doc['swarmpath']}, "
+              f"{doc['seconds']:.0f} s)\n")
+        for margin in args.margins:
+            agreement(replayed_race(values, settings.__class__(
+                max_runs=args.max_runs, alpha=0.05, min_runs=10, batch=10, margin=margin)),
+                values, args.max_runs)
+        return
     try:
         import numba  # noqa: F401
 
@@ -142,7 +234,7 @@ def table2(args: argparse.Namespace) -> None:
             Up(args.workers, Path(d)) as up:
         note(f"raced Table 2 (max {args.max_runs} runs per cell, {backend}) ...")
         raced = up.run_job(spec, timeout=86400)
-        summary = up.http.get(f"/jobs/{raced['id']}/summary").json()
+        race = up.http.get(f"/jobs/{raced['id']}/race").json()
         full_values: dict[tuple[str, str], list[float]]
         full_status: dict[str, Any] | None = None
         if args.full_up:
@@ -151,40 +243,16 @@ def table2(args: argparse.Namespace) -> None:
             full_status = up.run_job(plain, timeout=86400)
             full_values = _full_values_from_up(up, full_status["id"])
         else:
-            doc = json.loads(Path(args.full).read_text())
-            full_values = {(c["algorithm"], c["function"]): [float(v) for v in c["best_fitness"]]
-                           for c in doc["cells"]}
-    samples = {(f, 30, a): full_values[(a, f)] for a in TABLE2_ALGORITHMS for f in TABLE2_FUNCTIONS}
-    tests = report.benchmark_tests(samples, TABLE2_ALGORITHMS, None)
-    used = raced["runs_total"]
+            full_values = _bench_values(json.loads(Path(args.full).read_text()))
     full_runs = len(TABLE2_ALGORITHMS) * len(TABLE2_FUNCTIONS) * args.max_runs
-    print(f"raced: {used} runs of {full_runs} ({full_runs / used:.1f}x fewer), "
-          f"{elapsed(raced):.0f} s through swarmpath up --workers {args.workers}, load "
-          f"{raced['load'][0]:.1f} -> {raced['load'][1]:.1f}")
+    print(f"raced through swarmpath up --workers {args.workers}: {raced['runs_total']} runs, "
+          f"{elapsed(raced):.0f} s, load {raced['load'][0]:.1f} -> {raced['load'][1]:.1f}")
     if full_status is not None:
         print(f"full: {full_runs} runs, {elapsed(full_status):.0f} s, load "
               f"{full_status['load'][0]:.1f} -> {full_status['load'][1]:.1f}")
-    agree = 0
-    rows = []
-    for row in summary["rows"]:
-        if row["algorithm"] == "ICOOT":
-            continue
-        t = tests.comparison.get((row["function"], 30), row["algorithm"])
-        full = t.marker if t is not None else None
-        agree += row["marker"] == full
-        if row["marker"] != full:
-            duel = next(x for x in summary["statistics"]["comparison"]["tests"]
-                        if x["function"] == row["function"] and x["algorithm"] == row["algorithm"])
-            rows.append(f"| {row['function']} | {row['algorithm']} | {row['marker']} "
-                        f"({duel['decision']}, {row['race_runs']} runs, theta "
-                        f"{duel['theta']:.3f} [{duel['low']:.3f}, {duel['high']:.3f}]) | {full} "
-                        f"(A12 {t.a12 if t is not None else float('nan'):.3f}, p_holm "
-                        f"{t.p_holm if t is not None else float('nan'):.2g}) |")
-    n = len(summary["rows"]) - len(TABLE2_FUNCTIONS)
-    print(f"\nverdicts agreeing with the full study: {agree}/{n} ({100 * agree / n:.1f} %)\n")
-    if rows:
-        print("| function | algorithm | raced | full study |\n| --- | --- | --- | --- |")
-        print("\n".join(rows))
+    same = _decisions(race) == _decisions(replayed_race(full_values, settings))
+    print(f"the job's race equals its replay over the full study's runs: {same}\n")
+    agreement(race, full_values, args.max_runs)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -203,6 +271,10 @@ def main(argv: list[str] | None = None) -> int:
     t.add_argument("--margin", type=float, default=0.05)
     t.add_argument("--workers", type=int, default=2)
     t.add_argument("--seed", type=int, default=1)
+    t.add_argument("--replay", action="store_true", help="no service: replay the race over "
+                   "--full's runs (what a raced job decides, run for run)")
+    t.add_argument("--margins", type=lambda v: [float(x) for x in v.split(",")],
+                   default=[0.0, 0.05], help="with --replay: the margins to replay")
     src = t.add_mutually_exclusive_group(required=True)
     src.add_argument("--full", type=Path, help="swarmpath bench --json of the same setting")
     src.add_argument("--full-up", action="store_true", help="run the full study too")
