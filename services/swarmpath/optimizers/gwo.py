@@ -87,8 +87,14 @@ class GWO(Optimizer):
         self.scores = np.take_along_axis(pool_f, order, axis=1)
         self.leaders = np.take_along_axis(pool_x, order[:, :, None], axis=1)
 
+    def control(self) -> float:
+        """The control parameter a of iteration ``self.t`` (1..T): a_max (1 - (t-1)/T), linear
+        from a_max down to a_max/T as GWO.m computes it. Variants with another schedule
+        override this method alone (e.g. the example plugin's mGWO, examples/)."""
+        return float(self.p["a_max"]) * (1.0 - (self.t - 1) / self.T)
+
     def _iterate(self) -> None:
-        a = float(self.p["a_max"]) * (1.0 - (self.t - 1) / self.T)
+        a = self.control()
         r = self.rng.random(2, 3, self.N, self.d)  # r1, r2 for each leader: (R, 2, 3, N, d)
         L = self.leaders[:, :, None, :]  # (R, 3, 1, d)
         # In-place arithmetic: large temporaries cost more than the flops here.
