@@ -225,3 +225,13 @@ def test_reasons_file_refuses_a_reason_without_a_direction(monkeypatch):
 def test_unknown_table_is_refused_with_the_valid_names():
     with pytest.raises(KeyError, match="icoot-table2"):
         reference.load("icoot-table9")
+
+
+def test_a_suite_table_s_setting_line_names_its_paper_and_budget():
+    from swarmpath.cli.reproduce_output import _setting_text
+
+    text = _setting_text(reference.load("jso-cec2017-d10"), {"runs": 10, "seed": 1})
+    assert text == ("The results of the jSO algorithm for D = 10 of Brest, Maucec & Boskovic, "
+                    "CEC 2017 (51 runs, 10000xD evaluations, 10 dims); measured: 10 runs per "
+                    "cell, seed 1")
+    assert " of 000_" in _setting_text(reference.load("icoot-table2"), {"runs": 3, "seed": 1})

@@ -75,6 +75,7 @@ def main(argv: list[str] | None = None) -> int:
         f"table: {name}",
         "kind: benchmark",
         "source:",
+        "  cite: pycma on cocoex's bbob (scripts/evidence/pycma_reference.py)",
         "  paper: >-",
         "    N. Hansen, pycma (the reference implementation of CMA-ES), IPOP restarts as in",
         "    A. Auger and N. Hansen, \"A restart CMA evolution strategy with increasing",

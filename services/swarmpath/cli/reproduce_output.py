@@ -136,10 +136,18 @@ COUNT_HEADER = [*reproduction.VERDICTS, "unexplained", "+/=/- vs reference"]
 
 def _setting_text(tab: reference.Table, setting: Mapping[str, Any]) -> str:
     paper = tab.setting
-    what = (f"{paper.get('agents')} agents, {paper.get('iterations')} iterations, "
-            f"{paper['dims'][0]} dims" if tab.kind == "benchmark" else
-            ", ".join(f"{k} {v}" for k, v in paper.items() if k not in ("maps", "runs")))
-    return (f"{tab.source['table']} of {tab.source['seed']} ({paper['runs']} runs, {what}); "
+    if tab.kind != "benchmark":
+        what = ", ".join(f"{k} {v}" for k, v in paper.items() if k not in ("maps", "runs"))
+    elif paper.get("budget_evals"):  # a suite's table: the field's budget, its instances
+        what = (f"{paper['budget_evals']} evaluations, {paper['dims'][0]} dims"
+                + (f", instances {', '.join(map(str, paper['instances']))}"
+                   if paper.get("instances") else ""))
+    else:
+        what = (f"{paper.get('agents')} agents, {paper.get('iterations')} iterations, "
+                f"{paper['dims'][0]} dims")
+    # a seed paper's table names its seed text; another paper's, its short citation
+    where = tab.source.get("seed") or tab.source.get("cite") or tab.source["paper"]
+    return (f"{tab.source['table']} of {where} ({paper['runs']} runs, {what}); "
             f"measured: {setting['runs']} runs per cell, seed {setting['seed']}")
 
 
