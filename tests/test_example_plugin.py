@@ -10,7 +10,6 @@ import contextlib
 import json
 import os
 import shutil
-import signal
 import subprocess
 import sys
 import time
@@ -20,7 +19,7 @@ import httpx
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
-from test_service_e2e import ENV, PY, ROOT, free_port
+from test_service_e2e import ENV, PY, ROOT, free_port, stop_group
 
 EXAMPLE = ROOT / "examples" / "swarmpath-example"
 FILES = [EXAMPLE / "src" / "swarmpath_example" / "mgwo.py",
@@ -113,13 +112,7 @@ def test_up_gives_the_runs_of_a_local_bench(site, tmp_path, how):
             farm.setdefault((r["algorithm"], r["function"]), []).append(r["best_fitness"])
         assert farm == _local(env, extra)  # the same numbers, run for run
     finally:
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(proc.pid, signal.SIGTERM)
-        try:
-            proc.wait(30)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait(10)
+        stop_group(proc)
         log.close()
 
 

@@ -23,7 +23,7 @@ from swarmpath.service.identity import Issuer, id_for, owner, refusal, request_p
 from swarmpath.service.protocol import Lease, LeaseRequest, NoWork, decode_work_reply, encode
 from swarmpath.service.settings import CoordinatorSettings
 from swarmpath.service.worker import execute_lease, pack_batches
-from test_service_e2e import ENV, PY, Service, free_port
+from test_service_e2e import ENV, PY, Service, free_port, stop_group
 
 SPEC = {"kind": "benchmark", "algorithms": ["GWO"], "functions": ["F1"], "dims": [3],
         "runs": 20, "agents": 6, "iterations": 5, "seed": 3}
@@ -282,12 +282,6 @@ def test_under_up_a_login_cannot_speak_for_another_worker_nor_flood_it_out(tmp_p
             if p is not None and p.poll() is None:
                 os.killpg(p.pid, signal.SIGKILL)
                 p.wait(10)
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGTERM)
-            try:
-                proc.wait(30)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
-                proc.wait(10)
+        stop_group(proc)
         log.close()
         svc.http_client.close()

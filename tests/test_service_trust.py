@@ -9,8 +9,6 @@ forged stored, no lease dropped."""
 from __future__ import annotations
 
 import json
-import os
-import signal
 import subprocess
 import textwrap
 from collections.abc import Iterator
@@ -19,7 +17,7 @@ import httpx
 import pytest
 
 from swarmpath.optimizers import minimize
-from test_service_e2e import ENV, PY, Service, check_complete, free_port
+from test_service_e2e import ENV, PY, Service, check_complete, free_port, stop_group
 
 ATTACKER = textwrap.dedent("""
     import json, secrets, sys, time
@@ -166,11 +164,5 @@ def test_up_admits_only_its_own_random_login(tmp_path):
         assert seen["heard"] == [] and seen["relayed"] == [], login.stdout
         assert svc.wait_done(job, 180)["runs_done"] == 8
     finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGTERM)
-            try:
-                proc.wait(30)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
-                proc.wait(10)
+        stop_group(proc)
         log.close()
