@@ -39,6 +39,7 @@ TABLES: tuple[str, ...] = (
     "mfb-maps",
     "jso-cec2017-d10",
     "jso-cec2017-d30",
+    "cmaes-pycma-bbob-d5",
 )
 ILLEGIBLE = "illegible"
 REASONS_FILE = "reasons.yaml"
