@@ -340,7 +340,7 @@ def test_committed_schema_files_are_current():
 
 def test_schema_export_writes_every_model(tmp_path):
     written = schemas.write_schemas(tmp_path)
-    assert {w.name for w in written} == {f"{n}.schema.json" for n in p.SCHEMA_MODELS}
+    assert {w.name for w in written} == {f"{n}.schema.json" for n in schemas.SCHEMA_MODELS}
     assert schemas.stale_files(tmp_path) == []
     (tmp_path / "lease.schema.json").write_text("{}")
     assert schemas.stale_files(tmp_path) == ["lease.schema.json"]

@@ -20,7 +20,6 @@ it gives the same numbers.
 
 from __future__ import annotations
 
-from datetime import UTC, datetime
 from typing import Annotated, Any, Literal, TypeVar
 
 from pydantic import (
@@ -28,7 +27,6 @@ from pydantic import (
     BaseModel,
     Field,
     TypeAdapter,
-    computed_field,
 )
 
 from swarmpath.plugins.pins import clean_extensions
@@ -88,6 +86,7 @@ from swarmpath.service.spec_checks import (
     FieldProblems,
     Loc,
 )
+from swarmpath.service.status_views import JobStatus, WorkerStatus, iso_time
 
 #: Every name of the protocol, those defined in model, spec_checks and jobspec included.
 __all__ = [
@@ -109,8 +108,6 @@ __all__ = [
     "MAX_SCENARIO_BYTES",
     "MAX_SEED",
     "PROTOCOL_VERSION",
-    "SCHEMA_MODELS",
-    "SENT_BY_COORDINATOR",
     "WORK_REPLY_ADAPTER",
     "Ack",
     "AckStatus",
@@ -413,74 +410,6 @@ class Cancel(Model):
     leases: list[LeaseDrop] = Field(default_factory=list, max_length=CANCEL_LEASES)
 
 
-def iso_time(t: float | None) -> str | None:
-    """Unix time -> ISO 8601 in UTC with milliseconds (``2026-11-25T07:41:01.123Z``)."""
-    if not t:
-        return None
-    stamp = datetime.fromtimestamp(t, tz=UTC)
-    return stamp.strftime("%Y-%m-%dT%H:%M:%S.") + f"{stamp.microsecond // 1000:03d}Z"
-
-
-class WorkerStatus(Model):
-    """One entry of ``GET /workers``."""
-
-    id: Identifier
-    host: str = ""
-    pid: int = 0
-    slots: int = 1
-    current_runs: list[str] = Field(default_factory=list, description="'<job_id>:<run_id>'")
-    runs_done: int = 0
-    last_seen: float = Field(0.0, description="Unix time")
-    alive: bool = True
-    platform: dict[str, str] = Field(
-        default_factory=dict, description="numeric platform the worker last reported")
-
-    @computed_field  # type: ignore[prop-decorator]
-    @property
-    def last_seen_at(self) -> str | None:
-        """``last_seen`` in ISO 8601 (UTC)."""
-        return iso_time(self.last_seen)
-
-
-class JobStatus(Model):
-    """``GET /jobs/{id}``."""
-
-    id: str
-    kind: Literal["benchmark", "map"]
-    state: JobState
-    runs_total: int
-    runs_done: int
-    runs_failed: int
-    created: float = Field(description="Unix time; created_at is the same in ISO 8601")
-    started: float | None = None
-    finished: float | None = None
-    contents: str | None = Field(default=None, description="what the job runs, one line "
-                                 "(`GWO, PSO x F1-F13 x D 30`, `MFB x mfb-static`)")
-    waiting: str | None = Field(
-        default=None, description="state 'waiting': why no live worker can run the job now "
-        "(e.g. 'no live worker has optimizer MyGWO (digest 3f2a9c1b4d5e)')")
-    pins: dict[str, dict[str, str]] = Field(
-        default_factory=dict, description="the job's extensions ('<kind>:<name>') pinned at "
-        "submission: source (built-in, distribution, file, module), origin, version and the "
-        "sha256 of their code; only workers with the same code run its cells")
-
-    @computed_field  # type: ignore[prop-decorator]
-    @property
-    def created_at(self) -> str | None:
-        """``created`` in ISO 8601 (UTC)."""
-        return iso_time(self.created)
-
-    @computed_field  # type: ignore[prop-decorator]
-    @property
-    def started_at(self) -> str | None:
-        return iso_time(self.started)
-
-    @computed_field  # type: ignore[prop-decorator]
-    @property
-    def finished_at(self) -> str | None:
-        return iso_time(self.finished)
-
-
 # ----------------------------------------------------------------------------------- encoding
 M = TypeVar("M", bound=BaseModel)
 
@@ -507,38 +436,3 @@ def error_fields(exc: Exception) -> list[str]:
     if errors is None:
         return []
     return [".".join(str(p) for p in e["loc"]) for e in errors()]
-
-
-# The models exported to schemas/ (file stem -> model or adapter); see swarmpath.service.schemas.
-# Messages the coordinator sends are exported as it writes them (every field present); those it
-# receives (from users and workers) as it reads them (fields with defaults may be left out).
-SENT_BY_COORDINATOR = frozenset(
-    {"cell_spec", "run_request", "work_reply", "lease", "lease_bundle", "no_work", "ack", "cancel",
-     "lease_drop", "lease_ack", "worker_status", "job_status"}
-)
-SCHEMA_MODELS: dict[str, Any] = {
-    "job_spec": JOB_SPEC_ADAPTER,
-    "benchmark_job_spec": BenchmarkJobSpec,
-    "map_job_spec": MapJobSpec,
-    "cell_spec": CELL_ADAPTER,
-    "run_request": RunRequest,
-    "lease_request": LeaseRequest,
-    "scenario_request": ScenarioRequest,
-    "work_reply": WORK_REPLY_ADAPTER,
-    "lease": Lease,
-    "lease_bundle": LeaseBundle,
-    "no_work": NoWork,
-    "run_progress": RunProgress,
-    "run_result": RunResult,
-    "result_batch": ResultBatch,
-    "result_frame_head": FrameHead,
-    "run_result_head": RunResultHead,
-    "result_columns_head": ColumnsHead,
-    "ack": Ack,
-    "lease_drop": LeaseDrop,
-    "lease_ack": LeaseAck,
-    "cancel": Cancel,
-    "worker_status": WorkerStatus,
-    "job_status": JobStatus,
-    "cell_notes": CellNotes,
-}

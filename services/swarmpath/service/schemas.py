@@ -14,9 +14,69 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, TypeAdapter
 
-from swarmpath.service.protocol import PROTOCOL_VERSION, SCHEMA_MODELS, SENT_BY_COORDINATOR
+from swarmpath.service.cell_notes import CellNotes
+from swarmpath.service.protocol import (
+    CELL_ADAPTER,
+    JOB_SPEC_ADAPTER,
+    PROTOCOL_VERSION,
+    WORK_REPLY_ADAPTER,
+    Ack,
+    BenchmarkJobSpec,
+    Cancel,
+    ColumnsHead,
+    FrameHead,
+    JobStatus,
+    Lease,
+    LeaseAck,
+    LeaseBundle,
+    LeaseDrop,
+    LeaseRequest,
+    MapJobSpec,
+    NoWork,
+    ResultBatch,
+    RunProgress,
+    RunRequest,
+    RunResult,
+    RunResultHead,
+    ScenarioRequest,
+    WorkerStatus,
+)
 
 SCHEMA_DIALECT = "https://json-schema.org/draft/2020-12/schema"
+
+# The models exported to schemas/ (file stem -> model or adapter); see swarmpath.service.schemas.
+# Messages the coordinator sends are exported as it writes them (every field present); those it
+# receives (from users and workers) as it reads them (fields with defaults may be left out).
+SENT_BY_COORDINATOR = frozenset(
+    {"cell_spec", "run_request", "work_reply", "lease", "lease_bundle", "no_work", "ack", "cancel",
+     "lease_drop", "lease_ack", "worker_status", "job_status"}
+)
+SCHEMA_MODELS: dict[str, Any] = {
+    "job_spec": JOB_SPEC_ADAPTER,
+    "benchmark_job_spec": BenchmarkJobSpec,
+    "map_job_spec": MapJobSpec,
+    "cell_spec": CELL_ADAPTER,
+    "run_request": RunRequest,
+    "lease_request": LeaseRequest,
+    "scenario_request": ScenarioRequest,
+    "work_reply": WORK_REPLY_ADAPTER,
+    "lease": Lease,
+    "lease_bundle": LeaseBundle,
+    "no_work": NoWork,
+    "run_progress": RunProgress,
+    "run_result": RunResult,
+    "result_batch": ResultBatch,
+    "result_frame_head": FrameHead,
+    "run_result_head": RunResultHead,
+    "result_columns_head": ColumnsHead,
+    "ack": Ack,
+    "lease_drop": LeaseDrop,
+    "lease_ack": LeaseAck,
+    "cancel": Cancel,
+    "worker_status": WorkerStatus,
+    "job_status": JobStatus,
+    "cell_notes": CellNotes,
+}
 
 
 def default_dir() -> Path:
