@@ -8,7 +8,7 @@ import importlib
 import json
 import math
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from pydantic import (
@@ -134,3 +134,42 @@ def _inline_scenario_problems(scenario: Mapping[str, Any]) -> list[tuple[Loc, st
         return [((), str(exc))]
     return []
 
+
+def _reference(v: str | None, members: list[str] | None) -> str | None:
+    """A reference among the job's members (case-insensitive, stored as registered)."""
+    if v is None or members is None:  # no reference, or the members failed their validation
+        return v
+    from swarmpath.evidence.stats import resolve_reference
+
+    return resolve_reference(members, v)
+
+
+def _params_of_members(
+    v: dict[str, Any], members: list[str] | None, what: str, resolve: Callable[[str, Any], Any]
+) -> dict[str, Any]:
+    """Per-member parameters: only for the job's own members, each accepted by its resolver."""
+    from swarmpath.names import did_you_mean
+
+    if members is None:  # the member list itself failed validation: that error is reported
+        return v
+    problems: list[tuple[Loc, str]] = []
+    for name, params in v.items():
+        if name not in members:
+            problems.append(((name,), f"not one of the job's {what}{did_you_mean(name, members)}"
+                             f" ({', '.join(members)})"))
+            continue
+        keyed = False
+        for key, value in params.items():  # each parameter on its own: loc params.NAME.KEY
+            try:
+                resolve(name, {key: value})
+            except (ValueError, TypeError, KeyError, ArithmeticError) as exc:
+                problems.append(((name, key), str(exc.args[0]) if exc.args else str(exc)))
+                keyed = True
+        if not keyed:  # then together (a rule across parameters)
+            try:
+                resolve(name, params)
+            except (ValueError, TypeError, KeyError, ArithmeticError) as exc:
+                problems.append(((name,), str(exc.args[0]) if exc.args else str(exc)))
+    if problems:
+        raise FieldProblems(problems)
+    return v
