@@ -13,6 +13,7 @@ from pathlib import Path
 
 import httpx
 
+import owned
 from test_service_e2e import ENV
 
 WAIT = 600.0  # two tiny jobs through `swarmpath up` on a loaded machine
@@ -20,9 +21,9 @@ WAIT = 600.0  # two tiny jobs through `swarmpath up` on a loaded machine
 
 def test_demo_keep_leaves_the_dashboard_up_and_lists_its_outputs(tmp_path: Path) -> None:
     out = tmp_path / "out"
-    proc = subprocess.Popen([sys.executable, "-m", "swarmpath.cli", "demo", "--quick", "--keep",
-                             "--out", str(out)], env=ENV, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+    proc = owned.popen([sys.executable, "-m", "swarmpath.cli", "demo", "--quick", "--keep",
+                        "--out", str(out)], env=ENV, stdout=subprocess.PIPE,
+                       stderr=subprocess.PIPE, text=True)
     said: list[str] = []
     try:
         deadline = time.monotonic() + WAIT

@@ -23,6 +23,7 @@ from pathlib import Path
 
 import pytest
 
+import owned
 from swarmpath.optimizers import minimize
 from swarmpath.service import zenoh_config
 from test_service_e2e import ENV, PY, ROOT, Service, free_port
@@ -105,8 +106,8 @@ class NamespacedService(Service):
         log = open(self.tmp / f"{name}.log", "ab")  # closed by Service.close
         self._logs.append(log)
         # `ip netns exec` execs the command: the pid (and session) are the worker's
-        return subprocess.Popen(["ip", "netns", "exec", self.net.ns, PY, "-m", "swarmpath.cli",
-                                 *args], stdout=log, stderr=log, env=ENV, start_new_session=True)
+        return owned.popen(["ip", "netns", "exec", self.net.ns, PY, "-m", "swarmpath.cli",
+                            *args], stdout=log, stderr=log, env=ENV)
 
 
 def test_worker_in_a_namespace_completes_a_job_over_veth(netns, tmp_path):

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import owned
 from swarmpath.planners import Episode, PlannerError, get_planner, list_planners
 from swarmpath.planners import ompl_baselines as ompl_mod
 from swarmpath.planners.ompl_checks import FastChecker
@@ -232,7 +233,7 @@ def test_contacts_are_counted_by_cause():
 def _busy_processes(n: int) -> list[subprocess.Popen]:
     """``n`` processes spinning on the CPU (each in its own process group, bounded to 300 s)."""
     code = "import time\nend = time.time() + 300\nwhile time.time() < end:\n    pass\n"
-    return [subprocess.Popen([sys.executable, "-c", code], start_new_session=True)
+    return [owned.popen([sys.executable, "-c", code])
             for _ in range(n)]
 
 

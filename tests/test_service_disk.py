@@ -21,6 +21,7 @@ import pytest
 from fastapi.testclient import TestClient
 from mcap.reader import make_reader
 
+import owned
 from swarmpath.service.coordinator import Coordinator
 from swarmpath.service.http.app import create_app
 from swarmpath.service.protocol import Lease, LeaseRequest, NoWork, decode_work_reply, encode
@@ -180,8 +181,8 @@ class TmpfsService(Service):
                   f'swarmpath.cli "$@"')
         log = open(self.tmp / f"{name}.log", "ab")  # closed at teardown
         self._logs.append(log)
-        return subprocess.Popen(["unshare", "-Urm", "sh", "-c", script, "sh", *args],
-                                stdout=log, stderr=log, env=ENV, start_new_session=True)
+        return owned.popen(["unshare", "-Urm", "sh", "-c", script, "sh", *args],
+                           stdout=log, stderr=log, env=ENV)
 
     def inside(self, relative: str) -> Path:
         """A path of the coordinator's data directory as its mount namespace sees it."""

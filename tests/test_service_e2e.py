@@ -27,6 +27,7 @@ import httpx
 import pytest
 from mcap.reader import make_reader
 
+import owned
 from swarmpath.optimizers import minimize
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -83,8 +84,8 @@ class Service:
     def _spawn(self, name: str, args: list[str]) -> subprocess.Popen[bytes]:
         log = open(self.tmp / f"{name}.log", "ab")  # closed at teardown
         self._logs.append(log)
-        return subprocess.Popen([PY, "-m", "swarmpath.cli", *args], stdout=log, stderr=log,
-                                env=ENV, start_new_session=True)
+        return owned.popen([PY, "-m", "swarmpath.cli", *args], stdout=log, stderr=log,
+                           env=ENV)
 
     def start_coordinator(self, lease_seconds: float = 20.0) -> None:
         self.starts += 1

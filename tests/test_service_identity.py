@@ -17,6 +17,7 @@ import httpx
 import pytest
 from fastapi.testclient import TestClient
 
+import owned
 from swarmpath.service.coordinator import Coordinator
 from swarmpath.service.http.app import create_app
 from swarmpath.service.identity import Issuer, id_for, owner, refusal, request_proof
@@ -241,29 +242,28 @@ def test_under_up_a_login_cannot_speak_for_another_worker_nor_flood_it_out(tmp_p
     extra = tmp_path / "extra.txt"
     extra.write_text("intruder:pw-intruder-1234\nlab:pw-lab-5678\n")
     log = open(tmp_path / "up.log", "wb")
-    proc = subprocess.Popen([PY, "-m", "swarmpath.cli", "up", "--workers", "1", "--http",
-                             f"127.0.0.1:{http}", "--zenoh", f"tcp/127.0.0.1:{zport}", "--data",
-                             str(tmp_path / "data"), "--auth-dictionary", str(extra)],
-                            env=ENV, stdout=log, stderr=log, start_new_session=True)
+    proc = owned.popen([PY, "-m", "swarmpath.cli", "up", "--workers", "1", "--http",
+                        f"127.0.0.1:{http}", "--zenoh", f"tcp/127.0.0.1:{zport}", "--data",
+                        str(tmp_path / "data"), "--auth-dictionary", str(extra)],
+                       env=ENV, stdout=log, stderr=log)
     svc = Service(tmp_path)
     svc.http_client = httpx.Client(base_url=f"http://127.0.0.1:{http}", timeout=30.0)
     intruder = None
     try:
         svc.wait_for(lambda: any(w["alive"] for w in svc.get("/workers").json()), 90, "worker")
         victim = next(w["id"] for w in svc.get("/workers").json() if w["alive"])
-        intruder = subprocess.Popen([PY, "-c", INTRUDER, f"tcp/127.0.0.1:{zport}", "intruder",
-                                     "pw-intruder-1234", victim], env=ENV, text=True,
-                                    stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                    start_new_session=True)
+        intruder = owned.popen([PY, "-c", INTRUDER, f"tcp/127.0.0.1:{zport}", "intruder",
+                                "pw-intruder-1234", victim], env=ENV, text=True,
+                               stdin=subprocess.PIPE, stdout=subprocess.PIPE)
         said = json.loads(intruder.stdout.readline())
         for replies in (said["as_victim"], said["as_victim_no_login"]):
             assert len(replies) == 1 and '"refused: ' in replies[0], replies
         assert "does not belong to login 'intruder'" in said["as_victim"][0]
-        lab = subprocess.Popen([PY, "-m", "swarmpath.cli", "worker", "--connect",
-                                f"tcp/127.0.0.1:{zport}", "--id", "lab-remote", "--grace", "2"],
-                               env={**ENV, "SWARMPATH_ZENOH_USER": "lab",
-                                    "SWARMPATH_ZENOH_PASSWORD": "pw-lab-5678"},
-                               stdout=log, stderr=log, start_new_session=True)
+        lab = owned.popen([PY, "-m", "swarmpath.cli", "worker", "--connect",
+                           f"tcp/127.0.0.1:{zport}", "--id", "lab-remote", "--grace", "2"],
+                          env={**ENV, "SWARMPATH_ZENOH_USER": "lab",
+                               "SWARMPATH_ZENOH_PASSWORD": "pw-lab-5678"},
+                          stdout=log, stderr=log)
         svc.workers["lab"] = lab
         svc.wait_for(lambda: any(w["id"] == "lab-remote" and w["alive"]
                                  for w in svc.get("/workers").json()), 90, "lab admitted")

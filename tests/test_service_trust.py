@@ -16,6 +16,7 @@ from collections.abc import Iterator
 import httpx
 import pytest
 
+import owned
 from swarmpath.optimizers import minimize
 from test_service_e2e import ENV, PY, Service, check_complete, free_port, stop_group
 
@@ -134,10 +135,9 @@ def test_up_admits_only_its_own_random_login(tmp_path):
 
     http, zport = free_port(), free_port()
     log = open(tmp_path / "up.log", "wb")
-    proc = subprocess.Popen([PY, "-m", "swarmpath.cli", "up", "--workers", "1", "--http",
-                             f"127.0.0.1:{http}", "--zenoh", f"tcp/127.0.0.1:{zport}", "--data",
-                             str(tmp_path / "data")], env=ENV, stdout=log, stderr=log,
-                            start_new_session=True)
+    proc = owned.popen([PY, "-m", "swarmpath.cli", "up", "--workers", "1", "--http",
+                        f"127.0.0.1:{http}", "--zenoh", f"tcp/127.0.0.1:{zport}", "--data",
+                        str(tmp_path / "data")], env=ENV, stdout=log, stderr=log)
     try:
         svc = Service(tmp_path)
         svc.http_client = httpx.Client(base_url=f"http://127.0.0.1:{http}", timeout=30.0)
