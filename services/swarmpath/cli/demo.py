@@ -54,6 +54,15 @@ def _say(text: str) -> None:
     typer.echo(f"demo: {text}", err=True)
 
 
+def _end_with_parent() -> None:
+    """In the child before exec: SIGTERM it when the demo dies, even by SIGKILL (Linux
+    PR_SET_PDEATHSIG; elsewhere the demo's own Ctrl-C / SIGTERM handling is what stops it)."""
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        ctypes.CDLL(None).prctl(1, signal.SIGTERM, 0, 0, 0)  # 1: PR_SET_PDEATHSIG
+
+
 class _Service:
     """``swarmpath up`` as a child process (its own session: stopped with its workers)."""
 
@@ -66,7 +75,8 @@ class _Service:
             [sys.executable, "-m", "swarmpath.cli", "up", "--workers", "2", "--http",
              f"127.0.0.1:{self.http}", "--zenoh", f"tcp/127.0.0.1:{self.zenoh}", "--data",
              str(data), "--log-level", "warning"],
-            stdout=self._log, stderr=self._log, start_new_session=True)
+            stdout=self._log, stderr=self._log, start_new_session=True,
+            preexec_fn=_end_with_parent)
 
     def wait_ready(self) -> None:
         import httpx
