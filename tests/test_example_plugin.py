@@ -18,6 +18,8 @@ from pathlib import Path
 import httpx
 import pytest
 
+import owned
+
 sys.path.insert(0, str(Path(__file__).parent))
 from test_service_e2e import ENV, PY, ROOT, free_port, stop_group
 
@@ -94,11 +96,10 @@ def test_up_gives_the_runs_of_a_local_bench(site, tmp_path, how):
     extra = [] if how == "installed" else [a for f in FILES for a in ("--plugin", str(f))]
     http, zport = free_port(), free_port()
     log = open(tmp_path / "up.log", "wb")
-    proc = subprocess.Popen(
+    proc = owned.popen(
         [PY, "-m", "swarmpath.cli", "up", "--workers", "1", "--slots", "2", "--http",
          f"127.0.0.1:{http}", "--zenoh", f"tcp/127.0.0.1:{zport}", "--data",
-         str(tmp_path / "data"), *extra], stdout=log, stderr=log, env=env,
-        start_new_session=True)
+         str(tmp_path / "data"), *extra], stdout=log, stderr=log, env=env)
     try:
         with httpx.Client(base_url=f"http://127.0.0.1:{http}", timeout=30.0) as client:
             status = _run_job(client, proc, tmp_path)
