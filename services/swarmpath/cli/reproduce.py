@@ -24,6 +24,12 @@ import typer
 from swarmpath import __version__
 from swarmpath.cli import parallel
 from swarmpath.cli.core import InputError, app
+from swarmpath.cli.reproduce_added import (
+    added_statistics,
+    markdown_added,
+    parse_added,
+    print_added,
+)
 from swarmpath.cli.reproduce_run import (
     cells_from_runs,
     run_benchmark_local,
@@ -66,7 +72,7 @@ def _subset(option: str, given: str | None, names: Sequence[str]) -> list[str]:
 
 def study_setting(table: reference.Table, runs: int | None, seed: int,
                   backend: str = "numpy", algorithms: str | None = None,
-                  functions: str | None = None) -> dict[str, Any]:
+                  functions: str | None = None, add: str | None = None) -> dict[str, Any]:
     """The study run for ``table``: the paper's setting, runs lowered by ``--runs``, cells
     narrowed by ``--algorithms``/``--functions``; a backend other than the reference (numpy) is
     part of the setting."""
@@ -78,8 +84,9 @@ def study_setting(table: reference.Table, runs: int | None, seed: int,
     n = paper_runs if runs is None else runs
     if isinstance(table, reference.BenchmarkTable):
         columns = _subset("--algorithms", algorithms, table.algorithms)
+        added = parse_added(add, table)  # reproduce_added: measured beside the table
         setting: dict[str, Any] = {
-            "kind": "benchmark", "algorithms": columns,
+            "kind": "benchmark", "algorithms": [*columns, *added],
             "functions": _subset("--functions", functions, table.functions),
             "dims": [table.dim], "runs": n,
             "agents": int(table.setting["agents"]),
@@ -93,14 +100,19 @@ def study_setting(table: reference.Table, runs: int | None, seed: int,
             from swarmpath.optimizers.api import check_backend
 
             try:
-                check_backend(backend, columns)
-                check_backend(backend, columns, "shift")
+                check_backend(backend, setting["algorithms"])
+                check_backend(backend, setting["algorithms"], "shift")
             except ParameterError as exc:
                 raise InputError("--backend", f"{table.name}: {exc}") from None
             setting["backend"] = backend
+        if added:
+            setting["added"] = added
         return setting
     if backend != "numpy":
         raise InputError("--backend", f"{table.name} is a map table: planners run on numpy only")
+    if add is not None:
+        raise InputError("--add", f"{table.name} is a map table: --add adds optimizers to "
+                                  "benchmark tables")
     for option, given in (("--algorithms", algorithms), ("--functions", functions)):
         if given is not None:
             raise InputError(option, f"{table.name} is a map table: it has no {option[2:]}")
@@ -124,23 +136,26 @@ Result = tuple[reference.Table, dict[str, Any], list[reproduction.Row], dict[str
 
 def reproduce_table(name: str, runs: int | None, seed: int, jobs: int, url: str | None,
                     backend: str = "numpy", origin_check: bool = True,
-                    algorithms: str | None = None, functions: str | None = None) -> Result:
+                    algorithms: str | None = None, functions: str | None = None,
+                    add: str | None = None) -> Result:
     """Run one table's study (benchmark tables: also shifted when ``origin_check``); returns
     (table, setting, rows, statistics json, markers)."""
     table = reference.load(name)
-    setting = study_setting(table, runs, seed, backend, algorithms, functions)
+    setting = study_setting(table, runs, seed, backend, algorithms, functions, add)
     started = time.perf_counter()
     measured: list[Any]
     shifted: list[report.Cell] | None = None
     if isinstance(table, reference.BenchmarkTable):
-        measured = (cells_from_runs(run_remote(setting, url)) if url
+        job = {k: v for k, v in setting.items() if k != "added"}  # a job spec's fields
+        measured = (cells_from_runs(run_remote(job, url)) if url
                     else run_benchmark_local(setting, jobs))
         if setting.get("instances"):  # a table's function is its instances pooled (COCO)
             from swarmpath.evidence.instances import pool_instances
 
             measured = pool_instances(measured)
         if origin_check and not _suites(setting):  # the same runs, the optimum moved
-            moved = {**setting, "transform": "shift"}
+            moved = {**job, "transform": "shift", "algorithms": [  # the table's columns
+                a for a in job["algorithms"] if a not in setting.get("added", ())]}
             shifted = (cells_from_runs(run_remote(moved, url)) if url
                        else run_benchmark_local(moved, jobs))
             setting["origin_check"] = "shift"
@@ -159,7 +174,8 @@ def judge(table: reference.Table, setting: dict[str, Any], measured: Sequence[An
     markers: dict[str, str | None] = {}
     statistics: dict[str, Any] | None = None
     if isinstance(table, reference.BenchmarkTable):
-        cells: list[report.Cell] = list(measured)
+        added = list(setting.get("added") or [])
+        cells: list[report.Cell] = [c for c in measured if c.algorithm not in added]
         by_cell = {(c.function, c.algorithm): c.best_fitness for c in cells}
         moved = (None if shifted is None else
                  {(c.function, c.algorithm): c.best_fitness for c in shifted})
@@ -174,6 +190,9 @@ def judge(table: reference.Table, setting: dict[str, Any], measured: Sequence[An
         for c in cells:
             markers[reference.cell_key(table.name, c.algorithm, c.function, c.dim)] = (
                 stats.marker(c))
+        if added:  # beside the table, against its proposed (last measured) column
+            own = [a for a in setting["algorithms"] if a not in added]
+            statistics["added"] = added_statistics(list(measured), added, own[-1])
     else:
         from swarmpath.world import get_map
 
@@ -211,6 +230,8 @@ def from_document(doc: dict[str, Any]) -> Result:
         else:
             measured += [{**o, "planner": c["planner"], "map": c["map"]}
                          for o in c["outcomes"]]
+    for c in ((doc.get("statistics") or {}).get("added") or {}).get("cells", []):
+        measured.append(_saved_cell(c, c["runs"]))  # --add's cells, beside the table
     return judge(table, dict(doc["setting"]), measured, shifted or None)
 
 
@@ -241,10 +262,14 @@ def narrowing(table: reference.Table, setting: dict[str, Any]) -> list[str]:
     if not isinstance(table, reference.BenchmarkTable):
         return []
     out = []
+    added = list(setting.get("added") or [])
     for option, key, names in (("--algorithms", "algorithms", table.algorithms),
                                ("--functions", "functions", table.functions)):
-        if list(setting.get(key, names)) != list(names):
-            out += [option, ",".join(setting[key])]
+        given = [n for n in setting.get(key, names) if n not in added]
+        if given != list(names):
+            out += [option, ",".join(given)]
+    if added:
+        out += ["--add", ",".join(added)]
     if "origin_check" not in setting and not _suites(setting):
         out.append("--no-origin-check")
     return out
@@ -295,6 +320,13 @@ def reproduce(
                            "tables shifted (same runs and seeds) and mark the cells that lose "
                            "more than 3 decades (origin-suspect).")
     ] = True,
+    add: Annotated[
+        str | None, typer.Option("--add", metavar="NAMES", help="Also run these optimizers "
+                                 "(built-in or plugin, comma-separated) at a benchmark "
+                                 "table's setting: measured beside it, no verdict, markers "
+                                 "against the table's proposed algorithm (table, markdown, "
+                                 "--json).")
+    ] = None,
 ) -> None:
     """Run a seed paper's table at its setting; print published beside measured, with verdicts."""
     from swarmpath.cli import reproduce_output as output
@@ -310,10 +342,14 @@ def reproduce(
     results: list[Result] = []
     if from_ is not None and (table is not None or runs is not None or url is not None
                               or backend != "numpy" or algorithms is not None
-                              or functions is not None or not origin_check):
+                              or functions is not None or not origin_check
+                              or add is not None):
         raise InputError("--from", "judges saved runs: give no TABLE, --runs, --url, "
-                                   "--backend, --algorithms, --functions or "
+                                   "--backend, --algorithms, --functions, --add or "
                                    "--no-origin-check with it")
+    if add is not None and fmt in ("csv", "latex") and not as_json:
+        raise InputError("--add", f"the added columns print in table and markdown formats "
+                                  f"and --json, not --format {fmt}")
     if from_ is not None:
         try:
             loaded = json.loads(from_.read_text(encoding="utf-8"))
@@ -330,9 +366,10 @@ def reproduce(
     else:
         names = resolve_tables(table)
         for name in names:  # validate every table's options before running anything
-            study_setting(reference.load(name), runs, seed, backend, algorithms, functions)
+            study_setting(reference.load(name), runs, seed, backend, algorithms, functions, add)
     options = [*(["--algorithms", algorithms] if algorithms else []),
                *(["--functions", functions] if functions else []),
+               *(["--add", add] if add else []),
                *([] if origin_check else ["--no-origin-check"])]
     if fmt == "markdown" and not as_json:
         whole = table if table is not None else (
@@ -344,7 +381,8 @@ def reproduce(
     for i, name in enumerate(names):
         tab, setting, rows, statistics, markers = (
             results[i] if results else reproduce_table(name, runs, seed, jobs, url, backend,
-                                                       origin_check, algorithms, functions))
+                                                       origin_check, algorithms, functions,
+                                                       add))
         if results:
             runs, seed = int(setting["runs"]), int(setting["seed"])
             backend = str(setting.get("backend", "numpy"))
@@ -362,13 +400,15 @@ def reproduce(
         if fmt == "markdown":
             sys.stdout.write(output.markdown(tab, setting, rows, markers,
                                              command_line(name, runs, seed, fmt, backend,
-                                                          options)))
+                                                          options))
+                             + markdown_added(statistics))
         elif fmt == "csv":
             sys.stdout.write(output.csv_text(tab, rows, markers))
         elif fmt == "latex":
             sys.stdout.write(output.latex_table(tab, setting, rows, markers))
         else:
             output.print_rich(tab, setting, rows, markers)
+            print_added(statistics)
     if as_json:
         sys.stdout.write(json.dumps(docs[0] if len(docs) == 1 else docs, allow_nan=False)
                          + "\n")

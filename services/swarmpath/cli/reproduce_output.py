@@ -313,8 +313,11 @@ def write_outputs(directory: Path, tab: reference.Table, setting: Mapping[str, A
     """DIR/<table>.md and .png, and for a benchmark table run here its anytime figures
     (DIR/<table>-anytime/anytime_<function>_d<dim>.png: runtime ECDF and ERT per function)."""
     directory.mkdir(parents=True, exist_ok=True)
-    (directory / f"{tab.name}.md").write_text(markdown(tab, setting, rows, markers, command),
-                                              encoding="utf-8")
+    from swarmpath.cli.reproduce_added import markdown_added
+
+    (directory / f"{tab.name}.md").write_text(
+        markdown(tab, setting, rows, markers, command) + markdown_added(statistics),
+        encoding="utf-8")
     out = [directory / f"{tab.name}.md", plot(tab, rows, directory / f"{tab.name}.png")]
     groups = (statistics or {}).get("anytime")
     if groups:
