@@ -1,8 +1,8 @@
 """The example plugin package (examples/swarmpath-example), installed as a user installs it:
 ``pip install`` into a directory of its own (its entry points are found there), then its own test
-suite, ``swarmpath plugins``, ``plan`` with ``swarm:mGWO``, ``audit``, and ``swarmpath up``, whose
-results must equal a local ``bench`` run for run - installed, and loaded with ``--plugin`` files
-instead. The main suite's processes never see the plugin (it is not in .venv)."""
+suite, ``swarmpath plugins``, ``plan`` with ``swarm:mGWO``, ``audit``, ``reproduce --add``, and
+``swarmpath up``, whose results must equal a local ``bench`` run for run - installed, and loaded
+with ``--plugin`` files instead. The main suite's processes never see the plugin (it is not in .venv)."""
 
 from __future__ import annotations
 
@@ -80,6 +80,11 @@ def test_installed_extensions_come_from_their_distribution(site):
                  "--iterations", "50", "--json"], env_for(site))
     assert audit.returncode == 0, audit.stderr
     assert "mGWO" in audit.stdout
+    beside = cli(["reproduce", "icoot-table2", "-a", "COOT,ICOOT", "-f", "F1", "--runs", "2",
+                  "--no-origin-check", "-j", "1", "--add", "mGWO", "--json"], env_for(site))
+    assert beside.returncode == 0, beside.stderr
+    (cell,) = json.loads(beside.stdout)["statistics"]["added"]["cells"]
+    assert (cell["algorithm"], cell["function"], len(cell["runs"])) == ("mGWO", "F1", 2)
 
 
 def _local(env: dict[str, str], extra: list[str]) -> dict[tuple[str, str], list[float]]:
