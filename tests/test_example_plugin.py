@@ -2,7 +2,8 @@
 ``pip install`` into a directory of its own (its entry points are found there), then its own test
 suite, ``swarmpath plugins``, ``plan`` with ``swarm:mGWO``, ``audit``, ``reproduce --add``, and
 ``swarmpath up``, whose results must equal a local ``bench`` run for run - installed, and loaded
-with ``--plugin`` files instead. The main suite's processes never see the plugin (it is not in .venv)."""
+with ``--plugin`` files instead. The main suite's processes never see the plugin (it is not in
+.venv)."""
 
 from __future__ import annotations
 
