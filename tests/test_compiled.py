@@ -25,7 +25,7 @@ from swarmpath.optimizers import (
 )
 from swarmpath.optimizers.api import BACKENDS
 from swarmpath.optimizers.compiled import find_kernel, kernel_names
-from swarmpath.optimizers.compiled.functions import FUNCTION_IDS, evaluate
+from swarmpath.optimizers.compiled.objectives import evaluate, objective_for, work_for
 from swarmpath.optimizers.compiled.streams import (
     normal_into,
     open_stream,
@@ -58,12 +58,29 @@ def test_stream_emulation_draws_the_reference_numbers():
              ("r", 9100), ("r", 5), ("n", 100)] * 3
     for seed, run in [(1, 0), (7, 3)]:
         ref = RunStreams.for_runs(seed, [run + 1, run])
-        stream = open_stream(run_generator(seed, run), 9100)
+        stream = open_stream(run_generator(seed, run), 9100, True)
         for kind, n in sizes:
             expected = (ref.random if kind == "r" else ref.normal)(n)[1]
             got = np.empty(n)
             (random_into if kind == "r" else normal_into)(stream, got)
             assert np.array_equal(expected, got), (kind, n)
+
+
+@pytest.mark.parametrize("kind", ["r", "n"])
+def test_a_direct_stream_draws_the_reference_numbers_of_one_kind(kind):
+    sizes = [900, 5, 9100, 7000, 300, 8192, 1]
+    ref = RunStreams.for_runs(4, [2, 5])
+    stream = open_stream(run_generator(4, 5), 9100, False)
+    fill = random_into if kind == "r" else normal_into
+    for n in sizes:
+        expected = (ref.random if kind == "r" else ref.normal)(n)[1]
+        got = np.empty(n)
+        fill(stream, got)
+        assert np.array_equal(expected, got), n
+    with pytest.raises(ValueError, match="one kind"):
+        (normal_into if kind == "r" else random_into)(stream, np.empty(3))
+    with pytest.raises(ValueError, match="capacity"):
+        fill(stream, np.empty(9101))
 
 
 @pytest.mark.parametrize("name", list_functions())
@@ -80,9 +97,9 @@ def test_compiled_functions_equal_the_reference_bit_for_bit(name):
             F = np.empty(20)
             shifted = problem.shifts is not None
             shift = problem.shifts[r] if shifted else np.zeros(dim)
-            evaluate(open_stream(run_generator(9, r), 20), FUNCTION_IDS[name], shifted, shift,
+            evaluate(open_stream(run_generator(9, r), 20, False), objective_for(fn), shifted, shift,
                      problem.lower[r], problem.upper[r], np.ascontiguousarray(X[r]), F,
-                     np.ones(20, dtype=bool), np.empty((4, dim)))
+                     np.ones(20, dtype=bool), work_for(20, dim))
             assert np.array_equal(F, ref[r]), (dim, transform)
 
 

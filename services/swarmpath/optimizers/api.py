@@ -280,10 +280,10 @@ def check_backend(
         ) from None
     for algorithm in algorithms:
         check_study(algorithm, (params or {}).get(algorithm), transform)
-    from swarmpath.optimizers.compiled.run import compiled_function
+    from swarmpath.optimizers.compiled.run import check_function
 
     for name in functions:
-        compiled_function(get_function(name))
+        check_function(get_function(name))
 
 
 def _minimize_compiled(

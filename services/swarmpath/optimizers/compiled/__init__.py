@@ -3,16 +3,17 @@
 The numpy optimizers are the reference; a kernel here is an accelerated copy of one of them that
 must give the same numbers, run for run (equal to the last bit, or within the ``tolerance`` it
 declares, which every Result it computes records). Nothing in the numpy path imports this
-package: numba is an optional dependency (``pip install 'swarmpath[fast]'``).
+package.
 
-Kernel signature (one run; ``@njit(cache=True)``)::
+Kernel signature (one run; ``@njit(cache=True)``, or a Python shim calling one)::
 
-    run(rng, fid, shifted, shift, lower, upper, agents, iterations, params)
+    run(rng, objective, shifted, shift, lower, upper, agents, iterations, params)
         -> (best_fitness: float, best_position: (d,), curve: (iterations,), evaluations: int)
 
 * ``rng``: the run's ``numpy.random.Generator`` (``run_generator(seed, r)``, purpose OPTIMIZER).
-* ``fid``: the function's id (:data:`functions.FUNCTION_IDS`); ``shifted`` (bool) and
-  ``shift`` (d,): the run's shift (zeros when not shifted); ``lower``, ``upper`` (d,): the box.
+* ``objective``: the function's compiled objective (:func:`objectives.objective_for`: its
+  address and traits); ``shifted`` (bool) and ``shift`` (d,): the run's shift (zeros when not
+  shifted); ``lower``, ``upper`` (d,): the box.
 * ``agents``, ``iterations``: ints. ``params``: float64 vector made by the kernel's ``pack``
   from the resolved parameters (choices as indices into their tuple).
 * Returns what :class:`~swarmpath.optimizers.api.Result` holds for one run: the best value ever
@@ -22,22 +23,27 @@ Kernel signature (one run; ``@njit(cache=True)``)::
 Rules for kernel authors:
 
 1. Draw through one stream (:func:`streams.open_stream` with your largest single draw as
-   capacity) and :func:`streams.take`: one ``take`` per ``rng.random``/``rng.normal`` call of the
-   reference, of the same total size (``random_parts(k, ...)``/``random(k, ...)`` is one take of
-   k parts: part i is ``[o + i * size, o + (i + 1) * size)``, C order inside a part), in the same
-   order, uniforms and normals alike. ``uniform(lo, hi, ...)`` is ``lo + (hi - lo) * u`` of one
-   take; ``permutations`` is one uniform take and a stable argsort of each row; ``integers``
-   goes to the generator itself, unbuffered (call ``rng.integers`` at that point).
-2. Evaluate through :func:`functions.evaluate` exactly where the reference calls
+   capacity; ``mixed=False``, a direct stream, when the algorithm draws uniforms only) and
+   :func:`streams.take`: one ``take`` per ``rng.random``/``rng.normal`` call of the reference, of
+   the same total size (``random_parts(k, ...)``/``random(k, ...)`` is one take of k parts: part
+   i is ``[o + i * size, o + (i + 1) * size)``, C order inside a part), in the same order,
+   uniforms and normals alike (a direct stream may merge consecutive takes into one).
+   ``uniform(lo, hi, ...)`` is ``lo + (hi - lo) * u`` of one take; ``permutations`` is one
+   uniform take and a stable argsort of each row; ``integers`` goes to the generator itself,
+   unbuffered (call ``rng.integers`` at that point). A take may overwrite earlier numbers.
+2. Evaluate through :func:`objectives.evaluate` exactly where the reference calls
    ``Optimizer.evaluate`` and with the same rows (it draws F7's noise); pass ``mask`` where the
    reference masks (False rows are not computed and get +inf) and count evaluations as it does.
-   Keep the record with the first minimum and a strict ``<``, like ``Optimizer.evaluate``.
+   Keep the record with the first minimum and a strict ``<``, like ``Optimizer.evaluate``
+   (:mod:`.best`).
 3. Repeat the reference's arithmetic operation for operation: same association and order
    (``a * b + c`` stays that, ``np.sum`` over 3 rows is ``(x0 + x1) + x2``, ``x **= 2`` is
    ``x * x``), no ``fastmath``, no reassociation. numpy reductions along a contiguous axis add
    in a blocked order: use :func:`functions.dot` / :func:`functions.total` for ``einsum`` sums,
    and write ``np.sum`` along the last axis (pairwise, 8 accumulators past 8 elements) only with
-   care. Python ``min``/``max`` equal ``np.minimum``/``np.maximum`` except on NaN.
+   care. Python ``min``/``max`` equal ``np.minimum``/``np.maximum`` except on NaN. Where the
+   reference's numbers come from one of numpy's own loops (exp, cos, power, cbrt, matmul),
+   call that loop (:mod:`.ufuncs`, bound by symbol name: the caller stays cacheable).
 4. Refuse what you do not implement: ``pack`` raises ``ParameterError`` naming the parameter
    (value) it does not support; ``Kernel.transforms`` lists the transforms you handle (rotation
    is refused by the dispatcher for every kernel). Never fall back silently.
@@ -45,16 +51,12 @@ Rules for kernel authors:
    module to ``registry._MODULES``; ``tests/test_compiled.py`` then compares your kernel with
    the reference over its functions, dimensions, seeds, run ids and batch splits, and checks
    that every algorithm without a kernel refuses ``backend="numba"``.
-6. ``cache=True`` on every @njit (workers compile once); loops over runs stay in Python.
-7. Call the objective through the module-level name ``evaluate`` (``from
-   swarmpath.optimizers.compiled.functions import evaluate``), never as a function argument
-   (that makes the kernel uncachable). ``scripts/bench/kernels.py`` times the fused loop of
-   issue 14's target by recompiling the kernel with ``evaluate`` bound to one whose function
-   is fixed at compile time (``ufuncs.with_objective``): if ``run`` is a Python shim (numpy
-   loops passed as arguments), give the module ``loop(evaluate, rng, fid, ...)`` doing that.
-   Avoid ``objmode`` in a kernel (~20 us per call inside a large function). Where the
-   reference's numbers come from one of numpy's own loops (exp, power, cbrt, matmul), call that
-   loop (:mod:`.ufuncs`; by symbol name through ``ufuncs.link`` keeps the caller cacheable).
+6. ``cache=True`` on every @njit (workers compile once); loops over runs stay in Python. Keep
+   compilation cheap: scalar loops over arrays rather than slice assignments or array methods
+   (each numpy feature numba compiles costs seconds in a fresh process, numba's shape-error
+   messages most), one signature per function (the same argument types at every call).
+7. Speed: ``scripts/bench/kernels.py`` times the kernel against an independent fused loop of
+   the algorithm (``scripts/bench/fused_*.py``), which must reach the same bests; add yours.
 """
 
 import hashlib

@@ -5,7 +5,7 @@ from __future__ import annotations
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def record_first_min(F, X, m, best, best_x):
     """The first minimum of F[:m] (ties: first index), recorded if below ``best[0]``."""
     k = 0
@@ -14,4 +14,23 @@ def record_first_min(F, X, m, best, best_x):
             k = i
     if F[k] < best[0]:
         best[0] = F[k]
-        best_x[:] = X[k]
+        for j in range(best_x.size):
+            best_x[j] = X[k, j]
+
+
+@njit(cache=True)
+def record_masked(F, X, mask, best, best_x):
+    """:func:`record_first_min` over the rows of ``mask`` (a masked evaluation: the others are
+    neither counted nor eligible); returns how many rows were evaluated."""
+    k = -1
+    n = 0
+    for i in range(F.size):
+        if mask[i]:
+            n += 1
+            if F[i] < best[0] and (k < 0 or F[i] < F[k]):
+                k = i
+    if k >= 0:
+        best[0] = F[k]
+        for j in range(best_x.size):
+            best_x[j] = X[k, j]
+    return n

@@ -7,8 +7,9 @@ floating-point operation of the reference, in its order (the package's rules):
 
 * draws: the reference's layout of an iteration's uniforms, in its grouped draws (per coot flag,
   follow, chain and two scalars; two vectors per coot; per leader flag, sign and two scalars; two
-  vectors per leader; then mCOOT's picks or ICOOT's two rows of U(0, 1)). Every branch gets its
-  numbers whether it uses them or not, as in the reference;
+  vectors per leader; then mCOOT's picks or ICOOT's two rows of U(0, 1)), as one take of a
+  direct stream (uniforms only: the same numbers as the reference's several draws). Every
+  branch gets its numbers whether it uses them or not, as in the reference;
 * the in-place chain (eq 15), the coot/leader swap and the leader acceptance sweep are COOT.m's
   sequential loops, which the reference reproduces with chain depths and record sweeps;
 * mCOOT's jumping coots are the m smallest picks, their opposites evaluated in ascending order
@@ -39,10 +40,9 @@ from swarmpath.optimizers.compiled.coot_phases import (
     split,
     swap,
 )
-from swarmpath.optimizers.compiled.functions import evaluate
+from swarmpath.optimizers.compiled.objectives import evaluate, work_for
 from swarmpath.optimizers.compiled.registry import Kernel, register_kernel
 from swarmpath.optimizers.compiled.streams import RANDOM, open_stream, take
-from swarmpath.optimizers.compiled.ufuncs import with_objective
 from swarmpath.registry import ParamValue
 
 COOT, MCOOT, ICOOT = 0, 1, 2
@@ -100,20 +100,7 @@ def _smallest(keys, m, out):
 
 
 @njit(cache=True)
-def _take(stream, size, u, at):
-    """One draw of ``size`` uniforms of the reference, copied to u[at:at + size]."""
-    o = take(stream, RANDOM, size)
-    u[at : at + size] = stream[1][RANDOM][o : o + size]
-
-
-def loop(evaluate_, rng, fid, shifted, shift, lb, ub, N, T, params):
-    """``run`` with the objective ``evaluate_`` (``functions.evaluate``'s signature), for
-    ``scripts/bench/kernels.py``'s fused loop (compiled per objective, not cached)."""
-    return with_objective(run, evaluate_)(rng, fid, shifted, shift, lb, ub, N, T, params)
-
-
-@njit(cache=True)
-def run(rng, fid, shifted, shift, lb, ub, N, T, params):
+def run(rng, objective, shifted, shift, lb, ub, N, T, params):
     """One run (the package's kernel signature)."""
     d = lb.size
     variant, randoms = int(params[0]), int(params[3])
@@ -127,9 +114,9 @@ def run(rng, fid, shifted, shift, lb, ub, N, T, params):
     cell, power_, leader_gain, omega = params[13], params[14], params[15], params[16]
     nc = N - nl
     jumpers = math.ceil(params[9] * nc - 1e-9) if variant == MCOOT else 0
-    stream = open_stream(rng, max(N * d, 2 * nc * d, 2 * N))
+    stream = open_stream(rng, 2 * N * d + 6 * N, False)  # an iteration: see size
     mask = np.ones(2 * N, dtype=np.bool_)
-    scratch = np.empty((4, d))
+    scratch = work_for(2 * N, d)
     span = ub - lb
     mid = 0.5 * (lb + ub)
     cells = cell * span
@@ -152,7 +139,7 @@ def run(rng, fid, shifted, shift, lb, ub, N, T, params):
         for i in range(N):
             for j in range(d):
                 X[N + i, j] = _clip(lb[j] + ub[j] - X[i, j], lb[j], ub[j])
-        evaluate(stream, fid, shifted, shift, lb, ub, X, F, mask, scratch)
+        evaluate(stream, objective, shifted, shift, lb, ub, X, F, mask, scratch)
         evals += 2 * N
         record_first_min(F, X, 2 * N, best, best_x)
         for i in range(N):
@@ -160,17 +147,16 @@ def run(rng, fid, shifted, shift, lb, ub, N, T, params):
                 F[i] = F[N + i]
                 X[i] = X[N + i]
     else:
-        evaluate(stream, fid, shifted, shift, lb, ub, X[:N], F[:N], mask[:N], scratch)
+        evaluate(stream, objective, shifted, shift, lb, ub, X[:N], F[:N], mask[:N], scratch)
         evals += N
         record_first_min(F, X, N, best, best_x)
     CP, CF, LP, LF, g, gf, leader_of = split(X, F, N, nl)
-    o_v1, _, o_lflag, o_lv1, _, o_extra = offsets(nc, nl, d)
+    o_extra = offsets(nc, nl, d)[5]
     size = o_extra
     if variant == MCOOT and jumpers:
         size += nc
     if variant == ICOOT:
         size += nc + nl
-    u = np.empty(size)
     acc_c = np.ones(nc)
     acc_l = np.ones(nl)
     use_acc = variant == ICOOT and density_acc
@@ -190,22 +176,17 @@ def run(rng, fid, shifted, shift, lb, ub, N, T, params):
         step = t + 1 if counter_code else t
         A = 1.0 - step * inv
         B = 2.0 - step * inv
-        _take(stream, 5 * nc, u, 0)
-        _take(stream, 2 * nc * d, u, o_v1)
-        _take(stream, 4 * nl, u, o_lflag)
-        _take(stream, 2 * nl * d, u, o_lv1)
-        if variant == MCOOT and jumpers:
-            _take(stream, nc, u, o_extra)
-        elif variant == ICOOT and nc == nl:  # equal shapes: one grouped draw
-            _take(stream, 2 * nc, u, o_extra)
-        elif variant == ICOOT:
-            _take(stream, nc, u, o_extra)
-            _take(stream, nl, u, o_extra + nc)
+        # the iteration's draws (per coot, per leader, the variant's) are consecutive takes of
+        # one kind: one take of them all gives the same numbers (a direct stream). A noisy
+        # function's evaluations take their m <= N numbers into the front of the same buffer,
+        # the per-coot flags (5 N_c numbers), which are used before the coots' evaluation
+        o = take(stream, RANDOM, size)
+        u = stream[1][RANDOM][o : o + size]
         if use_acc:
             accelerate(CP, cells, power_, omega, rest_min, call, u, acc_c, acc_l)
         move_coots(CP, LP, leader_of, u, randoms, A, acc_c, use_acc, variant == ICOOT, target, g,
                    lb, ub, span, mid)
-        evaluate(stream, fid, shifted, shift, lb, ub, CP, CF, mask[:nc], scratch)
+        evaluate(stream, objective, shifted, shift, lb, ub, CP, CF, mask[:nc], scratch)
         evals += nc
         record_first_min(CF, CP, nc, best, best_x)
 
@@ -230,7 +211,7 @@ def run(rng, fid, shifted, shift, lb, ub, N, T, params):
             for q in range(jumpers):
                 for j in range(d):
                     opp[q, j] = _clip(lo_all[j] + hi_all[j] - CP[pick[q], j], lb[j], ub[j])
-            evaluate(stream, fid, shifted, shift, lb, ub, opp[:jumpers], F[:jumpers],
+            evaluate(stream, objective, shifted, shift, lb, ub, opp[:jumpers], F[:jumpers],
                      mask[:jumpers], scratch)
             evals += jumpers
             record_first_min(F, opp, jumpers, best, best_x)
@@ -242,7 +223,7 @@ def run(rng, fid, shifted, shift, lb, ub, N, T, params):
         gf = swap(CP, CF, LP, LF, leader_of, gbest_any, g, gf)
         propose_leaders(LP, g, g0, temp, u, nc, randoms, B * leader_gain, acc_l, use_acc,
                         mirror_minus, lb, ub)
-        evaluate(stream, fid, shifted, shift, lb, ub, temp, TF, mask[:nl], scratch)
+        evaluate(stream, objective, shifted, shift, lb, ub, temp, TF, mask[:nl], scratch)
         evals += nl
         record_first_min(TF, temp, nl, best, best_x)
         gf = accept_leaders(LP, LF, temp, TF, g0, g, gf, leader_code)

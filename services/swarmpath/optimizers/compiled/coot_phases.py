@@ -124,7 +124,7 @@ def move_coots(CP, LP, leader_of, u, randoms, A, acc_c, use_acc, icoot, target, 
         if follow:
             fa = 2.0 * acc_c[i] if use_acc else 2.0
             lead = leader_of[i]
-            w = cospi(4.0 * u[o_s1 + i]) * u[o_s2 + i] * fa + 1.0
+            w = 0.0 if vec else cospi(4.0 * u[o_s1 + i]) * u[o_s2 + i] * fa + 1.0
             for j in range(d):
                 if vec:
                     w = cospi(4.0 * u[o_v1 + i * d + j]) * u[o_v2 + i * d + j] * fa + 1.0

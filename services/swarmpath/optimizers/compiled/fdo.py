@@ -9,10 +9,15 @@ untried points included). Untried trial points are not evaluated here (the refer
 and masks them); they are neither counted nor eligible as best in either.
 
 |v|^(2/3) is cbrt(v^2) through numpy's own float64 cbrt loop
-(:mod:`~swarmpath.optimizers.compiled.ufuncs`): numpy picks its cbrt at run time by CPU (on an
-AVX-512 machine a SIMD version that differs from the C library's in the last bit for about half
-of the arguments), and one last bit in a Levy step is enough to turn a greedy comparison later
-in the run. Calling that very loop keeps the kernel bitwise equal to the reference.
+(:func:`~swarmpath.optimizers.compiled.ufuncs.cbrt_inplace`): numpy picks its cbrt at run time
+by CPU (on an AVX-512 machine a SIMD version that differs from the C library's in the last bit
+for about half of the arguments), and one last bit in a Levy step is enough to turn a greedy
+comparison later in the run. Calling that very loop keeps the kernel bitwise equal to the
+reference.
+
+An iteration is one pass over the bees computing the three trial points of each (trial 1's
+pace, trial 2 from the stored pace, trial 3 from the second Levy step), then per trial the
+bound rule, the evaluation of the bees that try it and the greedy test.
 """
 
 from __future__ import annotations
@@ -22,93 +27,14 @@ from collections.abc import Mapping
 import numpy as np
 from numba import njit
 
-from swarmpath.optimizers.compiled.functions import evaluate
+from swarmpath.optimizers.compiled.best import record_masked
+from swarmpath.optimizers.compiled.objectives import evaluate, work_for
 from swarmpath.optimizers.compiled.registry import Kernel, register_kernel
-from swarmpath.optimizers.compiled.streams import NORMAL, RANDOM, open_stream, take
-from swarmpath.optimizers.compiled.ufuncs import CBRT, unary, with_objective
+from swarmpath.optimizers.compiled.streams import NORMAL, open_stream, take
+from swarmpath.optimizers.compiled.ufuncs import cbrt_inplace
 from swarmpath.optimizers.fdo import _LEVY_SCALE as LEVY_SCALE
 from swarmpath.optimizers.fdo import FDO
 from swarmpath.registry import ParamValue
-
-
-@njit(cache=True, error_model="numpy")
-def levy(stream, m, d, cbrt, data, call, L, S):
-    """L[:m] = Levy steps of m x d from one two-part normal draw (u, v): (u / cbrt(v^2)) *
-    scale, the reference's ``_levy``; with S of size > 0 also S = copysign(L, v) (its
-    ``_levy_pair``). L and S are contiguous."""
-    n = m * d
-    start = take(stream, NORMAL, 2 * n)
-    z = stream[1][NORMAL]
-    flat = L.reshape(n)
-    for k in range(n):
-        v = z[start + n + k]
-        flat[k] = v * v
-    unary(cbrt, data, flat, call)
-    for k in range(n):
-        flat[k] = z[start + k] / flat[k]
-        flat[k] *= LEVY_SCALE
-    if S.size:
-        sflat = S.reshape(n)
-        for k in range(n):
-            sflat[k] = np.copysign(flat[k], z[start + n + k])
-
-
-@njit(cache=True)
-def bound(stream, C, lower, upper, author, cbrt, data, call, scratch, none):
-    """The reference's ``_bound`` in place: the author's rule (a fresh Levy draw) if asked,
-    then clip."""
-    N, d = C.shape
-    if author:
-        levy(stream, N, d, cbrt, data, call, scratch, none)
-    for i in range(N):
-        for j in range(d):
-            c = C[i, j]
-            if author:
-                if c > upper[j]:
-                    c = upper[j] * scratch[i, j]
-                elif c < lower[j]:
-                    c = lower[j] * scratch[i, j]
-            if c < lower[j]:
-                c = lower[j]
-            if c > upper[j]:
-                c = upper[j]
-            C[i, j] = c
-
-
-@njit(cache=True)
-def record(X, F, mask, best, best_x):
-    """The best point ever evaluated (strict <, first index); returns the points counted."""
-    k = -1
-    n = 0
-    for i in range(F.size):
-        if mask[i]:
-            n += 1
-            if F[i] < best[0]:
-                best[0] = F[i]
-                k = i
-    if k >= 0:
-        best_x[:] = X[k]
-    return n
-
-
-@njit(cache=True, error_model="numpy")
-def weights(F, b, wf, threshold, fw, walk, plain):
-    """fw (eq 2 with the reference's edge cases) and its two special branches, per bee."""
-    fb = F[b]
-    for i in range(F.size):
-        w = fb / F[i]
-        if wf != 0.0:
-            w -= wf
-        if threshold and fb < 0.05 * F[i]:
-            w = 0.2
-        if not np.isfinite(w) or fb == 0.0:
-            w = 0.0
-        infinite = F[i] == 0.0 and fb != 0.0
-        if infinite:
-            w = 1.0
-        fw[i] = w
-        walk[i] = w == 1.0 or infinite  # pace = x r
-        plain[i] = w == 0.0 and not walk[i]  # pace = (x* - x) r
 
 
 def pack(p: Mapping[str, ParamValue]) -> np.ndarray:
@@ -120,143 +46,153 @@ def pack(p: Mapping[str, ParamValue]) -> np.ndarray:
     ])
 
 
-def run(rng, fid, shifted, shift, lower, upper, agents, iterations, params):
-    """One FDO run (the package's kernel signature). A Python shim: numpy's cbrt loop is an
-    argument of the compiled loop (a global function pointer would keep numba from caching
-    it)."""
-    return _run(rng, fid, shifted, shift, lower, upper, agents, iterations, params, *CBRT)
-
-
-def loop(evaluate, rng, fid, shifted, shift, lower, upper, agents, iterations, params):
-    """``run`` with the objective ``evaluate`` (``functions.evaluate``'s signature), for
-    ``scripts/bench/kernels.py``'s fused loop (compiled per objective, not cached)."""
-    return with_objective(_run, evaluate)(rng, fid, shifted, shift, lower, upper, agents,
-                                          iterations, params, *CBRT)
+@njit(cache=True, error_model="numpy")
+def levy(stream, n, L, S, call):
+    """L[:n] = n Levy steps from one two-part normal draw (u, v): (u / cbrt(v^2)) * scale, the
+    reference's ``_levy``; S[:n] = copysign(L, v) (its ``_levy_pair``) when S has room."""
+    start = take(stream, NORMAL, 2 * n)
+    z = stream[1][NORMAL]
+    w = L[:n]
+    for k in range(n):
+        v = z[start + n + k]
+        w[k] = v * v
+    cbrt_inplace(w, call)
+    for k in range(n):
+        w[k] = z[start + k] / w[k]
+        w[k] *= LEVY_SCALE
+    if S.size >= n:
+        for k in range(n):
+            S[k] = np.copysign(w[k], z[start + n + k])
 
 
 @njit(cache=True)
-def _run(rng, fid, shifted, shift, lower, upper, agents, iterations, params, cbrt, data):
+def bound(stream, C, lower, upper, steps, call):
+    """The author's bound rule in place (``_bound``, ``bound = "author"``): a component above
+    the box becomes ub L, below lb L (a fresh Levy step L), then everything is clipped."""
+    N, d = C.shape
+    levy(stream, N * d, steps, steps[:0], call)
+    for i in range(N):
+        for j in range(d):
+            c = C[i, j]
+            if c > upper[j]:
+                c = upper[j] * steps[i * d + j]
+            elif c < lower[j]:
+                c = lower[j] * steps[i * d + j]
+            C[i, j] = min(max(c, lower[j]), upper[j])
+
+
+@njit(cache=True, error_model="numpy")
+def run(rng, objective, shifted, shift, lower, upper, agents, iterations, params):
     N, d, T = agents, lower.size, iterations
+    n = N * d
     wf = params[0]
-    threshold = params[1] == 0.0
-    nested = params[2] == 0.0
-    author = params[3] == 1.0
-    stream = open_stream(rng, max(2 * N * d, N))
+    threshold, nested, author = params[1] == 0.0, params[2] == 0.0, params[3] == 1.0
+    stream = open_stream(rng, max(2 * n, N), True)  # uniforms and normals: buffered
     call = np.empty(5, dtype=np.int64)
-    w4 = np.empty((4, d))
+    work = work_for(N, d)
     best = np.full(1, np.inf)
     best_x = np.zeros(d)
     curve = np.empty(T)
-    none = np.empty((0, 0))
-    everyone = np.ones(N, dtype=np.bool_)
     X = np.empty((N, d))
-    start = take(stream, RANDOM, N * d)
-    u = stream[1][RANDOM]
+    start = take(stream, 0, n)
+    u = stream[1][0]
     for i in range(N):
         for j in range(d):
             X[i, j] = lower[j] + (upper[j] - lower[j]) * u[start + i * d + j]
     F = np.empty(N)
-    evaluate(stream, fid, shifted, shift, lower, upper, X, F, everyone, w4)
-    evals = record(X, F, everyone, best, best_x)
+    tried = np.ones((3, N), dtype=np.bool_)
+    evaluate(stream, objective, shifted, shift, lower, upper, X, F, tried[0], work)
+    evals = record_masked(F, X, tried[0], best, best_x)
     pace = np.zeros((N, d))
     has_pace = np.zeros(N, dtype=np.bool_)
-    L = np.empty((N, d))
-    S3 = np.empty((N, d))
-    row = np.empty((1, d))
-    scratch = np.empty((N, d))
+    L = np.empty(n)
+    S3 = np.empty(n)
+    row = np.empty(d)
+    steps = np.empty(n)
     pace1 = np.empty((N, d))
-    cand1 = np.empty((N, d))
-    cand2 = np.empty((N, d))
-    cand3 = np.empty((N, d))
-    F1 = np.empty(N)
-    F2 = np.empty(N)
-    F3 = np.empty(N)
+    C = np.empty((3, N, d))
+    FC = np.empty((3, N))
+    kind = np.empty(N, dtype=np.int64)  # 0: general, 1: walk (pace x r), 2: plain ((x* - x) r)
     fw = np.empty(N)
-    walk = np.empty(N, dtype=np.bool_)
-    plain = np.empty(N, dtype=np.bool_)
-    tried2 = np.empty(N, dtype=np.bool_)
-    tried3 = np.empty(N, dtype=np.bool_)
-    acc = np.zeros(N, dtype=np.int64)  # 0: stays, else the accepted trial
+    took = np.empty(N, dtype=np.int64)  # the accepted trial, 0: none
     xb = np.empty(d)
     for t in range(T):
         b = 0
         for i in range(1, N):
             if F[i] < F[b]:
                 b = i
-        xb[:] = X[b]
-        weights(F, b, wf, threshold, fw, walk, plain)
-        levy(stream, N, d, cbrt, data, call, L, S3)
-        levy(stream, 1, d, cbrt, data, call, row, none)
-        # trial 1: x + pace; (x* - x) fw is kept in cand2 for trial 2
+        fb = F[b]
+        for j in range(d):
+            xb[j] = X[b, j]
+        for i in range(N):  # eq 2 with the reference's edge cases
+            w = fb / F[i]
+            if wf != 0.0:
+                w -= wf
+            if threshold and fb < 0.05 * F[i]:
+                w = 0.2
+            if not np.isfinite(w) or fb == 0.0:
+                w = 0.0
+            infinite = F[i] == 0.0 and fb != 0.0
+            if infinite:
+                w = 1.0
+            fw[i] = w
+            kind[i] = 1 if w == 1.0 or infinite else (2 if w == 0.0 else 0)
+        levy(stream, n, L, S3, call)
+        levy(stream, d, row, row[:0], call)
         for i in range(N):
             for j in range(d):
                 x = X[i, j]
                 dist = xb[j] - x
                 f = dist * fw[i]
-                cand2[i, j] = f
-                if walk[i]:
-                    p = x * L[i, j]
-                elif plain[i]:
-                    p = dist * L[i, j]
+                if kind[i] == 1:
+                    p = x * L[i * d + j]
+                elif kind[i] == 2:
+                    p = dist * L[i * d + j]
                 else:
-                    p = np.copysign(f, L[i, j])
+                    p = np.copysign(f, L[i * d + j])
                 pace1[i, j] = p
-                cand1[i, j] = x + p
-        bound(stream, cand1, lower, upper, author, cbrt, data, call, scratch, none)
-        evaluate(stream, fid, shifted, shift, lower, upper, cand1, F1, everyone, w4)
-        evals += record(cand1, F1, everyone, best, best_x)
-        # trial 2: x + (x* - x) fw + the stored pace; trial 3: x + x r
+                s = S3[i * d + j] if kind[i] == 0 else row[j]
+                c1 = x + p
+                c2 = (f + x) + pace[i, j]
+                c3 = s * x + x
+                if not author:
+                    c1 = min(max(c1, lower[j]), upper[j])
+                    c2 = min(max(c2, lower[j]), upper[j])
+                    c3 = min(max(c3, lower[j]), upper[j])
+                C[0, i, j] = c1
+                C[1, i, j] = c2
+                C[2, i, j] = c3
         for i in range(N):
-            acc[i] = 1 if F1[i] < F[i] else 0
-            tried2[i] = acc[i] == 0 and has_pace[i]
-            special = walk[i] or plain[i]
-            for j in range(d):
-                x = X[i, j]
-                cand2[i, j] = (cand2[i, j] + x) + pace[i, j]
-                s = row[0, j] if special else S3[i, j]
-                cand3[i, j] = s * x + x
-        if nested:  # trial 3 only after a failed trial 2
-            bound(stream, cand2, lower, upper, author, cbrt, data, call, scratch, none)
-            evaluate(stream, fid, shifted, shift, lower, upper, cand2, F2, tried2, w4)
-            evals += record(cand2, F2, tried2, best, best_x)
+            took[i] = 0
+        # trials in the reference's order: 1 (everyone), then "nested": 2 for the bees that moved
+        # before, 3 for those of them that failed 2; "split": 2 or 3 in one evaluation
+        for trial in range(3 if nested else 2):
+            if trial:
+                for i in range(N):
+                    if nested:
+                        tried[trial, i] = took[i] == 0 and (has_pace[i] if trial == 1
+                                                            else tried[1, i])
+                    else:
+                        tried[1, i] = took[i] == 0
+                        if tried[1, i] and not has_pace[i]:  # trial 3 instead of 2
+                            for j in range(d):
+                                C[1, i, j] = C[2, i, j]
+            if author:
+                bound(stream, C[trial], lower, upper, steps, call)
+            evaluate(stream, objective, shifted, shift, lower, upper, C[trial], FC[trial],
+                     tried[trial], work)
+            evals += record_masked(FC[trial], C[trial], tried[trial], best, best_x)
             for i in range(N):
-                if F2[i] < F[i]:
-                    acc[i] = 2
-                tried3[i] = tried2[i] and acc[i] != 2
-            bound(stream, cand3, lower, upper, author, cbrt, data, call, scratch, none)
-            evaluate(stream, fid, shifted, shift, lower, upper, cand3, F3, tried3, w4)
-            evals += record(cand3, F3, tried3, best, best_x)
-            for i in range(N):
-                if F3[i] < F[i]:
-                    acc[i] = 3
-        else:  # "split": trial 2 for bees that moved before, trial 3 for the others
-            for i in range(N):
-                tried3[i] = acc[i] == 0 and not has_pace[i]
-                if tried3[i]:
-                    cand2[i] = cand3[i]
-                    tried2[i] = True  # evaluated together, told apart below
-            bound(stream, cand2, lower, upper, author, cbrt, data, call, scratch, none)
-            evaluate(stream, fid, shifted, shift, lower, upper, cand2, F2, tried2, w4)
-            evals += record(cand2, F2, tried2, best, best_x)
-            for i in range(N):
-                if F2[i] < F[i]:
-                    acc[i] = 3 if tried3[i] else 2
-        # greedy update; a bee that moves keeps this iteration's trial-1 pace
-        for i in range(N):
-            a = acc[i]
-            if a == 0:
-                continue
-            if a == 1:
-                X[i] = cand1[i]
-                F[i] = F1[i]
-            elif a == 2 or not nested:
-                X[i] = cand2[i]
-                F[i] = F2[i]
-            else:
-                X[i] = cand3[i]
-                F[i] = F3[i]
-            pace[i] = pace1[i]
-            has_pace[i] = True
+                if took[i] == 0 and FC[trial, i] < F[i]:
+                    took[i] = trial + 1 if nested or has_pace[i] or not trial else 3
+        for i in range(N):  # greedy; a bee that moves keeps this iteration's trial-1 pace
+            if took[i]:
+                k = took[i] - 1 if nested or took[i] < 3 else 1
+                F[i] = FC[k, i]
+                for j in range(d):
+                    X[i, j] = C[k, i, j]
+                    pace[i, j] = pace1[i, j]
+                has_pace[i] = True
         curve[t] = best[0]
     return best[0], best_x, curve, evals
 

@@ -1,9 +1,8 @@
-"""F1-F13 (and F6-floor) in compiled code, value for value the numpy reference's numbers.
+"""F1-F13 (and F6-floor) at one point in compiled code, value for value the numpy reference's.
 
-:func:`evaluate` computes one population's values like ``BenchmarkProblem._evaluate`` (shift,
-F8's wrap into its box, the kernel, F7's noise from the run's stream). Each kernel repeats the
-operations of :mod:`swarmpath.functions.definitions` in the same order, and each reduction adds
-in the order numpy adds on this build (its baseline SIMD is two doubles wide, no FMA):
+Each function repeats the operations of :mod:`swarmpath.functions.definitions` in the same order,
+and each reduction adds in the order numpy adds on this build (its baseline SIMD is two doubles
+wide, no FMA):
 
 * ``einsum("...i,...i->...")`` (sums of squares, dot products): two lanes, 8 numbers per step
   added last-pair-first (:func:`dot`); ``einsum("...i->...")``: two lanes, pairs of pairs per
@@ -12,12 +11,10 @@ in the order numpy adds on this build (its baseline SIMD is two doubles wide, no
 * sin(pi q), cos(pi q): the reduction and Taylor/Horner steps of
   :mod:`swarmpath.functions.trig`, operation for operation.
 
-``tests/test_compiled.py`` checks every function bit for bit against the reference. F10
-(Ackley) needs numpy's own ``exp`` for that: numpy's vectorised exp and the C library's differ
-in the last bit for about one argument in a hundred, and near Ackley's optimum a last-bit
-difference reorders agents. :func:`evaluate` therefore computes a whole population's exponent
-arguments in compiled code and runs numpy's own exp loop on them once per evaluation
-(:func:`numpy_exp`).
+A point function takes the point x (d,) and scratch w (3, d); F10 (Ackley) has no point function:
+its two exponent arguments (:func:`ackley_parts`) go through numpy's own exp loop for a whole
+population at once (:mod:`.objectives`). The population objectives the kernels call are built
+on these in :mod:`.objectives`; ``tests/test_compiled.py`` checks every function bit for bit.
 """
 
 from __future__ import annotations
@@ -27,24 +24,9 @@ import math
 import numpy as np
 from numba import njit
 
-from swarmpath.functions.registry import list_functions
 from swarmpath.functions.trig import COS, SIN
-from swarmpath.optimizers.compiled.streams import RANDOM, take
-from swarmpath.optimizers.compiled.ufuncs import exp_inplace
-
-#: Function ids of the compiled kernels, by registered name.
-FUNCTION_IDS: dict[str, int] = {
-    "F1": 1, "F2": 2, "F3": 3, "F4": 4, "F5": 5, "F6": 6, "F7": 7, "F8": 8, "F9": 9, "F10": 10,
-    "F11": 11, "F12": 12, "F13": 13, "F6-floor": 14,
-}
-# Every built-in function has a kernel; suites' and plugins' functions have none (run on numpy).
-assert set(FUNCTION_IDS) == set(list_functions(builtin=True)), "a built-in has no compiled id"
-NOISY = 7
-WRAPPED = 8
-ACKLEY = 10
 
 _PI = math.pi
-_E = float(np.e)
 _INV_PI = 1.0 / math.pi
 # Horner coefficients, highest degree first (the reference runs coefficients[-1] ... [0])
 _COS = np.array(COS[::-1])
@@ -154,7 +136,7 @@ def sinpi_squared(q):
 
 
 # ------------------------------------------------------------------------------- functions
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _penalty(x, a, k, w):
     d = x.size
     for i in range(d):
@@ -165,7 +147,7 @@ def _penalty(x, a, k, w):
     return k * total(w, d)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def ackley_parts(x, w):
     """F10's two exponent arguments at x: (-0.2 sqrt(sum x^2 / d), sum cos(2 pi x) / d)."""
     d = x.size
@@ -177,139 +159,144 @@ def ackley_parts(x, w):
 
 
 @njit(cache=True, inline="always")
-def value(fid, x, w):
-    """f(x) of function ``fid`` (not F10: see :func:`evaluate`) for one point x (d,) (no noise);
-    ``w`` is (3, d) scratch."""
+def sphere(x, w):  # F1
+    return dot(x, x, x.size)
+
+
+@njit(cache=True, inline="always")
+def schwefel_2_22(x, w):  # F2
+    d = x.size
+    u = w[0]
+    for i in range(d):
+        u[i] = abs(x[i])
+    p = u[0]
+    for i in range(1, d):
+        p = p * u[i]
+    return total(u, d) + p
+
+
+@njit(cache=True, inline="always")
+def schwefel_1_2(x, w):  # F3
+    d = x.size
+    u = w[0]
+    s = 0.0
+    for i in range(d):
+        s = s + x[i] if i else x[0]
+        u[i] = s
+    return dot(u, u, d)
+
+
+@njit(cache=True, inline="always")
+def schwefel_2_21(x, w):  # F4
+    m = abs(x[0])
+    for i in range(1, x.size):
+        a = abs(x[i])
+        if a > m:
+            m = a
+    return m
+
+
+@njit(cache=True, inline="always")
+def rosenbrock(x, w):  # F5
     d = x.size
     u = w[0]
     v = w[1]
-    if fid == 1:
-        return dot(x, x, d)
-    if fid == 2:
-        p = 1.0
-        for i in range(d):
-            u[i] = abs(x[i])
-        p = u[0]
-        for i in range(1, d):
-            p = p * u[i]
-        return total(u, d) + p
-    if fid == 3:
-        s = 0.0
-        for i in range(d):
-            s = s + x[i] if i else x[0]
-            u[i] = s
-        return dot(u, u, d)
-    if fid == 4:
-        m = abs(x[0])
-        for i in range(1, d):
-            a = abs(x[i])
-            if a > m:
-                m = a
-        return m
-    if fid == 5:
-        for i in range(d - 1):
-            h = x[i]
-            u[i] = x[i + 1] - h * h
-            v[i] = h - 1.0
-        return 100.0 * dot(u, u, d - 1) + dot(v, v, d - 1)
-    if fid == 6 or fid == 14:
-        for i in range(d):
-            u[i] = np.floor(x[i] + 0.5) if fid == 14 else x[i] + 0.5
-        return dot(u, u, d)
-    if fid == 7:
-        for i in range(d):
-            q = x[i] * x[i]
-            u[i] = q * q
-            v[i] = i + 1.0
-        return dot(u, v, d)
-    if fid == 8:
-        for i in range(d):
-            r = np.sqrt(abs(x[i])) * _INV_PI
-            u[i] = sinpi(r)
-        return -dot(x, u, d)
-    if fid == 9:
-        for i in range(d):
-            u[i] = cospi(2.0 * x[i])
-        return (dot(x, x, d) - 10.0 * total(u, d)) + 10.0 * d
-    if fid == 11:
-        p = 1.0
-        for i in range(d):
-            c = cospi(x[i] * (1.0 / (_PI * np.sqrt(i + 1.0))))
-            p = p * c if i else c
-        return (dot(x, x, d) / 4000.0 - p) + 1.0
-    if fid == 12:
-        for i in range(d):
-            z = (x[i] + 1.0) * 0.25
-            u[i] = z
-            v[i] = sinpi_squared(z)
-        first = 10.0 * v[0]
-        for i in range(d):
-            v[i] = v[i] * 10.0 + 1.0
-        inner = dot3(u, u, v[1:], d - 1)
-        last = u[d - 1] * u[d - 1]
-        return (_PI / d) * ((first + inner) + last) + _penalty(x, 10.0, 100.0, w[2])
-    if fid == 13:
-        for i in range(d):
-            v[i] = sinpi_squared(3.0 * x[i])
-            u[i] = x[i] - 1.0
-        first = v[0]
-        for i in range(d):
-            v[i] = v[i] + 1.0
-        inner = dot3(u, u, v[1:], d - 1)
-        xn = x[d - 1]
-        g = xn - 1.0
-        last = (g * g) * (1.0 + sinpi_squared(2.0 * xn))
-        return 0.1 * ((first + inner) + last) + _penalty(x, 5.0, 100.0, w[2])
-    raise ValueError("unknown function id")
+    for i in range(d - 1):
+        h = x[i]
+        u[i] = x[i + 1] - h * h
+        v[i] = h - 1.0
+    return 100.0 * dot(u, u, d - 1) + dot(v, v, d - 1)
 
 
-@njit(cache=True)
-def numpy_exp(e):
-    """e <- np.exp(e), numpy's own loop called directly (:func:`ufuncs.exp_inplace`: tens of
-    nanoseconds where object mode took microseconds per call)."""
-    exp_inplace(e, np.empty(5, dtype=np.int64))
+@njit(cache=True, inline="always")
+def step(x, w):  # F6 (the GWO code's: no floor)
+    d = x.size
+    u = w[0]
+    for i in range(d):
+        u[i] = x[i] + 0.5
+    return dot(u, u, d)
 
 
-@njit(cache=True)
-def evaluate(stream, fid, shifted, shift, lower, upper, X, F, mask, w):
-    """Values of the population X (m, d) into F (m,), as the reference's objective computes them.
+@njit(cache=True, inline="always")
+def step_floor(x, w):  # F6-floor
+    d = x.size
+    u = w[0]
+    for i in range(d):
+        u[i] = np.floor(x[i] + 0.5)
+    return dot(u, u, d)
 
-    ``shifted``: subtract ``shift`` (d,) first (F8 is then wrapped into its box: ``lower``,
-    ``upper`` (d,)).
-    ``mask`` (m,) bool: False rows are not computed (F gets +inf), which is what the reference's
-    masked evaluation leaves of them; F7's noise is drawn for all m rows either way. ``w`` is
-    (4, d) scratch. NaN values become +inf, as ``Optimizer.evaluate`` does.
-    """
-    m, d = X.shape
-    z = w[3]
-    ackley = fid == ACKLEY
-    e = np.zeros(2 * m if ackley else 0)  # F10: exponent arguments, then np.exp of them
-    for i in range(m):
-        if not mask[i]:
-            F[i] = np.inf
-            continue
-        x = X[i]
-        if shifted:
-            for j in range(d):
-                z[j] = X[i, j] - shift[j]
-            if fid == WRAPPED:
-                for j in range(d):
-                    z[j] = ((z[j] - lower[j]) % (upper[j] - lower[j])) + lower[j]
-            x = z
-        if ackley:
-            e[i], e[m + i] = ackley_parts(x, w)
-        else:
-            F[i] = value(fid, x, w)
-    if ackley:
-        numpy_exp(e)
-        for i in range(m):
-            if mask[i]:
-                F[i] = ((-20.0 * e[i] - e[m + i]) + 20.0) + _E
-    if fid == NOISY:
-        start = take(stream, RANDOM, m)
-        row = stream[1][RANDOM]
-        for i in range(m):
-            F[i] = F[i] + row[start + i]
-    for i in range(m):
-        if np.isnan(F[i]):
-            F[i] = np.inf
+
+@njit(cache=True, inline="always")
+def quartic(x, w):  # F7 without its noise
+    d = x.size
+    u = w[0]
+    v = w[1]
+    for i in range(d):
+        q = x[i] * x[i]
+        u[i] = q * q
+        v[i] = i + 1.0
+    return dot(u, v, d)
+
+
+@njit(cache=True, inline="always")
+def schwefel_2_26(x, w):  # F8
+    d = x.size
+    u = w[0]
+    for i in range(d):
+        r = np.sqrt(abs(x[i])) * _INV_PI
+        u[i] = sinpi(r)
+    return -dot(x, u, d)
+
+
+@njit(cache=True, inline="always")
+def rastrigin(x, w):  # F9
+    d = x.size
+    u = w[0]
+    for i in range(d):
+        u[i] = cospi(2.0 * x[i])
+    return (dot(x, x, d) - 10.0 * total(u, d)) + 10.0 * d
+
+
+@njit(cache=True, inline="always")
+def griewank(x, w):  # F11
+    d = x.size
+    p = 1.0
+    for i in range(d):
+        c = cospi(x[i] * (1.0 / (_PI * np.sqrt(i + 1.0))))
+        p = p * c if i else c
+    return (dot(x, x, d) / 4000.0 - p) + 1.0
+
+
+@njit(cache=True, inline="always")
+def penalized_1(x, w):  # F12
+    d = x.size
+    u = w[0]
+    v = w[1]
+    for i in range(d):
+        z = (x[i] + 1.0) * 0.25
+        u[i] = z
+        v[i] = sinpi_squared(z)
+    first = 10.0 * v[0]
+    for i in range(d):
+        v[i] = v[i] * 10.0 + 1.0
+    inner = dot3(u, u, v[1:], d - 1)
+    last = u[d - 1] * u[d - 1]
+    return (_PI / d) * ((first + inner) + last) + _penalty(x, 10.0, 100.0, w[2])
+
+
+@njit(cache=True, inline="always")
+def penalized_2(x, w):  # F13
+    d = x.size
+    u = w[0]
+    v = w[1]
+    for i in range(d):
+        v[i] = sinpi_squared(3.0 * x[i])
+        u[i] = x[i] - 1.0
+    first = v[0]
+    for i in range(d):
+        v[i] = v[i] + 1.0
+    inner = dot3(u, u, v[1:], d - 1)
+    xn = x[d - 1]
+    g = xn - 1.0
+    last = (g * g) * (1.0 + sinpi_squared(2.0 * xn))
+    return 0.1 * ((first + inner) + last) + _penalty(x, 5.0, 100.0, w[2])

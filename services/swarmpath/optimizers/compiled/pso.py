@@ -8,7 +8,7 @@ import numpy as np
 from numba import njit
 
 from swarmpath.optimizers.compiled.best import record_first_min
-from swarmpath.optimizers.compiled.functions import evaluate
+from swarmpath.optimizers.compiled.objectives import evaluate, work_for
 from swarmpath.optimizers.compiled.registry import Kernel, register_kernel
 from swarmpath.optimizers.compiled.streams import RANDOM, open_stream, take
 from swarmpath.registry import ParamValue
@@ -26,18 +26,20 @@ def pack(p: Mapping[str, ParamValue]) -> np.ndarray:
 
 
 @njit(cache=True)
-def run(rng, fid, shifted, shift, lower, upper, agents, iterations, params):
+def run(rng, objective, shifted, shift, lower, upper, agents, iterations, params):
     c1, c2, w_max, w_min = params[0], params[1], params[2], params[3]
     mode, fraction, clip = int(params[5]), params[6], params[7] == 1.0
+    same, clamp = c1 == c2, mode != 2
     N, d, T = agents, lower.size, iterations
-    stream = open_stream(rng, max(2 * N * d, N))
+    stream = open_stream(rng, max(2 * N * d, N), False)
     buf = stream[1][RANDOM]
-    work = np.empty((4, d))
-    everyone = np.ones(N, dtype=np.bool_)
+    work = work_for(N, d)
     inside = np.ones(N, dtype=np.bool_)
     vmax = np.empty(d)
+    vmin = np.empty(d)
     for j in range(d):
         vmax[j] = fraction * (upper[j] - lower[j]) if mode == 1 else params[4]
+        vmin[j] = -vmax[j]
     X = np.empty((N, d))
     o = take(stream, RANDOM, N * d)
     for i in range(N):
@@ -45,56 +47,53 @@ def run(rng, fid, shifted, shift, lower, upper, agents, iterations, params):
             X[i, j] = lower[j] + (upper[j] - lower[j]) * buf[o + i * d + j]
     V = np.zeros((N, d))
     F = np.empty(N)
-    best = np.array([np.inf])
+    best = np.full(1, np.inf)
     best_x = np.zeros(d)
     curve = np.empty(T)
-    evaluate(stream, fid, shifted, shift, lower, upper, X, F, everyone, work)
+    evaluate(stream, objective, shifted, shift, lower, upper, X, F, inside, work)
     evaluations = N
-    record_first_min(F, X, F.size, best, best_x)
-    pbest_f = F.copy()
-    pbest = X.copy()
+    record_first_min(F, X, N, best, best_x)
+    PF = np.empty(N)
+    P = np.empty((N, d))
+    for i in range(N):
+        PF[i] = F[i]
+        for j in range(d):
+            P[i, j] = X[i, j]
     G = np.empty(d)
     for t in range(1, T + 1):
         w = w_max - (t - 1) * (w_max - w_min) / T
-        G[:] = best_x
-        o = take(stream, RANDOM, 2 * N * d)
+        for j in range(d):
+            G[j] = best_x[j]
+        o = take(stream, RANDOM, 2 * N * d)  # r1, then r2
         o2 = o + N * d
         for i in range(N):
-            out = False
+            ok = True
             for j in range(d):
                 x = X[i, j]
-                a = buf[o + i * d + j] * (pbest[i, j] - x)
+                a = buf[o + i * d + j] * (P[i, j] - x)
                 b = buf[o2 + i * d + j] * (G[j] - x)
-                if c1 == c2:
-                    s = (a + b) * c1
-                else:
-                    s = a * c1 + b * c2
+                s = (a + b) * c1 if same else a * c1 + b * c2
                 v = V[i, j] * w + s
-                if mode != 2:
-                    if v < -vmax[j]:
-                        v = -vmax[j]
-                    if v > vmax[j]:
-                        v = vmax[j]
+                if clamp:  # np.maximum, then np.minimum (NaN stays NaN)
+                    v = vmin[j] if v < vmin[j] else v
+                    v = vmax[j] if v > vmax[j] else v
                 V[i, j] = v
                 x = x + v
                 if clip:
-                    if x < lower[j]:
-                        x = lower[j]
-                    if x > upper[j]:
-                        x = upper[j]
+                    x = lower[j] if x < lower[j] else x
+                    x = upper[j] if x > upper[j] else x
                 elif x < lower[j] or x > upper[j]:
-                    out = True
+                    ok = False
                 X[i, j] = x
-            inside[i] = not out
-        evaluate(stream, fid, shifted, shift, lower, upper, X, F, inside, work)
+            inside[i] = ok
+            evaluations += ok
+        evaluate(stream, objective, shifted, shift, lower, upper, X, F, inside, work)
+        record_first_min(F, X, N, best, best_x)
         for i in range(N):
-            if inside[i]:
-                evaluations += 1
-        record_first_min(F, X, F.size, best, best_x)
-        for i in range(N):
-            if F[i] < pbest_f[i]:
-                pbest_f[i] = F[i]
-                pbest[i] = X[i]
+            if F[i] < PF[i]:
+                PF[i] = F[i]
+                for j in range(d):
+                    P[i, j] = X[i, j]
         curve[t - 1] = best[0]
     return best[0], best_x, curve, evaluations
 

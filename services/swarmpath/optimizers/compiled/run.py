@@ -8,10 +8,10 @@ from typing import Any
 
 import numpy as np
 
-from swarmpath.functions import BenchmarkFunction, get_function
+from swarmpath.functions import BenchmarkFunction
 from swarmpath.functions.transforms import rotates
 from swarmpath.optimizers.base import ParameterError
-from swarmpath.optimizers.compiled.functions import FUNCTION_IDS
+from swarmpath.optimizers.compiled.objectives import Objective, has_objective, objective_for
 from swarmpath.optimizers.compiled.registry import Kernel, find_kernel, kernel_names
 from swarmpath.optimizers.problem import BenchmarkProblem
 from swarmpath.optimizers.registry import get_optimizer
@@ -50,13 +50,18 @@ def check_study(algorithm: str, params: Mapping[str, Any] | None, transform: str
     kernel_for(algorithm, params, transform)
 
 
-def compiled_function(fn: BenchmarkFunction) -> int:
-    """The compiled id of a registered function (ParameterError naming ``function`` if the
-    object is not one of the registry's, e.g. a hand-made kernel)."""
-    fid = FUNCTION_IDS.get(fn.name)
-    if fid is None or fn.kernel is not get_function(fn.name).kernel:
+def check_function(fn: BenchmarkFunction) -> None:
+    """ParameterError naming ``function`` if it has no compiled objective (e.g. a hand-made
+    kernel); compiles nothing."""
+    if not has_objective(fn):
         raise ParameterError(f"function {fn.name!r} has no numba kernel; use backend='numpy'")
-    return fid
+
+
+def compiled_objective(fn: BenchmarkFunction) -> Objective:
+    """The compiled objective of a registered function (:func:`check_function`'s error if it
+    has none)."""
+    check_function(fn)
+    return objective_for(fn)
 
 
 def minimize_compiled(
@@ -84,12 +89,12 @@ def minimize_compiled(
         raise ParameterError(f"{cls.name} needs agents >= {cls.min_agents}, got {agents}")
     if kernel.check is not None:
         kernel.check(resolved, agents)
-    fids = [compiled_function(fn) for fn in fns]
+    objectives = [compiled_objective(fn) for fn in fns]
     started = time.perf_counter()
     total = len(fns) * len(ids)
     done = 0
     out = []
-    for fn, fid in zip(fns, fids, strict=True):
+    for fn, objective in zip(fns, objectives, strict=True):
         problem = BenchmarkProblem.build(fn, dim, list(ids), seed, transform)
         shifted = problem.shifts is not None
         shift = np.zeros((len(ids), dim)) if problem.shifts is None else problem.shifts
@@ -99,7 +104,7 @@ def minimize_compiled(
         evaluations = np.empty(len(ids), dtype=np.int64)
         for k, r in enumerate(ids):
             f, x, c, e = kernel.run(
-                run_generator(seed, r), fid, shifted, np.ascontiguousarray(shift[k]),
+                run_generator(seed, r), objective, shifted, np.ascontiguousarray(shift[k]),
                 np.ascontiguousarray(problem.lower[k]), np.ascontiguousarray(problem.upper[k]),
                 agents, iterations, packed,
             )

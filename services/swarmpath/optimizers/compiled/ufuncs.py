@@ -7,17 +7,16 @@ an order that depends on the shape (index order at 30 x 30, another order for th
 when the number of columns is 1-4 past a multiple of 8). Compiled code that must give the
 reference's numbers bit for bit calls numpy's loop itself: :func:`numpy_loop` reads it from the
 ufunc object (``PyUFuncObject`` of numpy's public C API: ``functions``, ``data``, ``ntypes``,
-``types``), and :func:`unary` and :func:`matmul` call it with numpy's loop convention
-(``args``, ``dimensions``, ``steps``, ``data``). The loop is passed to compiled functions as an
-argument (a ctypes function): as a global it would keep numba from caching them. :func:`link`
-instead binds a loop to a symbol name that compiled code calls like a C function (:func:`power`):
-cacheable, and no argument to thread through a kernel.
+``types``), and :func:`link` binds it to a symbol name that compiled code calls like a C
+function, with numpy's loop convention (``args``, ``dimensions``, ``steps``, ``data``):
+:func:`exp_inplace`, :func:`cbrt_inplace`, :func:`matmul_into`, :func:`power`. A call by name
+keeps the callers cacheable (a ctypes function as a global would not) and needs no argument
+threaded through a kernel.
 """
 
 from __future__ import annotations
 
 import ctypes
-import types
 from typing import Any
 
 import llvmlite.binding as llvm
@@ -70,44 +69,6 @@ def numpy_loop(ufunc: np.ufunc, types: str) -> Loop:
     raise RuntimeError(f"numpy's {ufunc.__name__} has no {types} loop")
 
 
-CBRT = numpy_loop(np.cbrt, "dd")
-MATMUL = numpy_loop(np.matmul, "ddd")
-
-
-@njit(cache=True)
-def unary(loop, data, x, call):
-    """x = ufunc(x) in place for a contiguous float64 x; ``call`` is int64 scratch (5,)."""
-    call[0] = x.ctypes.data
-    call[1] = x.ctypes.data
-    call[2] = x.size
-    call[3] = 8
-    call[4] = 8
-    loop(call.ctypes.data, call[2:].ctypes.data, call[3:].ctypes.data, data)
-
-
-@njit(cache=True)
-def matmul(loop, data, A, B, C, call):
-    """C = A @ B (float64 matrices, any strides) with numpy's matmul loop, as one item of
-    ``np.matmul``'s outer loop; ``call`` is int64 scratch (16,)."""
-    call[0] = A.ctypes.data
-    call[1] = B.ctypes.data
-    call[2] = C.ctypes.data
-    call[3] = 1  # outer loop length, then the core dimensions n, k, m
-    call[4] = A.shape[0]
-    call[5] = A.shape[1]
-    call[6] = B.shape[1]
-    call[7] = 0  # outer steps
-    call[8] = 0
-    call[9] = 0
-    call[10] = A.strides[0]
-    call[11] = A.strides[1]
-    call[12] = B.strides[0]
-    call[13] = B.strides[1]
-    call[14] = C.strides[0]
-    call[15] = C.strides[1]
-    loop(call.ctypes.data, call[3:].ctypes.data, call[7:].ctypes.data, data)
-
-
 def link(symbol: str, ufunc: np.ufunc, types: str) -> None:
     """Make numpy's loop for ``ufunc`` on ``types`` callable from compiled code by the name
     ``symbol`` (see :func:`power`). A call by name, unlike a function pointer argument, keeps
@@ -142,18 +103,75 @@ def _linked_loop(symbol: str, ufunc: np.ufunc, types: str) -> Any:
 
 _call_power = _linked_loop("swarmpath_numpy_power_ddd", np.power, "ddd")
 _call_exp = _linked_loop("swarmpath_numpy_exp_dd", np.exp, "dd")
+_call_cbrt = _linked_loop("swarmpath_numpy_cbrt_dd", np.cbrt, "dd")
+_call_cos = _linked_loop("swarmpath_numpy_cos_dd", np.cos, "dd")
+_call_sin = _linked_loop("swarmpath_numpy_sin_dd", np.sin, "dd")
+_call_log1p = _linked_loop("swarmpath_numpy_log1p_dd", np.log1p, "dd")
+_call_matmul = _linked_loop("swarmpath_numpy_matmul_ddd", np.matmul, "ddd")
 
 
 @njit(cache=True)
-def exp_inplace(x, call):
-    """x = np.exp(x) in place for a contiguous float64 x, with numpy's own loop (on AVX-512 not
-    the C library's exp); ``call`` is int64 scratch (5,)."""
+def _in_place(x, call):
+    """numpy's loop arguments (args, dimensions, steps) for x = f(x), x contiguous float64, in
+    ``call`` (int64, 5): the addresses of the three arrays."""
     call[0] = x.ctypes.data
     call[1] = x.ctypes.data
     call[2] = x.size
     call[3] = 8
     call[4] = 8
-    _call_exp(call.ctypes.data, call[2:].ctypes.data, call[3:].ctypes.data)
+    return call.ctypes.data, call[2:].ctypes.data, call[3:].ctypes.data
+
+
+# x = f(x) in place for a contiguous float64 x with numpy's own loop (on AVX-512 not the C
+# library's: exp, cos, sin and log1p differ from it in the last bit for about one argument in a
+# hundred, cbrt for about half); ``call`` is int64 scratch (5,).
+@njit(cache=True)
+def exp_inplace(x, call):
+    _call_exp(*_in_place(x, call))
+
+
+@njit(cache=True)
+def cbrt_inplace(x, call):
+    _call_cbrt(*_in_place(x, call))
+
+
+@njit(cache=True)
+def cos_inplace(x, call):
+    _call_cos(*_in_place(x, call))
+
+
+@njit(cache=True)
+def sin_inplace(x, call):
+    _call_sin(*_in_place(x, call))
+
+
+@njit(cache=True)
+def log1p_inplace(x, call):
+    _call_log1p(*_in_place(x, call))
+
+
+@njit(cache=True)
+def matmul_into(A, B, C, call):
+    """C = A @ B (float64 matrices, any strides) with numpy's matmul loop, as one item of
+    ``np.matmul``'s outer loop (its BLAS call, so its order of additions); ``call`` is int64
+    scratch (16,)."""
+    call[0] = A.ctypes.data
+    call[1] = B.ctypes.data
+    call[2] = C.ctypes.data
+    call[3] = 1  # outer loop length, then the core dimensions n, k, m
+    call[4] = A.shape[0]
+    call[5] = A.shape[1]
+    call[6] = B.shape[1]
+    call[7] = 0  # outer steps
+    call[8] = 0
+    call[9] = 0
+    call[10] = A.strides[0]
+    call[11] = A.strides[1]
+    call[12] = B.strides[0]
+    call[13] = B.strides[1]
+    call[14] = C.strides[0]
+    call[15] = C.strides[1]
+    _call_matmul(call.ctypes.data, call[3:].ctypes.data, call[7:].ctypes.data)
 
 
 @njit(cache=True)
@@ -175,18 +193,3 @@ def power(x, e, call):
     call[6] = 8
     _call_power(call.ctypes.data, call[3:].ctypes.data, call[4:].ctypes.data)
     return values[2]
-
-
-_FUSED: dict[tuple[Any, Any], Any] = {}
-
-
-def with_objective(kernel: Any, evaluate: Any) -> Any:
-    """The @njit ``kernel`` compiled again with its global ``evaluate`` bound to ``evaluate``
-    (not cached): the benchmark's fused loop. A kernel whose objective is a function argument
-    instead could not be cached together with numpy's loops (numba: "dynamic globals")."""
-    key = (kernel, evaluate)
-    if key not in _FUSED:
-        source = kernel.py_func
-        scope = dict(source.__globals__, evaluate=evaluate)
-        _FUSED[key] = njit(types.FunctionType(source.__code__, scope, source.__name__))
-    return _FUSED[key]
