@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from swarmpath.registry import ParamValue
 
-_MODULES: tuple[str, ...] = ("pso", "gwo", "ssa", "fdo", "coot")
+_MODULES: tuple[str, ...] = ("pso", "gwo", "ssa", "fdo", "coot", "hpo", "ba", "bats", "rfo")
 _KERNELS: dict[str, Kernel] = {}
 _loaded = False
 
