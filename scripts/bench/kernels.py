@@ -1,206 +1,150 @@
 #!/usr/bin/env python3
-"""CPU per run: the numpy reference, the numba backend and a fused compiled loop, side by side.
+"""CPU per run of the numba backend against an independent fused loop (and the numpy reference).
 
     PYTHONPATH=services .venv/bin/python scripts/bench/kernels.py [--algorithms PSO,GWO]
-        [--functions F1-F13] [--runs 10] [--repeats 2]
+        [--functions F1,F9] [--runs 30] [--rounds 5] [--numpy]
 
-The setting is the ICOOT paper's Table 2 (30 dims, 30 agents, 500 iterations). For each algorithm
-with a compiled kernel (``swarmpath.optimizers.compiled``; default: all of them):
+The setting is the ICOOT paper's Table 2 (30 dims, 30 agents, 500 iterations, seed 1). For each
+algorithm and function:
 
-* ``numpy``: ``minimize_many`` over the functions (stacked, default chunks; F7 alone), CPU
-  seconds / (functions x runs);
-* ``numba``: the same call with ``backend="numba"`` (one kernel call per run, from Python);
-* ``fused``: the kernel run with an ``evaluate`` whose function is fixed at compile time (the
-  function's code inlined, F10's exp one call of numpy's loop per population; through the
-  module's ``loop(evaluate, ...)``, or its @njit ``run`` recompiled by
-  ``ufuncs.with_objective``; an algorithm with neither gets no fused column), called directly
-  per run (no per-run Python beyond the call): what a hand-written compiled loop of the same
-  algorithm costs. Its numbers are checked to be the backend's (a different number would mean a
-  different trajectory, hence other work).
+* ``numba``: the backend's kernel called for each run as ``minimize(..., backend="numba")``
+  calls it (``run_generator(1, r)``, the compiled objective, the packed parameters);
+* ``fused``: the algorithm's loop of ``fused_*.py``, written apart from the kernels (one
+  ``@njit`` call per run, the run's PCG64 generator drawn directly in swarmpath's order, the
+  objective's code inlined), called once per run with ``run_generator(1, r)``. Before timing,
+  every run's best value is checked to be the backend's, bit for bit: a different number would
+  mean other work (the script stops);
+* ``numpy`` (with ``--numpy``): the reference, ``minimize`` of the same runs in one batch.
 
-CPU time (``time.process_time``) of this process; the three are interleaved per function and the
-best of ``--repeats`` is kept (the machine is shared). Compilation is done (and cached) before
-timing. Output: a markdown table per algorithm with the ratios numpy/numba and numba/fused
-(issue 14's target: numba within 1.5x of fused), then the load average.
+A round times the runs one by one, the kernel's and the fused loop's alternately (which goes
+first alternating too), so that both see the same load; the table gives each column's median
+over the rounds and the median (min-max) of the rounds' numba / fused ratios. CPU time is this
+process's (``time.process_time``); compilation happens (and the kernels are cached) before
+timing. The load average at the start and the end and the
+tree (``git describe``) close the output: the machine is shared, read the ratios.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import statistics
+import subprocess
 import sys
 import time
+from collections.abc import Callable
 
 import numpy as np
-from numba import njit
+from fused_common import OBJECTIVES
+from fused_loops import LOOPS
 
 from swarmpath.functions import expand_function_names, get_function
-from swarmpath.optimizers import get_optimizer, minimize_many
-from swarmpath.optimizers.compiled import find_kernel, kernel_names
-from swarmpath.optimizers.compiled.functions import (
-    _E,
-    ACKLEY,
-    FUNCTION_IDS,
-    NOISY,
-    WRAPPED,
-    ackley_parts,
-    numpy_exp,
-    value,
-)
-from swarmpath.optimizers.compiled.streams import RANDOM, take
-from swarmpath.optimizers.compiled.ufuncs import with_objective
+from swarmpath.optimizers import list_optimizers, minimize
+from swarmpath.optimizers.compiled import find_kernel
+from swarmpath.optimizers.compiled.objectives import objective_for
+from swarmpath.optimizers.compiled.run import kernel_for
 from swarmpath.optimizers.streams import run_generator
 
-DIM, AGENTS, ITERATIONS = 30, 30, 500
+DIM, AGENTS, ITERATIONS, SEED = 30, 30, 500, 1
 
 
-def fused_evaluate(fid: int):
-    """``functions.evaluate`` with the function fixed at compile time (``fid`` is a constant of
-    the closure: its branches fold away and the function's code is inlined)."""
-
-    @njit
-    def evaluate(stream, _fid, shifted, shift, lower, upper, X, F, mask, w):
-        m, d = X.shape
-        z = w[3]
-        e = np.zeros(2 * m if fid == ACKLEY else 0)
-        for i in range(m):
-            if not mask[i]:
-                F[i] = np.inf
-                continue
-            x = X[i]
-            if shifted:
-                for j in range(d):
-                    z[j] = X[i, j] - shift[j]
-                if fid == WRAPPED:
-                    for j in range(d):
-                        z[j] = ((z[j] - lower[j]) % (upper[j] - lower[j])) + lower[j]
-                x = z
-            if fid == ACKLEY:
-                e[i], e[m + i] = ackley_parts(x, w)
-            else:
-                F[i] = value(fid, x, w)
-        if fid == ACKLEY:
-            numpy_exp(e)
-            for i in range(m):
-                if mask[i]:
-                    F[i] = ((-20.0 * e[i] - e[m + i]) + 20.0) + _E
-        if fid == NOISY:
-            start = take(stream, RANDOM, m)
-            row = stream[1][RANDOM]
-            for i in range(m):
-                F[i] = F[i] + row[start + i]
-        for i in range(m):
-            if np.isnan(F[i]):
-                F[i] = np.inf
-
-    return evaluate
-
-
-def fused_runner(algo: str, evaluate):
-    """The algorithm's kernel with ``evaluate`` as its objective: the module's
-    ``loop(evaluate, ...)`` if it has one, else its @njit ``run`` recompiled with that global
-    (``ufuncs.with_objective``); None if neither exists."""
-    kernel = find_kernel(algo)
-    assert kernel is not None
-    module = sys.modules[kernel.run.__module__]
-    if hasattr(module, "loop"):
-        return lambda *args: module.loop(evaluate, *args)
-    if hasattr(kernel.run, "py_func"):
-        return with_objective(kernel.run, evaluate)
-    return None
-
-
-def cpu(fn) -> float:
+def cpu(fn: Callable[[], object]) -> float:
     started = time.process_time()
     fn()
     return time.process_time() - started
 
 
-def bench_algorithm(algo: str, functions: list[str], runs: int, repeats: int) -> list[str]:
-    kernel = find_kernel(algo)
-    assert kernel is not None
-    params = kernel.pack(get_optimizer(algo).resolve_params(None))
-    lower = {f: np.full(DIM, get_function(f).lower) for f in functions}
-    upper = {f: np.full(DIM, get_function(f).upper) for f in functions}
-    shift = np.zeros(DIM)
-    fused = {f: fused_runner(algo, fused_evaluate(FUNCTION_IDS[f])) for f in functions}
-    if any(v is None for v in fused.values()):
-        return [f"#### {algo}: no fused loop (its module has no loop(evaluate, ...)) ", ""]
-    kw = dict(dim=DIM, agents=AGENTS, iterations=ITERATIONS, runs=runs, seed=1)
+def bench_cell(algo: str, name: str, runs: int, rounds: int, with_numpy: bool) -> dict:
+    fn = get_function(name)
+    lower, upper, shift = np.full(DIM, fn.lower), np.full(DIM, fn.upper), np.zeros(DIM)
+    loop = LOOPS[algo](OBJECTIVES[name])
+    kernel, _, params = kernel_for(algo, None, "none")
+    objective = objective_for(fn)
+    kw = dict(dim=DIM, agents=AGENTS, iterations=ITERATIONS, runs=runs, seed=SEED)
 
-    def fused_runs(f: str, n: int) -> list[tuple[float, np.ndarray]]:
-        return [fused[f](run_generator(1, r), FUNCTION_IDS[f], False, shift, lower[f], upper[f],
-                         AGENTS, ITERATIONS, params)[:2] for r in range(n)]
+    def fused(r: int) -> float:
+        return loop(run_generator(SEED, r), lower, upper, AGENTS, ITERATIONS)[0]
 
-    print(f"compiling {algo} ...", file=sys.stderr)
-    minimize_many(algo, functions, **{**kw, "runs": 1, "iterations": 2}, backend="numba")
-    for f in functions:
-        fused_runs(f, 1)
-    # numbers: the fused loop computes the backend's runs (else it would time other work)
-    check = minimize_many(algo, functions, **{**kw, "runs": 2}, backend="numba")
-    for f, res in zip(functions, check, strict=True):
-        for (value_, _x), ref in zip(fused_runs(f, 2), res.best_fitness, strict=True):
-            gap = abs(value_ - ref) / max(abs(ref), 1e-300)
-            if gap > 0.0:
-                print(f"  note: {algo} {f} fused {value_!r} backend {ref!r}", file=sys.stderr)
+    def numba(r: int) -> float:  # what minimize_compiled does for run r
+        return kernel.run(run_generator(SEED, r), objective, False, shift, lower, upper, AGENTS,
+                          ITERATIONS, params)[0]
 
-    best = {"numpy": np.inf, "numba": np.inf}
-    fused_cpu = {f: np.inf for f in functions}
-    for _ in range(repeats):
-        best["numpy"] = min(best["numpy"], cpu(lambda: minimize_many(algo, functions, **kw)))
-        best["numba"] = min(best["numba"], cpu(
-            lambda: minimize_many(algo, functions, **kw, backend="numba")))
-        for f in functions:
-            fused_cpu[f] = min(fused_cpu[f], cpu(lambda f=f: fused_runs(f, runs)))
-    per_numba = {}
-    for f in functions:  # per function, numba: one more timed pass (cheap)
-        per_numba[f] = cpu(lambda f=f: minimize_many(algo, [f], **kw, backend="numba")) / runs
-    n = len(functions) * runs
-    numpy_ms, numba_ms = best["numpy"] / n * 1e3, best["numba"] / n * 1e3
-    fused_ms = sum(fused_cpu.values()) / n * 1e3
-    lines = [
-        f"#### {algo}: {', '.join(functions)}, {DIM} dims, {AGENTS} agents, {ITERATIONS} "
-        f"iterations, {runs} runs per function",
-        "",
-        "| function | numba ms/run | fused ms/run | numba / fused |",
-        "| --- | ---: | ---: | ---: |",
-    ]
-    for f in functions:
-        a, b = per_numba[f] * 1e3, fused_cpu[f] / runs * 1e3
-        lines.append(f"| {f} | {a:.2f} | {b:.2f} | {a / b:.2f}x |")
-    lines += [
-        "",
-        "| CPU ms per run (all functions) | numpy | numba | fused | numpy / numba | "
-        "numba / fused |",
-        "| --- | ---: | ---: | ---: | ---: | ---: |",
-        f"| {algo} | {numpy_ms:.2f} | {numba_ms:.2f} | {fused_ms:.2f} | "
-        f"{numpy_ms / numba_ms:.2f}x | {numba_ms / fused_ms:.2f}x |",
-        "",
-    ]
-    return lines
+    print(f"compiling and checking {algo} {name} ...", file=sys.stderr)
+    ours = minimize(algo, name, backend="numba", **kw).best_fitness
+    theirs = np.array([fused(r) for r in range(runs)])
+    if not np.array_equal(ours, theirs):
+        diff = np.flatnonzero(ours != theirs)
+        sys.exit(f"{algo} {name}: the fused loop's bests differ from the backend's in runs "
+                 f"{diff.tolist()} (e.g. {theirs[diff[0]]!r} vs {ours[diff[0]]!r})")
+    columns: dict[str, list[float]] = {"numba": [], "fused": [], "numpy": []}
+    for k in range(rounds):
+        spent = {"numba": 0.0, "fused": 0.0}
+        for r in range(runs):  # run by run, the order alternating
+            for column in ("numba", "fused") if (k + r) % 2 == 0 else ("fused", "numba"):
+                fn_ = numba if column == "numba" else fused
+                spent[column] += cpu(lambda fn_=fn_, r=r: fn_(r))
+        for column, seconds in spent.items():
+            columns[column].append(seconds / runs * 1e3)
+        if with_numpy:
+            columns["numpy"].append(cpu(lambda: minimize(algo, name, **kw)) / runs * 1e3)
+    ratios = [a / b for a, b in zip(columns["numba"], columns["fused"], strict=True)]
+    return {
+        "median": {c: statistics.median(v) for c, v in columns.items() if v},
+        "ratio": statistics.median(ratios), "low": min(ratios), "high": max(ratios),
+    }
+
+
+def tree() -> str:
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    try:
+        return subprocess.run(["git", "-C", root, "describe", "--always", "--dirty"],
+                              capture_output=True, text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--algorithms", default=",".join(kernel_names()))
-    ap.add_argument("--functions", default="F1-F13")
-    ap.add_argument("--runs", type=int, default=10)
-    ap.add_argument("--repeats", type=int, default=2)
+    ap.add_argument("--algorithms", default=",".join(a for a in list_optimizers() if a in LOOPS))
+    ap.add_argument("--functions", default="F1,F9")
+    ap.add_argument("--runs", type=int, default=30)
+    ap.add_argument("--rounds", type=int, default=5)
+    ap.add_argument("--numpy", action="store_true", help="also time the numpy reference")
     args = ap.parse_args()
     algos = [a.strip() for a in args.algorithms.split(",") if a.strip()]
-    missing = [a for a in algos if find_kernel(a) is None]
+    missing = [a for a in algos if find_kernel(a) is None or a not in LOOPS]
     if missing:
-        ap.error(f"--algorithms: no kernel for {', '.join(missing)} (kernels: "
-                 f"{', '.join(kernel_names())})")
+        ap.error(f"--algorithms: no kernel or no fused loop for {', '.join(missing)}")
     functions = expand_function_names(args.functions)
+    unknown = [f for f in functions if f not in OBJECTIVES]
+    if unknown:
+        ap.error(f"--functions: the fused loops have {', '.join(OBJECTIVES)}, not "
+                 f"{', '.join(unknown)}")
+    if args.runs < 1 or args.rounds < 1:
+        ap.error("--runs and --rounds must be >= 1")
     before = os.getloadavg()
-    out: list[str] = []
+    head = "| algorithm | function | numba ms/run | fused ms/run | numba / fused (min-max) |"
+    rule = "| --- | --- | ---: | ---: | ---: |"
+    if args.numpy:
+        head += " numpy ms/run | numpy / numba |"
+        rule += " ---: | ---: |"
+    lines = [head, rule]
     for algo in algos:
-        out += bench_algorithm(algo, functions, args.runs, args.repeats)
+        for name in functions:
+            cell = bench_cell(algo, name, args.runs, args.rounds, args.numpy)
+            m = cell["median"]
+            line = (f"| {algo} | {name} | {m['numba']:.2f} | {m['fused']:.2f} | "
+                    f"**{cell['ratio']:.2f}x** ({cell['low']:.2f}-{cell['high']:.2f}) |")
+            if args.numpy:
+                line += f" {m['numpy']:.2f} | {m['numpy'] / m['numba']:.2f}x |"
+            lines.append(line)
+            print(line, file=sys.stderr)
     after = os.getloadavg()
-    out.append(f"Load average {before[0]:.2f} at start, {after[0]:.2f} at the end "
-               f"({os.cpu_count()} CPUs).")
-    print("\n".join(out))
+    lines += ["", f"{DIM} dims, {AGENTS} agents, {ITERATIONS} iterations, {args.runs} runs, "
+              f"median of {args.rounds} alternating rounds; the fused loops' bests equal the "
+              f"backend's in every run. Load average {before[0]:.2f} at the start, "
+              f"{after[0]:.2f} at the end ({os.cpu_count()} CPUs); tree {tree()}."]
+    print("\n".join(lines))
 
 
 if __name__ == "__main__":
