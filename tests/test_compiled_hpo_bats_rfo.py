@@ -75,3 +75,15 @@ def test_edge_sizes():
     both("IHPO", ["F1"], dim=2, agents=1, iterations=6, seed=10, runs=2, params={"beta": 1.0})
     both("HPO", ["F13"], dim=6, agents=5, iterations=7, seed=11, runs=2,
          params={"beta": 1.0, "hunter": "relative"})  # every agent hunts
+
+
+def test_four_sub_swarms_give_a_run_its_numbers_in_any_batch():
+    """The reference's mean loudness per sub-swarm was a matmul whose order changed with the
+    batch at 4 sub-swarms (2 runs on); the kernel runs one run at a time."""
+    kw = dict(dim=3, agents=4, iterations=10, seed=6, backend="numpy",
+              params={"split": "per_particle", "restart": "cold", "pso_iterations": 3})
+    whole = minimize_many("HPSO-MFB", ["F9"], run_ids=[0, 1, 2], **kw)[0]
+    for r in range(3):
+        alone = minimize_many("HPSO-MFB", ["F9"], run_ids=[r], **kw)[0]
+        for field in FIELDS[:4]:
+            assert np.array_equal(getattr(alone, field)[0], getattr(whole, field)[r]), field

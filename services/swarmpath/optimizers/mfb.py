@@ -118,6 +118,18 @@ class BatSwarms(Optimizer):
         """Whether every bat uses the best of all sub-swarms (always so with one sub-swarm)."""
         return self.G == 1
 
+    def _group_sums(self, a: Array) -> Array:
+        """Per sub-swarm, the sum of its bats' values of ``a`` (R, Nb) -> (R, G), added in bat
+        order (g, g + G, g + 2G, ...: a cumulative sum, sequential by definition). A matmul
+        with the membership matrix added in BLAS's order, which depends on the number of runs
+        in the batch (4 sub-swarms: another order from 2 runs on), so a run's numbers depended
+        on its batch; a run alone got this order."""
+        R, G = a.shape[0], self.G
+        n = -(-self.Nb // G)
+        padded = np.zeros((R, n * G))  # the missing bats of the last row add 0.0: no change
+        padded[:, :self.Nb] = a
+        return np.cumsum(padded.reshape(R, n, G), axis=1)[:, -1]
+
     # ------------------------------------------------------------------------------ setup
     def _setup_bats(self, G: int, Nb: int) -> None:
         self.G, self.Nb = int(G), int(Nb)
@@ -216,7 +228,7 @@ class BatSwarms(Optimizer):
         if self.G == 1:
             Amean = self.A.mean(axis=1, keepdims=True)  # (R, 1)
         else:
-            Amean = ((self.A @ self.member.T) / self.size)[:, self.group]
+            Amean = (self._group_sums(self.A) / self.size)[:, self.group]
 
         # eqs 11-12
         D = np.subtract(zstar, self.X, out=self._D)  # z* - z_i
