@@ -78,3 +78,22 @@ def test_a_kernel_module_imported_first_caches_in_the_versioned_dir(name: str) -
     for path in seen["paths"]:
         # numba appends the source's folder to CACHE_DIR: the versioned dir is a prefix
         assert path.startswith(seen["versioned"]), (name, path)
+
+
+def test_no_cached_kernel_calls_itself() -> None:
+    """A recursive ``@njit(cache=True)`` function compiles, but loaded from the cache in the
+    next process it crashes (an unresolved symbol of itself; numba 0.6x): MFB's mean loudness
+    did, so recursion is written with explicit stacks (``functions.pairwise_sum``)."""
+    import ast
+
+    recursive = []
+    for name in MODULES:
+        path = PACKAGE.parent.joinpath(*name.split(".")).with_suffix(".py")
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.FunctionDef) and any(
+                    "njit" in ast.unparse(d) for d in node.decorator_list):
+                calls = {c.func.id for c in ast.walk(node)
+                         if isinstance(c, ast.Call) and isinstance(c.func, ast.Name)}
+                if node.name in calls:
+                    recursive.append(f"{name}.{node.name}")
+    assert not recursive

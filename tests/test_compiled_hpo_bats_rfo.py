@@ -87,3 +87,12 @@ def test_four_sub_swarms_give_a_run_its_numbers_in_any_batch():
         alone = minimize_many("HPSO-MFB", ["F9"], run_ids=[r], **kw)[0]
         for field in FIELDS[:4]:
             assert np.array_equal(getattr(alone, field)[0], getattr(whole, field)[r]), field
+
+
+def test_pairwise_sum_is_numpys_sum_at_every_size():
+    from swarmpath.optimizers.compiled.functions import pairwise_sum
+
+    rng = np.random.default_rng(1)
+    for n in [*range(1, 300), 513, 1000, 1024, 5000]:
+        a = rng.standard_normal(n + 3) * 10.0 ** rng.uniform(-6, 6, n + 3)
+        assert pairwise_sum(a, 3, n) == np.sum(a[3:]), n

@@ -3,8 +3,8 @@ makes the algorithm's loop for one objective (``fused_common.OBJECTIVES``)."""
 
 from __future__ import annotations
 
-from fused_classic import make_fdo, make_gwo, make_pso, make_ssa
 from fused_bats import make_ba, make_bats
+from fused_classic import make_fdo, make_gwo, make_pso, make_ssa
 from fused_coot import COOT, ICOOT, MCOOT, make_coot
 from fused_hpo import make_hpo, make_rfo
 

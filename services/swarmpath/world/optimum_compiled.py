@@ -23,6 +23,10 @@ from numba import njit
 
 import swarmpath.optimizers.compiled  # noqa: F401 - first: numba's versioned cache directory
 
+# ``np.sum`` of a[lo:lo + n]: numpy's pairwise summation (without recursion: a recursive cached
+# kernel fails to load in the next process)
+from swarmpath.optimizers.compiled.functions import pairwise_sum as _pairwise_sum
+
 Array = np.ndarray
 
 TOL = 1e-9  # optimum_base.TOL
@@ -208,32 +212,6 @@ def tangents_kernel(centres: Array, radii: Array, na: Array, nb: Array, m: float
     free = ~segments_blocked_kernel(tp, tq, m, box, circles, e0, e1, starts, counts, bb_lo,
                                     bb_hi)
     return ti[free], tj[free], tp[free], tq[free]
-
-
-@njit(cache=True)
-def _pairwise_sum(a: Array, lo: int, n: int) -> float:
-    """``np.sum`` of a[lo:lo + n] (contiguous float64): numpy's pairwise summation (plain below
-    8 terms, 8 running sums up to 128, halves above)."""
-    if n < 8:
-        res = 0.0
-        for i in range(n):
-            res += a[lo + i]
-        return res
-    if n <= 128:
-        r = a[lo : lo + 8].copy()
-        i = 8
-        while i < n - (n % 8):
-            for k in range(8):
-                r[k] += a[lo + i + k]
-            i += 8
-        res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
-        while i < n:
-            res += a[lo + i]
-            i += 1
-        return res
-    n2 = n // 2
-    n2 -= n2 % 8
-    return _pairwise_sum(a, lo, n2) + _pairwise_sum(a, lo + n2, n - n2)
 
 
 @njit(cache=True)

@@ -16,8 +16,8 @@ import numpy as np
 from numba import njit
 
 from swarmpath.optimizers.ba import BA
-from swarmpath.optimizers.compiled.bats import pairwise_sum
 from swarmpath.optimizers.compiled.best import record_first_min
+from swarmpath.optimizers.compiled.functions import pairwise_sum
 from swarmpath.optimizers.compiled.objectives import evaluate, work_for
 from swarmpath.optimizers.compiled.registry import Kernel, register_kernel
 from swarmpath.optimizers.compiled.streams import NORMAL, RANDOM, open_stream, take

@@ -7,8 +7,8 @@ the algorithm. Every floating-point operation is the reference's, in its order: 
 the reference lays them out ([eps | walk | accept | beta noise] per iteration), exp through
 numpy's own loop on the arrays the reference builds (eq 10's exp(-rho r), eq 15's exp(-gamma t)
 for every bat), the swarm's mean loudness added as numpy adds it (:func:`pairwise_sum` for one
-sub-swarm; ``A @ member.T`` adds each sub-swarm's bats in index order, the products by 0 and 1
-being exact), and every parameter value of both.
+sub-swarm; ``BatSwarms._group_sums`` adds each sub-swarm's bats in index order), and every
+parameter value of both.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ import numpy as np
 from numba import njit
 
 from swarmpath.optimizers.compiled.best import record_first_min
+from swarmpath.optimizers.compiled.functions import pairwise_sum
 from swarmpath.optimizers.compiled.objectives import evaluate, work_for
 from swarmpath.optimizers.compiled.registry import Kernel, register_kernel
 from swarmpath.optimizers.compiled.streams import RANDOM, open_stream, take
@@ -50,39 +51,6 @@ def _packer(name: str):
         ], dtype=np.float64)
 
     return pack
-
-
-@njit(cache=True)
-def pairwise_sum(a, start, n):
-    """sum of a[start:start + n] as numpy adds a contiguous reduction (pairwise: eight
-    accumulators up to 128 numbers, halves above), without the initial 0."""
-    if n < 8:
-        s = 0.0
-        for i in range(n):
-            s += a[start + i]
-        return s
-    if n <= 128:
-        r0, r1, r2, r3 = a[start], a[start + 1], a[start + 2], a[start + 3]
-        r4, r5, r6, r7 = a[start + 4], a[start + 5], a[start + 6], a[start + 7]
-        i = 8
-        while i < n - n % 8:
-            r0 += a[start + i]
-            r1 += a[start + i + 1]
-            r2 += a[start + i + 2]
-            r3 += a[start + i + 3]
-            r4 += a[start + i + 4]
-            r5 += a[start + i + 5]
-            r6 += a[start + i + 6]
-            r7 += a[start + i + 7]
-            i += 8
-        s = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-        while i < n:
-            s += a[start + i]
-            i += 1
-        return s
-    half = n // 2
-    half -= half % 8
-    return pairwise_sum(a, start, half) + pairwise_sum(a, start + half, n - half)
 
 
 @njit(cache=True)

@@ -135,6 +135,67 @@ def sinpi_squared(q):
     return s * t
 
 
+@njit(cache=True)
+def _block_sum(a, start, n):
+    """numpy's pairwise sum of a[start:start + n] for n <= 128: eight accumulators."""
+    if n < 8:
+        s = 0.0
+        for i in range(n):
+            s += a[start + i]
+        return s
+    r0, r1, r2, r3 = a[start], a[start + 1], a[start + 2], a[start + 3]
+    r4, r5, r6, r7 = a[start + 4], a[start + 5], a[start + 6], a[start + 7]
+    i = 8
+    while i < n - n % 8:
+        r0 += a[start + i]
+        r1 += a[start + i + 1]
+        r2 += a[start + i + 2]
+        r3 += a[start + i + 3]
+        r4 += a[start + i + 4]
+        r5 += a[start + i + 5]
+        r6 += a[start + i + 6]
+        r7 += a[start + i + 7]
+        i += 8
+    s = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        s += a[start + i]
+        i += 1
+    return s
+
+
+@njit(cache=True)
+def pairwise_sum(a, start, n):
+    """sum of a[start:start + n] as numpy adds a contiguous reduction (pairwise: eight
+    accumulators up to 128 numbers, above that the sum of two halves, the first a multiple of
+    8), without the initial 0. numpy's recursion runs on explicit stacks: a recursive function
+    cached by numba fails to load in the next process (an unresolved symbol of itself)."""
+    if n <= 128:
+        return _block_sum(a, start, n)
+    starts = np.empty(192, dtype=np.int64)  # pending parts (start, size, 1: add the two
+    sizes = np.empty(192, dtype=np.int64)  # sums on top), 3 per level of halving
+    combine = np.empty(192, dtype=np.bool_)
+    sums = np.empty(64)
+    top, at = 0, 0
+    starts[0], sizes[0], combine[0] = start, n, False
+    while top >= 0:
+        s, m, join = starts[top], sizes[top], combine[top]
+        top -= 1
+        if join:
+            at -= 1
+            sums[at - 1] = sums[at - 1] + sums[at]
+        elif m <= 128:
+            sums[at] = _block_sum(a, s, m)
+            at += 1
+        else:
+            half = m // 2
+            half -= half % 8
+            starts[top + 1], sizes[top + 1], combine[top + 1] = s, m, True
+            starts[top + 2], sizes[top + 2], combine[top + 2] = s + half, m - half, False
+            starts[top + 3], sizes[top + 3], combine[top + 3] = s, half, False
+            top += 3
+    return sums[0]
+
+
 # ------------------------------------------------------------------------------- functions
 @njit(cache=True, inline="always")
 def _penalty(x, a, k, w):

@@ -33,7 +33,6 @@ from typing import Any
 import numpy as np
 from llvmlite import ir
 from numba import carray, cfunc, njit, types
-from numba.core import cgutils
 from numba.extending import intrinsic
 
 from swarmpath.functions import BenchmarkFunction, get_function, list_functions
