@@ -165,8 +165,9 @@ def demo(
         done = _run_jobs(service.url, QUICK if quick else [BENCHMARK, MAP], out)
         typer.echo("")
         _say("outputs:")
-        _say("  the summary tables: above (again with: swarmpath results JOB --url "
-             f"{service.url}, while the coordinator is up)")
+        _say("  the summary tables: above" + (
+            f" (again: swarmpath results JOB --url {service.url})" if keep else
+            " (with --keep the coordinator stays up to ask again: swarmpath results JOB)"))
         for job, path, layout in done:
             _say(f"  job {job}: {path} (open in Foxglove), layout {layout} (Layouts > Import)")
         failed = False
