@@ -138,3 +138,20 @@ def test_occupancy_grid_values() -> None:
         OccupancyGrid(spec, np.zeros((3, 2), dtype=np.int8))
     b = OccupancyGrid.from_bool(spec, [[True, False, False], [False, False, True]])
     assert b.data.tolist() == [[100, 0, 0], [0, 0, 100]]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_circles_are_marked_as_every_cell_centre_tested_against_every_circle(seed: int) -> None:
+    # thousands of sensed points go in as circles of radius 0 (swarm_aim.free_space_path); the
+    # windowed marking must equal the definition cell by cell: centre within inflation + r
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 400))
+    radii = rng.choice([0.0, 0.0, 0.3, 1.7], n) * rng.uniform(0, 1, n)
+    circles = np.column_stack([rng.uniform(-2, 14, (n, 2)), radii])
+    spec = GridSpec.covering((12.0, 9.0), float(rng.choice([0.05, 0.1, 0.37])))
+    inflation = float(rng.choice([0.0, 0.14, 0.5, -0.1]))
+    centres = spec.cell_to_world(np.indices(spec.shape).reshape(2, -1).T)
+    d = np.hypot(centres[:, None, 0] - circles[:, 0], centres[:, None, 1] - circles[:, 1])
+    want = ((d - circles[:, 2] <= inflation) & (circles[:, 2] + inflation >= 0)).any(axis=1)
+    got = rasterize(ObstacleSet(circles=circles), spec, inflation)
+    assert np.array_equal(got.reshape(-1), want)

@@ -197,6 +197,33 @@ def _box_cells(
     return slice(r0, r1 + 1), slice(c0, c1 + 1)
 
 
+def _circles_into(out: BoolArray, circles: Array, xs: Array, ys: Array, spec: GridSpec,
+                  inflation: float) -> None:
+    """Mark in ``out`` the cells whose centre is within ``inflation`` of a circle: each circle's
+    window of cells (as wide as the widest circle's) at once, the same test cell by cell
+    (thousands of sensed points as circles of radius 0: swarm_aim.free_space_path)."""
+    reach = circles[:, 2] + inflation
+    circles = circles[reach >= 0]
+    if not len(circles):
+        return
+    res, (ox, oy) = spec.resolution, spec.origin
+    half = int(math.ceil(float(np.max(circles[:, 2] + inflation)) / res)) + 1
+    k = np.arange(-half, half + 1)
+    chunk = max(1, 2_000_000 // len(k) ** 2)  # bounded memory: 2 million cells at a time
+    for lo in range(0, len(circles), chunk):
+        cx, cy, r = circles[lo:lo + chunk].T
+        col = np.floor((cx - ox) / res).astype(np.int64)[:, None] + k  # (n, w)
+        row = np.floor((cy - oy) / res).astype(np.int64)[:, None] + k
+        cin = (col >= 0) & (col < spec.cols)
+        rin = (row >= 0) & (row < spec.rows)
+        colc, rowc = np.clip(col, 0, spec.cols - 1), np.clip(row, 0, spec.rows - 1)
+        d = np.hypot(xs[colc][:, None, :] - cx[:, None, None],
+                     ys[rowc][:, :, None] - cy[:, None, None]) - r[:, None, None]
+        hit = (d <= inflation) & rin[:, :, None] & cin[:, None, :]
+        n, i, j = np.nonzero(hit)
+        out[rowc[n, i], colc[n, j]] = True
+
+
 def rasterize(obstacles: ObstacleSet, spec: GridSpec, inflation: float = 0.0) -> BoolArray:
     """(rows, cols) mask: True where a cell centre's clearance to ``obstacles`` <= ``inflation``."""
     inflation = float(inflation)
@@ -207,16 +234,7 @@ def rasterize(obstacles: ObstacleSet, spec: GridSpec, inflation: float = 0.0) ->
     res = spec.resolution
     xs = ox + (np.arange(spec.cols) + 0.5) * res
     ys = oy + (np.arange(spec.rows) + 0.5) * res
-    for cx, cy, r in obstacles.circles:
-        reach = r + inflation
-        if reach < 0:
-            continue
-        box = _box_cells(spec, cx - reach, cy - reach, cx + reach, cy + reach)
-        if box is None:
-            continue
-        rs, cs = box
-        d = np.hypot(xs[cs][None, :] - cx, ys[rs][:, None] - cy) - r
-        out[rs, cs] |= d <= inflation
+    _circles_into(out, obstacles.circles, xs, ys, spec, inflation)
     for poly in obstacles.polygons:
         lo = poly.min(axis=0) - max(inflation, 0.0)
         hi = poly.max(axis=0) + max(inflation, 0.0)
