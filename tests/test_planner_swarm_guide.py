@@ -10,8 +10,9 @@ import pytest
 
 from swarmpath.planners import Episode, get_planner, list_planners
 from swarmpath.planners.cost_to_go import CostToGo
-from swarmpath.planners.sensed_map import surface_points
-from swarmpath.planners.swarm_guide import _taut, descend
+from swarmpath.planners.sensed_map import along, known_obstacles, known_path, surface_points
+from swarmpath.planners.swarm_aim import free_space_path
+from swarmpath.planners.swarm_guide import descend, taut
 from swarmpath.planners.swarm_local import SwarmLocalPlanner
 from swarmpath.world import clearance as fast
 from swarmpath.world import get_map
@@ -95,7 +96,7 @@ def test_the_cost_to_go_descent_goes_downhill_and_its_taut_way_keeps_the_margin(
     assert np.array_equal(cells[0], start) and np.array_equal(cells[-1], goal)
     values = field(cells[1:-1])
     assert np.all(np.diff(values) < 0)
-    way = _taut(cells, static, margin)
+    way = taut(cells, static, margin)
     assert len(way) < len(cells) / 3
     # a segment that skips cells keeps the margin; one from a cell to the next is the grid's own
     step = np.sqrt(2.0) * field.spec.resolution + 1e-9
@@ -146,3 +147,34 @@ def test_swarm_planners_that_know_the_map_reach_the_goal_near_the_optimum(scenar
                   params={"knowledge": "map", "backend": FAST}).run()
     assert out.success and out.collisions == 0, out.reason
     assert out.gap is not None and out.gap < 0.05
+
+
+def test_with_sensors_only_a_pocket_whose_hull_covers_the_robot_still_has_a_way_out():
+    # a cup of sensed points open to the left, the robot inside, the goal behind its bottom:
+    # the hulls of the known map cover the robot (no known path: the straight line, into the
+    # bottom, was the aim), the grid of the points themselves leads out of the opening
+    side = np.linspace(-0.6, 1.0, 33)
+    cup = np.vstack([np.column_stack([np.full(41, 1.0), np.linspace(-1.0, 1.0, 41)]),
+                     np.column_stack([side, np.full(33, 1.0)]),
+                     np.column_stack([side, np.full(33, -1.0)])])
+    shift = np.array([1.0, 2.0])  # the cup in the middle of a 6 x 4 m world
+    p, goal, cup = np.array([0.3, 0.0]) + shift, np.array([4.0, 0.0]) + shift, cup + shift
+    world = (0.0, 0.0, 6.0, 4.0)
+    known = known_obstacles(cup, link=0.4)
+    assert known.point_clearance(p[None, :])[0] <= 0  # the robot is inside the hull
+    assert known_path(p, goal, known, 0.2, world) is None
+    way = free_space_path(p, goal, cup, 0.2, world, "numpy")
+    assert way is not None
+    assert np.array_equal(way[0], p) and np.array_equal(way[-1], goal)
+    assert way[1][0] < p[0]  # first out of the opening, away from the goal
+    dense = along(way, np.arange(0.0, float(np.sum(np.hypot(*np.diff(way, axis=0).T))), 0.01))
+    gaps = np.hypot(dense[:, None, 0] - cup[:, 0], dense[:, None, 1] - cup[:, 1]).min(axis=1)
+    assert gaps.min() > 0.1
+    assert free_space_path(p, goal, cup, 0.2, world, "numpy") is not None  # no state
+
+
+def test_with_sensors_only_mfb_gets_out_of_random_32_32_20s_pocket():
+    # MFB seed 1 with sensors only oscillated in a pocket of random-32-32-20 until the time
+    # limit (no_path = "line", the earlier rule; docs/planners.md "Why runs fail")
+    out = Episode(_grid("random-32-32-20"), "MFB", seed=1, params={"backend": FAST}).run()
+    assert out.success and out.collisions == 0, out.reason

@@ -66,6 +66,29 @@ def _room(p: Array, known: ObstacleSet, backend: str) -> float:
     return float(known.point_clearance(p[None, :])[0])
 
 
+def free_space_path(p: Array, goal: Array, points: Array, clearance: float,
+                    world: tuple[float, float, float, float], backend: str) -> Array | None:
+    """The way to the goal on a grid of the sensed points themselves, unseen space free (the
+    free-space assumption of planning in unknown terrain: Koenig, Tovey & Smirnov, Artificial
+    Intelligence 147, 2003), for when the hulls leave no path: a concave pocket's faces make a
+    hull that covers the robot (MFB on random-32-32-20 oscillated there, aiming at the straight
+    line). The cost-to-go (:class:`~swarmpath.planners.cost_to_go.CostToGo`) of cells keeping
+    ``clearance`` (less when the robot is closer) from every point, descended from the robot and
+    pulled taut (:mod:`swarmpath.planners.swarm_guide`); None when no cell near the robot has a
+    way to the goal."""
+    from swarmpath.planners.cost_to_go import CostToGo
+    from swarmpath.planners.swarm_guide import descend, taut
+
+    if not len(points):
+        return None
+    c = min(clearance, nearest_hit(p, points, backend) - 1e-6)
+    if c <= 0:
+        return None
+    dots = ObstacleSet(circles=np.column_stack([points, np.zeros(len(points))]))
+    cells = descend(CostToGo(dots, (world[2], world[3]), goal, c), p, goal)
+    return None if cells is None else taut(cells, dots, c)
+
+
 def load_kernels() -> None:
     """Compile, or load from numba's cache, the sensing's and the aim's kernels (one call each
     on a tiny problem), so that no decision pays for it."""
@@ -142,6 +165,8 @@ class SwarmAim(SwarmSensing):
         room = _room(p, known, backend)
         path = sensed_map.known_path(p, goal, known, min(clearance, room - 1e-6), world,
                                      backend)
+        if path is None and self.p["no_path"] == "grid":
+            path = free_space_path(p, goal, coarse, clearance, world, backend)
         if path is None:
             self._path = None
             return np.array([p, goal])

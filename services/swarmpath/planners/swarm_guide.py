@@ -90,7 +90,7 @@ def _surface_near(static: ObstacleSet, p: Array, reach: float, spacing: float) -
     return np.concatenate(parts)
 
 
-def _taut(cells: Array, static: ObstacleSet, margin: float) -> Array:
+def taut(cells: Array, static: ObstacleSet, margin: float) -> Array:
     """A polyline through ``cells`` with every vertex dropped whose neighbours see each other
     keeping more than ``margin`` from the static map (greedy from the start)."""
     out = [cells[0]]
@@ -180,7 +180,7 @@ class Guide:
         self.planned_by = "cost-to-go"
         if cells is None:
             return np.array([p, goal], dtype=float)
-        return _taut(cells, self.static, max(margin, 0.0))
+        return taut(cells, self.static, max(margin, 0.0))
 
     def _first(self, p: Array, goal: Array) -> Array:
         """The way from the start, remembered per scenario, clearance and source."""

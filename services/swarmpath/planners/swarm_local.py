@@ -123,6 +123,9 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         "guide": "optimum",
         "guide_rejoin": 0.3,  # m
         "aim_hits": "known",  # the known path avoids: "known" (all remembered) or "near"
+        # the sensed hulls leave no known path: "grid" plans on the sensed points themselves
+        # (swarm_aim.free_space_path), "line" aims at the straight line (the earlier rule)
+        "no_path": "grid",
         "contact_band": 0.2,  # m beyond the body: no move closes on a sensed point this near
         # s without getting closer to the goal by ``escape_progress``: then the known path also
         # avoids every static point sensed since the start (planners.swarm_escape; 0: off)
@@ -142,6 +145,7 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         "knowledge": ("sensors", "map"),
         "guide": ("optimum", "cost-to-go"),
         "aim_hits": ("known", "near"),
+        "no_path": ("grid", "line"),
         "backend": BACKENDS,
     }
     #: Optimizer parameters of the preset (e.g. ICOOT's two leaders), merged under user ones.
