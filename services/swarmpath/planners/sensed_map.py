@@ -317,6 +317,15 @@ def along(pts: Array, distance: float | Array) -> Array:
     return np.stack([np.interp(s, cum, pts[:, 0]), np.interp(s, cum, pts[:, 1])], axis=-1)
 
 
+def feet(a: Array, b: Array, position: Array) -> tuple[Array, Array]:
+    """The nearest point of each segment a -> b (m, 2) to ``position`` and its distance."""
+    u = b - a
+    uu = np.einsum("ij,ij->i", u, u)
+    t = np.clip(np.einsum("ij,ij->i", position - a, u) / np.where(uu > 0, uu, 1.0), 0.0, 1.0)
+    foot = a + t[:, None] * u
+    return foot, np.hypot(*(position - foot).T)
+
+
 def rejoin(pts: Array, position: Array, tolerance: float,
            backend: str = "numpy") -> Array | None:
     """The rest of the polyline ``pts`` from the robot, starting at ``position``, when the robot
@@ -324,12 +333,7 @@ def rejoin(pts: Array, position: Array, tolerance: float,
     :func:`swarmpath.planners.compiled_aim.rejoin_kernel`, the same)."""
     if backend == "numba":
         return _fast().rejoin(pts, position, tolerance)
-    a, b = pts[:-1], pts[1:]
-    u = b - a
-    uu = np.einsum("ij,ij->i", u, u)
-    t = np.clip(np.einsum("ij,ij->i", position - a, u) / np.where(uu > 0, uu, 1.0), 0.0, 1.0)
-    foot = a + t[:, None] * u
-    d = np.hypot(*(position - foot).T)
+    _, d = feet(pts[:-1], pts[1:], position)
     k = int(np.argmin(d))
     if d[k] > tolerance:
         return None

@@ -223,12 +223,7 @@ class Guide:
             return way[-1], len(way) - 2 if len(way) > 1 else 0, math.dist(p, way[-1])
         length = np.concatenate([[0.0], np.cumsum(np.hypot(*(b - a).T))])
         keep = max(1, int(np.searchsorted(length, SEARCH_AHEAD * lookahead)) + 1)
-        a, b = a[:keep], b[:keep]
-        d = b - a
-        dd = np.einsum("ij,ij->i", d, d)
-        t = np.clip(np.einsum("ij,ij->i", p - a, d) / np.where(dd > 0, dd, 1.0), 0.0, 1.0)
-        foot = a + t[:, None] * d
-        dist = np.hypot(*(foot - p).T)
+        foot, dist = sensed_map.feet(a[:keep], b[:keep], p)
         k = int(np.argmin(dist))
         return foot[k], self.at + k, float(dist[k])
 
