@@ -207,7 +207,7 @@ def _circles_into(out: BoolArray, circles: Array, xs: Array, ys: Array, spec: Gr
     if not len(circles):
         return
     res, (ox, oy) = spec.resolution, spec.origin
-    half = int(math.ceil(float(np.max(circles[:, 2] + inflation)) / res)) + 1
+    half = math.ceil(float(np.max(circles[:, 2] + inflation)) / res) + 1
     k = np.arange(-half, half + 1)
     chunk = max(1, 2_000_000 // len(k) ** 2)  # bounded memory: 2 million cells at a time
     for lo in range(0, len(circles), chunk):
