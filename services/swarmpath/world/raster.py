@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -197,8 +198,8 @@ def _box_cells(
     return slice(r0, r1 + 1), slice(c0, c1 + 1)
 
 
-def _circles_into(out: BoolArray, circles: Array, xs: Array, ys: Array, spec: GridSpec,
-                  inflation: float) -> None:
+def _circles_into(out: BoolArray, circles: Array, xs: NDArray[np.floating[Any]],
+                  ys: NDArray[np.floating[Any]], spec: GridSpec, inflation: float) -> None:
     """Mark in ``out`` the cells whose centre is within ``inflation`` of a circle: each circle's
     window of cells (as wide as the widest circle's) at once, the same test cell by cell
     (thousands of sensed points as circles of radius 0: swarm_aim.free_space_path)."""
