@@ -23,7 +23,7 @@ from swarmpath.optimizers import (
     minimize,
     minimize_many,
 )
-from swarmpath.optimizers.api import BACKENDS
+from swarmpath.optimizers.api import BACKENDS, check_backend, resolve_backend
 from swarmpath.optimizers.compiled import find_kernel, kernel_names
 from swarmpath.optimizers.compiled.objectives import evaluate, objective_for, work_for
 from swarmpath.optimizers.compiled.streams import (
@@ -121,7 +121,7 @@ def test_kernel_equals_the_reference(algo):
         for dim, transform in ((3, "none"), (9, "shift")):
             kw = dict(dim=dim, agents=6, iterations=12, seed=3 + k, params=params,
                       transform=transform, run_ids=[2, 0])
-            ref = minimize_many(algo, functions, **kw)
+            ref = minimize_many(algo, functions, backend="numpy", **kw)
             fast = minimize_many(algo, functions, backend="numba", **kw)
             for a, b in zip(ref, fast, strict=True):
                 assert (b.backend, b.tolerance, a.backend) == ("numba", tolerance, "numpy")
@@ -134,7 +134,8 @@ def test_kernel_runs_do_not_depend_on_the_batch(algo):
     kw = dict(dim=5, agents=7, iterations=10, seed=11, transform="shift")
     whole = minimize(algo, "F7", run_ids=[0, 1, 2, 3, 4], backend="numba", **kw)
     assert whole.backend == "numba"
-    ref = minimize(algo, "F7", run_ids=[0, 1, 2, 3, 4], chunk_elements=2 * 7 * 5, **kw)
+    ref = minimize(algo, "F7", run_ids=[0, 1, 2, 3, 4], chunk_elements=2 * 7 * 5,
+                   backend="numpy", **kw)
     for ids in ([3], [4, 0, 2], [1, 3]):
         part = minimize(algo, "F7", run_ids=ids, backend="numba", **kw)
         for i, r in enumerate(ids):
@@ -152,7 +153,7 @@ def test_algorithms_without_a_kernel_refuse_numba(algo):
 def test_what_has_no_kernel_is_refused_by_name():
     algo = WITH_KERNEL[0]
     kw = dict(dim=3, agents=5, iterations=2, runs=1)
-    with pytest.raises(ParameterError, match="backend must be one of numpy, numba"):
+    with pytest.raises(ParameterError, match="backend must be one of auto, numpy, numba"):
         minimize(algo, "F1", backend="cuda", **kw)
     for transform in ("rotate", "shift+rotate"):
         with pytest.raises(ParameterError, match=re.escape(f"transform '{transform}'")):
@@ -195,13 +196,40 @@ def test_function_runs_with_numba_give_each_functions_own_runs(algo):
 
 def test_the_numpy_backend_never_imports_numba():
     code = ("import sys; from swarmpath.optimizers import minimize; "
-            "[minimize(a, 'F10', dim=2, agents=4, iterations=2, runs=1) for a in "
+            "[minimize(a, 'F10', dim=2, agents=4, iterations=2, runs=1, backend='numpy') for a in "
             f"{list_optimizers()!r}]; print('numba' in sys.modules)")
     path = ":".join(p for p in sys.path if p)
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, env={"PYTHONPATH": path})
     assert out.stdout.strip() == "False"
     assert "numpy" in BACKENDS
+
+
+def test_auto_runs_the_kernels_where_the_study_has_them_and_numpy_elsewhere(monkeypatch):
+    kw = dict(dim=3, agents=5, iterations=6, run_ids=[2, 0], seed=4)
+    algo = WITH_KERNEL[0]
+    auto = minimize(algo, "F8", transform="shift", **kw)  # the default backend
+    assert (auto.backend, auto.tolerance) == ("numba", 0.0)
+    assert_same(minimize(algo, "F8", transform="shift", backend="numpy", **kw), auto, 0.0)
+    hand_made = get_function("F1").__class__(name="F1", kernel=lambda x: x[..., 0], lower=-1,
+                                            upper=1, optimum_coordinate=0.0)
+    numpy_only = [
+        dict(algorithm=WITHOUT_KERNEL[0], function="F1") if WITHOUT_KERNEL else None,
+        dict(algorithm=algo, function="F1", transform="rotate"),
+        dict(algorithm=algo, function=hand_made),
+        dict(algorithm=algo, function="bbob:f1", dim=4),  # a suite: no compiled objective yet
+        dict(algorithm=algo, function="F1", max_evaluations=12),
+    ]
+    for case in filter(None, numpy_only):
+        res = minimize(**{**kw, **case})
+        assert res.backend == "numpy", case
+        assert_same(minimize(**{**kw, **case, "backend": "numpy"}), res, 0.0)
+    check_backend("auto", list_optimizers(), "rotate", None, ["F1", "bbob:f1"])  # never refuses
+    assert resolve_backend("auto", algo, ["F1", "F7"]) == "numba"
+    assert resolve_backend("numpy", algo, ["F1"]) == "numpy"
+    monkeypatch.setitem(sys.modules, "swarmpath.optimizers.compiled.run", None)  # no numba
+    assert minimize(algo, "F1", **kw).backend == "numpy"
+    assert resolve_backend("auto", algo, ["F1"]) == "numpy"
 
 
 def test_bench_with_the_numba_backend_gives_the_reference_tables_numbers():
@@ -224,7 +252,8 @@ def test_reproduce_puts_the_backend_in_the_setting():
 
     table = next(t for t in map(reference.load, reference.TABLES)
                  if isinstance(t, reference.BenchmarkTable))
-    assert "backend" not in reproduce.study_setting(table, 2, 1)
+    assert "backend" not in reproduce.study_setting(table, 2, 1)  # auto
+    assert reproduce.study_setting(table, 2, 1, "numpy")["backend"] == "numpy"
     if all(find_kernel(a) is not None for a in table.algorithms):
         assert reproduce.study_setting(table, 2, 1, "numba")["backend"] == "numba"
     else:

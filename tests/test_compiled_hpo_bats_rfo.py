@@ -19,7 +19,7 @@ ALGORITHMS = ["HPO", "IHPO", "BA", "MFB", "HPSO-MFB", "RFO"]
 
 
 def both(algo, functions, **kw):
-    ref = minimize_many(algo, functions, **kw)
+    ref = minimize_many(algo, functions, backend="numpy", **kw)
     fast = minimize_many(algo, functions, backend="numba", **kw)
     for a, b in zip(ref, fast, strict=True):
         assert (a.backend, b.backend, b.tolerance) == ("numpy", "numba", 0.0)

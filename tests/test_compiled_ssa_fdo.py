@@ -26,7 +26,7 @@ def assert_equal_runs(ref, fast):
 
 
 def both(algo, functions, **kw):
-    ref = minimize_many(algo, functions, **kw)
+    ref = minimize_many(algo, functions, backend="numpy", **kw)
     fast = minimize_many(algo, functions, backend="numba", **kw)
     for a, b in zip(ref, fast, strict=True):
         assert_equal_runs(a, b)

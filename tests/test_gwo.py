@@ -1,9 +1,15 @@
 """GWO: the authors' leader semantics and the published order of magnitude."""
 
+from functools import partial
+
 import numpy as np
 import pytest
 
 from swarmpath.optimizers import Problem, RunStreams, create, minimize
+
+# These tests are about the numpy reference (the default backend, "auto", would run the
+# compiled kernels where they exist).
+minimize = partial(minimize, backend="numpy")
 
 
 # Mirjalili et al. 2014, Table 3 (GWO, 30 dims, 30 agents, 500 iterations, 30 runs): averages.

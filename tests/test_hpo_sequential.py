@@ -1,11 +1,17 @@
 """HPO/IHPO's sequential update (the authors' agent-by-agent sweep, the default since issue 10)."""
 
+from functools import partial
+
 import numpy as np
 import pytest
 
 from swarmpath.optimizers import Problem, RunStreams, create, get_optimizer, minimize
 from swarmpath.optimizers.registry import list_optimizers
 from swarmpath.optimizers.streams import OPTIMIZER, run_generator
+
+# These tests are about the numpy reference (the default backend, "auto", would run the
+# compiled kernels where they exist).
+minimize = partial(minimize, backend="numpy")
 
 
 @pytest.mark.parametrize("algorithm", ["HPO", "IHPO"])

@@ -1,10 +1,16 @@
 """MFB and HPSO-MFB (Ajeil et al. 2020): the decisions of docs/algorithms.md."""
 
+from functools import partial
+
 import numpy as np
 import pytest
 
 from swarmpath.functions import get_function
 from swarmpath.optimizers import Problem, RunStreams, create, get_optimizer, minimize
+
+# These tests are about the numpy reference (the default backend, "auto", would run the
+# compiled kernels where they exist).
+minimize = partial(minimize, backend="numpy")
 
 SPHERE = get_function("F1")
 

@@ -7,12 +7,17 @@ documented exception (docs/algorithms.md) and the test asserts its direction.
 """
 
 import math
+from functools import partial
 
 import numpy as np
 import pytest
 
 from swarmpath.optimizers import Problem, RunStreams, create, minimize
 from swarmpath.optimizers.ssa import SSA
+
+# These tests are about the numpy reference (the default backend, "auto", would run the
+# compiled kernels where they exist).
+minimize = partial(minimize, backend="numpy")
 
 # Seeds, Table 2 (30 dims): published mean of the best fitness.
 # fmt: off

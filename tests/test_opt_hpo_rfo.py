@@ -4,6 +4,7 @@ Decisions and measured tables: docs/algorithms.md.
 """
 
 from dataclasses import replace
+from functools import partial
 
 import numpy as np
 import pytest
@@ -11,6 +12,10 @@ import pytest
 from swarmpath.functions import get_function
 from swarmpath.optimizers import Problem, RunStreams, create, get_optimizer, minimize
 from swarmpath.optimizers.hpo import hpo_c, hpo_kbest, matlab_round
+
+# These tests are about the numpy reference (the default backend, "auto", would run the
+# compiled kernels where they exist).
+minimize = partial(minimize, backend="numpy")
 
 PAPER = dict(dim=30, agents=30, iterations=500)
 

@@ -1,5 +1,7 @@
 """The contract every registered optimizer keeps (parametrized over the registry)."""
 
+from functools import partial
+
 import numpy as np
 import pytest
 
@@ -13,6 +15,10 @@ from swarmpath.optimizers import (
     list_optimizers,
     minimize,
 )
+
+# These tests are about the numpy reference (the default backend, "auto", would run the
+# compiled kernels where they exist).
+minimize = partial(minimize, backend="numpy")
 
 REGISTERED = [
     "PSO", "SSA", "FDO", "GWO", "BA", "MFB", "HPSO-MFB", "COOT", "mCOOT", "ICOOT", "HPO", "IHPO",
@@ -186,7 +192,8 @@ def test_stacked_functions_give_each_functions_own_runs(algo, shifted, monkeypat
     from swarmpath.optimizers.problem import StackedProblem
 
     functions = ["F1", "F9", "F7", "F12", "F8"]  # F7 (noisy) is never stacked with another
-    kw = dict(dim=4, agents=10, iterations=8, seed=3, shifted=shifted, run_ids=[4, 0, 2])
+    kw = dict(dim=4, agents=10, iterations=8, seed=3, shifted=shifted, run_ids=[4, 0, 2],
+              backend="numpy")
     alone = [minimize(algo, f, **kw) for f in functions]
     built = []
     original = StackedProblem.of
@@ -211,7 +218,7 @@ def test_stacked_functions_with_their_own_runs(algo, monkeypatch):
 
     functions = ["F1", "F9", "F7", "F1", "F12"]
     runs = [[3, 0], [5], [1, 2, 7], [6, 9], [0, 4, 8]]
-    kw = dict(dim=4, agents=10, iterations=8, seed=3, transform="shift")
+    kw = dict(dim=4, agents=10, iterations=8, seed=3, transform="shift", backend="numpy")
     monkeypatch.setattr(api, "CHUNK_ELEMENTS", 4 * 10 * 4)  # chunks of four rows: mixed blocks
     stacked = minimize_many(algo, functions, function_runs=runs, **kw)
     assert sum(r.seconds for r in stacked) > 0

@@ -1,6 +1,8 @@
 """Function transforms (none, shift, rotate, shift+rotate): per-run draws, the optimum kept, the
 reproducibility contract for every transform and optimizer."""
 
+from functools import partial
+
 import numpy as np
 import pytest
 
@@ -8,6 +10,10 @@ from swarmpath.functions import get_function, list_functions
 from swarmpath.functions.transforms import TRANSFORMS, random_rotation
 from swarmpath.optimizers import ParameterError, RunStreams, list_optimizers, minimize
 from swarmpath.optimizers.problem import BenchmarkProblem
+
+# These tests are about the numpy reference (the default backend, "auto", would run the
+# compiled kernels where they exist).
+minimize = partial(minimize, backend="numpy")
 
 
 @pytest.mark.parametrize("transform", TRANSFORMS)

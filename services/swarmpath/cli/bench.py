@@ -200,7 +200,7 @@ def run_cell(
 
 def caption(spec: BenchSpec, seconds: float | None, race: dict[str, Any] | None = None) -> str:
     moved = "" if spec.transform == "none" else f", transform {spec.transform}"
-    backend = "" if spec.backend == "numpy" else f", backend {spec.backend}"
+    backend = "" if spec.backend in ("numpy", "auto") else f", backend {spec.backend}"
     length = (f"{spec.iterations} iterations" if spec.budget_evals is None else
               f"budget {spec.budget_evals.replace('xD', ' x D')} evaluations per run")
     suites = [f for f in spec.functions if getattr(get_function(f), "suite", "")]
@@ -319,7 +319,7 @@ def bench(
                      "fitness per function and dimension, a critical-difference diagram per "
                      "dimension."),
     ] = None,
-    backend: BackendOpt = "numpy",
+    backend: BackendOpt = "auto",
     instances: InstancesOpt = None,
     budget_evals: BudgetOpt = None,
     pool_instances: Annotated[

@@ -42,8 +42,8 @@ class BenchSpec:
     reference: str | None = None
     #: none, shift, rotate or shift+rotate (swarmpath.functions.transforms)
     transform: str = "none"
-    #: numpy (the reference) or numba (swarmpath.optimizers.api.BACKENDS)
-    backend: str = "numpy"
+    #: auto, numpy (the reference) or numba (swarmpath.optimizers.api.BACKENDS)
+    backend: str = "auto"
     #: suite instances of the study (None: instance 1); ``functions`` already lists them
     instances: list[int] | None = None
     #: evaluations per run: "N" or "NxD" (N times the dimension); None: agents x iterations
@@ -167,7 +167,7 @@ def make_spec(
     params: str | None = None,
     reference: str | None = None,
     transform: str | None = None,
-    backend: str = "numpy",
+    backend: str = "auto",
     instances: str | None = None,
     budget_evals: str | None = None,
     pool_instances: bool = False,
@@ -211,7 +211,7 @@ def make_spec(
     checked = parse_params(params, algos)
     try:
         check_backend(backend, algos, kind, checked, fns)
-        if budget is not None and backend != "numpy":
+        if budget is not None and backend == "numba":
             raise ParameterError("--budget-evals runs on backend 'numpy' only")
     except ParameterError as exc:
         raise InputError("--backend", str(exc)) from None

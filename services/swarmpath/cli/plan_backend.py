@@ -11,7 +11,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from swarmpath.cli.core import InputError
-from swarmpath.optimizers.api import BACKENDS  # the registry of backends (re-exported here)
+from swarmpath.optimizers.api import COMPUTING_BACKENDS as BACKENDS  # a planner's (re-exported)
 
 
 def _numba_missing() -> str | None:

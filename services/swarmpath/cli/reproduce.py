@@ -71,11 +71,15 @@ def _subset(option: str, given: str | None, names: Sequence[str]) -> list[str]:
 
 
 def study_setting(table: reference.Table, runs: int | None, seed: int,
-                  backend: str = "numpy", algorithms: str | None = None,
+                  backend: str = "auto", algorithms: str | None = None,
                   functions: str | None = None, add: str | None = None) -> dict[str, Any]:
     """The study run for ``table``: the paper's setting, runs lowered by ``--runs``, cells
-    narrowed by ``--algorithms``/``--functions``; a backend other than the reference (numpy) is
-    part of the setting."""
+    narrowed by ``--algorithms``/``--functions``; a backend other than ``auto`` (the default:
+    the reference's numbers, compiled where it can) is part of the setting."""
+    from swarmpath.optimizers.api import BACKENDS
+
+    if backend not in BACKENDS:
+        raise InputError("--backend", f"{backend!r} is not one of {', '.join(BACKENDS)}")
     paper_runs = int(table.setting["runs"])
     if runs is not None and not 1 <= runs <= paper_runs:
         raise InputError("--runs", f"{runs} is not in [1, {paper_runs}] (the paper's count)")
@@ -95,7 +99,7 @@ def study_setting(table: reference.Table, runs: int | None, seed: int,
         for key in ("budget_evals", "instances"):  # the suites' settings (docs/functions.md)
             if table.setting.get(key) is not None:
                 setting[key] = table.setting[key]
-        if backend != "numpy":
+        if backend == "numba":
             from swarmpath.optimizers import ParameterError
             from swarmpath.optimizers.api import check_backend
 
@@ -104,11 +108,12 @@ def study_setting(table: reference.Table, runs: int | None, seed: int,
                 check_backend(backend, setting["algorithms"], "shift")
             except ParameterError as exc:
                 raise InputError("--backend", f"{table.name}: {exc}") from None
+        if backend != "auto":
             setting["backend"] = backend
         if added:
             setting["added"] = added
         return setting
-    if backend != "numpy":
+    if backend == "numba":
         raise InputError("--backend", f"{table.name} is a map table: planners run on numpy only")
     if add is not None:
         raise InputError("--add", f"{table.name} is a map table: --add adds optimizers to "
@@ -135,7 +140,7 @@ Result = tuple[reference.Table, dict[str, Any], list[reproduction.Row], dict[str
 
 
 def reproduce_table(name: str, runs: int | None, seed: int, jobs: int, url: str | None,
-                    backend: str = "numpy", origin_check: bool = True,
+                    backend: str = "auto", origin_check: bool = True,
                     algorithms: str | None = None, functions: str | None = None,
                     add: str | None = None) -> Result:
     """Run one table's study (benchmark tables: also shifted when ``origin_check``); returns
@@ -242,14 +247,14 @@ def _saved_cell(c: dict[str, Any], runs: Sequence[Any]) -> report.Cell:
                        evaluations=[0] * len(values), seconds=0.0)
 
 
-def command_line(name: str, runs: int | None, seed: int, fmt: str, backend: str = "numpy",
+def command_line(name: str, runs: int | None, seed: int, fmt: str, backend: str = "auto",
                  options: Sequence[str] = ()) -> str:
     parts = ["swarmpath", "reproduce", name]
     if runs is not None:
         parts += ["--runs", str(runs)]
     if seed != 1:
         parts += ["--seed", str(seed)]
-    if backend != "numpy":
+    if backend != "auto":
         parts += ["--backend", backend]
     parts += list(options)
     if fmt != "table":
@@ -306,7 +311,7 @@ def reproduce(
         typer.Option("--from", help="Judge the runs of an earlier --json output again "
                                     "(no study is run; reasons as they are now)."),
     ] = None,
-    backend: BackendOpt = "numpy",
+    backend: BackendOpt = "auto",
     algorithms: Annotated[
         str | None, typer.Option("--algorithms", "-a", help="Only these columns of a "
                                  "benchmark table (comma-separated; default: all).")
@@ -341,7 +346,7 @@ def reproduce(
         raise InputError("--jobs", f"{jobs} is not in [0, {parallel.MAX_JOBS}]")
     results: list[Result] = []
     if from_ is not None and (table is not None or runs is not None or url is not None
-                              or backend != "numpy" or algorithms is not None
+                              or backend != "auto" or algorithms is not None
                               or functions is not None or not origin_check
                               or add is not None):
         raise InputError("--from", "judges saved runs: give no TABLE, --runs, --url, "
@@ -385,7 +390,7 @@ def reproduce(
                                                        add))
         if results:
             runs, seed = int(setting["runs"]), int(setting["seed"])
-            backend = str(setting.get("backend", "numpy"))
+            backend = str(setting.get("backend", "auto"))
             options = narrowing(tab, setting)
         doc = reproduction.document(tab, setting, rows, statistics)
         doc["version"] = __version__

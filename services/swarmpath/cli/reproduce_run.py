@@ -22,7 +22,7 @@ def run_benchmark_local(setting: dict[str, Any], jobs: int) -> list[report.Cell]
         ",".join(setting["algorithms"]), ",".join(setting["functions"]),
         ",".join(str(d) for d in setting["dims"]), runs=setting["runs"],
         agents=setting["agents"], iterations=setting["iterations"], seed=setting["seed"],
-        backend=setting.get("backend", "numpy"), transform=setting.get("transform"),
+        backend=setting.get("backend", "auto"), transform=setting.get("transform"),
         instances=(",".join(str(i) for i in setting["instances"]) if setting.get("instances")
                    else None),
         budget_evals=setting.get("budget_evals"),

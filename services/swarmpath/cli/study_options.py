@@ -34,9 +34,10 @@ SeedOpt = Annotated[int, typer.Option(help="Study seed; run r uses its own strea
 BackendOpt = Annotated[
     str,
     typer.Option(
-        "--backend", metavar="numpy|numba",
-        help="numpy: the reference; numba: compiled kernels giving the reference's numbers run "
-        "for run (numba: the 'fast' extra); what has no kernel is refused.",
+        "--backend", metavar="auto|numpy|numba",
+        help="auto (default): compiled kernels where the study has them, else the reference; "
+        "numpy: the reference; numba: compiled kernels giving the reference's numbers run for "
+        "run, and what has no kernel is refused. The numbers are the same either way.",
     ),
 ]
 StatOpt = Annotated[

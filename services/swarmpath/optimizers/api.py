@@ -27,8 +27,13 @@ MAX_ITERATIONS = 100_000
 #: measured fastest per run on the project machine; larger batches are split (see ``minimize``).
 CHUNK_ELEMENTS = 100_000
 #: Ways of computing a study: ``numpy`` is the reference; ``numba`` runs the compiled kernels of
-#: :mod:`swarmpath.optimizers.compiled` (optional dependency: ``pip install swarmpath[fast]``).
-BACKENDS: tuple[str, ...] = ("numpy", "numba")
+#: :mod:`swarmpath.optimizers.compiled`; ``auto`` (the default) runs the kernels where numba is
+#: installed and the study has kernels that give the reference's numbers to the last bit (every
+#: kernel does: tolerance 0.0), numpy otherwise (:func:`resolve_backend`). Each Result records the
+#: backend that computed it.
+BACKENDS: tuple[str, ...] = ("auto", "numpy", "numba")
+#: The backends that compute (``auto`` picks one of them): a planner's ``backend`` parameter.
+COMPUTING_BACKENDS: tuple[str, ...] = ("numpy", "numba")
 
 
 @dataclass
@@ -92,7 +97,7 @@ def minimize(
     on_iteration: Callable[[Optimizer | None], None] | None = None,
     chunk_elements: int | None = None,
     transform: str | None = None,
-    backend: str = "numpy",
+    backend: str = "auto",
     *,
     max_evaluations: int | None = None,
 ) -> Result:
@@ -128,7 +133,7 @@ def minimize_many(
     on_iteration: Callable[[Optimizer | None], None] | None = None,
     chunk_elements: int | None = None,
     transform: str | None = None,
-    backend: str = "numpy",
+    backend: str = "auto",
     *,
     function_runs: Sequence[Sequence[int]] | None = None,
     max_evaluations: int | None = None,
@@ -146,6 +151,8 @@ def minimize_many(
     sharing the process run faster with larger chunks (fewer numpy calls, so fewer hand-offs of
     the GIL for the same work: docs/benchmarks.md, Table 2).
 
+    ``backend="auto"`` (the default) is ``"numba"`` when :func:`resolve_backend` finds kernels
+    for the whole study, else ``"numpy"``: the same numbers either way, faster where it can.
     ``backend="numba"`` computes each run with its algorithm's compiled kernel
     (:mod:`swarmpath.optimizers.compiled`), the same numbers as the reference (``"numpy"``)
     within the kernel's ``tolerance`` (recorded in each Result; 0.0 is equal to the last bit). An
@@ -189,8 +196,9 @@ def minimize_many(
     if isinstance(elements, bool) or not isinstance(elements, int | np.integer) or elements < 0:
         raise ParameterError(f"chunk_elements must be an integer >= 0, got {elements!r}")
     cls = get_optimizer(algorithm)
-    if max_evaluations is not None and backend != "numpy":
+    if max_evaluations is not None and backend == "numba":
         raise ParameterError("an evaluation budget (budget_evals) runs on backend 'numpy' only")
+    backend = _resolve(backend, cls.name, fns, kind, params, max_evaluations)
     if backend == "numba":  # run by run: one call per distinct run list, progress spread
         if all(ids == cell_ids[0] for ids in cell_ids):
             groups = [(fns, cell_ids[0])]
@@ -258,6 +266,47 @@ def minimize_many(
     return results
 
 
+def resolve_backend(
+    backend: str,
+    algorithm: str,
+    functions: Sequence[str | BenchmarkFunction],
+    transform: str = "none",
+    params: Mapping[str, Any] | None = None,
+    max_evaluations: int | None = None,
+) -> str:
+    """The backend that computes a study: ``backend`` itself unless it is ``"auto"``, which is
+    ``"numba"`` when numba is installed and the study has kernels equal to the reference to the
+    last bit (the algorithm with these ``params`` and ``transform``, each function; no
+    evaluation budget), else ``"numpy"``. Never an error for ``"auto"``: what the kernels do not
+    cover runs on the reference."""
+    if backend not in BACKENDS:
+        raise ParameterError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
+    fns = [get_function(f) if isinstance(f, str) else f for f in functions]
+    return _resolve(backend, get_optimizer(algorithm).name, fns, transform, params,
+                    max_evaluations)
+
+
+def _resolve(backend: str, algorithm: str, fns: Sequence[BenchmarkFunction], transform: str,
+             params: Mapping[str, Any] | None, max_evaluations: int | None) -> str:
+    if backend != "auto":
+        return backend
+    if max_evaluations is not None:
+        return "numpy"
+    try:
+        from swarmpath.optimizers.compiled.run import check_function, kernel_for
+        from swarmpath.optimizers.compiled.run import check_study as check
+    except ImportError:  # numba missing or broken: the reference runs everything
+        return "numpy"
+    try:
+        check(algorithm, params, transform)
+        for fn in fns:
+            check_function(fn)
+        kernel = kernel_for(algorithm, params, transform)[0]
+    except ParameterError:
+        return "numpy"
+    return "numba" if kernel.tolerance == 0.0 else "numpy"
+
+
 def check_backend(
     backend: str,
     algorithms: Sequence[str],
@@ -270,7 +319,7 @@ def check_backend(
     ``minimize_many`` would refuse, checked before a study."""
     if backend not in BACKENDS:
         raise ParameterError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
-    if backend == "numpy":
+    if backend != "numba":  # the reference, or auto (which falls back to it)
         return
     try:
         from swarmpath.optimizers.compiled.run import check_study

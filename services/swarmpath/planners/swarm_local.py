@@ -51,7 +51,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmpath.optimizers import RunStreams, get_optimizer
-from swarmpath.optimizers.api import BACKENDS
+from swarmpath.optimizers.api import COMPUTING_BACKENDS
 from swarmpath.optimizers.base import ParameterError
 from swarmpath.planners import local, sensed_map, swarm_aim
 from swarmpath.planners.base import Decision, Observation, PlannerError, register
@@ -146,7 +146,7 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         "guide": ("optimum", "cost-to-go"),
         "aim_hits": ("known", "near"),
         "no_path": ("grid", "line"),
-        "backend": BACKENDS,
+        "backend": COMPUTING_BACKENDS,
     }
     #: Optimizer parameters of the preset (e.g. ICOOT's two leaders), merged under user ones.
     optimizer_params: ClassVar[dict[str, Any]] = {}

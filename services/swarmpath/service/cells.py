@@ -42,7 +42,8 @@ class BenchmarkCell(Model):
     shifted: bool = False
     params: dict[str, ParamValue] = Field(default_factory=dict)
     transform: str = Field(default="none", validate_default=True)
-    backend: str = Field(default="numpy", description="numpy or numba (optimizers.api.BACKENDS)")
+    backend: str = Field(default="numpy",
+                         description="auto, numpy or numba (optimizers.api.BACKENDS)")
     max_evaluations: int | None = Field(
         default=None, ge=1, description="evaluations each run may count (the job's budget_evals "
         "at this dim; iterations then spend it); null: agents x iterations")

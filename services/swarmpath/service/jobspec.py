@@ -195,8 +195,10 @@ class BenchmarkJobSpec(Model):
 
     backend: str = Field(
         default="numpy",
-        description="numpy (the reference) or numba (compiled kernels: the reference's numbers "
-        "run for run, within each kernel's stated tolerance)",
+        description="numpy (the reference), numba (compiled kernels: the reference's numbers "
+        "run for run, within each kernel's stated tolerance) or auto (the kernels where the "
+        "study has them, else numpy). The service's default stays numpy until workers compile "
+        "before they lease (a kernel's first use compiles it, seconds of a lease's time)",
     )
 
     @field_validator("backend")

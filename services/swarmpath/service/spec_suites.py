@@ -41,7 +41,7 @@ def _check_budget(v: str | None, info: ValidationInfo) -> str | None:
         raise ValueError(str(exc)) from None
     if norm is None:
         return None
-    if info.data.get("backend", "numpy") != "numpy":
+    if info.data.get("backend", "numpy") == "numba":
         raise ValueError("an evaluation budget runs on backend 'numpy' only")
     for a in info.data.get("algorithms") or ():
         for d in info.data.get("dims") or ():

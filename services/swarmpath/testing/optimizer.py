@@ -72,8 +72,10 @@ def registered(optimizer: str | type[Optimizer]) -> Iterator[type[Optimizer]]:
 
 
 def settings(cls: type[Optimizer]) -> dict[str, Any]:
+    """The gate's study; on the numpy backend: it checks the optimizer's own code (a compiled
+    kernel, which "auto" would run, is checked against it by tests/test_compiled*.py)."""
     return {"function": FUNCTION, "dim": DIM, "agents": max(10, cls.min_agents),
-            "iterations": ITERATIONS, "seed": SEED}
+            "iterations": ITERATIONS, "seed": SEED, "backend": "numpy"}
 
 
 def _same(a: Any, b: Any) -> bool:
