@@ -24,7 +24,7 @@ __all__ = ["InputError", "app", "main"]
 
 _COMMANDS = (
     "bench", "plan", "reproduce", "audit", "check", "processes", "service", "upload", "results",
-    "plugins", "demo",
+    "plugins", "demo", "warmup",
 )
 
 for _name in _COMMANDS:

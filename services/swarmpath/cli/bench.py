@@ -130,6 +130,8 @@ def run_bench(
     """
     keys = spec.cells() if cells is None else list(cells)
     tasks = plan_tasks(spec, keys, ranges)
+    if jobs > 1 or pool is not None:
+        compile_first(spec)
     finished = None if on_done is None else (lambda job: on_done(job[1]))
     jobs_ = [(spec, t) for t in tasks]
     done = (parallel.run_tasks(_compute, jobs_, jobs, on_step, finished) if pool is None
@@ -158,6 +160,25 @@ def _compute(job: tuple[BenchSpec, Task], report_rows: Callable[[int], None]) ->
         run_ids=list(task.run_ids), on_iteration=hook, backend=spec.backend,
         max_evaluations=spec.evaluations(task.dim),
     )
+
+
+def compile_first(spec: BenchSpec) -> None:
+    """Compile the kernels the study will run (backend auto or numba) in this process, before
+    the tasks go to other processes: they then load them from numba's cache instead of each
+    compiling the same kernels side by side (seconds of CPU per kernel in a fresh
+    environment)."""
+    if spec.backend == "numpy":
+        return
+    from swarmpath.optimizers.api import resolve_backend
+
+    budget = None if spec.budget_evals is None else 1  # any budget runs on numpy
+    compiled = [a for a in spec.algorithms
+                if resolve_backend(spec.backend, a, spec.functions, spec.transform,
+                                   spec.params.get(a), budget) == "numba"]
+    if compiled:
+        from swarmpath.optimizers.compiled.warm import warm
+
+        warm(compiled, list(dict.fromkeys(spec.functions)))
 
 
 def auto_jobs(spec: BenchSpec) -> int:
