@@ -16,8 +16,10 @@ from test_store import T0
 from test_store_racing import SPEC, check_race_against_direct_runs, direct, drain
 
 runner = CliRunner()
-# the store test's raced job (FDO, PSO, GWO x F1, F10; 5 dims, at most 60 runs)
+# the store test's raced job (FDO, PSO, GWO x F1, F10; 5 dims, at most 60 runs) on the job
+# spec's default backend (bench's default, auto, is recorded as such in the race's blocks)
 ARGS = ["-a", ",".join(SPEC["algorithms"]), "-f", ",".join(SPEC["functions"]), "-d", "5",
+        "--backend", "numpy",
         "--runs", "60", "--agents", "8", "--iterations", "30", "--seed", "3", "--race",
         "--race-min-runs", "10", "--race-batch", "10"]
 
