@@ -19,14 +19,21 @@ from test_service_e2e import ENV
 WAIT = 600.0  # two tiny jobs through `swarmpath up` on a loaded machine
 
 
+def _ignore_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def test_demo_keep_leaves_the_dashboard_up_and_lists_its_outputs(tmp_path: Path) -> None:
     out = tmp_path / "out"
     # files, not pipes: a pipe nobody reads fills (the tables, the legends, the coordinator's
     # log after the last line read) and blocks the demo, which then never ends on Ctrl-C
     stdout, stderr = tmp_path / "stdout.txt", tmp_path / "stderr.txt"
     with open(stdout, "w") as o, open(stderr, "w") as e:
+        # started with SIGINT ignored, as under a parent that ignores it (nohup, a test runner
+        # whose process ignored it once): Ctrl-C must stop the demo all the same
         proc = owned.popen([sys.executable, "-m", "swarmpath.cli", "demo", "--quick", "--keep",
-                            "--out", str(out)], env=ENV, stdout=o, stderr=e, text=True)
+                            "--out", str(out)], env=ENV, stdout=o, stderr=e, text=True,
+                           preexec_fn=_ignore_sigint)
     try:
         deadline = time.monotonic() + WAIT
         while time.monotonic() < deadline and proc.poll() is None:

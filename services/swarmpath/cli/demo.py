@@ -158,6 +158,10 @@ def demo(
         raise KeyboardInterrupt
 
     signal.signal(signal.SIGTERM, stop)
+    # Ctrl-C explicitly too: a process started with SIGINT ignored (by a parent that ignores it,
+    # `nohup`, a test runner) inherits SIG_IGN, and Python then installs no KeyboardInterrupt:
+    # the demo that says "Ctrl-C stops it" would not stop
+    signal.signal(signal.SIGINT, stop)
     failed = True
     try:
         service.wait_ready()
