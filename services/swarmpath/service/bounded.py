@@ -15,6 +15,7 @@ checks the parent's pid)."""
 from __future__ import annotations
 
 import os
+import pickle
 import signal
 import threading
 import time
@@ -58,14 +59,17 @@ def _child(conn: Any, memory_bytes: int, parent: int, warm: Callable[[], Any] | 
     threading.Thread(target=_watch_parent, args=(parent,), daemon=True).start()
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(var, "1")  # no thread pools reserving address space
+    # pickled before the limit: with the address space used up, even pickling a short reply can
+    # raise MemoryError, and the parent would only see a child that died
+    out_of_memory = pickle.dumps(("memory", "out of memory"))
     if memory_bytes > 0:
         resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, memory_bytes))
     try:
         if warm is not None:
             warm()
         conn.send(("ready", None))
-    except MemoryError as exc:
-        conn.send(("memory", str(exc)))
+    except MemoryError:
+        conn.send_bytes(out_of_memory)
         return
     while True:
         try:
@@ -84,7 +88,7 @@ def _child(conn: Any, memory_bytes: int, parent: int, warm: Callable[[], Any] | 
         try:
             conn.send(reply)
         except MemoryError:
-            conn.send(("memory", "the reply did not fit"))
+            conn.send_bytes(out_of_memory)
         except Exception as exc:  # an unpicklable exception or value
             conn.send(("raised", RuntimeError(f"{type(exc).__name__}: {exc}")))
 
