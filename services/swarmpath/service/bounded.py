@@ -3,17 +3,19 @@ with, so that no upload can hold its GIL, stall its event loop or grow its memor
 
 :class:`BoundedRunner` keeps one child (multiprocessing *spawn*; started at the first call, again
 after a kill) and makes one call at a time: ``runner.call(fn, *args)`` pickles a module-level
-function and its arguments over a pipe, the child runs it under ``RLIMIT_AS`` = ``memory_bytes``
-and the parent waits at most ``seconds``. A call over its time is SIGKILLed with its child
-(:class:`CallTimedOut`); one that runs out of memory raises :class:`CallOutOfMemory`; a child that
-dies (a decoder crashing) raises :class:`CallDied`; an exception of the function is raised again
-in the parent. ``warm`` (a module-level function) runs in each new child before its first call,
-outside the call's time (the imports). At most ``max_waiting`` calls wait for the child; more
-raise :class:`RunnerBusy`. A child whose parent died exits (its pipe closes; a watch thread
+function and its arguments over a pipe, the child runs it under ``RLIMIT_AS`` = its own address
+space once warmed up + ``memory_bytes`` (what a call may add) and the parent waits at most
+``seconds``. A call over its time is SIGKILLed with its child (:class:`CallTimedOut`); one that
+runs out of memory raises :class:`CallOutOfMemory`; a child that dies (a decoder crashing)
+raises :class:`CallDied`; an exception of the function is raised again in the parent. ``warm``
+(a module-level function: the imports) runs in each new child before its first call, outside
+the call's time and before the memory bound. At most ``max_waiting`` calls wait for the child;
+more raise :class:`RunnerBusy`. A child whose parent died exits (its pipe closes; a watch thread
 checks the parent's pid)."""
 
 from __future__ import annotations
 
+import errno
 import os
 import pickle
 import signal
@@ -50,6 +52,12 @@ def _watch_parent(parent: int) -> None:
             os._exit(3)
 
 
+def _address_space() -> int:
+    """This process's virtual memory size (bytes): what RLIMIT_AS is compared with."""
+    with open("/proc/self/statm", encoding="ascii") as f:
+        return int(f.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
+
+
 def _child(conn: Any, memory_bytes: int, parent: int, warm: Callable[[], Any] | None) -> None:
     """The child: ``warm()`` then ``("ready",)`` out; calls in, ``("ok", value)`` /
     ``("raised", exc)`` / ``("memory", text)`` out."""
@@ -62,15 +70,15 @@ def _child(conn: Any, memory_bytes: int, parent: int, warm: Callable[[], Any] | 
     # pickled before the limit: with the address space used up, even pickling a short reply can
     # raise MemoryError, and the parent would only see a child that died
     out_of_memory = pickle.dumps(("memory", "out of memory"))
+    # our own imports first, unbounded: how much address space numpy/scipy/numba reserve
+    # differs by machine and install (a fixed limit that held on one failed at import on
+    # another); the bound is on what a call adds to the warmed-up child
+    if warm is not None:
+        warm()
     if memory_bytes > 0:
-        resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, memory_bytes))
-    try:
-        if warm is not None:
-            warm()
-        conn.send(("ready", None))
-    except MemoryError:
-        conn.send_bytes(out_of_memory)
-        return
+        limit = _address_space() + memory_bytes
+        resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    conn.send(("ready", None))
     while True:
         try:
             message = conn.recv()
@@ -83,6 +91,8 @@ def _child(conn: Any, memory_bytes: int, parent: int, warm: Callable[[], Any] | 
             reply: tuple[Any, ...] = ("ok", fn(*args))
         except MemoryError as exc:
             reply = ("memory", str(exc))
+        except OSError as exc:  # ENOMEM from a system call (an mmap, a listdir) at the limit
+            reply = ("memory", str(exc)) if exc.errno == errno.ENOMEM else ("raised", exc)
         except Exception as exc:
             reply = ("raised", exc)
         try:

@@ -73,7 +73,8 @@ class CoordinatorSettings:
     max_map_cells: int = field(default_factory=lambda: _env_count("SWARMPATH_MAX_MAP_CELLS"))
     max_map_obstacles: int = field(
         default_factory=lambda: _env_count("SWARMPATH_MAX_MAP_OBSTACLES"))
-    # the child process parsing an upload: wall-clock seconds and address space (bytes)
+    # the child process parsing an upload: wall-clock seconds and the address space (bytes) an
+    # import may add to the child's own (its imports are not counted)
     max_map_import_seconds: float = field(default_factory=lambda: _env_number(
         "SWARMPATH_MAX_MAP_IMPORT_SECONDS", DEFAULT_MAX_MAP_IMPORT_SECONDS))
     max_map_import_bytes: int = field(default_factory=lambda: int(_env_number(
