@@ -274,6 +274,8 @@ def load_job_spec(data: Mapping[str, Any] | str | bytes) -> BenchmarkJobSpec | M
     cls: type[BenchmarkJobSpec] | type[MapJobSpec] = (
         BenchmarkJobSpec if obj.get("kind") == "benchmark" else MapJobSpec
     )
+    if isinstance(obj.get("racing"), Mapping):  # nested models are not built by model_construct
+        obj["racing"] = RacingSpec.model_construct(**obj["racing"])
     return cls.model_construct(**obj)
 
 
