@@ -5,7 +5,8 @@ raced through ``swarmpath up``.
     .venv/bin/python scripts/bench/racing.py error [--seeds 5] [--max-runs 100] [--alpha 0.05]
     .venv/bin/python scripts/bench/racing.py power [--races 300] [--max-runs 1000]
     .venv/bin/python scripts/bench/racing.py table2 [--max-runs 1000] [--margin 0.05]
-                                                    [--workers 2] [--full FILE | --full-up]
+                                                    [--workers 2] [--full FILE] [--full-up]
+                                                    [--again]
 
 ``error``: races between one optimizer and itself on two seeds' streams (exchangeable runs: any
 declared difference is a false one), for every registered optimizer on F1-F13 (5 dims, 10
@@ -22,7 +23,9 @@ alpha 0.05/65), min 10, batch 10: the share decided right, decided wrong, the ru
 --workers N`` with ``max_runs`` runs per cell at most, beside the full study's verdicts
 (rank-sum tests, Holm over the table, alpha 0.05: what ``swarmpath bench`` prints), read from
 ``--full FILE`` (a ``swarmpath bench --json`` document of the same setting and seed) or run
-through the same service (``--full-up``). Prints the runs used, the wall times, the agreement of
+through the same service (``--full-up``; with both, the job's runs are checked equal to the
+file's; ``--again`` runs the raced job once more after the full one, so the two raced times
+bracket the full one). Prints the runs used, the wall times, the agreement of
 every +/=/- and each disagreement with its race interval and the full study's A12 and p.
 Markdown to stdout, progress to stderr.
 """
@@ -47,6 +50,7 @@ from service import TABLE2_ALGORITHMS, TABLE2_FUNCTIONS, Up, elapsed, note
 from swarmpath.evidence import report
 from swarmpath.evidence.race_report import block_json
 from swarmpath.evidence.racing import RaceSettings, race_block
+from swarmpath.evidence.sequential import rejection_times
 from swarmpath.optimizers import list_optimizers, minimize
 
 
@@ -108,6 +112,47 @@ def power(args: argparse.Namespace) -> None:
         n = args.races
         print(f"| {theta} | {margin} | {right / n:.3f} | {wrong / n:.3f} | {undecided / n:.3f} "
               f"| {np.median(used):.0f} | {np.percentile(used, 90):.0f} |")
+
+
+def needed(args: argparse.Namespace) -> None:
+    """Runs per cell a comparison of small effect theta needs, at the race's level (alpha/65)
+    and at the full study's (Holm: between alpha/65 for the smallest p and alpha for the
+    largest): the fixed-n rank-sum test (Noether's normal approximation, JASA 82 (1987) 645),
+    and the race's own statistic, the paired score Z (Bernoulli(theta) for independent runs
+    without ties), at a fixed n (binomial test) and anytime-valid (the first n whose confidence
+    sequence leaves 1/2, simulated); and the power of the full 1000-run study's rank-sum test."""
+    rng = np.random.default_rng(args.seed)
+    race_level = 0.05 / 65
+    z_power = float(stats.norm.ppf(args.power))
+    print(f"power {args.power}, two-sided; race: alpha {race_level:.2e} (0.05/65), "
+          f"{args.races} simulated races of up to {args.max_runs} pairs per theta\n")
+    print("| theta (A12) | rank-sum n, alpha/65 | rank-sum n, alpha 0.05 | paired fixed n, "
+          "alpha/65 | race n (median / p80) | race decided by 1000 | full 1000-run power, "
+          "alpha/65 / 0.05 | two full studies agree |\n"
+          "| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    for theta in (0.53, 0.55, 0.56, 0.58, 0.6, 0.64):
+        d = theta - 0.5
+
+        def rank_sum_n(level: float, d: float = d) -> float:  # per group, equal groups
+            return (float(stats.norm.ppf(1 - level / 2)) + z_power) ** 2 / (6 * d * d)
+
+        def rank_sum_power(n: int, level: float, d: float = d) -> float:
+            return float(stats.norm.cdf(d * math.sqrt(6 * n) - stats.norm.ppf(1 - level / 2)))
+
+        paired = ((float(stats.norm.ppf(1 - race_level / 2)) * 0.5
+                   + z_power * math.sqrt(theta * (1 - theta))) / d) ** 2
+        times = np.array([rejection_times(rng.random(args.max_runs) < theta, [0.5],
+                                          race_level)[0] for _ in range(args.races)], float)
+        times[times == 0] = np.inf
+        p_lo, p_hi = rank_sum_power(1000, race_level), rank_sum_power(1000, 0.05)
+        # two independent studies give the same verdict: both detect it or both miss it
+        agree = [p * p + (1 - p) * (1 - p) for p in (p_lo, p_hi)]
+        ordered = np.sort(times)  # never decided: inf, last
+        med, p80 = (f"{v:.0f}" if np.isfinite(v := ordered[int(q * (len(ordered) - 1))])
+                    else f">{args.max_runs}" for q in (0.5, 0.8))
+        print(f"| {theta} | {rank_sum_n(race_level):.0f} | {rank_sum_n(0.05):.0f} | "
+              f"{paired:.0f} | {med} / {p80} | {np.mean(times <= 1000):.2f} | "
+              f"{p_lo:.2f} / {p_hi:.2f} | {min(agree):.2f}-{max(agree):.2f} |")
 
 
 def table2_spec(max_runs: int, margin: float, seed: int, backend: str) -> dict[str, Any]:
@@ -206,6 +251,62 @@ def _bench_values(doc: dict[str, Any]) -> dict[tuple[str, str], list[float]]:
                                               for v in c["best_fitness"]] for c in doc["cells"]}
 
 
+def _save_full(path: Path, spec: dict[str, Any], values: dict[tuple[str, str], list[float]],
+               seconds: float) -> None:
+    """The full job's runs as the cells of a ``swarmpath bench --json`` document (what
+    ``--full`` and ``seeds`` read)."""
+    from swarmpath import __version__
+
+    settings = {k: v for k, v in spec.items() if k not in ("kind", "racing")}
+    cells = [{"algorithm": a, "function": f, "dim": 30,
+              "best_fitness": [None if math.isnan(v) else v for v in values[(a, f)]]}
+             for f in TABLE2_FUNCTIONS for a in TABLE2_ALGORITHMS]
+    path.write_text(json.dumps({"swarmpath": __version__, "seconds": seconds,
+                                "settings": settings, "cells": cells}))
+
+
+def _verdicts(values: dict[tuple[str, str], list[float]], max_runs: int) -> dict[Any, Any]:
+    """(function, algorithm) -> the full study's test against ICOOT (rank-sum, Holm over the
+    table, alpha 0.05: what ``swarmpath bench`` prints)."""
+    samples = {(a, f, 30): values[(a, f)][:max_runs] for a in TABLE2_ALGORITHMS
+               for f in TABLE2_FUNCTIONS}
+    tests = report.benchmark_tests(samples, TABLE2_ALGORITHMS, None)
+    return {(f, a): tests.comparison.get((f, 30), a) for f in TABLE2_FUNCTIONS
+            for a in TABLE2_ALGORITHMS[:-1]}
+
+
+def seeds(args: argparse.Namespace) -> None:
+    """Two full studies of Table 2 on other seeds: how many of their +/=/- verdicts they share
+    (the comparison's own reproducibility, the ceiling of any racing agreement), and the race
+    replayed over each, against both."""
+    docs = [json.loads(Path(f).read_text()) for f in args.full]
+    values = [_bench_values(d) for d in docs]
+    verdicts = [_verdicts(v, args.max_runs) for v in values]
+    names = [f"seed {d['settings']['seed']}" for d in docs]
+    keys = list(verdicts[0])
+    same = [k for k in keys if verdicts[0][k].marker == verdicts[1][k].marker]
+    print(f"full {args.max_runs}-run studies, {names[0]} and {names[1]}: **{len(same)}/"
+          f"{len(keys)} verdicts the same ({100 * len(same) / len(keys):.1f} %)**\n")
+    print(f"| function | algorithm vs ICOOT | {names[0]}: marker (A12, p_holm) | {names[1]} |\n"
+          "| --- | --- | --- | --- |")
+    for f, a in keys:
+        if (f, a) not in same:
+            cols = [f"{t.marker} ({t.a12:.3f}, {t.p_holm:.2g})"
+                    for t in (verdicts[0][(f, a)], verdicts[1][(f, a)])]
+            print(f"| {f} | {a} | {cols[0]} | {cols[1]} |")
+    settings = RaceSettings(max_runs=args.max_runs, alpha=0.05, min_runs=10, batch=10,
+                            margin=args.margin)
+    print(f"\nraces (replayed, margin {args.margin}) against each full study's verdicts:\n\n"
+          f"| race over | runs used | against {names[0]} | against {names[1]} |\n"
+          "| --- | ---: | ---: | ---: |")
+    for name, v in zip(names, values, strict=True):
+        race = replayed_race(v, settings)
+        used = sum(c["runs"] for b in race["blocks"] for c in b["cells"])
+        agree = [sum(d["marker"] == verdicts[i][(b["block"]["function"], d["a"])].marker
+                     for b in race["blocks"] for d in b["duels"]) for i in (0, 1)]
+        print(f"| {name} | {used} | {agree[0]}/{len(keys)} | {agree[1]}/{len(keys)} |")
+
+
 def table2(args: argparse.Namespace) -> None:
     settings = RaceSettings(max_runs=args.max_runs, alpha=0.05, min_runs=10, batch=10,
                             margin=args.margin)
@@ -237,19 +338,33 @@ def table2(args: argparse.Namespace) -> None:
         race = up.http.get(f"/jobs/{raced['id']}/race").json()
         full_values: dict[tuple[str, str], list[float]]
         full_status: dict[str, Any] | None = None
+        again: dict[str, Any] | None = None
         if args.full_up:
             note("the full study through the same service ...")
             plain = {k: v for k, v in spec.items() if k != "racing"}
             full_status = up.run_job(plain, timeout=86400)
             full_values = _full_values_from_up(up, full_status["id"])
-        else:
-            full_values = _bench_values(json.loads(Path(args.full).read_text()))
+            if args.save_full is not None:
+                _save_full(args.save_full, spec, full_values, elapsed(full_status))
+            if args.again:  # raced, full, raced: the first job's warm-up shows as a difference
+                note("the raced job again ...")
+                again = up.run_job(spec, timeout=86400)
+        if args.full is not None:
+            from_file = _bench_values(json.loads(Path(args.full).read_text()))
+            if args.full_up:
+                same_runs = all(np.array_equal(np.asarray(v, dtype=float),
+                                               np.asarray(from_file[k][:args.max_runs],
+                                                          dtype=float), equal_nan=True)
+                                for k, v in full_values.items())
+                print(f"the full job's runs equal `{args.full.name}`'s: {same_runs}")
+            else:
+                full_values = from_file
     full_runs = len(TABLE2_ALGORITHMS) * len(TABLE2_FUNCTIONS) * args.max_runs
-    print(f"raced through swarmpath up --workers {args.workers}: {raced['runs_total']} runs, "
-          f"{elapsed(raced):.0f} s, load {raced['load'][0]:.1f} -> {raced['load'][1]:.1f}")
-    if full_status is not None:
-        print(f"full: {full_runs} runs, {elapsed(full_status):.0f} s, load "
-              f"{full_status['load'][0]:.1f} -> {full_status['load'][1]:.1f}")
+    for label, status in (("raced", raced), ("full", full_status), ("raced again", again)):
+        if status is not None:
+            print(f"{label} through swarmpath up --workers {args.workers}: "
+                  f"{status['runs_total']} of {full_runs} runs, {elapsed(status):.0f} s, "
+                  f"load {status['load'][0]:.1f} -> {status['load'][1]:.1f}")
     same = _decisions(race) == _decisions(replayed_race(full_values, settings))
     print(f"the job's race equals its replay over the full study's runs: {same}\n")
     agreement(race, full_values, args.max_runs)
@@ -275,12 +390,30 @@ def main(argv: list[str] | None = None) -> int:
                    "--full's runs (what a raced job decides, run for run)")
     t.add_argument("--margins", type=lambda v: [float(x) for x in v.split(",")],
                    default=[0.0, 0.05], help="with --replay: the margins to replay")
-    src = t.add_mutually_exclusive_group(required=True)
-    src.add_argument("--full", type=Path, help="swarmpath bench --json of the same setting")
-    src.add_argument("--full-up", action="store_true", help="run the full study too")
+    t.add_argument("--full", type=Path, help="swarmpath bench --json of the same setting (with "
+                   "--full-up: the full job's runs are checked equal to its)")
+    t.add_argument("--full-up", action="store_true", help="run the full study too")
+    t.add_argument("--again", action="store_true",
+                   help="with --full-up: the raced job once more after the full one")
+    t.add_argument("--save-full", type=Path, help="with --full-up: write the full job's runs "
+                   "there (a swarmpath bench --json document's cells)")
+    n = sub.add_parser("needed", help="runs a small effect needs: fixed-n and the race")
+    n.add_argument("--races", type=int, default=200)
+    n.add_argument("--max-runs", type=int, default=20000)
+    n.add_argument("--power", type=float, default=0.8)
+    n.add_argument("--seed", type=int, default=1)
+    o = sub.add_parser("seeds", help="two full studies' verdicts against each other")
+    o.add_argument("--full", type=Path, nargs=2, required=True, metavar="FILE")
+    o.add_argument("--max-runs", type=int, default=1000)
+    o.add_argument("--margin", type=float, default=0.0)
     args = ap.parse_args(argv)
+    if args.what == "table2" and args.full is None and not args.full_up:
+        ap.error("table2: --full FILE or --full-up (or both)")
+    if args.what == "table2" and args.replay and args.full is None:
+        ap.error("table2 --replay: --full FILE")
     started = time.perf_counter()
-    {"error": error, "power": power, "table2": table2}[args.what](args)
+    {"error": error, "power": power, "table2": table2, "seeds": seeds,
+     "needed": needed}[args.what](args)
     note(f"{time.perf_counter() - started:.0f} s")
     return 0
 
