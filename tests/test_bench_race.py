@@ -134,6 +134,7 @@ BAD = [
     (["--race", "--race-margin", "0.5"], "--race-margin"),
     (["--race", "--race-margin", "-0.1"], "--race-margin"),
     (["--race", "--race-pairs", "some"], "--race-pairs"),
+    (["--race-final-test"], "--race-final-test"),  # without --race
     (["--race", "-a", "GWO"], "--algorithms"),
     (["--race", "-f", "bbob:f1", "--instances", "1-2", "--pool-instances"], "--pool-instances"),
 ]

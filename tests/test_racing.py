@@ -15,6 +15,7 @@ from swarmpath.evidence.sequential import (
     decide,
     pair_scores,
     rejection_times,
+    sign_test,
 )
 from swarmpath.optimizers import minimize
 
@@ -126,6 +127,45 @@ def test_one_optimizer_raced_against_itself_on_other_streams_rarely_differs():
             samples.append((a.best_fitness, b.best_fitness))
     ours, _ = _false_difference_rates(samples, 0.05, [])
     assert ours <= 0.05 + 3 * math.sqrt(0.05 * 0.95 / len(samples))
+
+
+def _raced(pairs, final_test, max_runs, comparisons=1):
+    settings = RaceSettings(max_runs=max_runs, min_runs=20, batch=20, final_test=final_test)
+    return [race_block({"A": a, "B": b}, ["A", "B"], settings, comparisons).duels[0]
+            for a, b in pairs]
+
+
+def test_the_closing_sign_test_keeps_the_error_rate_under_optional_stopping():
+    """Null races (one distribution) with the closing look: the sequence at alpha/2 over 10
+    rounds, then one sign test at alpha/2 at max_runs; declared differences at most alpha."""
+    rng = np.random.default_rng(12)
+    samples = [(rng.normal(size=200), rng.normal(size=200)) for _ in range(400)]
+    duels = _raced(samples, True, 200)
+    rate = np.mean([d.result.decision == "different" for d in duels])
+    assert rate <= 0.05 + 3 * math.sqrt(0.05 * 0.95 / 400)
+    assert any(d.final for d in duels)  # the look did fire (its alpha is spent, not idle)
+
+
+def test_the_closing_sign_test_decides_a_small_effect_the_sequence_leaves_open():
+    """theta = 0.6 at 200 runs: the sequence alone decides some races; the closing look decides
+    most of the rest, always for the better algorithm, and only at max_runs."""
+    rng = np.random.default_rng(13)
+    shift = math.sqrt(2.0) * stats.norm.ppf(0.6)
+    samples = [(rng.normal(size=200) - shift, rng.normal(size=200)) for _ in range(100)]
+    alone, closed = _raced(samples, False, 200), _raced(samples, True, 200)
+    decided = [sum(d.result.decision == "different" for d in r) for r in (alone, closed)]
+    assert decided[1] >= decided[0] + 20
+    final = [d for d in closed if d.final]
+    assert final and all(d.result.better == "a" and d.result.at == 200 for d in final)
+    assert all(not d.final for d in alone)
+
+
+def test_sign_test_drops_ties_and_names_the_side_that_wins_more_pairs():
+    assert sign_test(np.full(500, 0.5), 0.05) is None  # all ties: nothing to test
+    z = np.r_[np.ones(40), np.zeros(20), np.full(100, 0.5)]
+    assert sign_test(z, 0.05) == "a"  # 40 of 60: p = 0.013
+    assert sign_test(1.0 - z, 0.05) == "b"
+    assert sign_test(z, 0.01) is None
 
 
 def test_comparisons_are_against_the_reference_listed_last_or_every_pair():

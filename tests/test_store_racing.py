@@ -110,6 +110,7 @@ def test_a_reopened_store_goes_on_with_the_same_rounds(tmp_path):
     ({"margin": 0.5}, ("racing", "margin")),
     ({"alpha": 0}, ("racing", "alpha")),
     ({"rounds": 3}, ("racing", "rounds")),
+    ({"final_test": "yes"}, ("racing", "final_test")),
 ])
 def test_bad_racing_fields_are_named(racing, loc):
     with pytest.raises(ValidationError) as err:

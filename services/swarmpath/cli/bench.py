@@ -366,6 +366,7 @@ def bench(
     race_batch: bench_race.RaceBatchOpt = None,
     race_margin: bench_race.RaceMarginOpt = None,
     race_pairs: bench_race.RacePairsOpt = None,
+    race_final_test: bench_race.RaceFinalOpt = False,
 ) -> None:
     """Run optimizers on benchmark functions; print min/max/avg/std (or median/IQR) per function
     and dimension, with Wilcoxon rank-sum markers, effect sizes and Bayesian probabilities
@@ -378,7 +379,7 @@ def bench(
                      baselines)
     check_range("--jobs", jobs, 0, parallel.MAX_JOBS)
     racing = bench_race.race_settings(spec, race, race_alpha, race_min_runs, race_batch,
-                                      race_margin, race_pairs)
+                                      race_margin, race_pairs, race_final_test)
     if plot is not None:
         plot = plot_dir(plot, "--plot")
     stderr = Console(stderr=True)

@@ -45,18 +45,22 @@ RaceBatchOpt = Annotated[int | None, typer.Option(
 RaceMarginOpt = Annotated[float | None, typer.Option(
     "--race-margin", help="Equivalence margin on P(run beats the other's run) - 1/2 (Vargha-"
     "Delaney's negligible: 0.06); 0: only differences stop a comparison. Default 0.")]
+RaceFinalOpt = Annotated[bool, typer.Option(
+    "--race-final-test", help="Give half of the race's alpha to one sign test at --runs for the "
+    "comparisons still open there, so they get a verdict too (docs/statistics.md, Racing).")]
 RacePairsOpt = Annotated[str | None, typer.Option(
     "--race-pairs", metavar="reference|all", help="Compare every algorithm with the reference "
     "(default) or every pair.")]
 
 
 def race_settings(spec: BenchSpec, race: bool, alpha: float | None, min_runs: int | None,
-                  batch: int | None, margin: float | None, pairs: str | None
-                  ) -> RaceSettings | None:
+                  batch: int | None, margin: float | None, pairs: str | None,
+                  final_test: bool = False) -> RaceSettings | None:
     """The race of ``--race`` and its options (None without ``--race``), ``--runs`` its
     ``max_runs``; :class:`InputError` naming the option that is wrong."""
     given = {"--race-alpha": alpha, "--race-min-runs": min_runs, "--race-batch": batch,
-             "--race-margin": margin, "--race-pairs": pairs}
+             "--race-margin": margin, "--race-pairs": pairs,
+             "--race-final-test": final_test or None}
     if not race:
         for option, value in given.items():
             if value is not None:
@@ -85,7 +89,7 @@ def race_settings(spec: BenchSpec, race: bool, alpha: float | None, min_runs: in
         raise InputError("--pool-instances", "a race decides per instance; pooled rows would "
                          "mix its allowances: race without it")
     return RaceSettings(max_runs=spec.runs, alpha=alpha, min_runs=min_runs, batch=batch,
-                        pairs=pairs, margin=margin)
+                        pairs=pairs, margin=margin, final_test=final_test)
 
 
 @dataclass(frozen=True)

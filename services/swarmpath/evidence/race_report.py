@@ -157,10 +157,12 @@ def race_legend(race: Mapping[str, Any], reference: str) -> str:
     """What a raced table's markers and race rows mean (the terminal legend, LaTeX captions)."""
     s = race["settings"]
     equiv = f"equiv: within {s['margin']:g} of 1/2, " if s["margin"] else ""
+    final = (f", half of it to one sign test at {s['max_runs']} runs for the comparisons "
+             "still open there" if s.get("final_test") else "")
     return (f"+/=/-: better / not decided different / worse than {reference} as the race "
             f"decided it (anytime-valid betting confidence sequence on the probability that a "
             f"run beats {reference}'s run of the same index, alpha {s['alpha']:g} over the "
-            f"study's {race['comparisons']} comparisons, Bonferroni; docs/statistics.md, "
+            f"study's {race['comparisons']} comparisons, Bonferroni{final}; docs/statistics.md, "
             f"Racing); A paired: that probability and its interval; race: the runs the cell "
             f"got, its decision against {reference} (diff, {equiv}open) and the round rK it "
             f"stopped in (min_runs {s['min_runs']} + K x batch {s['batch']} runs, at most "
@@ -175,8 +177,9 @@ def race_line(race: Mapping[str, Any]) -> str:
     stopped = sum(not c["racing"] for c in cells)
     decided = sum(c["reason"] == "decided" for c in cells)
     s = race["settings"]
+    final = ", closing sign test" if s.get("final_test") else ""
     return (f"race (alpha {s['alpha']:g} over {race['comparisons']} comparisons, min_runs "
-            f"{s['min_runs']}, batch {s['batch']}, margin {s['margin']:g}): {stopped}/"
+            f"{s['min_runs']}, batch {s['batch']}, margin {s['margin']:g}{final}): {stopped}/"
             f"{len(cells)} cells stopped ({decided} decided), {used} runs of {full} "
             f"({full / max(used, 1):.1f}x fewer)")
 

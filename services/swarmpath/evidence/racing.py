@@ -19,6 +19,14 @@ number of comparisons of the whole study (Bonferroni), so the probability that a
 the study declares a difference between algorithms that do not differ (theta = 1/2), or an
 equivalence between algorithms that differ by more than the margin, is at most ``alpha``,
 whenever the race stops. See docs/statistics.md, "Racing".
+
+The closing look (``final_test``): a group-sequential design with two parts. The confidence
+sequence gets half of each comparison's level, ``alpha / (2 m)``; a comparison still open when its
+cells reach ``max_runs`` gets one fixed-n test at the other half: the exact sign test of theta = 1/2
+on its ``max_runs`` pairs (ties dropped: under theta = 1/2 a win is as likely as a loss, whatever
+the two algorithms' distributions). A false difference needs one of the two parts to err, so the
+union bound keeps each comparison at ``alpha / m``. The look happens once, at a run count fixed
+before the race (``max_runs``), so optional stopping does not touch it.
 """
 
 from __future__ import annotations
@@ -32,7 +40,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from swarmpath.evidence.sequential import PairDecision, decide, pair_scores
+from swarmpath.evidence.sequential import PairDecision, decide, pair_scores, sign_test
 
 PAIRS = ("reference", "all")
 
@@ -50,6 +58,8 @@ class RaceSettings:
     batch: int = 10
     pairs: str = "reference"
     margin: float = 0.0
+    #: half the level to a sign test at max_runs for the comparisons still open (module text)
+    final_test: bool = False
 
     def __post_init__(self) -> None:
         if not 0.0 < self.alpha < 1.0:
@@ -64,6 +74,13 @@ class RaceSettings:
             raise ValueError(f"pairs must be one of {', '.join(PAIRS)}, got {self.pairs!r}")
         if not 0.0 <= self.margin < 0.5:
             raise ValueError(f"margin must be in [0, 0.5), got {self.margin}")
+
+    def levels(self, comparisons: int) -> tuple[float, float]:
+        """Each comparison's level for the confidence sequence and for the closing sign test
+        (0: none): Bonferroni over the study's ``comparisons``, halved between the two parts
+        when ``final_test``."""
+        level = self.alpha / max(comparisons, 1)
+        return (level / 2, level / 2) if self.final_test else (level, 0.0)
 
     def allowance(self, round_: int) -> int:
         """Runs a racing cell may have in round ``round_`` (0-based)."""
@@ -96,6 +113,8 @@ class Duel:
     b: str
     result: PairDecision
     round: int | None
+    #: decided by the closing sign test at max_runs, not by the confidence sequence
+    final: bool = False
 
     @property
     def marker(self) -> str:
@@ -110,7 +129,8 @@ class Duel:
         return {"a": self.a, "b": self.b, "decision": r.decision, "better":
                 None if r.better is None else (self.a if r.better == "a" else self.b),
                 "marker": self.marker, "round": self.round, "pairs": r.n, "decided_after": r.at,
-                "theta": _number(r.theta), "low": _number(r.low), "high": _number(r.high)}
+                "theta": _number(r.theta), "low": _number(r.low), "high": _number(r.high),
+                "final": self.final}
 
 
 def _number(v: float) -> float | None:
@@ -149,7 +169,7 @@ def race_block(
     result, contiguous from run 0). ``algorithms`` are the block's names with the reference last
     (for ``pairs="reference"``); ``comparisons`` is the number of comparisons of the whole study
     (the Bonferroni divisor)."""
-    level = settings.alpha / max(comparisons, 1)
+    level, final_level = settings.levels(comparisons)
     arrays = {name: np.asarray(values.get(name, ()), dtype=float) for name in algorithms}
     pairs = comparisons_per_block(algorithms, settings.pairs)
     mine = {name: [p for p in pairs if name in p] for name in algorithms}
@@ -172,6 +192,13 @@ def race_block(
                 result = decide(z, level, settings.margin, interval=False)
                 if result.decision != "open":
                     decided[(a, b)] = Duel(a, b, result, round_)
+                elif final_level and need >= settings.max_runs:
+                    # open with both cells at max_runs: the one fixed-n look (module text)
+                    better = sign_test(z, final_level)
+                    if better is not None:
+                        decided[(a, b)] = Duel(a, b, PairDecision(
+                            result.n, "different", better, result.n, result.theta, math.nan,
+                            math.nan), round_, final=True)
         for name in active:
             if mine[name] and all(p in decided for p in mine[name]):
                 racing[name], stopped[name], reason[name] = False, round_, "decided"
@@ -187,7 +214,7 @@ def race_block(
             d = decided[(a, b)].result
             result = PairDecision(result.n, d.decision, d.better, d.at, result.theta,
                                   result.low, result.high)
-            duels.append(Duel(a, b, result, decided[(a, b)].round))
+            duels.append(Duel(a, b, result, decided[(a, b)].round, decided[(a, b)].final))
         else:  # a crossing inside an incomplete round waits for the round's end
             duels.append(Duel(a, b, _open(result), None))
     return BlockRace(round_, allowance, racing, stopped, reason, duels)

@@ -61,6 +61,7 @@ BET_CAP = 0.5
 
 __all__ = [
     "BET_CAP", "PairDecision", "confidence_sequence", "decide", "pair_scores", "rejection_times",
+    "sign_test",
 ]
 
 
@@ -166,6 +167,22 @@ def confidence_sequence(z: ArrayLike, alpha: float, tol: float = 1e-4) -> tuple[
         return good
 
     return edge(tol), edge(1.0 - tol)
+
+
+def sign_test(z: ArrayLike, alpha: float) -> str | None:
+    """The exact two-sided sign test of theta = 1/2 at a fixed number of pairs (ties dropped):
+    ``"a"`` or ``"b"`` for the side that wins more pairs when p <= alpha, else None. Valid for
+    any two distributions, as the confidence sequence is, but only at a sample size chosen
+    before looking (a race's closing look at max_runs)."""
+    from scipy.stats import binomtest  # scipy.stats costs ~0.8 s to import: only when needed
+
+    zz = np.asarray(z, dtype=float)
+    wins, losses = int(np.sum(zz == 1.0)), int(np.sum(zz == 0.0))
+    if wins + losses == 0 or wins == losses:
+        return None
+    if binomtest(wins, wins + losses, 0.5).pvalue > alpha:
+        return None
+    return "a" if wins > losses else "b"
 
 
 def decide(z: ArrayLike, alpha: float, margin: float = 0.0, interval: bool = True) -> PairDecision:

@@ -42,6 +42,9 @@ class RacingSpec(Model):
                        description="compare every algorithm with the reference, or all pairs")
     margin: float = Field(default=0.0, ge=0, lt=0.5, allow_inf_nan=False,
                           description="equivalence margin on P(A's run beats B's) - 1/2")
+    final_test: bool = Field(default=False, strict=True,
+                             description="half of alpha to one sign test at max_runs for the "
+                             "comparisons still open (docs/statistics.md, Racing)")
 
     @field_validator("pairs")
     @classmethod
@@ -52,7 +55,8 @@ class RacingSpec(Model):
 
     def settings(self, runs: int) -> RaceSettings:
         return RaceSettings(max_runs=runs, alpha=self.alpha, min_runs=self.min_runs,
-                            batch=self.batch, pairs=self.pairs, margin=self.margin)
+                            batch=self.batch, pairs=self.pairs, margin=self.margin,
+                            final_test=self.final_test)
 
 
 def check_racing(racing: RacingSpec, runs: int, algorithms: Sequence[str]) -> list[

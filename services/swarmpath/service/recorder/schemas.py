@@ -104,7 +104,9 @@ RACE_SCHEMA: dict[str, Any] = {
             "better": {"type": "string"}, "marker": {"type": "string"},
             "round": {"type": "integer"}, "pairs": {"type": "integer"},
             "decided_after": {"type": "integer"}, "theta": {"type": "number"},
-            "low": {"type": "number"}, "high": {"type": "number"}}}},
+            "low": {"type": "number"}, "high": {"type": "number"},
+            "final": {"type": "boolean",
+                      "description": "decided by the closing sign test at max_runs"}}}},
     },
 }
 
