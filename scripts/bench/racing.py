@@ -55,31 +55,43 @@ from swarmpath.optimizers import list_optimizers, minimize
 
 
 def error(args: argparse.Namespace) -> None:
-    settings = RaceSettings(max_runs=args.max_runs, alpha=args.alpha, min_runs=10, batch=10)
+    """Each null race twice: the confidence sequence alone, and with the closing sign test at
+    max_runs (``final_test``: half the level each), over the same runs."""
+    plain = RaceSettings(max_runs=args.max_runs, alpha=args.alpha, min_runs=10, batch=10)
+    closing = RaceSettings(max_runs=args.max_runs, alpha=args.alpha, min_runs=10, batch=10,
+                           final_test=True)
     functions = [f"F{i}" for i in range(1, 14)]
     print(f"{args.seeds} seed pairs x F1-F13 x {len(list_optimizers())} optimizers, max_runs "
-          f"{args.max_runs}, min_runs 10, batch 10, alpha {args.alpha} per race\n")
-    print("| optimizer | races | of them not all ties | false differences | rate |\n"
-          "| --- | ---: | ---: | ---: | ---: |")
-    total = wrong = varied = 0
+          f"{args.max_runs}, min_runs 10, batch 10, alpha {args.alpha} per race; each race "
+          "without and with the closing sign test (final_test)\n")
+    print("| optimizer | races | of them not all ties | false differences | rate | "
+          "with final_test | rate |\n| --- | ---: | ---: | ---: | ---: | ---: | ---: |")
+    total = varied = 0
+    wrong = [0, 0]
     for name in list_optimizers():
-        races = false = live = 0
+        races = live = 0
+        false = [0, 0]
         for f in functions:
             for s in range(args.seeds):
                 a = minimize(name, f, 5, 10, 50, seed=1000 + s, runs=args.max_runs).best_fitness
                 b = minimize(name, f, 5, 10, 50, seed=9000 + s, runs=args.max_runs).best_fitness
-                race = race_block({"A": a, "B": b}, ["A", "B"], settings, 1)
                 races += 1
                 live += bool(np.any(a != b))  # every pair tied: a difference is impossible
-                false += race.duels[0].result.decision == "different"
-        total, wrong, varied = total + races, wrong + false, varied + live
-        print(f"| {name} | {races} | {live} | {false} | {false / races:.3f} |")
-        note(f"{name}: {false}/{races}")
+                for i, settings in enumerate((plain, closing)):
+                    race = race_block({"A": a, "B": b}, ["A", "B"], settings, 1)
+                    false[i] += race.duels[0].result.decision == "different"
+        total, varied = total + races, varied + live
+        wrong = [w + x for w, x in zip(wrong, false, strict=True)]
+        print(f"| {name} | {races} | {live} | {false[0]} | {false[0] / races:.3f} | {false[1]} "
+              f"| {false[1] / races:.3f} |")
+        note(f"{name}: {false[0]}/{races}, with final_test {false[1]}/{races}")
     for label, n in (("all", total), ("not all ties", varied)):
-        rate = wrong / n
-        half = 1.96 * math.sqrt(rate * (1 - rate) / n) if wrong else 3.0 / n
-        print(f"| {label} | {n} | | {wrong} | {rate:.4f} (95 % MC: {max(rate - half, 0):.4f}-"
-              f"{rate + half:.4f}; alpha {args.alpha}) |")
+        cols = []
+        for w in wrong:
+            rate = w / n
+            half = 1.96 * math.sqrt(rate * (1 - rate) / n) if w else 3.0 / n
+            cols.append(f"{w} | {rate:.4f} ({max(rate - half, 0):.4f}-{rate + half:.4f})")
+        print(f"| {label} (95 % MC) | {n} | | {' | '.join(cols)} |")
 
 
 def power(args: argparse.Namespace) -> None:
@@ -155,11 +167,13 @@ def needed(args: argparse.Namespace) -> None:
               f"{p_lo:.2f} / {p_hi:.2f} | {min(agree):.2f}-{max(agree):.2f} |")
 
 
-def table2_spec(max_runs: int, margin: float, seed: int, backend: str) -> dict[str, Any]:
+def table2_spec(max_runs: int, margin: float, seed: int, backend: str,
+                final_test: bool = False) -> dict[str, Any]:
     return {"kind": "benchmark", "algorithms": TABLE2_ALGORITHMS, "functions": TABLE2_FUNCTIONS,
             "dims": [30], "agents": 30, "iterations": 500, "runs": max_runs, "seed": seed,
             "backend": backend,
-            "racing": {"min_runs": 10, "batch": 10, "alpha": 0.05, "margin": margin}}
+            "racing": {"min_runs": 10, "batch": 10, "alpha": 0.05, "margin": margin,
+                       **({"final_test": True} if final_test else {})}}
 
 
 def _full_values_from_up(up: Up, job: str) -> dict[tuple[str, str], list[float]]:
@@ -295,8 +309,10 @@ def seeds(args: argparse.Namespace) -> None:
                     for t in (verdicts[0][(f, a)], verdicts[1][(f, a)])]
             print(f"| {f} | {a} | {cols[0]} | {cols[1]} |")
     settings = RaceSettings(max_runs=args.max_runs, alpha=0.05, min_runs=10, batch=10,
-                            margin=args.margin)
-    print(f"\nraces (replayed, margin {args.margin}) against each full study's verdicts:\n\n"
+                            margin=args.margin, final_test=args.final_test)
+    print(f"\nraces (replayed, margin {args.margin}"
+          f"{', closing sign test' if args.final_test else ''}) against each full study's "
+          "verdicts:\n\n"
           f"| race over | runs used | against {names[0]} | against {names[1]} |\n"
           "| --- | ---: | ---: | ---: |")
     for name, v in zip(names, values, strict=True):
@@ -309,7 +325,7 @@ def seeds(args: argparse.Namespace) -> None:
 
 def table2(args: argparse.Namespace) -> None:
     settings = RaceSettings(max_runs=args.max_runs, alpha=0.05, min_runs=10, batch=10,
-                            margin=args.margin)
+                            margin=args.margin, final_test=args.final_test)
     if args.replay:
         doc = json.loads(Path(args.full).read_text())
         values = _bench_values(doc)
@@ -321,8 +337,8 @@ def table2(args: argparse.Namespace) -> None:
               f"{doc['seconds']:.0f} s)\n")
         for margin in args.margins:
             agreement(replayed_race(values, settings.__class__(
-                max_runs=args.max_runs, alpha=0.05, min_runs=10, batch=10, margin=margin)),
-                values, args.max_runs)
+                max_runs=args.max_runs, alpha=0.05, min_runs=10, batch=10, margin=margin,
+                final_test=args.final_test)), values, args.max_runs)
         return
     try:
         import numba  # noqa: F401
@@ -330,9 +346,19 @@ def table2(args: argparse.Namespace) -> None:
         backend = "numba"
     except ImportError:
         backend = "numpy"
-    spec = table2_spec(args.max_runs, args.margin, args.seed, backend)
+    spec = table2_spec(args.max_runs, args.margin, args.seed, backend, args.final_test)
     with tempfile.TemporaryDirectory(prefix="swarmpath-race-") as d, \
             Up(args.workers, Path(d)) as up:
+        if args.full_only:  # the full job alone, its runs kept (--save-full)
+            note(f"the full study (max {args.max_runs} runs per cell, {backend}) ...")
+            plain = {k: v for k, v in spec.items() if k != "racing"}
+            alone = up.run_job(plain, timeout=86400)
+            _save_full(args.save_full, spec, _full_values_from_up(up, alone["id"]),
+                       elapsed(alone))
+            print(f"full through swarmpath up --workers {args.workers}: {alone['runs_total']} "
+                  f"runs, {elapsed(alone):.0f} s, load {alone['load'][0]:.1f} -> "
+                  f"{alone['load'][1]:.1f}; runs in `{args.save_full}`")
+            return
         note(f"raced Table 2 (max {args.max_runs} runs per cell, {backend}) ...")
         raced = up.run_job(spec, timeout=86400)
         race = up.http.get(f"/jobs/{raced['id']}/race").json()
@@ -386,6 +412,8 @@ def main(argv: list[str] | None = None) -> int:
     t.add_argument("--margin", type=float, default=0.05)
     t.add_argument("--workers", type=int, default=2)
     t.add_argument("--seed", type=int, default=1)
+    t.add_argument("--final-test", action="store_true",
+                   help="race with the closing sign test at max_runs (racing.final_test)")
     t.add_argument("--replay", action="store_true", help="no service: replay the race over "
                    "--full's runs (what a raced job decides, run for run)")
     t.add_argument("--margins", type=lambda v: [float(x) for x in v.split(",")],
@@ -402,12 +430,17 @@ def main(argv: list[str] | None = None) -> int:
     n.add_argument("--max-runs", type=int, default=20000)
     n.add_argument("--power", type=float, default=0.8)
     n.add_argument("--seed", type=int, default=1)
+    t.add_argument("--full-only", action="store_true",
+                   help="only the full job through the service, its runs to --save-full")
     o = sub.add_parser("seeds", help="two full studies' verdicts against each other")
     o.add_argument("--full", type=Path, nargs=2, required=True, metavar="FILE")
     o.add_argument("--max-runs", type=int, default=1000)
     o.add_argument("--margin", type=float, default=0.0)
+    o.add_argument("--final-test", action="store_true")
     args = ap.parse_args(argv)
-    if args.what == "table2" and args.full is None and not args.full_up:
+    if args.what == "table2" and args.full_only and args.save_full is None:
+        ap.error("table2 --full-only: --save-full FILE")
+    if args.what == "table2" and args.full is None and not (args.full_up or args.full_only):
         ap.error("table2: --full FILE or --full-up (or both)")
     if args.what == "table2" and args.replay and args.full is None:
         ap.error("table2 --replay: --full FILE")
