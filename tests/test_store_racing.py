@@ -41,22 +41,22 @@ def drain(store: Store, job: str, max_runs: int = 7, stop_after: int | None = No
     return leased
 
 
-def check_race_against_direct_runs(store: Store, job: str) -> dict:
+def check_race_against_direct_runs(store: Store, job: str, raw: dict = SPEC) -> dict:
     race = store.race(job)
-    assert race is not None and race["settings"]["max_runs"] == SPEC["runs"]
-    spec = parse_job_spec(SPEC)
+    assert race is not None and race["settings"]["max_runs"] == raw["runs"]
+    spec = parse_job_spec(raw)
     cells = [(i, c.model_dump()) for i, c in enumerate(expand_cells(spec))]
     blocks = group_blocks(cells, None, "reference")
     assert race["comparisons"] == blocks.comparisons == 4
     for block in race["blocks"]:
         function = block["block"]["function"]
         names = [c["algorithm"] for c in block["cells"]]
-        values = {a: direct(SPEC, a, function) for a in names}
-        expected = race_block(values, names, spec.racing.settings(SPEC["runs"]), 4)
+        values = {a: direct(raw, a, function) for a in names}
+        expected = race_block(values, names, spec.racing.settings(raw["runs"]), 4)
         assert block["rounds"] == expected.rounds and block["finished"] == expected.finished
         assert {c["algorithm"]: c["runs"] for c in block["cells"]} == expected.allowance
-        assert [d["decision"] for d in block["duels"]] == [
-            d.result.decision for d in expected.duels]
+        assert [(d["decision"], d["final"]) for d in block["duels"]] == [
+            (d.result.decision, d.final) for d in expected.duels]
         for c in block["cells"]:
             assert c["finished_runs"] == c["runs"]
     return race
@@ -89,6 +89,23 @@ def test_a_raced_job_runs_its_rounds_and_finishes_with_the_runs_it_used(tmp_path
             assert store.run(job, item["run_id"])["run"] == item["run"]
         gap = items[0]["run_id"] + cells[items[0]["cell"]]  # past the first cell's last run
         assert store.run(job, gap) is None and store.run_record(job, gap) is None
+
+
+def test_a_raced_job_with_the_closing_look_is_its_replay(tmp_path):
+    """racing.final_test reaches the store's race: the job's decisions, the closing sign test's
+    among them, are those of race_block over the directly computed runs."""
+    spec = {**SPEC, "functions": ["F1", "F5"],
+            "racing": {**SPEC["racing"], "final_test": True}}
+    with Store(tmp_path) as store:
+        job = store.create_job(spec, now=T0)
+        drain(store, job)
+        assert store.job_status(job).state == "done"
+        race = check_race_against_direct_runs(store, job, spec)
+    assert race["settings"]["final_test"] is True
+    # PSO against GWO on F5 is open after 60 runs (theta 0.7) and the look decides it
+    finals = [(b["block"]["function"], d["a"], d["better"]) for b in race["blocks"]
+              for d in b["duels"] if d["final"]]
+    assert finals == [("F5", "PSO", "PSO")]
 
 
 def test_a_reopened_store_goes_on_with_the_same_rounds(tmp_path):
