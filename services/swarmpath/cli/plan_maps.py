@@ -221,42 +221,27 @@ def scen_pairs(path: Path, ids: Sequence[int] | None,
                shape: tuple[int, int] | None = None) -> list[tuple[int, tuple[int, int],
                                                               tuple[int, int], float, int]]:
     """(row, start cell, goal cell, octile length, bucket) of the chosen rows of a MovingAI
-    .scen; with ``shape`` (the map's width, height in cells) a row stated for another size is
-    refused."""
+    .scen (:mod:`swarmpath.world.movingai_scen`); with ``shape`` (the map's width, height in
+    cells) a row stated for another size is refused."""
+    from swarmpath.world.movingai_scen import ScenChoiceError, ScenError, choose_rows, parse_scen
+
     try:
-        lines = path.read_text(encoding="utf-8").splitlines()
+        text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError("--scen", f"cannot read {path}: {exc}") from None
-    if not lines or not lines[0].lower().startswith("version"):
-        raise InputError("--scen", f"{path}: first line must be 'version 1' (a MovingAI .scen)")
-    rows = []
-    for k, line in enumerate(lines[1:], start=2):
-        if not line.strip():
-            continue
-        cols = line.split("\t") if "\t" in line else line.split()
-        try:
-            bucket = int(cols[0])
-            width, height, sx, sy, gx, gy = (int(c) for c in cols[2:8])
-            rows.append(((sx, sy), (gx, gy), float(cols[8]), bucket))
-        except (ValueError, IndexError):
-            raise InputError("--scen", f"{path}: line {k}: expected 9 columns "
-                             "(bucket map width height sx sy gx gy length), the bucket and "
-                             "the cells integers") from None
-        if shape is not None and (width, height) != shape:
-            raise InputError("--scen", f"{path}: line {k}: a pair of a {width} x {height} map "
-                             f"({cols[1]}), but the .map in --maps is {shape[0]} x {shape[1]}")
-    if ids is None:
-        if len(rows) > MAX_SCEN_PAIRS:
-            raise InputError("--scen-ids", f"{path} has {len(rows)} pairs; choose some with "
-                             f"--scen-ids (0 = first), at most {MAX_SCEN_PAIRS} are taken "
-                             "without it")
-        ids = range(len(rows))
-    out = []
-    for i in ids:
-        if i >= len(rows):
-            raise InputError("--scen-ids", f"{i} is beyond the {len(rows)} pairs of {path}")
-        out.append((i, *rows[i]))
-    return out
+    try:
+        rows = parse_scen(text, str(path), shape)
+    except ScenError as exc:
+        raise InputError("--scen", str(exc)) from None
+    if ids is None and len(rows) > MAX_SCEN_PAIRS:
+        raise InputError("--scen-ids", f"{path} has {len(rows)} pairs; choose some with "
+                         f"--scen-ids (0 = first), at most {MAX_SCEN_PAIRS} are taken "
+                         "without it")
+    try:
+        chosen = choose_rows(rows, ids)
+    except ScenChoiceError as exc:
+        raise InputError("--scen-ids", f"{exc} ({path})") from None
+    return [(r.row, r.start, r.goal, r.octile, r.bucket) for r in chosen]
 
 
 @dataclass
