@@ -345,6 +345,8 @@ UPLOADS = st.one_of(
     st.builds(lambda text, res: {"name": "fuzz", "format": "movingai", "map": text,
                                  "resolution": res},
               movingai_texts(), st.sampled_from([1.0, 0.05, 1e-9, 1e9, 3.7])),
+    st.builds(lambda text: {"name": "fuzz", "format": "movingai",  # a .scen beside its map
+                            "map": (DATA / "arena.map").read_text(), "scen": text}, scen_texts()),
 )
 FUZZ = settings(max_examples=120, deadline=None, derandomize=True,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,

@@ -358,6 +358,59 @@ def test_map_job_page_paths_failures_and_boxes(server, jobs, browser):
     wait_for(browser, "#plot svg .sp-robot")
 
 
+def test_map_job_page_draws_the_difficulty_curve_of_scen_pairs(server, jobs, browser):
+    """A job on pairs of an uploaded .scen: the bucket table equals the summary's rows (what
+    swarmpath plan --scen prints) and each planner has a line in both difficulty charts; a job
+    without buckets has no such section."""
+    import httpx
+
+    url, app = server
+    data = Path(__file__).parent / "data"
+    up = httpx.post(f"{url}/maps", json={"name": "arena", "format": "movingai",
+                                         "map": (data / "arena.map").read_text(),
+                                         "scen": (data / "arena.map.scen").read_text()},
+                    timeout=WAIT * 4)  # the import process starts at the first upload
+    assert up.status_code == 201, up.text
+    spec = {"kind": "map", "planners": ["OMPL-RRTstar", "OMPL-BITstar"], "runs": 2, "seed": 2,
+            "params": {"OMPL-RRTstar": {"iterations": 60}, "OMPL-BITstar": {"iterations": 400}},
+            "maps": [{"map": up.json()["id"], "scen": {"buckets": [0, 15]}}]}
+    r = httpx.post(f"{url}/jobs", json=spec, timeout=WAIT)
+    assert r.status_code == 201, r.text
+    job = r.json()["id"]
+    assert work_off(app.state.core) == 8
+    summary = httpx.get(f"{url}/jobs/{job}/summary", timeout=WAIT).json()
+    assert [(b["planner"], b["bucket"]) for b in summary["buckets"]] == [
+        (p, b) for p in spec["planners"] for b in (0, 15)]
+
+    browser.get(f"{url}/ui/jobs/{job}")
+    rows = wait_for(browser, "#buckets tbody tr", len(summary["buckets"]))
+    shown = [texts(row.find_elements(By.CSS_SELECTOR, "td")) for row in rows]
+    want = sorted(summary["buckets"], key=lambda b: (b["bucket"], spec["planners"].index(
+        b["planner"])))
+    assert [row[:4] for row in shown] == [
+        [str(b["bucket"]), b["planner"], str(b["pairs"]), f"{b['successes']}/{b['runs']}"]
+        for b in want]
+    for row, b in zip(shown, want, strict=True):
+        assert float(row[4]) == pytest.approx(100 * b["success_rate"], abs=0.05)
+        if isinstance(b["gap_median"], float):
+            assert float(row[5]) == pytest.approx(100 * b["gap_median"], rel=0.01, abs=0.006)
+        else:
+            assert row[5] == ""
+    for chart, key in ((".difficulty-success", "success_rate"), (".difficulty-gap", "gap_median")):
+        series = browser.find_elements(By.CSS_SELECTOR, f"#difficulty {chart} g.sp-series")
+        assert [g.get_attribute("data-name") for g in series] == spec["planners"]
+        for g, planner in zip(series, spec["planners"], strict=True):
+            points = [b for b in want if b["planner"] == planner and isinstance(b[key], float)]
+            d = g.find_element(By.CSS_SELECTOR, "path.sp-line").get_attribute("d")
+            assert d.count("M") + d.count("L") == len(points)  # one vertex per bucket with a value
+        labels = texts(browser.find_elements(By.CSS_SELECTOR, f"#difficulty {chart} .sp-xlabel"))
+        assert labels == ["MovingAI bucket"]
+    shot(browser, "job-buckets")
+    browser.get(f"{url}/ui/jobs/{jobs['map']}")
+    wait_for(browser, "#maps section .mapchart svg", len(MAP["maps"]))
+    assert not browser.find_elements(By.CSS_SELECTOR, "#buckets, #difficulty")
+
+
 def test_run_pages(server, jobs, browser):
     url, _app = server
     browser.get(f"{url}/ui/jobs/{jobs['benchmark']}/runs/0")

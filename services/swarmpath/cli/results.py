@@ -150,6 +150,10 @@ def _summary(client: Any, job: str, format: str, file: Any = None) -> None:
 
     for line in statistics_lines(summary) + note_lines(summary):
         console.print(line, highlight=False, markup=False)
+    if summary.get("buckets"):  # a job on MovingAI pairs: the table of swarmpath plan --scen
+        from swarmpath.cli.plan_tables import render_buckets
+
+        console.print(render_buckets(summary["buckets"]))
     shown = [c for c in summary["columns"] if c not in empty]
     console.print(legend_text(shown), markup=False, highlight=False)
 

@@ -21,8 +21,10 @@ def _text(path: Path) -> str:
         raise InputError("FILE", f"{path}: not a text file (UTF-8)") from None
 
 
-def upload_body(path: Path, name: str | None, resolution: float | None) -> dict[str, Any]:
-    """The POST /maps body for a file; raises InputError naming the argument at fault."""
+def upload_body(path: Path, name: str | None, resolution: float | None,
+                scen: Path | None = None) -> dict[str, Any]:
+    """The POST /maps body for a file (a MovingAI map with its ``.scen`` when given); raises
+    InputError naming the argument at fault."""
     import yaml
 
     from swarmpath.world.safe_yaml import load_yaml
@@ -34,7 +36,16 @@ def upload_body(path: Path, name: str | None, resolution: float | None) -> dict[
         body: dict[str, Any] = {"name": stem, "format": "movingai", "map": _text(path)}
         if resolution is not None:
             body["resolution"] = resolution
+        if scen is not None:
+            if not scen.is_file():
+                raise InputError("--scen", f"no such file {str(scen)!r}")
+            try:
+                body["scen"] = scen.read_text(encoding="utf-8")
+            except UnicodeDecodeError:
+                raise InputError("--scen", f"{scen}: not a text file (UTF-8)") from None
         return body
+    if scen is not None:
+        raise InputError("--scen", "applies to MovingAI .map files only")
     if path.suffix.lower() not in (".yaml", ".yml"):
         raise InputError("FILE", "a nav2 map .yaml (with its image) or a MovingAI .map")
     if resolution is not None:
@@ -61,13 +72,18 @@ def upload_map(
     = None,
     resolution: Annotated[float | None, typer.Option(
         "--resolution", metavar="M", help="MovingAI cell size in metres (default 1).")] = None,
+    scen: Annotated[Path | None, typer.Option(
+        "--scen", metavar="SCEN", help="The MovingAI map's .scen: a job then names pairs of "
+        "it by row or bucket.")] = None,
     url: UrlOpt = None,
 ) -> None:
     """Upload a map to the coordinator (POST /maps); prints its id, which a map job names in
-    its maps as {"map": ID} with an optional start and goal."""
+    its maps as {"map": ID} with an optional start and goal, or with --scen as {"map": ID,
+    "scen": {"buckets": [0, 5, 10], "per_bucket": 2}} (one map per pair, success and gap per
+    bucket in the summary and the dashboard)."""
     from swarmpath.service.client import ServiceError, describe_detail
 
-    body = upload_body(file, name, resolution)
+    body = upload_body(file, name, resolution, scen)
     with _client(url) as client:
         try:
             info = client.upload_map(body)
@@ -82,7 +98,17 @@ def upload_map(
     typer.echo(info["id"])
     typer.echo(f"map {info['id']}: {info['name']}, {info['size'][0]:g} x {info['size'][1]:g} m, "
                f"{info['obstacles']} obstacles, default start {_point(info['start'])} goal "
-               f"{_point(info['goal'])}" + _frame(info), err=True)
+               f"{_point(info['goal'])}" + _frame(info) + _pairs(info), err=True)
+
+
+def _pairs(info: Any) -> str:
+    """How many .scen pairs came with the map, and in which buckets."""
+    scen = info.get("scen")
+    if not scen:
+        return ""
+    buckets = [int(b) for b in scen["buckets"]]
+    return (f"; {scen['pairs']} .scen pairs in buckets {min(buckets)}-{max(buckets)}"
+            if buckets else "; an empty .scen")
 
 
 def _frame(info: Any) -> str:

@@ -11,6 +11,7 @@ from pydantic import (
     Field,
     ValidationInfo,
     field_validator,
+    model_validator,
 )
 
 from swarmpath.service.model import (
@@ -34,15 +35,67 @@ from swarmpath.service.spec_checks import (
     _unique,
 )
 
+#: Pairs one ``{"map": id, "scen": ...}`` entry may expand into.
+MAX_SCEN_PAIRS_PER_MAP = 500
+#: The highest MovingAI bucket a job names (as :data:`swarmpath.world.movingai_scen.MAX_BUCKET`).
+MAX_BUCKET = 100_000
+
+
+class ScenChoice(Model):
+    """Pairs of the ``.scen`` uploaded with a MovingAI map: by row (0 = the file's first pair)
+    or by bucket (the first ``per_bucket`` pairs of each bucket, in file order)."""
+
+    rows: list[Annotated[int, Field(ge=0, le=10**9, strict=True)]] | None = Field(
+        default=None, min_length=1, max_length=MAX_SCEN_PAIRS_PER_MAP,
+        description="rows of the .scen (0 = first)")
+    buckets: list[Annotated[int, Field(ge=0, le=MAX_BUCKET, strict=True)]] | None = Field(
+        default=None, min_length=1, max_length=MAX_SCEN_PAIRS_PER_MAP,
+        description="MovingAI buckets (bucket b: octile lengths in [4b, 4b + 4))")
+    per_bucket: int = Field(default=1, ge=1, le=MAX_SCEN_PAIRS_PER_MAP, strict=True,
+                            description="pairs taken from each bucket")
+
+    @model_validator(mode="after")
+    def _one_way(self) -> ScenChoice:
+        if (self.rows is None) == (self.buckets is None):
+            raise FieldProblems([(("rows",), "give either rows or buckets")])
+        for field in ("rows", "buckets"):
+            try:
+                _unique(getattr(self, field) or [], field[:-1])
+            except ValueError as exc:
+                raise FieldProblems([((field,), str(exc))]) from None
+        if self.rows is not None:
+            if "per_bucket" in self.model_fields_set:
+                raise FieldProblems([(("per_bucket",), "applies to buckets, not rows")])
+        else:
+            assert self.buckets is not None
+            if len(self.buckets) * self.per_bucket > MAX_SCEN_PAIRS_PER_MAP:
+                raise FieldProblems([(("per_bucket",), f"{len(self.buckets)} buckets x "
+                                      f"{self.per_bucket} pairs is over "
+                                      f"{MAX_SCEN_PAIRS_PER_MAP} pairs")])
+        return self
+
 
 class MapRef(Model):
     """A map uploaded with ``POST /maps``, by id, with optional start and goal (metres from the
-    map's lower-left corner). The coordinator replaces it with the stored scenario when the job
-    is submitted, so the job carries its map (:func:`swarmpath.service.maps.resolve_refs`)."""
+    map's lower-left corner), or with ``scen``: pairs of the ``.scen`` uploaded with it, one map
+    per pair. The coordinator replaces it with the stored scenario (one per pair) when the job
+    is submitted, so the job carries its maps (:func:`swarmpath.service.maps.resolve_refs`)."""
 
     map: str = Field(pattern=ID_PATTERN, description="id from POST /maps")
     start: tuple[float, float] | None = None
     goal: tuple[float, float] | None = None
+    scen: ScenChoice | None = Field(
+        default=None, description="MovingAI pairs of the map's uploaded .scen: one map "
+        "'NAME#row' per pair (start and goal at the pair's cells)")
+
+    @model_validator(mode="after")
+    def _pairs_set_the_endpoints(self) -> MapRef:
+        if self.scen is not None:
+            for key in ("start", "goal"):
+                if getattr(self, key) is not None:
+                    raise FieldProblems([((key,), "a .scen pair sets start and goal; leave "
+                                          f"{key} out or leave scen out")])
+        return self
 
 
 MapEntry = Annotated[str | MapRef | dict[str, Any], Field(union_mode="left_to_right")]
@@ -56,6 +109,26 @@ def map_name(entry: str | MapRef | dict[str, Any]) -> str:
     if isinstance(entry, MapRef):
         return entry.map
     return str(entry["name"])
+
+
+def _map_ref_problems(entry: dict[str, Any]) -> list[tuple[Loc, str]]:
+    """Why ``entry`` is not a :class:`MapRef`, each problem at its place (``scen.rows.3``):
+    the union would otherwise report it as an inline scenario without a name."""
+    from pydantic import ValidationError
+
+    try:
+        MapRef.model_validate(entry)
+    except ValidationError as exc:
+        out: list[tuple[Loc, str]] = []
+        for e in exc.errors():
+            loc = tuple(p for p in e["loc"] if not (isinstance(p, str) and "[" in p))
+            problem = (e.get("ctx") or {}).get("error")
+            if isinstance(problem, FieldProblems):
+                out += [((*loc, *sub), msg) for sub, msg in problem.problems]
+            else:
+                out.append((loc, str(e["msg"]).removeprefix("Value error, ")))
+        return out
+    return []
 
 
 class MapJobSpec(Model):
@@ -73,6 +146,13 @@ class MapJobSpec(Model):
     params: Annotated[dict[str, dict[str, Any]], BeforeValidator(_bounded_numbers)] = Field(
         default_factory=dict, description="{planner: {parameter: value}}"
     )
+
+    buckets: dict[str, Annotated[int, Field(ge=0, le=MAX_BUCKET, strict=True)]] = Field(
+        default_factory=dict, description="{map name: MovingAI bucket}: the summary and the "
+        "dashboard report success and gap per bucket (the difficulty curve); set by the "
+        "coordinator for {'map': id, 'scen': ...} pairs, or given for presets and inline maps")
+    octile: dict[str, Annotated[float, Field(gt=0, allow_inf_nan=False)]] = Field(
+        default_factory=dict, description="{map name: the .scen's octile optimal length (m)}")
 
     optimum_budget: float | None = Field(
         default=None, gt=0, le=MAX_OPTIMUM_BUDGET, allow_inf_nan=False, strict=True,
@@ -120,6 +200,9 @@ class MapJobSpec(Model):
                 continue
             if isinstance(entry, MapRef):  # resolved against the stored maps on submission
                 continue
+            if "map" in entry and "name" not in entry:  # an uploaded map's entry gone wrong
+                problems += [((i, *loc), msg) for loc, msg in _map_ref_problems(entry)]
+                continue
             inner = [((i, *loc), msg) for loc, msg in _inline_scenario_problems(entry)]
             name = entry.get("name")
             if not isinstance(name, str) or not _ID_RE.match(name):
@@ -132,6 +215,17 @@ class MapJobSpec(Model):
             raise FieldProblems(problems)
         _unique([map_name(e) for e in v], "map name")
         return v
+
+    @model_validator(mode="after")
+    def _bucketed_maps_exist(self) -> MapJobSpec:
+        names = {map_name(m) for m in self.maps if not isinstance(m, MapRef)}
+        problems: list[tuple[Loc, str]] = [
+            ((field, name), "not the name of a preset or inline map of this job")
+            for field in ("buckets", "octile") for name in getattr(self, field)
+            if name not in names]
+        if problems:
+            raise FieldProblems(problems)
+        return self
 
     @field_validator("runs")
     @classmethod

@@ -30,6 +30,7 @@ from swarmpath.service.bounded import (
 )
 from swarmpath.service.protocol import (
     ID_PATTERN,
+    MAX_RUNS_PER_JOB,
     MAX_SCENARIO_BYTES,
     FieldProblems,
     MapJobSpec,
@@ -39,6 +40,8 @@ from swarmpath.service.protocol import (
 
 #: A nav2 map YAML is a dozen lines; anything longer is not one.
 MAX_NAV2_YAML_CHARS = 65_536
+#: A .scen of MAX_SCEN_ROWS rows of 40-80 characters.
+MAX_SCEN_CHARS = 8_000_000
 _UPLOAD_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,99}")
 
 
@@ -59,6 +62,11 @@ class MovingAIUpload(Model):
     map: str = Field(description="the .map text")
     resolution: float = Field(default=1.0, gt=0, allow_inf_nan=False,
                               description="metres per cell")
+    scen: str | None = Field(
+        default=None, max_length=MAX_SCEN_CHARS,
+        description="the map's MovingAI .scen text (its start/goal pairs and their buckets): a "
+        "job then names pairs as {'map': id, 'scen': {'rows': [...]} or {'buckets': [...], "
+        "'per_bucket': n}}")
 
 
 #: The ``POST /maps`` body: one of the two, told apart by ``format``.
@@ -127,6 +135,26 @@ def import_upload(up: Nav2Upload | MovingAIUpload, max_cells: int | None = None,
     return scenario
 
 
+def import_map(up: Nav2Upload | MovingAIUpload, max_cells: int | None = None,
+               max_obstacles: int | None = None) -> tuple[dict[str, Any], dict[str, Any] | None]:
+    """The scenario of an upload (:func:`import_upload`) and the pairs of its ``.scen``
+    (:func:`swarmpath.service.map_pairs.scen_rows`; None without one), both made in the
+    bounded child process."""
+    from swarmpath.service.map_pairs import scen_rows
+    from swarmpath.world.movingai_scen import ScenError, ScenLimitError
+
+    scenario = import_upload(up, max_cells, max_obstacles)
+    scen = getattr(up, "scen", None)
+    if scen is None:
+        return scenario, None
+    assert isinstance(up, MovingAIUpload)
+    try:
+        return scenario, scen_rows(scen, up.name, scenario, up.resolution)
+    except ScenError as exc:
+        raise MapUploadError(413 if isinstance(exc, ScenLimitError) else 422, "scen",
+                             str(exc)) from None
+
+
 def _about_image(text: str, up: Nav2Upload | MovingAIUpload) -> bool:
     """Whether an importer's message is about the upload's image (not about its YAML, whose
     messages start with the YAML's name)."""
@@ -180,6 +208,7 @@ def _write_nav2(d: Path, up: Nav2Upload) -> tuple[Path, str]:
 
 def warm_importer() -> None:
     """The import process's imports, paid before its first upload's time starts."""
+    import swarmpath.service.map_pairs
     import swarmpath.world.importers
     import swarmpath.world.scenario_io  # noqa: F401
 
@@ -191,14 +220,15 @@ def _raise_hint(setting: str) -> str:
 
 def import_bounded(runner: BoundedRunner, up: Nav2Upload | MovingAIUpload,
                    max_cells: int | None = None, max_obstacles: int | None = None
-                   ) -> dict[str, Any]:
-    """:func:`import_upload` in ``runner``'s child process (bounded memory and time); the
+                   ) -> tuple[dict[str, Any], dict[str, Any] | None]:
+    """:func:`import_map` in ``runner``'s child process (bounded memory and time); the
     bounds' refusals as :class:`MapUploadError` (413 naming the limit and the setting that
     raises it; 503 while too many uploads wait)."""
     field = _image_field(up)
     try:
-        scenario: dict[str, Any] = runner.call(import_upload, up, max_cells, max_obstacles)
-        return scenario
+        imported: tuple[dict[str, Any], dict[str, Any] | None] = runner.call(
+            import_map, up, max_cells, max_obstacles)
+        return imported
     except CallTimedOut:
         raise MapUploadError(413, field, f"importing this map took longer than "
                              f"{runner.seconds:g} s{_raise_hint('max_map_import_seconds')}",
@@ -217,11 +247,17 @@ def import_bounded(runner: BoundedRunner, up: Nav2Upload | MovingAIUpload,
 
 
 def resolve_refs(spec: MapJobSpec,
-                 lookup: Callable[[str], dict[str, Any] | None]) -> MapJobSpec:
+                 lookup: Callable[[str], dict[str, Any] | None],
+                 pairs_lookup: Callable[[str], dict[str, Any] | None] | None = None
+                 ) -> MapJobSpec:
     """The job with every ``{"map": id, ...}`` replaced by the stored scenario (named as it was
     uploaded, ``name (id)`` when another map of the job has that name; its description names
-    the id; ``start`` / ``goal`` applied and checked); raises :class:`FieldProblems` at
-    ``maps.i.map`` / ``maps.i.start`` / ``maps.i.goal``."""
+    the id; ``start`` / ``goal`` applied and checked), and every ``{"map": id, "scen": ...}``
+    by one scenario per chosen pair of the map's stored ``.scen`` (``pairs_lookup``; named
+    ``NAME#row``, their buckets and octile optima in the spec's ``buckets`` / ``octile``:
+    :func:`swarmpath.service.map_pairs.expand_pairs`); raises :class:`FieldProblems` at
+    ``maps.i.map`` / ``maps.i.start`` / ``maps.i.goal`` / ``maps.i.scen...``."""
+    from swarmpath.service.map_pairs import expand_pairs
     from swarmpath.world.scenario import scenario_problems
     from swarmpath.world.scenario_io import ScenarioError, scenario_from_dict
 
@@ -229,6 +265,7 @@ def resolve_refs(spec: MapJobSpec,
         return spec
     problems: list[tuple[tuple[str | int, ...], str]] = []
     maps: list[Any] = []
+    buckets, octile = dict(spec.buckets), dict(spec.octile)
     taken = {m if isinstance(m, str) else str(m.get("name")) for m in spec.maps
              if not isinstance(m, MapRef) and isinstance(m, str | dict)}
     for i, entry in enumerate(spec.maps):
@@ -246,6 +283,15 @@ def resolve_refs(spec: MapJobSpec,
                    f"{stored.get('description', '')}".rstrip(": "))
         # start and goal in the map's own frame (a nav2 map's YAML origin), as GET /maps
         # reports them; the scenario keeps its own frame (0, 0 = the lower-left corner)
+        if entry.scen is not None:
+            found_pairs = expand_pairs(entry, stored, (pairs_lookup or _none)(entry.map),
+                                       name, doc)
+            maps += found_pairs[0]
+            buckets.update(found_pairs[1])
+            octile.update(found_pairs[2])
+            problems += [((i, *loc), message) for loc, message in found_pairs[3]]
+            taken.update(found_pairs[1])
+            continue
         ox, oy = (float(v) for v in (stored.get("grid") or {}).get("origin") or (0.0, 0.0))
         for key in ("start", "goal"):
             value = getattr(entry, key)
@@ -257,7 +303,17 @@ def resolve_refs(spec: MapJobSpec,
             found = list(exc.problems)
         problems += [((i, field), message) for field, message in found]
         maps.append(doc)
+    total = len(spec.planners) * len(maps) * spec.runs
+    if total > MAX_RUNS_PER_JOB and not problems:  # the pairs multiplied the maps
+        first = next(i for i, m in enumerate(spec.maps) if isinstance(m, MapRef) and m.scen)
+        problems.append(((first, "scen"), f"{len(spec.planners)} planners x {len(maps)} maps "
+                         f"x {spec.runs} runs = {total} runs; a job may have at most "
+                         f"{MAX_RUNS_PER_JOB}"))
     if problems:
         raise FieldProblems(problems)
-    return spec.model_copy(update={"maps": maps})
+    return spec.model_copy(update={"maps": maps, "buckets": buckets, "octile": octile})
+
+
+def _none(_map_id: str) -> None:
+    return None
 

@@ -27,6 +27,13 @@ class JobCreated(BaseModel):
     runs_total: int
 
 
+class MapScen(_Open):
+    """The pairs of a map's uploaded MovingAI .scen."""
+
+    pairs: int
+    buckets: dict[str, int] = Field(description="{bucket: pairs}")
+
+
 class MapInfo(_Open):
     """``POST /maps`` 201 and ``GET /maps``: an uploaded map (a job names it by ``id``);
     positions in the map's own frame (``frame``, its ``origin``: a nav2 map's YAML origin)."""
@@ -41,6 +48,21 @@ class MapInfo(_Open):
     start: list[float] = Field(description="the default start")
     goal: list[float] = Field(description="the default goal")
     obstacles: int
+    scen: MapScen | None = Field(default=None, description="the .scen uploaded with the map "
+                                 "(null: none)")
+
+
+class BucketRow(_Open):
+    """One planner in one MovingAI bucket (swarmpath.evidence.buckets.bucket_rows)."""
+
+    planner: str
+    bucket: int
+    pairs: int = Field(description="maps of the bucket the planner ran")
+    runs: int
+    successes: int
+    success_rate: float
+    gap_median: Number = Field(description="over the successful runs with an exact optimum")
+    gap_mean: Number
 
 
 class Summary(_Open):
@@ -66,6 +88,10 @@ class Summary(_Open):
         "static obstacle, each naming its field (maps[i].goal_motion, maps[i].obstacles[k]); "
         "found by the workers (swarmpath.service.cell_notes). Map rows also carry "
         "optimum_reason: why the cell has no exact optimum (so no gap), null when it has one")
+    buckets: list[BucketRow] | None = Field(
+        None, description="map jobs: success and gap per planner and MovingAI bucket (the "
+        "difficulty curve; empty when no map has a bucket: the spec's buckets, set for "
+        "{'map': id, 'scen': ...} pairs). Map rows also carry their bucket")
 
 
 class RunItem(_Open):

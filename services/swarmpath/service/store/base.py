@@ -127,6 +127,11 @@ CREATE TABLE IF NOT EXISTS maps (                      -- uploaded with POST /ma
     scenario TEXT NOT NULL,                            -- the imported scenario (JSON)
     created  REAL NOT NULL
 );
+CREATE TABLE IF NOT EXISTS map_scen (                  -- the .scen uploaded with a MovingAI map
+    map_id   TEXT PRIMARY KEY,
+    pairs    TEXT NOT NULL,                            -- service.map_pairs.scen_rows (JSON)
+    info     TEXT NOT NULL                             -- pairs per bucket (map_pairs.scen_info)
+);
 """
 
 _COUNTERS = ("leases", "requeued_runs", "results_accepted", "duplicates", "stale")

@@ -10,6 +10,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from swarmpath.evidence.audit import origin_suspect
+from swarmpath.evidence.buckets import bucket_rows
 from swarmpath.evidence.race_report import RACE_COLUMNS, apply_race
 from swarmpath.failure_classes import count_classes
 from swarmpath.path_metrics import PATH_METRICS
@@ -28,7 +29,8 @@ BENCHMARK_COLUMNS = (
     "origin_suspect", *BENCHMARK_TEST_COLUMNS,
 )
 MAP_COLUMNS = (
-    "planner", "map", "runs", "failed", "success_rate", "collisions", "length_mean", "length_std",
+    "planner", "map", "bucket", "runs", "failed", "success_rate", "collisions", "length_mean",
+    "length_std",
     "error_mean", "seconds_mean", "cpu_seconds_mean", "gap_mean", "robot_driven_contacts",
     "obstacle_driven_contacts", "travel_time_mean", *PATH_METRICS, *MAP_TEST_COLUMNS,
 )
@@ -120,7 +122,10 @@ class SummariesMixin(StoreBase):
         error_mean, seconds_mean, gap_mean (length and gap over successful runs), and per measure
         (success, length, seconds) its marker and Holm-adjusted p, and ``optimum_reason`` (why
         the cell has no exact optimum; null when it has one); a map summary's ``warnings`` are
-        its stated trajectories through walls (:mod:`swarmpath.service.cell_notes`).
+        its stated trajectories through walls (:mod:`swarmpath.service.cell_notes`), a map row
+        its MovingAI ``bucket`` (the spec's ``buckets``; null without one) and a map summary
+        ``buckets``: success and gap per planner and bucket
+        (:func:`swarmpath.evidence.buckets.bucket_rows`, the rows of ``swarmpath plan --scen``).
         ``statistics``: the tests' document (:mod:`swarmpath.service.summary_stats`)."""
         from swarmpath.evidence.stats import describe, rank
 
@@ -189,15 +194,20 @@ class SummariesMixin(StoreBase):
                                              job_spec.get("reference")))
         else:
             where = _map_indexes(job_spec.get("maps") or [])
+            buckets = job_spec.get("buckets") or {}
+            bucketed: list[dict[str, Any]] = []
             for c in cells:
                 spec = json.loads(c["spec"])
                 runs = metrics.get(c["idx"], [])
                 note = cell_notes(runs, where.get(spec["map"]), spec["map"])
                 notes.append(note)
                 rows.append(
-                    {"planner": spec["planner"], "map": spec["map"], "failed": c["failed"],
+                    {"planner": spec["planner"], "map": spec["map"],
+                     "bucket": buckets.get(spec["map"]), "failed": c["failed"],
                      **map_cell_summary(runs), "optimum_reason": note.optimum_reason}
                 )
+                if spec["map"] in buckets:
+                    bucketed += [dict(m, planner=spec["planner"], map=spec["map"]) for m in runs]
             statistics = map_statistics(
                 rows, [metrics.get(c["idx"], []) for c in cells], job_spec["planners"],
                 job_spec.get("reference"),
@@ -214,7 +224,10 @@ class SummariesMixin(StoreBase):
                 list(RACE_COLUMNS) if kind == "benchmark" and job_spec.get("racing") else []),
             "rows": [_safe(r) for r in rows],
             "statistics": statistics,
-            **({} if kind == "benchmark" else {"warnings": job_warnings(notes)}),
+            **({} if kind == "benchmark" else {
+                "warnings": job_warnings(notes),
+                # success and gap per planner and MovingAI bucket, as swarmpath plan --scen
+                "buckets": [_safe(r) for r in bucket_rows(bucketed, buckets)]}),
             "pins": json.loads(job["pins"] or "{}"),  # the code it ran (swarmpath.plugins.pins)
         }
 

@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from swarmpath.evidence.buckets import BucketCell, bucket_curve
 from swarmpath.evidence.legend import legend
 from swarmpath.service.web.cells import _BenchmarkCell, _f_star, _MapCell
 from swarmpath.service.web.series import (
@@ -63,8 +64,10 @@ class JobAggregates:
     """The dashboard's state of one job (see the module docstring). Thread-safe."""
 
     def __init__(self, job_id: str, kind: str, cells: Sequence[Mapping[str, Any]],
-                 seed: int = 0, reference: str | None = None, racing: bool = False):
+                 seed: int = 0, reference: str | None = None, racing: bool = False,
+                 buckets: Mapping[str, int] | None = None):
         self.job_id = job_id
+        self.buckets = dict(buckets or {})  # map name -> MovingAI bucket (the spec's)
         self.reference = reference  # the statistics' reference (None: the last one listed)
         self.racing = racing  # a raced job: the page shows its race (GET /jobs/{id}/race)
         self.kind = kind
@@ -270,17 +273,26 @@ class JobAggregates:
         samples: dict[str, dict[str, dict[str, list[float]]]] = {"length": {}, "gap": {},
                                                                   "seconds": {}}
         planners: list[str] = []
+        bucketed: list[BucketCell] = []
         for index, cell in enumerate(self._cells):
             s = cell.spec
             if s["planner"] not in planners:
                 planners.append(s["planner"])
-            g = groups.setdefault(s["map"], {"map": s["map"], "cell": index, "planners": {}})
+            g = groups.setdefault(s["map"], {"map": s["map"], "cell": index, "planners": {},
+                                             "bucket": self.buckets.get(s["map"])})
             g["planners"][s["planner"]] = {**cell.view(), "cell": index}
             for metric in ("length", "gap", "seconds"):
                 samples[metric].setdefault(s["map"], {})[s["planner"]] = cell.values[metric]
+            if s["map"] in self.buckets:  # the runs the summary counts: every one that ended
+                assert isinstance(cell, _MapCell)
+                bucketed.append(BucketCell(
+                    s["planner"], s["map"], self.buckets[s["map"]],
+                    cell.finished - cell.crashed, cell.succeeded, list(cell.values["gap"])))
         return {"job_id": self.job_id, "kind": "map", "version": self.version,
                 "loading": self.loading, "finished": self.finished,
                 "runs_per_cell": self.runs_per_cell, "legend": legend(MAP_LEGEND),
                 "planners": planners, "groups": list(groups.values()),
+                # success and gap per planner and MovingAI bucket (the difficulty curve)
+                "buckets": bucket_curve(bucketed),
                 "statistics": map_statistics(groups, planners, self.reference, samples)}
 

@@ -400,4 +400,4 @@ def _job_aggregates(job_id: str, kind: str, cells: list[dict[str, Any]], spec: A
     if racing:
         cells = [{**c, "runs": spec.runs} for c in cells]
     return JobAggregates(job_id, kind, cells, spec.seed, getattr(spec, "reference", None),
-                         racing=racing)
+                         racing=racing, buckets=getattr(spec, "buckets", None))

@@ -35,7 +35,7 @@ def submit_job(
     are replaced by their scenarios first, so the job keeps its maps."""
     if isinstance(spec, MapJobSpec):
         try:
-            spec = resolve_refs(spec, core.store.map_scenario)
+            spec = resolve_refs(spec, core.store.map_scenario, core.store.map_pairs)
         except FieldProblems as exc:
             raise HTTPException(422, [{"loc": ["body", "maps", *loc], "msg": msg,
                                        "type": "value_error"} for loc, msg in exc.problems]

@@ -23,13 +23,15 @@ router = APIRouter(tags=["maps"])
 async def upload_map(
     up: Annotated[Nav2Upload | MovingAIUpload, Body(discriminator="format")], core: CoreDep,
 ) -> dict[str, Any]:
-    """Import a nav2 YAML + base64 image or a MovingAI .map; 201 with the map id (name it in a
-    map job: ``{"map": id, "start": [x, y], "goal": [x, y]}``). 413 when the map is over a size
-    limit, or its import over the time or memory limit (named in the message), 422 when it
-    cannot be imported. The import runs in a child process bounded in memory and time."""
+    """Import a nav2 YAML + base64 image or a MovingAI .map (with its .scen: ``scen``); 201
+    with the map id (name it in a map job: ``{"map": id, "start": [x, y], "goal": [x, y]}``, or
+    pairs of its .scen: ``{"map": id, "scen": {"buckets": [...], "per_bucket": n}}``). 413
+    when the map is over a size limit, or its import over the time or memory limit (named in
+    the message), 422 when it cannot be imported. The import runs in a child process bounded
+    in memory and time."""
     settings = core.settings
     try:
-        scenario = await asyncio.to_thread(
+        scenario, pairs = await asyncio.to_thread(
             import_bounded, core.map_importer, up, settings.max_map_cells,
             settings.max_map_obstacles)
     except MapUploadError as exc:
@@ -38,7 +40,8 @@ async def upload_map(
                             headers={"Retry-After": "5"} if exc.status == 503 else None
                             ) from None
     source = up.model_dump()
-    map_id = await asyncio.to_thread(core.store.add_map, up.name, up.format, source, scenario)
+    map_id = await asyncio.to_thread(core.store.add_map, up.name, up.format, source, scenario,
+                                     None, pairs)
     info = core.store.map_info(map_id)
     assert info is not None
     info.pop("scenario")

@@ -167,6 +167,33 @@
     }
   }
 
+  /* MovingAI buckets (swarmpath.evidence.buckets, as swarmpath plan --scen prints them): a
+     table and the difficulty curve, success and median gap against the bucket per planner. */
+  function difficultyTable(buckets, planners) {
+    const pct = (v, d) => (v === null || v === undefined || typeof v !== "number" ? "" : SP.num(100 * v, d));
+    let html = `<h2>Difficulty: per MovingAI bucket</h2><div class="grid" id="difficulty">
+      <div class="card chart difficulty-success"></div><div class="card chart difficulty-gap"></div></div>
+      <table id="buckets"><thead><tr><th>bucket</th><th class="l">planner</th><th>pairs</th><th>success</th>
+      <th>success %</th><th>gap % (median)</th><th>gap % (mean)</th></tr></thead><tbody>`;
+    const rows = buckets.slice().sort((a, b) => a.bucket - b.bucket || planners.indexOf(a.planner) - planners.indexOf(b.planner));
+    for (const b of rows) {
+      html += `<tr data-bucket="${b.bucket}" data-planner="${SP.esc(b.planner)}"><td>${b.bucket}</td><td class="l">${SP.esc(b.planner)}</td><td>${b.pairs}</td>
+        <td>${b.successes}/${b.runs}</td><td>${pct(b.success_rate, 1)}</td><td>${pct(b.gap_median, 2)}</td><td>${pct(b.gap_mean, 2)}</td></tr>`;
+    }
+    return html + `</tbody></table><p class="legend">A MovingAI .scen groups its start/goal pairs into buckets by the octile length of their optimal path (bucket b: lengths in [4b, 4b + 4) cells; Sturtevant 2012), so higher buckets are longer and usually harder. Success over every run of the bucket's pairs; gap over the successful runs with an exact optimum, pooled over the pairs.</p>`;
+  }
+  function difficultyCharts(buckets, planners) {
+    const series = (key) => planners.filter((p) => buckets.some((b) => b.planner === p)).map((p) => {
+      const mine = buckets.filter((b) => b.planner === p).sort((a, b) => a.bucket - b.bucket);
+      return { name: p, color: color(p, planners), x: mine.map((b) => b.bucket),
+        y: mine.map((b) => (typeof b[key] === "number" ? 100 * b[key] : null)) };
+    });
+    SP.lineChart(SP.q("#difficulty .difficulty-success"), { title: "success per bucket", xlabel: "MovingAI bucket",
+      ylabel: "success %", series: series("success_rate") });
+    SP.lineChart(SP.q("#difficulty .difficulty-gap"), { title: "median gap per bucket (successful runs)", xlabel: "MovingAI bucket",
+      ylabel: "gap %", series: series("gap_median") });
+  }
+
   async function renderMap(data) {
     const planners = data.planners;
     const st = data.statistics || { markers: {} };
@@ -228,8 +255,11 @@
       }
       html += `</tbody></table><p class="legend">+/=/-: maps where the planner is significantly better / not significantly different / worse than ${SP.esc(st.reference)}. Mean rank: Friedman ranks of the planners' mean length (successful runs) and mean planning time over the maps (1 = best; a map where a planner has no value is left out).</p>`;
     }
+    const buckets = data.buckets || [];
+    if (buckets.length) html += difficultyTable(buckets, planners);
     html += `<div id="maps"></div>`;
     content.innerHTML = html;
+    if (buckets.length) difficultyCharts(buckets, planners);
     const maps = SP.q("#maps");
     for (const g of data.groups) {
       const sec = document.createElement("section");
