@@ -5,6 +5,7 @@
         [--cells C] [--iterations I] [--agents A] [--dim D] [--algorithm GWO] [--function F1]
         [--map mfb-static --planner MFB] [--run-ms MS] [--runs-per-lease R] [--max-leases L]
         [--seconds T] [--jobs N] [--zenoh-config FILE] [--json FILE] [--data DIR]
+        [--profile OUT.raw [--rate HZ]]
 
 What runs: ``swarmpath coordinator`` as a subprocess on free loopback ports (HTTP, Zenoh router
 with usrpwd authentication, a fresh data directory: its real SQLite store and MCAP recorder), and
@@ -26,6 +27,10 @@ file-backed; at 0/25/50/75/100 % of each job's runs and its slope over the secon
 scripts/bench/farm_memory.py), the workers the
 coordinator saw alive, and how the runs were spread over the workers (min/median/max per worker,
 workers with none). The machine is shared: read times next to the load averages reported.
+
+``--profile OUT``: samples the coordinator with py-spy (``pip install py-spy``; not a dependency)
+over the job(s) and prints its top functions by own and cumulative samples (one raw file per
+measurement: OUT with the tree and K in its name).
 """
 
 from __future__ import annotations
@@ -46,6 +51,7 @@ from pathlib import Path
 from typing import Any
 
 import httpx
+from coordinator import summarize  # scripts/bench/coordinator.py
 from farm_memory import memory_profile, proc_memory, profile_line  # scripts/bench/farm_memory.py
 from polling import wait_until  # scripts/bench/polling.py
 
@@ -108,7 +114,10 @@ def job_spec(args: argparse.Namespace) -> dict[str, Any]:
     return {"kind": "benchmark", "algorithms": [args.algorithm],
             "functions": sorted({f for f, _ in cells}, key=functions.index),
             "dims": sorted({d for _, d in cells}), "runs": args.runs, "agents": args.agents,
-            "iterations": args.iterations, "seed": 1}
+            "iterations": args.iterations, "seed": 1,
+            # the simulated slots compute a few template runs per cell with the spec's backend:
+            # numpy keeps numba's first compile (seconds per simulator process) out of the job
+            "backend": "numpy"}
 
 
 class Farm:
@@ -281,6 +290,7 @@ def run(args: argparse.Namespace, data: Path, root: Path = ROOT) -> dict[str, An
         idle0 = proc_cpu(pid) + children_cpu(pid)
         time.sleep(args.idle_seconds)  # K live workers, nothing to lease: what they cost
         idle = proc_cpu(pid) + children_cpu(pid) - idle0
+        spy = profiler(args, pid, data)  # attached before the CPU count starts
         store0 = store_bytes(data / "store")
         load0 = os.getloadavg()[0]
         cpu0, rss0 = proc_cpu(pid), proc_memory(pid)[0]
@@ -303,6 +313,7 @@ def run(args: argparse.Namespace, data: Path, root: Path = ROOT) -> dict[str, An
                 if status.get("started") else float("nan")
         cpu1, rss1 = proc_cpu(pid), proc_memory(pid)[0]
         rec1 = children_cpu(pid)
+        profile = stop_profiler(spy)
         sim1 = farm.sim_cpu()
         load1 = os.getloadavg()[0]
         metrics = farm.metrics()
@@ -348,7 +359,35 @@ def run(args: argparse.Namespace, data: Path, root: Path = ROOT) -> dict[str, An
             "messages_unproven_total", "messages_overload_total", "leases_total",
             "lease_requeues_total", "workers_refused_total", "lease_requests_busy_total")},
         "load": [round(load0, 2), round(load1, 2)],
+        "profile": profile,
     }
+
+
+def profiler(args: argparse.Namespace, pid: int, data: Path) -> tuple[Any, Path] | None:
+    """py-spy sampling the coordinator (``--profile``), or None."""
+    if args.profile is None:
+        return None
+    out = args.profile.with_name(f"{args.profile.stem}-{data.name}{args.profile.suffix}")
+    proc = subprocess.Popen(
+        [str(Path(sys.executable).with_name("py-spy")), "record", "--pid", str(pid),
+         "--rate", str(args.rate), "--format", "raw", "--threads", "--nonblocking",
+         "-o", str(out)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    time.sleep(1.0)  # attached before the job starts
+    return proc, out
+
+
+def stop_profiler(spy: tuple[Any, Path] | None) -> str | None:
+    """Stop py-spy; the summary of its samples."""
+    if spy is None:
+        return None
+    proc, out = spy
+    proc.send_signal(signal.SIGINT)
+    try:
+        proc.wait(60)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait(10)
+    return summarize(out) if out.exists() else None
 
 
 def markdown(results: list[dict[str, Any]]) -> str:
@@ -434,6 +473,10 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
     ap.add_argument("--json", type=Path, help="write the whole result here")
     ap.add_argument("--data", type=Path, help="keep the data directory here (default: temp)")
     ap.add_argument("--log-level", default="warning")
+    ap.add_argument("--profile", type=Path,
+                    help="py-spy raw stacks of the coordinator over the job, one file per "
+                    "measurement named after this one")
+    ap.add_argument("--rate", type=int, default=200, help="py-spy samples per second")
     args = ap.parse_args(argv)
     try:
         args.worker_counts = [int(k) for k in str(args.workers).split(",")]
@@ -466,6 +509,9 @@ def main(argv: list[str] | None = None) -> int:
                 if args.json:
                     args.json.write_text(json.dumps(results, indent=1))
     print(markdown(results))
+    for r in results:
+        if r.get("profile"):
+            print(f"\n### py-spy, {r['tree']} tree, K = {r['workers']}\n\n{r['profile']}")
     return 0 if all(r["state"] == "done" for r in results) else 1
 
 
