@@ -310,6 +310,25 @@ def test_garbage_and_oversized_payloads_are_rejected():
         p.decode(p.ResultBatch, b" " * (p.MAX_BODY_BYTES + 1))
 
 
+@pytest.mark.parametrize("extensions", [
+    {"optimizer:GWO": "0123456789ABCDEF"},  # upper case
+    {"optimizer:GWO": "0123456789abcde"},  # 15 digits
+    {"optimizer:GWO": "0123456789abcdef0"},  # 17
+    {"optimizer:GWO": "0123456789abcdeg"},
+    {"optimizer:GWO": "0123456789abcde\n"},
+    {"optimizer:GWO": "0123456789abcd\u0660\u0661"},  # Arabic-Indic digits
+    {"optimizer:GWO": 12},
+    {"GWO": "0123456789abcdef"},  # no kind
+    {"o:" + "x" * 159: "0123456789abcdef"},  # key of 161 characters
+    {f"optimizer:A{i}": "0123456789abcdef" for i in range(513)},
+])
+def test_a_lease_requests_advertisement_is_bounded_and_checked(extensions):
+    good = {"optimizer:GWO": "0123456789abcdef", "o:" + "x" * 158: "fedcba9876543210"}
+    assert p.LeaseRequest(worker="w1", extensions=good).extensions == good
+    with pytest.raises(ValidationError, match="extensions"):
+        p.LeaseRequest(worker="w1", extensions=extensions)
+
+
 def test_key_expressions():
     k = p.Keys()
     assert k.work == "swarmpath/work"
