@@ -97,6 +97,85 @@ def test_idle_workers_are_told_to_wait_longer_the_more_of_them_there_are(tmp_pat
             core.worker_alive(f"w{i}")
         reply = decode_work_reply(core.handle_lease_request(request))
         assert isinstance(reply, NoWork)
-        assert reply.retry_after == 600 / core.EMPTY_POLLS_PER_SECOND  # 3 s: 200 polls/s in all
+        assert reply.retry_after == 600 / core.EMPTY_POLLS_PER_SECOND  # 30 s: 20 polls/s
     finally:
         core.close()
+
+
+def test_new_work_wakes_the_workers_told_empty_and_nothing_else_does(tmp_path):
+    """A submitted job puts a wake hint at once; runs requeued while a worker waits after an
+    empty reply put one at the next tick; a requeue nobody waits for, or a tick without new
+    work, puts none."""
+    sent: list[str] = []
+    core = Coordinator(CoordinatorSettings(data_dir=tmp_path, synchronous="NORMAL",
+                                           lease_seconds=30.0),
+                       publish=lambda key, _payload: sent.append(key))
+    spec = BenchmarkJobSpec(kind="benchmark", algorithms=["GWO"], functions=["F1"], dims=[2],
+                            runs=20, agents=2, iterations=5)
+    wakes = lambda: sent.count("swarmpath/wake")  # noqa: E731
+    try:
+        core.worker_alive("w1")
+        t = 1000.0
+        core.submit(spec)
+        assert wakes() == 1
+        request = encode(LeaseRequest(worker="w1", max_runs=100, max_leases=32))
+        assert not isinstance(decode_work_reply(core.handle_lease_request(request, t)), NoWork)
+        core.tick(t)
+        core.tick(t + 31.0)  # the lease expired: its runs are requeued, but nobody waits
+        assert wakes() == 1
+        assert not isinstance(decode_work_reply(core.handle_lease_request(request, t + 32)),
+                              NoWork)
+        empty = decode_work_reply(core.handle_lease_request(request, t + 33))
+        assert isinstance(empty, NoWork) and empty.reason == "empty"
+        core.tick(t + 34)  # nothing new
+        assert wakes() == 1
+        core.tick(t + 64.0)  # expired again, and w1 waits: woken
+        assert wakes() == 2
+        core.tick(t + 65.0)
+        assert wakes() == 2  # once
+    finally:
+        core.close()
+
+
+class Replies:
+    """A querier answering every lease request ``empty``, ask again in 600 s."""
+
+    def __init__(self, on_ask) -> None:
+        self.asked: list[float] = []
+        self.on_ask = on_ask
+
+    def get(self, payload: bytes) -> list[object]:
+        import time
+
+        self.asked.append(time.monotonic())
+        self.on_ask(len(self.asked))
+        empty = encode(NoWork(retry_after=600.0, reason="empty"))
+        return [SimpleNamespace(ok=SimpleNamespace(payload=SimpleNamespace(
+            to_bytes=lambda: empty)))]
+
+
+def test_a_worker_told_empty_asks_again_when_woken_and_not_before_the_hint_min_wait():
+    from swarmpath.service.worker.pulling import HINT_MIN_WAIT
+    from test_service_api import offline_worker
+
+    for hint_in_flight in (False, True):
+        w = offline_worker(executor="thread")
+        w._slots = [w.new_slot(0)]
+
+        def on_ask(n: int, w=w, in_flight=hint_in_flight) -> None:
+            if n == 1 and in_flight:
+                w._on_wake(None)  # the hint overtook the "empty" reply: it counts
+            if n == 2:
+                w.stop()
+
+        w._querier = Replies(on_ask)
+        loop = threading.Thread(target=w._pull_loop, daemon=True)
+        loop.start()
+        if not hint_in_flight:
+            while not w._querier.asked:
+                loop.join(0.05)
+            w._on_wake(None)
+        loop.join(60)  # without the hint: 600 s
+        assert not loop.is_alive()
+        first, second = w._querier.asked
+        assert second - first >= HINT_MIN_WAIT

@@ -83,6 +83,8 @@ def test_security_extras_match_the_builders():
     allowed = {(r["flows"][0], m, k) for r in acl["rules"] for m in r["messages"]
                for k in r["key_exprs"]}
     assert ("ingress", "put", "swarmpath/cancel") not in allowed  # only the coordinator
+    assert ("ingress", "put", "swarmpath/wake") not in allowed
+    assert ("egress", "put", "swarmpath/wake") in allowed  # workers hear the coordinator's
     assert not any(flow == "ingress" and k.startswith("swarmpath/ack")
                    and m in ("put", "delete") for flow, m, k in allowed)
 

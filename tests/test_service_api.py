@@ -434,6 +434,36 @@ def test_made_up_worker_ids_leave_no_state(client, core):
     assert [w["id"] for w in client.get("/workers").json()] == ["newcomer"]
 
 
+def test_the_worker_tables_live_counts_follow_every_change():
+    """alive_count/alive_slots (asked by every lease request) are kept, not recounted per
+    request: after tokens, slots, departures, returns and evictions they equal a recount."""
+    from swarmpath.service.worker_table import MAX_SLOTS, WorkerTable
+
+    table = WorkerTable(max_entries=4, forget_seconds=10.0)
+
+    def check() -> None:
+        live = [e for e in table.snapshot().values() if e.alive]
+        assert (table.alive_count(), table.alive_slots()) == (len(live),
+                                                               sum(e.slots for e in live))
+
+    steps = [
+        lambda: table.alive("a", 1.0), lambda: table.alive("b", 2.0),
+        lambda: table.seen("a", 3.0, slots=8, proven=True),
+        lambda: table.seen("a", 3.5, slots=10**9, proven=True),  # bounded: MAX_SLOTS
+        lambda: table.seen("b", 4.0, slots=3), lambda: table.gone("b", 5.0),  # unproven: out
+        lambda: table.alive("c", 6.0), lambda: table.seen("c", 6.5, slots=2, proven=True),
+        lambda: table.gone("a", 7.0), lambda: table.alive("a", 8.0),  # back
+        lambda: table.alive("d", 9.0), lambda: table.alive("e", 9.5),
+        lambda: table.alive("f", 9.7),  # full: the oldest unproven (d) makes room
+        lambda: table.gone("c", 10.0), lambda: table.prune(30.0),
+    ]
+    for step in steps:
+        step()
+        check()
+    assert table.alive_slots() == MAX_SLOTS + 2  # a (capped), e, f
+    assert table.alive_count() == 3
+
+
 def test_catalog_health_metrics(client):
     cat = client.get("/catalog").json()
     gwo = next(o for o in cat["optimizers"] if o["name"] == "GWO")
@@ -789,9 +819,29 @@ def test_lease_sizer_shrinks_leases_at_the_end_and_fills_bundles():
     assert sizer.runs_for(cell, remaining=10_000, bundle=[one] * 200) == 0  # bundle is full
 
 
+def test_a_big_farm_gets_leases_of_at_least_its_slots_over_the_lease_rate():
+    """The tail rule's leases shrink with the farm, but not below live slots / max_lease_rate
+    seconds of work (the farm's lease rate is bounded), nor is that floor above the target."""
+    sizer = LeaseSizer(target_seconds=10.0, min_runs=8, max_lease_rate=100.0)
+    cell = BenchmarkCell(algorithm="GWO", function="F1", dim=30, agents=30, iterations=500)
+    sizer.observe(cell, 0.005)
+    sizer.slots = 2
+    assert sizer.runs_for(cell, remaining=10_000) == 2000  # 10 s: the tail rule's 12.5 s
+    sizer.slots = 200
+    assert sizer.runs_for(cell, remaining=10_000) == 400  # 2 s, not the tail rule's 0.125 s
+    assert sizer.runs_for(cell, remaining=100) == 400  # more than is left: the store clips it
+    sizer.slots = 100_000
+    assert sizer.runs_for(cell, remaining=10_000) == 2000  # the target's 10 s, not 1000 s
+    no_floor = LeaseSizer(target_seconds=10.0, min_runs=8, max_lease_rate=float("inf"))
+    no_floor.observe(cell, 0.005)
+    no_floor.slots = 200
+    assert no_floor.runs_for(cell, remaining=10_000) == 25  # the tail rule alone
+
+
 def test_lease_bundles_and_group_commit(core, client):
     job = client.post("/jobs", json={**SPEC, "runs": 1}).json()["id"]  # 4 cells of one run
     core.worker_alive("w1")
+    core.sizer.max_lease_rate = float("inf")  # the tail rule alone: these runs cost 0.3 ms
     request = encode(LeaseRequest(worker="w1", max_runs=100, max_leases=8, slots=1))
     bundles = [decode_work_reply(core.handle_lease_request(request)) for _ in range(3)]
     assert all(isinstance(b, LeaseBundle) for b in bundles)

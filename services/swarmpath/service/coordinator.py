@@ -94,7 +94,8 @@ class Coordinator(WorkerAdmission, ResultIntake):
             RecorderProcess(settings.data_dir, settings.synchronous)
             if settings.recorder_process else Recorders(self.store))
         self.dashboard = Dashboard(self.store, Path(settings.data_dir) / "dashboard")
-        self.sizer = LeaseSizer(settings.target_lease_seconds, settings.min_lease_runs)
+        self.sizer = LeaseSizer(settings.target_lease_seconds, settings.min_lease_runs,
+                                max_lease_rate=settings.max_lease_rate)
         self.publish: Callable[[str, bytes], None] = publish or (lambda key, payload: None)
         self.heartbeat_seconds = settings.heartbeat_seconds or settings.lease_seconds / 3.0
         self.accepting = True
@@ -113,6 +114,8 @@ class Coordinator(WorkerAdmission, ResultIntake):
                                           settings.max_map_import_seconds,
                                           name="swarmpath-map-import", warm=warm_importer)
         self._accepted: deque[tuple[float, int]] = deque()
+        self._told_empty = False  # a worker was told "empty" since the last wake hint
+        self._depth: int | None = None  # the queue's unleased runs at the last tick
         self._jobs: dict[str, dict[str, Any]] = {}  # job id -> what records need (cache)
         self._recording: set[str] = set()  # jobs whose MCAP is open
         # lease -> (its worker, its capability, runs stored): recognizes re-sent copies of
@@ -154,15 +157,33 @@ class Coordinator(WorkerAdmission, ResultIntake):
     # ------------------------------------------------------------------------------ leasing
     #: Idle workers together ask for work about this often at most: an empty reply tells each
     #: to wait max(retry_after, live workers / this) seconds. A lease query costs the coordinator
-    #: about 0.28 ms of CPU (Zenoh included): 500 idle workers polling every 0.5 s took 0.28 of a
-    #: core (scripts/bench/farm.py --idle-seconds, docs/scale.md); a new job now reaches them
-    #: within that wait (2.5 s at 500 workers).
-    EMPTY_POLLS_PER_SECOND = 200.0
+    #: about 0.3-0.5 ms of CPU (Zenoh included): 500 idle workers polling every 0.5 s took 0.28 of
+    #: a core, and at 200 polls/s the idle workers of a 200-worker farm were most of its CPU per
+    #: run (scripts/bench/farm.py, docs/benchmarks.md). New work does not wait for these polls:
+    #: the coordinator puts a hint on ``wake`` (:meth:`wake`) and the workers told ``empty`` ask
+    #: again at once; the polls only catch a hint that was missed.
+    EMPTY_POLLS_PER_SECOND = 20.0
 
     def empty_retry(self) -> float:
-        """How long a worker told "empty" waits before asking again."""
+        """How long a worker told "empty" waits before asking again (unless woken)."""
+        self._told_empty = True
         return max(self.settings.retry_after,
                    self.worker_table.alive_count() / self.EMPTY_POLLS_PER_SECOND)
+
+    def wake(self) -> None:
+        """Tell the workers waiting after an ``empty`` reply that work appeared (a hint on
+        ``wake``, no payload: they ask again at once; only the coordinator may put there)."""
+        self._told_empty = False
+        self._send(self.keys.wake, b"")
+
+    def _wake_for_new_work(self) -> None:
+        """From the tick: wake the workers told ``empty`` when the job queue's unleased runs
+        grew since the last tick (runs requeued, a race's next round, ...; a submitted job wakes
+        them at once)."""
+        depth = self.store.queue_depth()
+        if self._told_empty and self._depth is not None and depth > self._depth:
+            self.wake()
+        self._depth = depth
 
     def _no_work(self, reason: str, retry_after: float | None = None) -> bytes:
         return encode(NoWork(
@@ -252,6 +273,7 @@ class Coordinator(WorkerAdmission, ResultIntake):
         status = self.store.job_status(job_id)
         assert status is not None
         log.info("job %s submitted: %s, %d runs", job_id, spec.kind, status.runs_total)
+        self.wake()
         return status
 
     def extend(self, job_id: str, runs: int) -> tuple[JobStatus, int]:
@@ -264,6 +286,8 @@ class Coordinator(WorkerAdmission, ResultIntake):
                  new_id, job_id, runs, reused, status.runs_total)
         if status.state in FINAL_STATES:
             self.finalize(new_id)
+        else:
+            self.wake()
         return status, reused
 
     def cancel(self, job_id: str) -> JobStatus | None:
@@ -347,6 +371,10 @@ class Coordinator(WorkerAdmission, ResultIntake):
             n = 0
         if n:
             log.warning("%d runs requeued: their leases expired without a heartbeat", n)
+        try:
+            self._wake_for_new_work()
+        except StoreError:  # closing
+            pass
         try:
             self.recorders.tick()
         except OSError as exc:  # in-process recorders on a full disk: rebuilt when there is room

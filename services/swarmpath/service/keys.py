@@ -40,6 +40,12 @@ class Keys:
     def cancel(self) -> str:
         return f"{self.prefix}/cancel"
 
+    @property
+    def wake(self) -> str:
+        """Put by the coordinator when work appeared (a hint, no payload): workers told
+        ``empty`` ask again at once instead of at the end of their ``retry_after``."""
+        return f"{self.prefix}/wake"
+
     def scenario(self, sha256: str) -> str:
         """Queryable of the coordinator: ScenarioRequest -> the scenario's canonical JSON."""
         if not re.fullmatch(r"[0-9a-f]{64}", sha256):

@@ -28,13 +28,25 @@ class LeaseSizer:
     ``remaining / (2 * slots)`` of the job's unleased work, ``slots`` being the slots of the live
     workers, so the last leases are small and no worker is left computing a big one alone while
     the others idle. A bundle (several leases in one reply) is filled until its leases' estimated
-    seconds reach that target."""
+    seconds reach that target.
+
+    The tail rule never takes a lease below ``slots / max_lease_rate`` seconds of work (nor above
+    the target): the farm as a whole then asks for at most about ``max_lease_rate`` leases per
+    second. A lease costs the coordinator about a millisecond of CPU whatever its size (the
+    grant's transaction, its result message, its ack); without the floor a farm of K slots on a
+    job of cheap runs was granted leases of ``remaining / 2K`` runs, so the leases (and the
+    coordinator's CPU per run) grew with K: 28 leases at 2 workers, 989 at 200 on the same
+    10,000 runs of 3.5 ms (scripts/bench/farm.py, docs/benchmarks.md). With the floor the
+    workers left without a lease near the end of a job are the ones that would have cost more to
+    serve than they computed."""
 
     MAP_PRIOR_SECONDS = 5.0
     MAX_ESTIMATES = 100_000  # cell and family costs kept (specs come from users)
 
-    def __init__(self, target_seconds: float = 10.0, min_runs: int = 8, alpha: float = 0.3):
+    def __init__(self, target_seconds: float = 10.0, min_runs: int = 8, alpha: float = 0.3,
+                 max_lease_rate: float = 100.0):
         self.target_seconds = float(target_seconds)
+        self.max_lease_rate = float(max_lease_rate)
         self.min_runs = max(1, int(min_runs))
         self.alpha = alpha
         self.slots = 1  # slots of the live workers (the coordinator keeps it current)
@@ -76,7 +88,9 @@ class LeaseSizer:
         est = max(self.estimate(spec), 1e-6)
         budget = self.target_seconds
         if remaining is not None:
-            budget = min(budget, remaining * est / (2 * max(1, self.slots)))
+            slots = max(1, self.slots)
+            floor = min(budget, slots / self.max_lease_rate)
+            budget = max(floor, min(budget, remaining * est / (2 * slots)))
         if bundle:
             budget -= sum(len(lease.runs) * max(self.estimate(lease.spec), 1e-6)
                           for lease in bundle)

@@ -49,6 +49,9 @@ class CoordinatorSettings:
     heartbeat_seconds: float | None = None  # default lease_seconds / 3
     target_lease_seconds: float = 10.0  # a lease (or bundle of leases) is about this much work
     min_lease_runs: int = 8  # benchmark leases: at least this many runs (vectorization)
+    # the farm is granted about this many leases per second at most (lease_sizer.py: a lease
+    # holds at least live slots / this seconds of work)
+    max_lease_rate: float = 100.0
     retry_after: float = 0.5  # NoWork: ask again after this long
     token: str | None = None  # bearer token of mutating endpoints (None: $SWARMPATH_TOKEN)
     shm: bool = False

@@ -50,6 +50,9 @@ class WorkerTable:
         self.refused = 0
         self._entries: dict[str, WorkerEntry] = {}
         self._lock = threading.Lock()
+        # (live workers, their slots), asked by every lease request: counted again only after
+        # a change (None), not over the whole table per request
+        self._live: tuple[int, int] | None = None
 
     def __len__(self) -> int:
         with self._lock:
@@ -65,6 +68,7 @@ class WorkerTable:
                     return False
                 entry = self._entries[worker] = WorkerEntry()
             entry.alive, entry.gone_at, entry.last_seen = True, None, now
+            self._live = None
             return True
 
     def _evict_one(self) -> bool:
@@ -75,6 +79,7 @@ class WorkerTable:
         if not gone:
             return False
         del self._entries[min(gone)[1]]
+        self._live = None
         return True
 
     def gone(self, worker: str, now: float) -> None:
@@ -82,6 +87,7 @@ class WorkerTable:
             entry = self._entries.get(worker)
             if entry is None or not entry.alive:
                 return
+            self._live = None
             if not entry.proven:  # a token that never asked for work leaves no trace
                 del self._entries[worker]
                 return
@@ -116,7 +122,9 @@ class WorkerTable:
             if pid:
                 entry.pid = int(pid)
             if slots:
-                entry.slots = max(1, min(int(slots), MAX_SLOTS))
+                slots = max(1, min(int(slots), MAX_SLOTS))
+                if slots != entry.slots:
+                    entry.slots, self._live = slots, None
             if platform:
                 entry.platform = dict(platform)
             if extensions is not ...:  # only lease requests say what a worker runs
@@ -139,13 +147,19 @@ class WorkerTable:
             entry = self._entries.get(worker)
             return entry is not None and entry.alive
 
+    def _live_counts(self) -> tuple[int, int]:
+        if self._live is None:
+            live = [e.slots for e in self._entries.values() if e.alive]
+            self._live = (len(live), sum(live))
+        return self._live
+
     def alive_count(self) -> int:
         with self._lock:
-            return sum(1 for e in self._entries.values() if e.alive)
+            return self._live_counts()[0]
 
     def alive_slots(self) -> int:
         with self._lock:
-            return sum(e.slots for e in self._entries.values() if e.alive)
+            return self._live_counts()[1]
 
     def snapshot(self) -> dict[str, WorkerEntry]:
         with self._lock:

@@ -175,13 +175,13 @@ def worker_access_control(
     ``cert_common_names`` of their TLS client certificates) exactly what a worker does:
 
     * send: put results and progress, query ``work``, declare its liveliness token, subscribe to
-      its acks and to cancels;
-    * receive: acks and cancels, replies to its lease queries.
+      its acks, to cancels and to wake hints;
+    * receive: acks, cancels and wake hints, replies to its lease queries.
 
     The coordinator is the router itself (its own session is not a remote subject), so only it
-    puts acks and cancels, answers ``work`` and sees results and progress: a worker login cannot
-    put on ``<prefix>/cancel`` or ``<prefix>/ack/*``, declare a ``work`` queryable, or subscribe
-    to other workers' results and progress."""
+    puts acks, cancels and wake hints, answers ``work`` and sees results and progress: a worker
+    login cannot put on ``<prefix>/cancel``, ``<prefix>/wake`` or ``<prefix>/ack/*``, declare a
+    ``work`` queryable, or subscribe to other workers' results and progress."""
     users, names = list(usernames), list(cert_common_names)
     if not users and not names:
         raise ValueError("access control needs worker usernames or certificate common names")
@@ -195,8 +195,9 @@ def worker_access_control(
         rule("worker-puts", "ingress", ["put"], [f"{p}/results/*", f"{p}/progress/*"]),
         rule("worker-asks", "ingress", ["query"], [f"{p}/work"]),
         rule("worker-token", "ingress", ["liveliness_token"], [f"{p}/workers/*"]),
-        rule("worker-listens", "ingress", ["declare_subscriber"], [f"{p}/ack/*", f"{p}/cancel"]),
-        rule("worker-hears", "egress", ["put"], [f"{p}/ack/*", f"{p}/cancel"]),
+        rule("worker-listens", "ingress", ["declare_subscriber"],
+             [f"{p}/ack/*", f"{p}/cancel", f"{p}/wake"]),
+        rule("worker-hears", "egress", ["put"], [f"{p}/ack/*", f"{p}/cancel", f"{p}/wake"]),
         rule("worker-answered", "egress", ["reply"], [f"{p}/work"]),
         rule("worker-sees-work", "egress", ["declare_queryable"], [f"{p}/work"]),
     ]

@@ -55,6 +55,7 @@ class Worker(Pulling, Reporting):
         self._wake = threading.Condition(self._lock)
         self._stop = threading.Event()
         self._abort = threading.Event()
+        self._hinted = threading.Event()  # a wake hint since the last lease request
         self._active: dict[str, _Active] = {}  # leases held: running or queued
         self._queue: deque[list[Lease]] = deque()  # groups waiting for a free slot
         self._pending: dict[tuple[str, int], _Pending] = {}
@@ -79,6 +80,7 @@ class Worker(Pulling, Reporting):
         if self._stop.is_set():
             self._abort.set()
         self._stop.set()
+        self._hinted.set()
         with self._wake:
             self._wake.notify_all()
 
@@ -166,6 +168,7 @@ class Worker(Pulling, Reporting):
         self._subs = [
             s.declare_subscriber(self.keys.ack(self.id), self._on_ack),
             s.declare_subscriber(self.keys.cancel, self._on_cancel),
+            s.declare_subscriber(self.keys.wake, self._on_wake),
         ]
         self._querier = s.declare_querier(
             self.keys.work, timeout=self.settings.query_timeout,

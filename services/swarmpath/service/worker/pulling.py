@@ -41,6 +41,11 @@ def _version() -> str:
     return __version__
 
 
+#: A wake hint ends the wait after an ``empty`` reply, but never sooner than this after it: a
+#: forged hint (on a bus without access control) cannot make a worker ask more often.
+HINT_MIN_WAIT = 0.25
+
+
 class Pulling(Reporting):
     """Mixin of :class:`~swarmpath.service.worker.loop.Worker`: how it gets work. The state it
     uses is created by ``Worker.__init__``; ``_dispatch`` (start queued groups) is the Worker's."""
@@ -51,6 +56,7 @@ class Pulling(Reporting):
     _querier: Any
     scenarios: ByteLRU
     _issued: Issuer
+    _hinted: Any  # threading.Event: a wake hint arrived since the last lease request
     capabilities: Capabilities
 
     def _wants_work(self) -> bool:
@@ -103,6 +109,7 @@ class Pulling(Reporting):
                     self._wake.wait(0.5)
             if self._stop.is_set():
                 return
+            self._hinted.clear()  # a hint from now on answers this request's "empty"
             try:
                 reply = self._ask()
             except Exception as exc:
@@ -121,9 +128,24 @@ class Pulling(Reporting):
             if isinstance(reply, NoWork):
                 if reply.reason.startswith("busy"):  # behind on storing: our results wait
                     self._last_busy = time.monotonic()
-                self._stop.wait(reply.retry_after)
+                if reply.reason == "empty":
+                    self._await_work(reply.retry_after)
+                else:
+                    self._stop.wait(reply.retry_after)
                 continue
             self._take(reply.leases if isinstance(reply, LeaseBundle) else [reply])
+
+    def _await_work(self, retry_after: float) -> None:
+        """After an ``empty`` reply: wait ``retry_after`` s, or until the coordinator's wake
+        hint (work appeared; one that came while the request was on its way counts), but at
+        least HINT_MIN_WAIT."""
+        if self._stop.wait(min(retry_after, HINT_MIN_WAIT)):
+            return
+        self._hinted.wait(max(0.0, retry_after - HINT_MIN_WAIT))
+
+    def _on_wake(self, _sample: Any) -> None:
+        """A wake hint (its payload is not read)."""
+        self._hinted.set()
 
     def _take(self, leases: Sequence[Lease]) -> None:
         """Hold a group of granted leases and start it as soon as a slot is free."""
