@@ -73,6 +73,7 @@ def test_a_login_leases_only_under_its_own_worker_ids(core: Coordinator) -> None
     """The audit's failure 5: bob (a valid login) asked for work as alice's worker (its id is
     public in GET /workers) and its results were stored as alice's. Now the request is refused
     whatever bob sends, and alice's own requests are leased, once each."""
+    core.sizer.max_lease_rate = float("inf")  # small leases: work is left for bob's own worker
     core.worker_alive("alice-1")
     forged = [request("alice-1"),  # no login
               request("alice-1", "bob", "pw-bob"),  # bob's valid proof, alice's worker
@@ -107,7 +108,10 @@ def test_a_token_flood_cannot_lock_workers_out(tmp_path: Path,
     with their tokens, and a worker refused by a table full of real workers is admitted once
     there is room, when it asks for work again."""
     monkeypatch.delenv("SWARMPATH_TOKEN", raising=False)
-    app = create_app(CoordinatorSettings(data_dir=tmp_path / "data"), use_zenoh=False)
+    # small leases (no floor of live slots / lease rate: 1,024 entries would make it the whole
+    # job): work is left for the worker admitted later
+    app = create_app(CoordinatorSettings(data_dir=tmp_path / "data", max_lease_rate=float("inf")),
+                     use_zenoh=False)
     with TestClient(app) as client:
         core: Coordinator = app.state.core
         job = client.post("/jobs", json=SPEC).json()["id"]
