@@ -68,7 +68,7 @@ class SuiteError:
     values: Callable[[Array, int, int], Array]
     optimum: Callable[[int, int], tuple[Array, float]]
     instance: int
-    check: Callable[[int], None]
+    check: Callable[[int], None] = field(compare=False)  # a bound method: not the identity
     centred: bool = False  # evaluated at x + x_opt: the optimum at the origin
 
     def __call__(self, x: Array) -> Array:
@@ -105,6 +105,13 @@ class SuiteFunction(BenchmarkFunction):
     @property
     def base_name(self) -> str:
         return split_instance(self.name.removesuffix(CENTRE_SUFFIX))[0]
+
+    @property
+    def objective_name(self) -> str:
+        """The name its compiled objective is registered under (the backends'
+        ``objectives``): the base name, the instance being the objective's data; a centred
+        copy (which adds x_opt first) keeps its own name, which has none."""
+        return self.name if self.centred else self.base_name
 
     def check_dim(self, dim: int) -> None:
         if self.dimensions is not None and dim not in self.dimensions:

@@ -27,6 +27,7 @@ The objective a kernel receives is the tuple ``(address, noisy, wrapped, data ad
 
 from __future__ import annotations
 
+import ctypes
 from collections.abc import Callable
 from typing import Any
 
@@ -60,6 +61,7 @@ _P = types.CPointer(types.float64)
 SIGNATURE = types.void(types.int64, types.int64, _P, _P, types.CPointer(types.uint8), _P, _P)
 
 Objective = tuple[int, bool, bool, int]
+DataOf = Callable[[BenchmarkFunction, int], np.ndarray]
 
 
 @njit(cache=True)
@@ -173,47 +175,111 @@ _POPULATIONS: dict[str, Callable[..., None]] = {
 assert set(_POPULATIONS) == set(list_functions(builtin=True)), "a built-in has no objective"
 _COMPILED: dict[str, Any] = {}
 _NO_DATA = np.empty(0)
-_KEPT: dict[tuple[str, int], np.ndarray] = {}  # the data arrays objectives point to
+_KEPT: dict[tuple[str, bytes], np.ndarray] = {}  # the data arrays objectives point to
+_DATA_OF: dict[str, DataOf] = {}
 
 
-def register_population(name: str, population: Callable[..., None]) -> None:
+def register_population(name: str, population: Callable[..., None],
+                        data: DataOf | None = None) -> None:
     """Make ``population`` (a module-level function with :data:`SIGNATURE`'s parameters, not
-    yet compiled) the compiled objective of the registered function ``name``."""
+    yet compiled) the compiled objective of the registered function ``name``; ``data(fn, dim)``
+    gives the constants it reads (an instance's optimum, rotations, ...) for ``fn`` (``name``
+    or, for a suite function, one of its instances) in ``dim`` dimensions."""
     get_function(name)  # KeyError naming it if there is no such function
     if _POPULATIONS.get(name, population) is not population:
         raise ValueError(f"function {name!r} has a compiled objective already")
     _POPULATIONS[name] = population
+    if data is not None:
+        _DATA_OF[name] = data
 
 
 def compiled_names() -> list[str]:
     """Registered functions with a compiled objective."""
+    _register_suites()
     return [name for name in _POPULATIONS]
+
+
+def _population_name(fn: BenchmarkFunction) -> str:
+    """The name ``fn``'s objective is registered under: its own, or for an instance of a suite
+    function its base name (``bbob:f3@i7`` -> ``bbob:f3``; see ``SuiteFunction``)."""
+    return str(getattr(fn, "objective_name", fn.name))
 
 
 def has_objective(fn: BenchmarkFunction) -> bool:
     """Whether ``fn`` (a registered function, not a hand-made one of the same name) has a
     compiled objective."""
+    _register_suites()
     try:
         registered = get_function(fn.name)
     except KeyError:
         return False
-    return fn.name in _POPULATIONS and fn.kernel is registered.kernel
+    # an instance of a suite function is a new object per lookup: its kernel compares equal
+    return _population_name(fn) in _POPULATIONS and (
+        fn.kernel is registered.kernel or fn.kernel == registered.kernel)
+
+
+def data_for(fn: BenchmarkFunction, dim: int) -> np.ndarray:
+    """The ``data`` array of ``fn``'s objective in ``dim`` dimensions (empty: none needed)."""
+    _register_suites()
+    data_of = _DATA_OF.get(_population_name(fn))
+    return _NO_DATA if data_of is None else data_of(fn, dim)
 
 
 def objective_for(fn: BenchmarkFunction, data: np.ndarray = _NO_DATA) -> Objective:
     """The tuple a kernel takes for ``fn``: (its compiled objective's address, noisy, wrapped
-    when shifted, the address of ``data``, which is kept alive here); compiles (or loads from
-    numba's cache) the objective on first use. KeyError if ``fn`` has none
-    (:func:`has_objective`)."""
-    if not has_objective(fn):
-        raise KeyError(fn.name)
-    compiled: Any = _COMPILED.get(fn.name)
-    if compiled is None:
-        compiled = _COMPILED[fn.name] = cfunc(SIGNATURE, cache=True)(_POPULATIONS[fn.name])
+    when shifted, the address of ``data`` (:func:`data_for`), which is kept alive here: once
+    per distinct content); compiles (or loads from numba's cache) the objective on first use.
+    KeyError if ``fn`` has none (:func:`has_objective`)."""
+    compiled = _compiled(fn)
     constants = np.ascontiguousarray(data, dtype=np.float64)
-    _KEPT[(fn.name, constants.ctypes.data)] = constants
+    constants = _KEPT.setdefault((fn.name, constants.tobytes()), constants)
     return (int(compiled.address), bool(fn.noisy), bool(fn.wrap_shifted),
             int(constants.ctypes.data))
+
+
+def _compiled(fn: BenchmarkFunction) -> Any:
+    """``fn``'s compiled objective (the cfunc), compiled or loaded on first use."""
+    if not has_objective(fn):
+        raise KeyError(fn.name)
+    name = _population_name(fn)
+    compiled: Any = _COMPILED.get(name)
+    if compiled is None:
+        compiled = _COMPILED[name] = cfunc(SIGNATURE, cache=True)(_POPULATIONS[name])
+    return compiled
+
+
+_CALLABLE = ctypes.CFUNCTYPE(None, ctypes.c_int64, ctypes.c_int64, *[ctypes.c_void_p] * 5)
+
+
+def population_values(fn: BenchmarkFunction, X: np.ndarray) -> np.ndarray:
+    """The values ``fn``'s compiled objective gives the rows of X (m, d), called from Python
+    (tests and benchmarks compare them with the numpy kernel's): no shift, noise or NaN rule,
+    which :func:`evaluate` adds around it."""
+    X = np.ascontiguousarray(X, dtype=np.float64)
+    m, d = X.shape
+    data = np.ascontiguousarray(data_for(fn, d), dtype=np.float64)
+    call = _CALLABLE(_compiled(fn).address)
+    F = np.empty(m)
+    mask = np.ones(m, dtype=np.uint8)
+    work = np.empty(m * d + 3 * d + 2 * m)
+    call(m, d, X.ctypes.data, F.ctypes.data, mask.ctypes.data, work.ctypes.data,
+         data.ctypes.data)
+    return F
+
+
+_SUITES_REGISTERED = False
+
+
+def _register_suites() -> None:
+    """The suites' compiled objectives (on first need: importing them loads the suites)."""
+    global _SUITES_REGISTERED
+    if _SUITES_REGISTERED:
+        return
+    _SUITES_REGISTERED = True
+    from swarmpath.optimizers.compiled import bbob
+
+    for name, population in bbob.POPULATIONS.items():
+        register_population(name, population, bbob.data_for)
 
 
 def _typed_call(typingctx, address, X, x_at, d, F, row, m, mask, work, w_at, data):

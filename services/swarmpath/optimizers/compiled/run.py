@@ -11,7 +11,12 @@ import numpy as np
 from swarmpath.functions import BenchmarkFunction
 from swarmpath.functions.transforms import rotates
 from swarmpath.optimizers.base import ParameterError
-from swarmpath.optimizers.compiled.objectives import Objective, has_objective, objective_for
+from swarmpath.optimizers.compiled.objectives import (
+    Objective,
+    data_for,
+    has_objective,
+    objective_for,
+)
 from swarmpath.optimizers.compiled.registry import Kernel, find_kernel, kernel_names
 from swarmpath.optimizers.problem import BenchmarkProblem
 from swarmpath.optimizers.registry import get_optimizer
@@ -57,11 +62,11 @@ def check_function(fn: BenchmarkFunction) -> None:
         raise ParameterError(f"function {fn.name!r} has no numba kernel; use backend='numpy'")
 
 
-def compiled_objective(fn: BenchmarkFunction) -> Objective:
-    """The compiled objective of a registered function (:func:`check_function`'s error if it
-    has none)."""
+def compiled_objective(fn: BenchmarkFunction, dim: int) -> Objective:
+    """The compiled objective of a registered function in ``dim`` dimensions, with its data
+    (:func:`check_function`'s error if it has none)."""
     check_function(fn)
-    return objective_for(fn)
+    return objective_for(fn, data_for(fn, dim))
 
 
 def minimize_compiled(
@@ -89,7 +94,7 @@ def minimize_compiled(
         raise ParameterError(f"{cls.name} needs agents >= {cls.min_agents}, got {agents}")
     if kernel.check is not None:
         kernel.check(resolved, agents)
-    objectives = [compiled_objective(fn) for fn in fns]
+    objectives = [compiled_objective(fn, dim) for fn in fns]
     started = time.perf_counter()
     total = len(fns) * len(ids)
     done = 0
