@@ -34,7 +34,7 @@ def test_warmup_command_lists_what_it_compiled():
 
 def test_warmup_names_the_option_of_what_has_no_kernel():
     for args, field in ((["-a", "NOPE"], "--algorithms"), (["-a", "RS"], "--algorithms"),
-                        (["-f", "bbob:f1"], "--functions"), (["-f", "F99"], "--functions")):
+                        (["-f", "cec2022:F1"], "--functions"), (["-f", "F99"], "--functions")):
         out = runner.invoke(app, ["warmup", *args])
         assert out.exit_code == 2, (args, out.output)
         assert f"error: {field}:" in out.output, (args, out.output)

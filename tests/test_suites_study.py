@@ -136,12 +136,26 @@ def test_bench_budget_in_evaluations_per_dimension():
     (["-f", "bbob:f1", "-d", "5", "--budget-evals", "10"], "--budget-evals"),
     (["-f", "cec2017", "-d", "20"], "--dims"),
     (["-f", "bbob:f2", "-d", "5", "--transform", "rotate"], "--transform"),
-    (["-f", "bbob:f2", "-d", "5", "--backend", "numba"], "--backend"),
+    (["-f", "cec2022:F2", "-d", "10", "--backend", "numba"], "--backend"),
 ])
 def test_bench_names_the_bad_option(args, option):
     out = _bench(*args)
     assert out.exit_code == 2
     assert option in out.output
+
+
+def test_bench_runs_bbob_on_numba_with_the_numpy_backends_numbers():
+    args = ("-f", "bbob:f7,bbob:f21", "-d", "4", "--instances", "1-2", "--iterations", "8",
+            "--json")
+    compiled = _bench(*args, "--backend", "numba")
+    reference = _bench(*args, "--backend", "numpy")
+    assert compiled.exit_code == 0, compiled.output
+    docs = [json.loads(out.stdout) for out in (compiled, reference)]
+    assert [doc["settings"]["backend"] for doc in docs] == ["numba", "numpy"]
+    assert len(docs[0]["cells"]) == 8
+    for a, b in zip(docs[0]["cells"], docs[1]["cells"], strict=True):
+        assert (a["algorithm"], a["function"]) == (b["algorithm"], b["function"])
+        assert a["best_fitness"] == b["best_fitness"]
 
 
 def test_pooling_keeps_cells_without_instances():
