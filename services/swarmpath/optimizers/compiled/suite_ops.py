@@ -25,10 +25,10 @@ from swarmpath.optimizers.compiled.functions import dot, pairwise_sum
 from swarmpath.optimizers.compiled.ufuncs import (
     _call_cos,
     _call_exp,
-    _call_matmul,
     _call_power,
     _call_sin,
     _linked_loop,
+    matmul_into,
 )
 
 _call_log = _linked_loop("swarmpath_numpy_log_dd", np.log, "dd")
@@ -92,33 +92,10 @@ def pow_scalar_into(x, e, out, call):
 
 
 @njit(cache=True)
-def matmul_into(A, B, C, call):
-    """C = A @ B with numpy's matmul loop as one item of its outer loop (its BLAS call)."""
-    call16 = np.empty(16, dtype=np.int64)
-    call16[0] = A.ctypes.data
-    call16[1] = B.ctypes.data
-    call16[2] = C.ctypes.data
-    call16[3] = 1
-    call16[4] = A.shape[0]
-    call16[5] = A.shape[1]
-    call16[6] = B.shape[1]
-    call16[7] = 0
-    call16[8] = 0
-    call16[9] = 0
-    call16[10] = A.strides[0]
-    call16[11] = A.strides[1]
-    call16[12] = B.strides[0]
-    call16[13] = B.strides[1]
-    call16[14] = C.strides[0]
-    call16[15] = C.strides[1]
-    _call_matmul(call16.ctypes.data, call16[3:].ctypes.data, call16[7:].ctypes.data)
-
-
-@njit(cache=True)
 def rotate(Z, M, call):
     """Z @ M.T for a population Z (m, d) and a rotation M (d, d): the suites' ``rotate``."""
     out = np.empty((Z.shape[0], M.shape[0]))
-    matmul_into(Z, M.T, out, call)
+    matmul_into(Z, M.T, out, np.empty(16, dtype=np.int64))
     return out
 
 
