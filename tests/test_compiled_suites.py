@@ -36,7 +36,7 @@ def _points(fn, d, rng):
 @pytest.mark.parametrize("name", BBOB)
 def test_bbob_values_equal_numpy_bit_for_bit(name):
     rng = np.random.default_rng(int(name.split("f")[-1]))
-    for d in (2, 3, 7, 10, 20):
+    for d in (2, 3, 7, 10, 20, 40):
         for instance in (1, 2, 71):
             fn = get_function(name).with_instance(instance)
             X = _points(fn, d, rng)
@@ -79,7 +79,7 @@ def test_every_kernel_gives_the_numpy_backends_runs(k):
     in turn: the same bests and curves as the numpy backend."""
     algorithms = kernel_names()
     algorithm = algorithms[k % len(algorithms)]
-    d, instance = (2, 5, 10, 3)[k % 4], (1, 3, 71, 2)[k % 4]
+    d, instance = (2, 5, 10, 40)[k % 4], (1, 3, 71, 2)[k % 4]
     name = get_function(f"bbob:f{k}").with_instance(instance).name
     kw = dict(dim=d, agents=12, iterations=12, runs=2, seed=3)
     (ref,) = minimize_many(algorithm, [name], backend="numpy", **kw)

@@ -10,8 +10,8 @@ References: bbob: ``cocoex.BareProblem`` called once per point (how an optimizer
 COCO); CEC: the organisers' ``cec17_test_func`` / ``cec22_test_func`` from a shared library you
 built from their code (as for scripts/suites/golden.py), called once per point (mx = 1) and once
 for the whole batch (mx = points: the C code's own speed without the per-call overhead).
-swarmpath's numpy evaluates the batch of ``--points`` points (30 runs x 30 agents by default)
-in one call, as the numpy backend does; its compiled objective (where there is one) is called
+swarmpath's numpy evaluates the batch of ``--points`` points as runs x ``--population`` agents
+(30 x 30 by default) in one call, as the numpy backend does; its compiled objective (where there is one) is called
 once per population of ``--population`` points, as a kernel calls it, and checked equal to the
 numpy values bit for bit. Every figure is the best of ``--repeats`` in process CPU time,
 measured side by side in one run; each row also checks that the values agree (golden.agree).
@@ -153,14 +153,19 @@ def main(argv: list[str] | None = None) -> int:
                 except ValueError:
                     continue
                 X = rng.uniform(fn.lower, fn.upper, (args.points, dim))
-                ours = fn.value(X)  # type: ignore[attr-defined]  (warms the instance cache)
-                t_ours = best_time(lambda fn=fn, X=X: fn.value(X), args.repeats)
+                # runs x agents, one call: what the numpy backend evaluates (each run's
+                # population is one matmul item; one 900-row matmul would sum otherwise)
+                batch_shape = (-1, args.population, dim)
+                ours = fn.value(X.reshape(batch_shape)).ravel()  # type: ignore[attr-defined]
+                t_ours = best_time(lambda fn=fn, X=X: fn.value(X.reshape(batch_shape)),
+                                   args.repeats)
                 R = X[: args.reference_points]
                 batch = ""
                 compiled = compiled_caller(fn, dim, args.population)
                 numba_cols = f"{'-':>11}{'-':>12}"
                 if compiled is not None:
-                    same = np.array_equal(compiled(X), fn.kernel(X[None])[0])
+                    same = np.array_equal(compiled(X),
+                                          fn.kernel(X.reshape(batch_shape)).ravel())
                     t_numba = best_time(lambda c=compiled, X=X: c(X), args.repeats)
                     compiled_ratios.append(t_ours / t_numba)
                     numba_cols = (f"{args.points / t_numba:11.3g}{t_ours / t_numba:12.2f}"
