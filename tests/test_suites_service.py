@@ -34,6 +34,14 @@ def test_a_job_spec_expands_suite_instances_and_budgets_into_cells():
     assert benchmark_evaluations(spec) == 2 * 4 * 2 * 200  # algorithms x cells x runs x budget
 
 
+def test_a_bbob_job_may_ask_for_numba_and_cec_may_not():
+    bbob = {**SPEC, "functions": ["bbob:f3", "bbob:f21"], "instances": [1, 2],
+            "budget_evals": None, "backend": "numba"}
+    assert parse_job_spec(bbob).backend == "numba"
+    with pytest.raises(ValidationError, match="cec2022:F1"):
+        parse_job_spec({**bbob, "functions": ["bbob:f3", "cec2022:F1"], "instances": [1]})
+
+
 @pytest.mark.parametrize(("change", "field", "says"), [
     ({"instances": [2]}, "functions", "cec2022 has instances 1"),
     ({"functions": ["F1"], "instances": [2]}, "functions", "only suite functions"),
