@@ -11,10 +11,11 @@ COCO); CEC: the organisers' ``cec17_test_func`` / ``cec22_test_func`` from a sha
 built from their code (as for scripts/suites/golden.py), called once per point (mx = 1) and once
 for the whole batch (mx = points: the C code's own speed without the per-call overhead).
 swarmpath's numpy evaluates the batch of ``--points`` points as runs x ``--population`` agents
-(30 x 30 by default) in one call, as the numpy backend does; its compiled objective (where there is one) is called
-once per population of ``--population`` points, as a kernel calls it, and checked equal to the
-numpy values bit for bit. Every figure is the best of ``--repeats`` in process CPU time,
-measured side by side in one run; each row also checks that the values agree (golden.agree).
+(30 x 30 by default) in one call, as the numpy backend does; its compiled objective (where
+there is one) is called once per population of ``--population`` points, as a kernel calls it,
+and checked equal to the numpy values bit for bit. Every figure is the best of ``--repeats`` in
+process CPU time, measured side by side in one run; each row also checks that the values agree
+(golden.agree).
 Prints one row per function and a median line per suite and dimension, and the load average.
 BLAS runs on one thread, as in the study processes (swarmpath.parallel): on a loaded machine
 its threads' spinning otherwise costs 10-50x the matmul of a rotation.
@@ -156,16 +157,16 @@ def main(argv: list[str] | None = None) -> int:
                 # runs x agents, one call: what the numpy backend evaluates (each run's
                 # population is one matmul item; one 900-row matmul would sum otherwise)
                 batch_shape = (-1, args.population, dim)
-                ours = fn.value(X.reshape(batch_shape)).ravel()  # type: ignore[attr-defined]
-                t_ours = best_time(lambda fn=fn, X=X: fn.value(X.reshape(batch_shape)),
-                                   args.repeats)
+                runs = X.reshape(batch_shape)
+                ours = fn.value(runs).ravel()  # type: ignore[attr-defined]
+                t_ours = best_time(lambda fn=fn, runs=runs: fn.value(runs), args.repeats)
                 R = X[: args.reference_points]
                 batch = ""
                 compiled = compiled_caller(fn, dim, args.population)
                 numba_cols = f"{'-':>11}{'-':>12}"
                 if compiled is not None:
                     same = np.array_equal(compiled(X),
-                                          fn.kernel(X.reshape(batch_shape)).ravel())
+                                          fn.kernel(runs).ravel())
                     t_numba = best_time(lambda c=compiled, X=X: c(X), args.repeats)
                     compiled_ratios.append(t_ours / t_numba)
                     numba_cols = (f"{args.points / t_numba:11.3g}{t_ours / t_numba:12.2f}"
