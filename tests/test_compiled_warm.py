@@ -1,8 +1,15 @@
 """``swarmpath warmup`` and ``compiled.warm``: the kernels a study needs, made ready before it."""
 
+import contextlib
+import fcntl
 import json
+import os
+import threading
+import time
+from pathlib import Path
 
 import numpy as np
+import pytest
 from typer.testing import CliRunner
 
 from swarmpath.cli import app
@@ -38,3 +45,87 @@ def test_warmup_names_the_option_of_what_has_no_kernel():
         out = runner.invoke(app, ["warmup", *args])
         assert out.exit_code == 2, (args, out.output)
         assert f"error: {field}:" in out.output, (args, out.output)
+
+
+@contextlib.contextmanager
+def piece_held(kind: str, name: str):
+    """The lock a shared warm-up takes for one piece, held here (as by another process)."""
+    from numba.core import config
+
+    path = Path(config.CACHE_DIR) / f".warm-{kind}-{name}.lock"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield path
+    finally:
+        os.close(fd)
+
+
+def waiting_on_a_lock(pid: int) -> bool:
+    """Whether process ``pid`` waits for a file lock (a ``->`` line of /proc/locks)."""
+    return any(line.split()[1] == "->" and int(line.split()[5]) == pid
+               for line in Path("/proc/locks").read_text().splitlines())
+
+
+def test_a_shared_warm_up_waits_for_the_process_making_a_piece_then_loads_it():
+    done: list = []
+    with piece_held("function", "F1"):
+        thread = threading.Thread(target=lambda: done.append(
+            warm([], ["F9", "F1"], shared=True, start=1)), daemon=True)
+        thread.start()
+        thread.join(3.0)
+        assert thread.is_alive() and not done  # F9 comes first: F1 is another's
+    thread.join(120)
+    assert [(w.kind, w.name) for w in done[0]] == [("function", "F9"), ("function", "F1")]
+
+
+@pytest.mark.skipif(not Path("/proc/locks").is_file(), reason="needs Linux's /proc/locks")
+def test_a_process_slot_says_ready_only_after_its_kernels_and_without_warm_at_once():
+    """A slot process compiles (or loads) the kernels before it says ready, so a worker never
+    pulls work for a slot that would compile inside its lease; ``warm=False`` skips that."""
+    from swarmpath.service.worker.slots import ProcessSlot
+
+    def nothing(*_args: object) -> None:
+        pass
+
+    with piece_held("function", "F1"):
+        warming, plain = ProcessSlot(0, nothing, warm=True), ProcessSlot(1, nothing, warm=False)
+        try:
+            warming.start()
+            plain.start()
+            deadline = time.monotonic() + 180
+            while not (plain.ready and waiting_on_a_lock(warming._proc.pid)):
+                assert time.monotonic() < deadline, "the slots did not get there in 180 s"
+                time.sleep(0.2)
+            assert not warming.ready  # it waits for the kernel another process is making
+        finally:
+            warming.close(timeout=2.0)
+            plain.close(timeout=2.0)
+
+
+def test_a_worker_process_runs_auto_on_the_kernels_only_once_it_compiled_them(monkeypatch):
+    """Backend "auto" in a lease is the numpy reference until the process warmed every kernel
+    (nothing compiles inside a lease), the kernels after; a failed warm-up keeps numpy."""
+    import swarmpath.optimizers.compiled.warm as warm_module
+    from swarmpath.service.protocol import BenchmarkCell
+    from swarmpath.service.worker import execution, slots
+    from test_service_api import make_lease
+
+    monkeypatch.setattr(execution, "AUTO", ["numpy"])
+    spec = BenchmarkCell(algorithm="GWO", function="F1", dim=2, agents=6, iterations=3,
+                         backend="auto")
+    lease = make_lease(spec, [0])
+    assert execution.minimize_options(lease, spec)["backend"] == "numpy"
+    numba_spec = spec.model_copy(update={"backend": "numba"})
+    assert execution.minimize_options(lease, numba_spec)["backend"] == "numba"  # as asked
+
+    def broken(**_kw: object) -> list:
+        raise RuntimeError("no compiler")
+
+    monkeypatch.setattr(warm_module, "warm", broken)
+    slots.warm_compiled()
+    assert execution.minimize_options(lease, spec)["backend"] == "numpy"
+    monkeypatch.setattr(warm_module, "warm", lambda **_kw: [])
+    slots.warm_compiled()
+    assert execution.minimize_options(lease, spec)["backend"] == "auto"

@@ -383,7 +383,7 @@ def test_transform_reaches_every_cell(transform):
 def test_backend_reaches_every_cell_and_what_has_no_kernel_names_the_field():
     s = p.parse_job_spec(spec(backend="numba", algorithms=["GWO", "PSO"]))
     assert {c.backend for c in p.expand_cells(s)} == {"numba"}
-    assert {c.backend for c in p.expand_cells(p.parse_job_spec(spec()))} == {"numpy"}
+    assert {c.backend for c in p.expand_cells(p.parse_job_spec(spec()))} == {"auto"}
     fails_on(spec(backend="gpu"), "backend")
     fails_on(spec(backend="numba", transform="shift+rotate"), "backend")
 

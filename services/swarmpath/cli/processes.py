@@ -139,6 +139,13 @@ StackingOpt = Annotated[
     bool, typer.Option("--stacking/--no-stacking",
                        help="Run a bundle's leases that differ only in the function as one batch.")
 ]
+WarmOpt = Annotated[
+    bool, typer.Option("--warm/--no-warm", envvar="SWARMPATH_WARM",
+                       help="Slots compile (or load from numba's cache) the compiled kernels "
+                            "before they take work, so no lease waits for the compiler (the "
+                            "first start of a tree: about 100 s of CPU, shared by the slots; "
+                            "SWARMPATH_WARM=0 is --no-warm).")
+]
 AllowedHostOpt = Annotated[
     list[str] | None,
     typer.Option("--allowed-host", metavar="NAME",
@@ -249,6 +256,7 @@ def worker(
                           help="Bundles pulled ahead of free slots (0: pull only when idle).")
     ] = 1,
     stacking: StackingOpt = True,
+    warm: WarmOpt = True,
     exit_with_parent: Annotated[int | None, typer.Option(hidden=True)] = None,
     shm: ShmOpt = False,
     zenoh_config: ZConfOpt = None,
@@ -296,7 +304,7 @@ def worker(
         executor="thread" if threads else "process", user=user, password=password, shm=shm,
         zenoh_extra=_extra(zenoh_config, "--zenoh-config"), grace_seconds=grace,
         exit_with_parent=exit_with_parent, max_leases=max_leases, prefetch=prefetch,
-        stacking=stacking,
+        stacking=stacking, warm=warm,
     )
     _logging(log_level)
     raise typer.Exit(run_worker(settings))
@@ -306,9 +314,9 @@ class LocalWorkers:
     """The worker subprocesses of ``swarmpath up`` (fork+exec'd, so nothing of Zenoh is shared)."""
 
     def __init__(self, logins: list[tuple[str, str]], connect: str, prefix: str, slots: int,
-                 log_level: str, stacking: bool = True):
+                 log_level: str, stacking: bool = True, warm: bool = True):
         self.n, self.connect, self.prefix, self.slots = len(logins), connect, prefix, slots
-        self.stacking = stacking
+        self.stacking, self.warm = stacking, warm
         self.log_level = log_level
         # one login per worker, named by its id: (user, password), handed over in the
         # environment, never in argv
@@ -326,6 +334,7 @@ class LocalWorkers:
                 "--prefix", self.prefix, "--slots", str(self.slots),
                 "--exit-with-parent", str(os.getpid()), "--log-level", self.log_level,
                 "--id", worker_id, *([] if self.stacking else ["--no-stacking"]),
+                *([] if self.warm else ["--no-warm"]),
             ]
             env = dict(os.environ)
             env.pop("SWARMPATH_ZENOH_LOGIN_FILE", None)
@@ -372,6 +381,7 @@ def up(
                           "local workers' own random login."),
     ] = None,
     stacking: StackingOpt = True,
+    warm: WarmOpt = True,
     allowed_host: AllowedHostOpt = None,
     log_level: LogOpt = "info",
 ) -> None:
@@ -399,7 +409,7 @@ def up(
     from swarmpath.service.coordinator import create_app
 
     local = LocalWorkers(logins, _connectable(settings.zenoh_listen[0]), prefix, slots,
-                         log_level, stacking)
+                         log_level, stacking, warm)
     typer.echo(f"swarmpath up: http://{http}  zenoh {zenoh}  data {data}", err=True)
     _serve(create_app(settings, on_started=local.start, on_stopping=local.stop), http, log_level)
 

@@ -194,11 +194,11 @@ class BenchmarkJobSpec(Model):
         return _reference(v, info.data.get("algorithms"))
 
     backend: str = Field(
-        default="numpy",
-        description="numpy (the reference), numba (compiled kernels: the reference's numbers "
-        "run for run, within each kernel's stated tolerance) or auto (the kernels where the "
-        "study has them, else numpy). The service's default stays numpy until workers compile "
-        "before they lease (a kernel's first use compiles it, seconds of a lease's time)",
+        default="auto",
+        description="auto (the compiled kernels where the worker has numba and the study has "
+        "kernels, else numpy), numpy (the reference) or numba (compiled kernels only): the "
+        "reference's numbers run for run, within each kernel's stated tolerance (0 for every "
+        "built-in kernel). Workers compile the kernels before they take work",
     )
 
     @field_validator("backend")

@@ -9,8 +9,11 @@ or a worker before it leases.
 
 from __future__ import annotations
 
+import contextlib
+import os
+import re
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 
 from swarmpath.functions import get_function
@@ -58,26 +61,72 @@ def functions_with_objectives(functions: Sequence[str] | None) -> list[str]:
 
 
 def warm(algorithms: Sequence[str] | None = None,
-         functions: Sequence[str] | None = None) -> list[Warmed]:
+         functions: Sequence[str] | None = None, *, shared: bool = False,
+         start: int = 0) -> list[Warmed]:
     """Make the compiled objectives of ``functions`` and the kernels of ``algorithms`` ready
     (None: every one there is; KeyError as :func:`algorithms_with_kernels` and
     :func:`functions_with_objectives`). Functions first: an algorithm's first run then times
-    its kernel alone."""
+    its kernel alone.
+
+    ``shared``: other processes of this tree may be warming at the same time (a worker's slots,
+    the workers of ``swarmpath up``): each piece is made ready under a lock of its own in the
+    cache directory, so one process compiles it while the others wait and then load it from
+    the cache, and the pieces after the first function are taken in turn from position
+    ``start`` (processes starting at different positions compile different pieces at once)."""
     from swarmpath.optimizers.api import minimize
     from swarmpath.optimizers.registry import get_optimizer
 
     algos = algorithms_with_kernels(algorithms)
     names = functions_with_objectives(functions)
-    out = []
-    for name in names:
-        started = time.process_time()
+    first = names[0] if names else "F1"
+
+    def function(name: str) -> None:
         objective_for(get_function(name))
-        out.append(Warmed("function", name, time.process_time() - started))
-    for a in algos:
-        started = time.process_time()
+
+    def algorithm(a: str) -> None:
         # one tiny run: a kernel has one signature whatever the sizes, so this is its build
-        minimize(a, names[0] if names else "F1", dim=2,
-                 agents=max(10, get_optimizer(a).min_agents), iterations=2, runs=1,
-                 backend="numba")
-        out.append(Warmed("algorithm", a, time.process_time() - started))
+        minimize(a, first, dim=2, agents=max(10, get_optimizer(a).min_agents), iterations=2,
+                 runs=1, backend="numba")
+
+    pieces: list[tuple[str, str, Callable[[str], None]]] = [
+        ("function", n, function) for n in names]
+    pieces += [("algorithm", a, algorithm) for a in algos]
+    order = {(kind, name): i for i, (kind, name, _make) in enumerate(pieces)}
+    if shared and len(pieces) > 1:
+        # the first function first (every kernel's warm-up run evaluates it), then in turn
+        head, rest = pieces[:1] if names else [], pieces[1:] if names else pieces
+        k = start % len(rest)
+        pieces = head + rest[k:] + rest[:k]
+    out = []
+    for kind, name, make in pieces:
+        started = time.process_time()
+        with _piece_lock(kind, name) if shared else contextlib.nullcontext():
+            make(name)
+        out.append(Warmed(kind, name, time.process_time() - started))
+    out.sort(key=lambda w: order[(w.kind, w.name)])  # as asked, whatever order they were made in
     return out
+
+
+@contextlib.contextmanager
+def _piece_lock(kind: str, name: str) -> Iterator[None]:
+    """An exclusive lock on one piece, shared by the processes of this tree (a file lock in
+    numba's cache directory, released by the kernel if its holder dies); no lock where the
+    directory cannot be written (then numba cannot cache there either)."""
+    import fcntl
+
+    from numba.core import config
+
+    try:
+        folder = str(config.CACHE_DIR)  # type: ignore[attr-defined]
+        os.makedirs(folder, exist_ok=True)
+        safe = re.sub(r"[^A-Za-z0-9_.-]", "_", name)
+        fd = os.open(os.path.join(folder, f".warm-{kind}-{safe}.lock"),
+                     os.O_RDWR | os.O_CREAT, 0o644)
+    except OSError:
+        yield
+        return
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)  # releases the lock

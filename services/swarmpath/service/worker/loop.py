@@ -127,8 +127,10 @@ class Worker(Pulling, Reporting):
     def new_slot(self, index: int) -> Slot:
         """Slot ``index`` of this worker (the settings' executor; a subclass may run leases
         elsewhere, e.g. scripts/bench/farm.py's simulated slots)."""
-        slot_cls = ProcessSlot if self.settings.executor == "process" else ThreadSlot
-        return slot_cls(index, self._on_slot_done, self.settings.stacking)
+        if self.settings.executor == "process":
+            return ProcessSlot(index, self._on_slot_done, self.settings.stacking,
+                               warm=self.settings.warm)
+        return ThreadSlot(index, self._on_slot_done, self.settings.stacking)
 
     def _slot_ready(self) -> None:
         with self._wake:

@@ -32,6 +32,10 @@ class WorkerSettings:
     max_leases: int = 32  # per lease request: small leases come as bundles of up to this many
     prefetch: int = 1  # bundles held beyond the slots: the next one is at hand when a slot frees
     stacking: bool = True  # a bundle's leases differing only in the function run as one batch
+    # process slots compile (or load) the numba kernels before they take work (slots.py);
+    # SWARMPATH_WARM=0 turns it off (backend auto then runs the numpy reference in the slots)
+    warm: bool = field(default_factory=lambda: os.environ.get("SWARMPATH_WARM", "1").lower()
+                       not in ("0", "false", "no", "off"))
     executor: Literal["process", "thread"] = "process"
     user: str | None = None
     password: str | None = None

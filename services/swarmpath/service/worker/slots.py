@@ -134,8 +134,35 @@ def warm_up() -> None:
         log.debug("warm-up run failed", exc_info=True)
 
 
+def warm_compiled() -> None:
+    """Compile (or load from numba's on-disk cache) every kernel and compiled objective that
+    backend "auto" may run, before the slot takes work: no lease waits for numba's compiler (a
+    kernel not in the cache costs 3-20 s of CPU at its first use). The cache is per installed
+    tree and shared by every process of it; the slots and workers starting together compile
+    each piece once between them (:func:`swarmpath.optimizers.compiled.warm.warm`, shared).
+    Only then does backend "auto" run the kernels in this process (``execution.AUTO``; the
+    numpy reference before, or without numba: the same numbers)."""
+    try:
+        from swarmpath.optimizers.compiled.warm import warm
+    except ImportError:  # numba is not installed: nothing compiles
+        return
+    try:
+        done = warm(shared=True, start=os.getpid())
+    except Exception:  # auto stays on the numpy reference in this slot
+        log.warning("compiling the kernels failed; backend auto runs numpy here", exc_info=True)
+        return
+    from swarmpath.service.worker import execution
+
+    execution.AUTO[0] = "auto"  # every kernel is ready: auto may run them
+    seconds = sum(w.seconds for w in done)
+    if seconds > 10.0:
+        log.warning("compiled the numba kernels in %.0f s of CPU (once per installed tree; "
+                    "`swarmpath warmup` does it ahead)", seconds)
+
+
 def _slot_main(
-    conn: Any, cancel: Any, done: Any, running: Any, parent: int, stacking: bool = True
+    conn: Any, cancel: Any, done: Any, running: Any, parent: int, stacking: bool = True,
+    warm: bool = True,
 ) -> None:
     """A slot's child process: groups of leases in, one reply per lease out, until told to stop
     or orphaned."""
@@ -172,6 +199,8 @@ def _slot_main(
         done.value = n
 
     warm_up()
+    if warm:
+        warm_compiled()
     try:
         conn.send(("ready", -1))  # the worker pulls work for this slot only from now on
     except (EOFError, OSError):
@@ -211,11 +240,14 @@ def _slot_main(
 
 class ProcessSlot(Slot):
     """Leases run in a spawned child process (true parallelism; killed and respawned if it
-    dies). The child is started with the multiprocessing *spawn* method, never forked."""
+    dies). The child is started with the multiprocessing *spawn* method, never forked; it says
+    ready after its warm-up (imports, a tiny run, and with ``warm`` the compiled kernels:
+    :func:`warm_compiled`)."""
 
     def __init__(self, index: int, on_done: Callable[[Slot, Outcomes], None],
-                 stacking: bool = True):
+                 stacking: bool = True, warm: bool = True):
         super().__init__(index, on_done, stacking)
+        self.warm = warm
         import multiprocessing
 
         self._ctx = multiprocessing.get_context("spawn")
@@ -256,7 +288,7 @@ class ProcessSlot(Slot):
         self._proc = self._ctx.Process(
             target=_slot_main,
             args=(child_conn, self._cancel, self._done, self._running, os.getpid(),
-                  self.stacking),
+                  self.stacking, self.warm),
             name=f"swarmpath-slot-{self.index}", daemon=True,
         )
         self._proc.start()
