@@ -143,7 +143,7 @@ WarmOpt = Annotated[
     bool, typer.Option("--warm/--no-warm", envvar="SWARMPATH_WARM",
                        help="Slots compile (or load from numba's cache) the compiled kernels "
                             "before they take work, so no lease waits for the compiler (the "
-                            "first start of a tree: about 100 s of CPU, shared by the slots; "
+                            "first start of a tree: 2-3 min of CPU, shared by the slots; "
                             "SWARMPATH_WARM=0 is --no-warm).")
 ]
 AllowedHostOpt = Annotated[
