@@ -177,7 +177,8 @@ def test_pairs_need_a_scen_and_set_the_endpoints_and_blocked_cells_are_refused(
     r = client.post("/jobs", json={"kind": "map", "planners": ["MFB"], "maps": [
         {"map": arena["id"], "start": [5.5, 5.5], "scen": {"rows": [0]}}]})
     assert r.status_code == 422
-    assert r.json()["detail"][0]["loc"] == ["body", "maps", 0, "start"]
+    assert r.json()["detail"][0]["loc"] == ["body", "maps", 0, "scen"]
+    assert "leave start out" in r.json()["detail"][0]["msg"]
     # a pair whose start is a blocked cell (arena's corner (0, 0)) names its place in rows
     blocked = _upload(client, "version 1\n0\tarena.map\t49\t49\t1\t11\t1\t12\t1\n"
                               "0\tarena.map\t49\t49\t0\t0\t1\t12\t12\n")

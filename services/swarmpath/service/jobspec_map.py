@@ -88,14 +88,17 @@ class MapRef(Model):
         default=None, description="MovingAI pairs of the map's uploaded .scen: one map "
         "'NAME#row' per pair (start and goal at the pair's cells)")
 
-    @model_validator(mode="after")
-    def _pairs_set_the_endpoints(self) -> MapRef:
-        if self.scen is not None:
+    @field_validator("scen")
+    @classmethod
+    def _pairs_set_the_endpoints(cls, v: ScenChoice | None, info: ValidationInfo
+                                 ) -> ScenChoice | None:
+        # a field validator, not a model one: the union's member keeps its plain name in locs
+        if v is not None:
             for key in ("start", "goal"):
-                if getattr(self, key) is not None:
-                    raise FieldProblems([((key,), "a .scen pair sets start and goal; leave "
-                                          f"{key} out or leave scen out")])
-        return self
+                if info.data.get(key) is not None:
+                    raise ValueError(f"a .scen pair sets start and goal; leave {key} out or "
+                                     "leave scen out")
+        return v
 
 
 MapEntry = Annotated[str | MapRef | dict[str, Any], Field(union_mode="left_to_right")]
