@@ -204,6 +204,7 @@ def _cell(algorithm: str, function: str, dim: int, results: list[Any]) -> report
         seconds=sum(res.seconds for res in results),
         params=dict(results[-1].params or {}),
         curves=[row.tolist() for res in results for row in res.curve],
+        cpu_seconds=report.cpu_total(res.cpu_seconds for res in results),
     )
 
 
@@ -219,7 +220,17 @@ def run_cell(
     return cell
 
 
-def caption(spec: BenchSpec, seconds: float | None, race: dict[str, Any] | None = None) -> str:
+#: What the ranking table's time columns are (under it).
+TIME_LEGEND = ("time (s), CPU (s): wall and CPU seconds of the algorithm's runs, summed over "
+               "its functions and dimensions (CPU: the computing threads' time, which does not "
+               "grow with the machine's load as the wall time does)")
+
+
+def caption(spec: BenchSpec, seconds: float | None, race: dict[str, Any] | None = None,
+            cpu_seconds: float | None = None) -> str:
+    """The table's caption: the setting, then (after a run) the study's elapsed wall time and
+    ``cpu_seconds``, the CPU time its runs took (their threads', summed over the cells: it
+    does not grow with the machine's load as the elapsed time does)."""
     moved = "" if spec.transform == "none" else f", transform {spec.transform}"
     backend = "" if spec.backend in ("numpy", "auto") else f", backend {spec.backend}"
     length = (f"{spec.iterations} iterations" if spec.budget_evals is None else
@@ -241,7 +252,8 @@ def caption(spec: BenchSpec, seconds: float | None, race: dict[str, Any] | None 
     if seconds is None:  # a paper's caption: what was run
         dims = ", ".join(str(d) for d in spec.dims)
         return f"swarmpath bench: {', '.join(spec.functions)} in {dims} dimensions; {setting}"
-    return f"{setting}; {report.BEST_MARK} best avg; {seconds:.1f} s"
+    cpu = "" if cpu_seconds is None else f", {cpu_seconds:.2f} s CPU in the runs"
+    return f"{setting}; {report.BEST_MARK} best avg; {seconds:.1f} s elapsed{cpu}"
 
 
 def _ranges(ids: Sequence[int]) -> str:
@@ -471,17 +483,21 @@ def print_tables(
     plain = spec.transform == "none"
     table = report.render_table(cells, spec.algorithms, tests=tests if multi else None,
                                 origin=plain)
+    ranks = report.render_ranking(cells, spec.algorithms, tests) if multi else None
     console = Console()
     if not console.is_terminal:  # pipes and files: never squeeze the numbers to 80 columns
-        width = Measurement.get(console, console.options.update(width=100_000), table).maximum
+        wide = console.options.update(width=100_000)
+        width = max(Measurement.get(console, wide, t).maximum for t in (table, ranks) if t)
         console = Console(width=max(80, width))
     console.print(table)
-    console.print(caption(spec, seconds, tests.race if tests else None), highlight=False)
+    console.print(caption(spec, seconds, tests.race if tests else None,
+                          report.cpu_total(c.cpu_seconds for c in cells)), highlight=False)
     if plain and report.origin_suspects(cells):
         console.print(audit.ORIGIN_FOOTNOTE, highlight=False)
-    if multi:
-        console.print(report.render_ranking(cells, spec.algorithms, tests))
+    if ranks is not None:
+        console.print(ranks)
         if tests is not None:
             for line in report.friedman_lines(tests) + bayes_lines(tests):
                 console.print(line, highlight=False)
             console.print(report.legend(tests), highlight=False)
+        console.print(TIME_LEGEND, highlight=False)

@@ -61,9 +61,23 @@ class Cell:
     curves: list[list[float]] = field(default_factory=list, repr=False)
     stats: dict[str, float] = field(init=False)
     rank: int = 0  # among the algorithms at this (function, dim); set by assign_ranks
+    #: CPU seconds of the runs (the computing threads', ``Result.cpu_seconds``) beside the wall
+    #: ``seconds``; None when a part of the cell was not measured (see :func:`cpu_total`)
+    cpu_seconds: float | None = None
 
     def __post_init__(self) -> None:
         self.stats = describe(self.best_fitness)
+
+
+def cpu_total(values: Iterable[float | None]) -> float | None:
+    """The sum of CPU times, or None when any is unknown (a sum missing a part would read as a
+    smaller cost, unlike a mean over the measured ones)."""
+    total = 0.0
+    for v in values:
+        if v is None:
+            return None
+        total += float(v)
+    return total
 
 
 def assign_ranks(cells: Iterable[Cell]) -> None:
@@ -159,7 +173,8 @@ def origin_suspects(cells: Iterable[Cell]) -> set[tuple[str, int, str]]:
 
 
 def ranking(cells: Sequence[Cell], algorithms: Sequence[str]) -> list[dict[str, Any]]:
-    """Per algorithm: how many (function, dim) it has the best average in, and its mean rank."""
+    """Per algorithm: how many (function, dim) it has the best average in, its mean rank, and
+    the wall and CPU seconds of its cells (summed; CPU None when a cell's is unknown)."""
     out = []
     for a in algorithms:
         mine = [c for c in cells if c.algorithm == a]
@@ -169,6 +184,8 @@ def ranking(cells: Sequence[Cell], algorithms: Sequence[str]) -> list[dict[str, 
                 "best": sum(1 for c in mine if c.rank == 1),
                 "of": len(mine),
                 "mean_rank": (sum(c.rank for c in mine) / len(mine)) if mine else math.nan,
+                "seconds": sum(c.seconds for c in mine),
+                "cpu_seconds": cpu_total(c.cpu_seconds for c in mine),
             }
         )
     return out
@@ -177,13 +194,16 @@ def ranking(cells: Sequence[Cell], algorithms: Sequence[str]) -> list[dict[str, 
 def render_ranking(
     cells: Sequence[Cell], algorithms: Sequence[str], tests: Statistics | None = None
 ) -> Table:
-    """Per algorithm: best averages, mean rank over the cells and, with ``tests``, the +/=/-
+    """Per algorithm: best averages, mean rank over the cells, the wall time and CPU time of its
+    cells (``time (s)``, ``CPU (s)``: "-" when not measured) and, with ``tests``, the +/=/-
     counts against the reference and the Friedman mean rank per dimension (with the marker of
     the Holm post-hoc against the reference)."""
     table = Table(box=box.SIMPLE_HEAD, pad_edge=False)
     table.add_column("algorithm")
     table.add_column("best avg", justify="right")
     table.add_column("mean rank", justify="right")
+    table.add_column("time (s)", justify="right")
+    table.add_column("CPU (s)", justify="right")
     counts = tests.comparison.counts() if tests else {}
     verdicts = tests.bayes.verdict_counts() if tests and tests.bayes else {}
     if tests:
@@ -194,7 +214,9 @@ def render_ranking(
             table.add_column(f"Friedman D={dim}", justify="right")
     for r in ranking(cells, algorithms):
         a = r["algorithm"]
-        cols = [a, f"{r['best']}/{r['of']}", f"{r['mean_rank']:.2f}"]
+        cpu = r["cpu_seconds"]
+        cols = [a, f"{r['best']}/{r['of']}", f"{r['mean_rank']:.2f}", f"{r['seconds']:.2f}",
+                "-" if cpu is None else f"{cpu:.2f}"]
         if tests:
             n = counts.get(a)
             cols.append("ref" if n is None else f"{n['+']}/{n['=']}/{n['-']}")
@@ -229,6 +251,7 @@ def cell_to_json(
         "stats": {k: json_number(v) for k, v in c.stats.items()},
         "rank": c.rank,
         "seconds": c.seconds,
+        "cpu_seconds": c.cpu_seconds,
         "evaluations": sum(c.evaluations),
         "params": c.params,
         "run_ids": c.run_ids,
@@ -262,6 +285,7 @@ def study_to_json(
         "swarmpath": version,
         "settings": dict(settings),
         "seconds": seconds,
+        "cpu_seconds": cpu_total(c.cpu_seconds for c in cells),
         "cells": [cell_to_json(c, tests, origin) for c in cells],
         "ranking": [
             {**r, "mean_rank": json_number(r["mean_rank"])} for r in ranking(cells, algorithms)

@@ -57,6 +57,11 @@ class Result:
     #: numpy reference that backend allows (0.0: equal to the last bit).
     backend: str = "numpy"
     tolerance: float = 0.0
+    #: CPU seconds of the computing thread (:func:`time.thread_time`, as a map run's
+    #: ``RunOutcome.cpu_seconds``), shared among the functions like ``seconds``: beside the wall
+    #: time, what the runs cost whatever else the machine does. None: not measured (a Result
+    #: made elsewhere). A timing: never part of a run's identity or of a rerun's comparison.
+    cpu_seconds: float | None = None
 
 
 def create(
@@ -145,7 +150,8 @@ def minimize_many(
     one function's runs: fewer, larger array operations per iteration (on two threads, the ICOOT
     paper's Table 2 takes about a fifth less time stacked: docs/benchmarks.md). A noisy function
     (F7) is never stacked with another. ``seconds`` of each result is the call's wall time
-    shared among the functions in proportion to their runs.
+    shared among the functions in proportion to their runs; ``cpu_seconds`` the call's CPU
+    time of this thread, shared the same way.
 
     ``chunk_elements``: see :func:`minimize`. One thread runs fastest with the default; threads
     sharing the process run faster with larger chunks (fewer numpy calls, so fewer hand-offs of
@@ -209,7 +215,7 @@ def minimize_many(
             res for group, ids in groups for res in _minimize_compiled(
                 cls.name, group, dim, agents, iterations, ids, int(seed), params, kind, hook)
         ]
-    started = time.perf_counter()
+    started, cpu_started = time.perf_counter(), time.thread_time()
     # Large batches run as chunks of about ``elements`` coordinates per population array,
     # stepped in turn every iteration: the arrays of a step stay in the CPU caches. Runs are
     # independent and each has its own streams, so chunking changes no number.
@@ -234,6 +240,7 @@ def minimize_many(
         if on_iteration is not None:
             on_iteration(opts[-1])
     seconds = time.perf_counter() - started
+    cpu_seconds = time.thread_time() - cpu_started
     best = np.concatenate([opt.best_fitness for opt in opts])
     position = np.concatenate([opt.best_position for opt in opts])
     evaluations = np.concatenate([opt.evaluations for opt in opts])
@@ -258,6 +265,7 @@ def minimize_many(
                 curve=fn.report(curve[rows]),
                 evaluations=evaluations[rows].copy(),
                 seconds=seconds * len(ids) / total,
+                cpu_seconds=cpu_seconds * len(ids) / total,
                 shifts=None if shifts is None else shifts[rows].copy(),
                 params=dict(opts[0].p),
                 transform=kind,

@@ -95,7 +95,7 @@ def minimize_compiled(
     if kernel.check is not None:
         kernel.check(resolved, agents)
     objectives = [compiled_objective(fn, dim) for fn in fns]
-    started = time.perf_counter()
+    started, cpu_started = time.perf_counter(), time.thread_time()
     total = len(fns) * len(ids)
     done = 0
     out = []
@@ -124,6 +124,8 @@ def minimize_compiled(
             "tolerance": kernel.tolerance,
         })
     seconds = time.perf_counter() - started
+    cpu_seconds = time.thread_time() - cpu_started
     for fields in out:
         fields["seconds"] = seconds / len(fns)
+        fields["cpu_seconds"] = cpu_seconds / len(fns)
     return out
