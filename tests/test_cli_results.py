@@ -164,6 +164,13 @@ def test_runs_export_in_every_format_holds_every_run_with_its_curve(service, tmp
             assert row["best_fitness"] == item["best_fitness"]
             assert list(row["curve"]) == item["curve"] and len(row["curve"]) == 10
             assert list(row["best_position"]) == item["best_position"]
+            # CPU beside wall time, as the worker measured it (REST and every export)
+            assert isinstance(item["cpu_seconds"], float) and item["cpu_seconds"] >= 0.0
+            assert row["cpu_seconds"] == pytest.approx(item["cpu_seconds"], rel=1e-15)
+    summary = http.get(f"/jobs/{job}/summary").json()
+    assert all(r["cpu_seconds_mean"] >= 0.0 for r in summary["rows"])
+    csv_head = http.get(f"/jobs/{job}/summary", params={"format": "csv"}).text.splitlines()[0]
+    assert "seconds_mean,cpu_seconds_mean" in csv_head
     pd.testing.assert_frame_equal(frames["csv"].drop(columns=["curve", "best_position",
                                                               "worker", "failure",
                                                               "curve_stride"]),

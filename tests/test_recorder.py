@@ -96,6 +96,7 @@ def test_benchmark_job_file(store):
         assert by_run[item["run_id"]]["best_fitness"] == item["best_fitness"]
         assert by_run[item["run_id"]]["algorithm"] == item["algorithm"]
         assert by_run[item["run_id"]]["backend"] == "numpy"  # provenance of the numbers
+        assert by_run[item["run_id"]]["cpu_seconds"] == item["cpu_seconds"] >= 0.0
     assert all(len(c["best_fitness"]) == c["iterations"] == 8 for c in curves)
     names = {s.name: s for s in summary.schemas.values()}
     assert set(names) == {"swarmpath.BenchmarkRunResult", "swarmpath.ConvergenceCurve"}

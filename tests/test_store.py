@@ -47,8 +47,9 @@ def beat(store: Store, lease: Lease, worker: str, seq: int = 1, **kw):
                            proof=progress_proof(lease.capability, lease.lease_id, seq), **kw)
 
 
-def execute(lease: Lease, worker: str | None = None) -> list[RunResult]:
-    """What a worker does with a benchmark lease."""
+def execute(lease: Lease, worker: str | None = None, cpu: bool = True) -> list[RunResult]:
+    """What a worker does with a benchmark lease (``cpu=False``: as a worker from before CPU
+    times were sent)."""
     c = lease.spec
     res = minimize(c.algorithm, c.function, c.dim, c.agents, c.iterations, seed=lease.seed,
                    params=c.params, transform=c.transform, run_ids=lease.runs)
@@ -56,6 +57,7 @@ def execute(lease: Lease, worker: str | None = None) -> list[RunResult]:
         signed(lease, RunResult(
             lease_id=lease.lease_id, job_id=lease.job_id, cell=lease.cell, run=r,
             worker=worker or lease.worker, seconds=res.seconds / len(lease.runs),
+            cpu_seconds=res.cpu_seconds / len(lease.runs) if cpu else None,
             metrics={"best_fitness": float(res.best_fitness[i]),
                      "evaluations": int(res.evaluations[i])},
             curve=res.curve[i].tolist(), best_position=res.best_position[i].tolist(),

@@ -114,15 +114,22 @@ def test_adding_runs_together_equals_adding_them_one_by_one():
             metrics: dict = {"best_fitness": float(curve[-1])}
             if (cell, run) == (1, 2):  # a thinned curve (every 4th value, and the last)
                 curve, metrics = np.append(curve[::4], curve[-1]), {**metrics, "curve_stride": 4}
-            entries.append((cell, run, (cell, run) != (2, 1), metrics, curve, None))
-    entries += [entries[0], (9, 0, True, {}, None, None), (0, 7, True, {}, None, None)]
+            times = (0.5 + run, None if cell == 3 else 0.25 * run)  # cell 3: CPU not known
+            entries.append((cell, run, (cell, run) != (2, 1), metrics, curve, None, times))
+    entries += [entries[0], (9, 0, True, {}, None, None, None),
+                (0, 7, True, {}, None, None, None)]
     one = agg.JobAggregates("j1", "benchmark", _bench_cells())
-    for cell, run, ok, metrics, curve, path in entries:
-        one.add(cell, run, ok=ok, metrics=metrics, curve=curve, path=path)
+    for cell, run, ok, metrics, curve, path, times in entries:
+        one.add(cell, run, ok=ok, metrics=metrics, curve=curve, path=path, times=times)
     many = agg.JobAggregates("j1", "benchmark", _bench_cells())
     assert many.add_many(entries) == 16 and many.add_many(entries[:3]) == 0
     a, b = one.view(), many.view()
     assert a == b and a["groups"][1]["algorithms"]["GWO"]["failed"] == 1
+    # wall and CPU seconds: medians over the finished runs (cell 2's run 1 crashed)
+    gwo_f1, pso_f8 = a["groups"][0]["algorithms"]["GWO"], a["groups"][1]["algorithms"]["PSO"]
+    assert (gwo_f1["seconds"], gwo_f1["cpu_seconds"]) == (2.0, 0.375)
+    assert pso_f8["seconds"] == 2.0 and pso_f8["cpu_seconds"] is None  # missing, not 0
+    assert a["groups"][1]["algorithms"]["GWO"]["seconds"] == 2.5  # runs 0, 2, 3
 
 
 def test_job_aggregates_map_view_counts_success_and_marks_failures():

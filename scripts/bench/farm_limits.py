@@ -135,7 +135,8 @@ def coordinator_pieces(
         rows.append(("dashboard aggregates", *timed(
             lambda: core.dashboard.observe_runs(job_a, [
                 (c.cell, c.runs[k], c.status[k] == "ok", c.metrics[k], c.array("curve", k),
-                 c.array("path", k)) for c, ks in every for k in ks], time.time()))))
+                 c.array("path", k), (c.seconds[k], c.cpu(k))) for c, ks in every for k in ks],
+                time.time()))))
 
         def progress_all() -> None:
             for key, payload in messages:

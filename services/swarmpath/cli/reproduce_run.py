@@ -75,5 +75,6 @@ def cells_from_runs(runs: Sequence[dict[str, Any]]) -> list[report.Cell]:
             best_fitness=[float(r["best_fitness"]) for r in items],
             evaluations=[int(r.get("evaluations") or 0) for r in items],
             seconds=sum(float(r.get("seconds") or 0.0) for r in items),
+            cpu_seconds=report.cpu_total(r.get("cpu_seconds") for r in items),
         ))
     return out

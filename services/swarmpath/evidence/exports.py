@@ -31,7 +31,8 @@ BENCHMARK_COLUMNS: tuple[tuple[str, Any], ...] = (
     ("job_id", str), ("run_id", int), ("run", int), ("cell", str), ("algorithm", str),
     ("function", str), ("dim", int), ("agents", int), ("iterations", int), ("shifted", bool),
     ("transform", str), ("seed", int), ("state", str), ("worker", str), ("best_fitness", float),
-    ("evaluations", int), ("seconds", float), ("failure", str), ("completed", float),
+    ("evaluations", int), ("seconds", float), ("cpu_seconds", float), ("failure", str),
+    ("completed", float),
     ("curve_stride", int), ("curve", "list"), ("best_position", "list"),
 )
 MAP_IDENTITY: tuple[tuple[str, Any], ...] = (

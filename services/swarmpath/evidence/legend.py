@@ -20,9 +20,12 @@ NOTES: dict[str, str] = {
                 "service job's summary says it in the row's optimum_reason)",
     "length_mean": "mean executed path length of the successful runs (m)",
     "error_mean": "mean final distance to the goal over all runs (m)",
-    "seconds_mean": "mean planning wall time per run (s)",
-    "cpu_seconds_mean": "mean CPU time of the planner per run (s): unlike the wall time, not "
-                        "inflated by other processes sharing the machine",
+    "seconds_mean": "mean wall time per run (s): a map run's planning, a benchmark run's share "
+                    "of the batch that computed it",
+    "cpu_seconds_mean": "mean CPU time per run (s; the planner's, or a benchmark run's share of "
+                        "its batch): unlike the wall time, not inflated by other processes "
+                        "sharing the machine; blank when no run has one (stored before CPU "
+                        "times were measured)",
     "travel_time_mean": "mean simulated time from start to goal of the successful runs (s)",
     "clearance_mean": "mean body gap (clearance minus robot radius) sampled every 5 cm along "
                       "the path, mean over successful runs (m; Bench-MR, OMPL)",

@@ -42,8 +42,10 @@ def _same(expected: str, given: str | None) -> bool:
 
 
 def result_body(result: RunResult) -> str:
-    """The text a result's proof covers: its wire JSON without the proof."""
-    return result.model_dump_json(exclude={"proof"})
+    """The text a result's proof covers: its wire JSON without the proof (and without
+    ``cpu_seconds`` when it is null: the JSON of a result from before that field, unchanged)."""
+    unmeasured = {"cpu_seconds"} if result.cpu_seconds is None else set()
+    return result.model_dump_json(exclude={"proof", *unmeasured})
 
 
 def result_proof(capability: str, result: RunResult) -> str:

@@ -42,7 +42,7 @@ class Incoming(RunFields):
             None if r.curve is None else np.asarray(r.curve, dtype=np.float64),
             None if r.best_position is None else np.asarray(r.best_position, dtype=np.float64),
             None if r.path is None else np.asarray(r.path, dtype=np.float64).reshape(-1, 3),
-            capability,
+            capability, cpu_seconds=r.cpu_seconds,
         )
 
     def series(self) -> dict[str, np.ndarray]:

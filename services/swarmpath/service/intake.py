@@ -120,6 +120,7 @@ class ResultIntake:
                         "spec": spec, "run": run, "seed": info["seed"], "worker": c.worker,
                         "lease_id": c.lease_id, "status": c.status[k],
                         "failure": c.failure[k], "seconds": c.seconds[k],
+                        "cpu_seconds": c.cpu(k),
                         "metrics": c.metrics[k], "created": now,
                     }
                     for name in SERIES:
@@ -197,7 +198,7 @@ class ResultIntake:
             entries.append(Incoming(
                 h.lease_id, h.job_id, h.cell, h.run, h.worker, h.status, h.failure, h.seconds,
                 h.metrics, arrays.get("curve"), arrays.get("best_position"), arrays.get("path"),
-                found[0], raw_series(h.arrays, rec.raw)))
+                found[0], raw_series(h.arrays, rec.raw), cpu_seconds=h.cpu_seconds))
         self._count_foreign(foreign, worker)
         self._count_unproven(unproven)
         return worker, entries
@@ -356,7 +357,8 @@ class ResultIntake:
         try:
             self.dashboard.observe_runs(job_id, [
                 (c.cell, c.runs[k], c.status[k] == "ok", c.metrics[k], c.array("curve", k),
-                 c.array("path", k)) for c, indexes in accepted for k in indexes], now)
+                 c.array("path", k), (c.seconds[k], c.cpu(k)))
+                for c, indexes in accepted for k in indexes], now)
         except Exception:
             log.exception("updating the dashboard's aggregates of job %s failed", job_id)
         status = self.store.job_status(job_id)

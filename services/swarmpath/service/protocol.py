@@ -326,6 +326,9 @@ class RunResult(Model):
     status: Literal["ok", "failed"] = "ok"
     failure: str | None = Field(default=None, max_length=20_000)
     seconds: float = Field(ge=0, description="wall seconds of this run (its share of a batch)")
+    cpu_seconds: float | None = Field(
+        default=None, ge=0, description="CPU seconds of this run (its share of a batch): the "
+        "computing thread's CPU time; null: not measured (a worker from before it was sent)")
     metrics: dict[str, Scalar] = Field(
         default_factory=dict,
         description="map runs may add notes on their map (swarmpath.service.cell_notes; the "

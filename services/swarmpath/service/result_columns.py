@@ -7,15 +7,16 @@ of several (all integers uint32 little-endian)::
     frame: b"SPC1" | H | ColumnsHead JSON (H bytes) | float64 block | proof (32 bytes)
 
 :class:`ColumnsHead` names the lease, its job, cell and worker once and holds each run's small
-fields as columns (``runs``, ``status``, ``failure``, ``seconds``, ``metrics``: one entry per
-run, in the same order). ``arrays`` declares the series: for each name (``curve``,
-``best_position``, ``path``, each at most once, in that order) the rows of every run (-1: the
-run has no such array; a path row is [x, y, t], three values, the others one). The block holds
-the arrays' raw little-endian float64 values, array by array and, within one, run by run. The
-proof is the raw HMAC-SHA256 digest, keyed with the lease's capability (its text, UTF-8), of
-``b"result-columns\\n"`` followed by every byte of the frame before the proof: one HMAC per
-frame, over the bytes received (nothing re-serialized), and a frame proves nothing for any other
-lease.
+fields as columns (``runs``, ``status``, ``failure``, ``seconds``, ``cpu_seconds``,
+``metrics``: one entry per run, in the same order; ``cpu_seconds`` may be absent, as from
+workers older than it: then no run's CPU time is known). ``arrays`` declares the series: for
+each name (``curve``, ``best_position``, ``path``, each at most once, in that order) the rows
+of every run (-1: the run has no such array; a path row is [x, y, t], three values, the others
+one). The block holds the arrays' raw little-endian float64 values, array by array and,
+within one, run by run. The proof is the raw HMAC-SHA256 digest, keyed with the lease's
+capability (its text, UTF-8), of ``b"result-columns\\n"`` followed by every byte of the frame
+before the proof: one HMAC per frame, over the bytes received (nothing re-serialized), and a
+frame proves nothing for any other lease.
 
 Decoding checks everything before anything is used: the size, the magic, the head against its
 schema (``schemas/result_columns_head.schema.json``: one pydantic validation per frame; the
@@ -88,6 +89,10 @@ class ColumnsHead(Model):
         max_length=MAX_LEASE_RUNS)
     seconds: list[Annotated[float, Field(ge=0)]] = Field(
         max_length=MAX_LEASE_RUNS, description="wall seconds of each run (its share of a batch)")
+    cpu_seconds: list[Annotated[float, Field(ge=0)] | None] | None = Field(
+        default=None, max_length=MAX_LEASE_RUNS,
+        description="CPU seconds of each run (its share of a batch; null: not measured); "
+        "absent: none measured (a worker from before it was sent)")
     metrics: list[dict[str, Scalar]] = Field(max_length=MAX_LEASE_RUNS)
     arrays: list[ColumnArray] = Field(default_factory=list, max_length=3)
 
@@ -190,7 +195,7 @@ def _columns_frame(worker: str, capability: str | None, recs: list[Any]) -> byte
         worker=worker, lease_id=first.lease_id, job_id=first.job_id, cell=first.cell,
         runs=[r.head.run for r in recs], status=[r.head.status for r in recs],
         failure=[r.head.failure for r in recs], seconds=[r.head.seconds for r in recs],
-        metrics=[r.head.metrics for r in recs])
+        cpu_seconds=[r.head.cpu_seconds for r in recs], metrics=[r.head.metrics for r in recs])
     return encode_columns(head, [r.arrays for r in recs], capability)
 
 
@@ -254,8 +259,8 @@ def _frame_at(payload: bytes, view: memoryview, pos: int, i: int) -> tuple[Colum
 def _declared_values(head: ColumnsHead, i: int) -> int:
     """How many float64 values the head's arrays declare, after checking the columns."""
     count = len(head.runs)
-    for name in ("status", "failure", "seconds", "metrics"):
-        if len(getattr(head, name)) != count:
+    for name in ("status", "failure", "seconds", "metrics", "cpu_seconds"):
+        if getattr(head, name) is not None and len(getattr(head, name)) != count:
             raise FrameError(f"frame {i}: columns head: {name} has "
                              f"{len(getattr(head, name))} entries; runs has {count}")
     values = 0
@@ -308,12 +313,14 @@ def column_arrays(frame: ColumnsFrame) -> dict[str, list[np.ndarray | None]]:
 def _records(frame: ColumnsFrame) -> list[FrameRecord]:
     h = frame.head
     by_name = column_arrays(frame)
+    cpu = h.cpu_seconds or [None] * len(h.runs)
     records = []
     for k, run in enumerate(h.runs):
         arrays = {name: v[k] for name, v in by_name.items() if v[k] is not None}
         shapes = [(name, "<f8", list(v.shape)) for name, v in arrays.items()]
         head = RecordHead(h.lease_id, h.job_id, h.cell, run, h.worker, h.status[k],
-                          h.failure[k], h.seconds[k], h.metrics[k], shapes)
+                          h.failure[k], h.seconds[k], h.metrics[k], shapes,
+                          cpu_seconds=cpu[k])
         records.append(FrameRecord(head, arrays, b"", b""))
     return records
 

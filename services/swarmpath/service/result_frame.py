@@ -28,7 +28,7 @@ import hashlib
 import hmac
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
@@ -78,6 +78,9 @@ class RunResultHead(Model):
     status: Literal["ok", "failed"] = "ok"
     failure: str | None = Field(default=None, max_length=20_000)
     seconds: float = Field(ge=0, description="wall seconds of this run (its share of a batch)")
+    cpu_seconds: float | None = Field(
+        default=None, ge=0, description="CPU seconds of this run (its share of a batch); null: "
+        "not measured")
     metrics: dict[str, Scalar] = Field(default_factory=dict)
     arrays: list[tuple[ArrayName, Literal["<f8"], list[int]]] = Field(
         default_factory=list, max_length=3,
@@ -99,6 +102,8 @@ class RunFields:
     failure: str | None
     seconds: float
     metrics: dict[str, Any]
+    #: the run's CPU seconds (None: not measured); keyword-only, so it follows every field
+    cpu_seconds: float | None = field(default=None, kw_only=True)
 
 
 @dataclass(slots=True, eq=False)
@@ -111,7 +116,8 @@ class RecordHead(RunFields):
         """The small fields (without ``arrays``), as ``RunResultHead.model_dump`` gives them."""
         return {"lease_id": self.lease_id, "job_id": self.job_id, "cell": self.cell,
                 "run": self.run, "worker": self.worker, "status": self.status,
-                "failure": self.failure, "seconds": self.seconds, "metrics": dict(self.metrics)}
+                "failure": self.failure, "seconds": self.seconds,
+                "cpu_seconds": self.cpu_seconds, "metrics": dict(self.metrics)}
 
 
 class FrameError(ValueError):
@@ -246,7 +252,8 @@ def _record(payload: bytes, pos: int, i: int) -> tuple[FrameRecord, int]:
         raise FrameError(f"record {i}: {_first(exc)}") from None
     head = RecordHead(model.lease_id, model.job_id, model.cell, model.run, model.worker,
                       model.status, model.failure, model.seconds, dict(model.metrics),
-                      [(n, d, list(s)) for n, d, s in model.arrays])
+                      [(n, d, list(s)) for n, d, s in model.arrays],
+                      cpu_seconds=model.cpu_seconds)
     arrays: dict[str, np.ndarray] = {}
     first = pos
     for name, _dtype, shape in head.arrays:

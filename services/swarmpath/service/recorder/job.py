@@ -258,6 +258,9 @@ class JobRecorder:
             "failure": record.get("failure") or "",
             "seconds": float(record.get("seconds") or 0.0),
         }
+        cpu = record.get("cpu_seconds")
+        if cpu is not None:  # None: stored before CPU times were measured (left out, not 0)
+            msg["cpu_seconds"] = float(cpu)
         for key, value in (record.get("metrics") or {}).items():
             if key not in msg and _finite_scalar(value):
                 msg[key] = value

@@ -19,7 +19,9 @@ _OUTCOME: dict[str, Any] = {
     "worker": {"type": "string"},
     "status": {"type": "string", "description": "ok or failed"},
     "failure": {"type": "string", "description": "exception text; empty unless failed"},
-    "seconds": {"type": "number"},
+    "seconds": {"type": "number", "description": "wall seconds of the run"},
+    "cpu_seconds": {"type": "number", "description": "CPU seconds of the run (the computing "
+                    "thread's); absent: not measured"},
 }
 
 BENCHMARK_RESULT_SCHEMA: dict[str, Any] = {

@@ -19,7 +19,7 @@ from swarmpath.service.protocol import (
     MapCell,
 )
 
-SCHEMA_VERSION = 3  # 2: leases.capability, leases.beat; 3: jobs.pins
+SCHEMA_VERSION = 4  # 2: leases.capability, leases.beat; 3: jobs.pins; 4: results.cpu_seconds
 DB_NAME = "swarmpath.sqlite3"
 CACHE_KIB = 2048  # SQLite page cache of the connection, KiB (bounded; its default is 2,000)
 #: Page size of a new store file. A result row (a 500-point curve: ~4.3 KB) overflows a 4 KiB
@@ -109,6 +109,7 @@ CREATE TABLE IF NOT EXISTS results (
     metrics  TEXT NOT NULL,                            -- JSON object
     series   BLOB,                                     -- encode_series: curve, path, ...
     created  REAL NOT NULL,
+    cpu_seconds REAL,                   -- NULL: not measured (stored before schema version 4)
     UNIQUE (job_seq, cell_idx, run)                    -- a run has at most one result
 );
 CREATE TABLE IF NOT EXISTS races (                     -- raced jobs: one row per block
@@ -229,13 +230,16 @@ class StoreBase:
                     "INSERT OR IGNORE INTO meta (key, value) VALUES (?, '0')",
                     [(f"counter.{c}",) for c in (*_COUNTERS, "lease_turn")],
                 )
-            elif int(row[0]) in (1, 2):
-                if int(row[0]) == 1:  # leases granted before capabilities can prove nothing
+            elif int(row[0]) in (1, 2, 3):
+                version = int(row[0])
+                if version == 1:  # leases granted before capabilities can prove nothing
                     db.execute("ALTER TABLE leases ADD COLUMN capability TEXT NOT NULL "
                                "DEFAULT ''")
                     db.execute("ALTER TABLE leases ADD COLUMN beat INTEGER NOT NULL DEFAULT 0")
-                # jobs from before pins pinned nothing: any worker having the names runs them
-                db.execute("ALTER TABLE jobs ADD COLUMN pins TEXT NOT NULL DEFAULT '{}'")
+                if version <= 2:  # jobs from before pins pinned nothing: any worker runs them
+                    db.execute("ALTER TABLE jobs ADD COLUMN pins TEXT NOT NULL DEFAULT '{}'")
+                # results from before CPU times were not measured: NULL (missing), never 0
+                db.execute("ALTER TABLE results ADD COLUMN cpu_seconds REAL")
                 db.execute("UPDATE meta SET value = ? WHERE key = 'schema_version'",
                            (str(SCHEMA_VERSION),))
             elif int(row[0]) != SCHEMA_VERSION:

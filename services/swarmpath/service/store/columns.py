@@ -41,10 +41,16 @@ class ResultColumns:
     series: Sequence[Any] = field(default_factory=list, repr=False)
     #: each run's arrays by name (a sequence per name, None where a run has none)
     arrays: dict[str, Sequence[Any]] = field(default_factory=dict, repr=False)
+    #: each run's CPU seconds (None: not measured); empty: none known (an older worker's frame)
+    cpu_seconds: Sequence[float | None] = field(default_factory=list, kw_only=True)
 
     def array(self, name: str, k: int) -> np.ndarray | None:
         values = self.arrays.get(name)
         return None if values is None else values[k]
+
+    def cpu(self, k: int) -> float | None:
+        """Run ``k``'s CPU seconds, None when not measured."""
+        return self.cpu_seconds[k] if k < len(self.cpu_seconds) else None
 
 
 def unproven(head: ColumnsHead) -> ResultColumns:
@@ -60,7 +66,8 @@ def from_frame(frame: ColumnsFrame, capability: str) -> ResultColumns:
     h = frame.head
     series, arrays = _series(frame)
     return ResultColumns(h.lease_id, h.job_id, h.cell, h.worker, capability, h.runs, h.status,
-                         h.failure, h.seconds, h.metrics, series, arrays)
+                         h.failure, h.seconds, h.metrics, series, arrays,
+                         cpu_seconds=h.cpu_seconds or [])
 
 
 def _series(frame: ColumnsFrame) -> tuple[Sequence[Any], dict[str, Sequence[Any]]]:
@@ -114,7 +121,7 @@ def from_incoming(items: Sequence[Incoming]) -> tuple[list[ResultColumns], list[
         if got is None:
             cols = ResultColumns(r.lease_id, r.job_id, r.cell, r.worker, r.capability,
                                  [], [], [], [], [], [], {"curve": [], "best_position": [],
-                                                          "path": []})
+                                                          "path": []}, cpu_seconds=[])
             got = groups[key] = (cols, [])
         cols, indexes = got
         indexes.append(i)
@@ -122,6 +129,7 @@ def from_incoming(items: Sequence[Incoming]) -> tuple[list[ResultColumns], list[
         cols.status.append(r.status)
         cols.failure.append(r.failure)
         cols.seconds.append(r.seconds)
+        cols.cpu_seconds.append(r.cpu_seconds)  # type: ignore[attr-defined]
         cols.metrics.append(r.metrics)
         blob = r.stored_series
         if blob is None and r.capability is not None:

@@ -49,8 +49,9 @@ class ExtendMixin(StoreBase):
                 raise StoreError(f"job {job_id}'s cells changed: cannot extend it")
             reused = db.execute(
                 "INSERT INTO results (job_seq, cell_idx, run, lease_id, worker, status, failure,"
-                " value, seconds, metrics, series, created) SELECT ?, cell_idx, run, lease_id,"
-                " worker, status, failure, value, seconds, metrics, series, created FROM results"
+                " value, seconds, cpu_seconds, metrics, series, created) SELECT ?, cell_idx,"
+                " run, lease_id, worker, status, failure, value, seconds, cpu_seconds, metrics,"
+                " series, created FROM results"
                 " WHERE job_seq = ?", (seq, old["seq"])).rowcount
             self._take_over(db, seq, spec, now)
         return new_id, max(reused, 0)

@@ -132,14 +132,14 @@ class ResultsMixin(StoreBase):
         failed = sum(1 for k in new if status[k] != "ok")
         worker, failure, seconds, series = c.worker, c.failure, c.seconds, c.series
         rows = [(seq, cell_idx, c.runs[k], lease_id, worker, status[k], failure[k],
-                 _value(metrics[k]) if benchmark else None, seconds[k],
+                 _value(metrics[k]) if benchmark else None, seconds[k], c.cpu(k),
                  _metrics_json(metrics[k]), series[k], now) for k in new]
         if not rows:
             return out
         db.executemany(
             "INSERT INTO results (job_seq, cell_idx, run, lease_id, worker, status,"
-            " failure, value, seconds, metrics, series, created)"
-            " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)", rows)
+            " failure, value, seconds, cpu_seconds, metrics, series, created)"
+            " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)", rows)
         accepted = {row[2] for row in rows}
         requeued = [row[0] for row in db.execute(
             "SELECT run FROM requeue WHERE job_seq = ? AND cell_idx = ? AND run BETWEEN ? AND ?",

@@ -49,6 +49,8 @@ class RunViewsMixin(StoreBase):
             metrics = json.loads(result["metrics"])
             item.update({k: v for k, v in metrics.items() if k not in item})
             item["seconds"] = metrics.get("seconds", result["seconds"])
+            # a map run's own (the planner's, RunOutcome), else the run's; None: not measured
+            item["cpu_seconds"] = metrics.get("cpu_seconds", result["cpu_seconds"])
             item["failure"] = result["failure"]
             item["lease_id"] = result["lease_id"]
             item["completed"] = result["created"]
@@ -81,8 +83,8 @@ class RunViewsMixin(StoreBase):
             results = {
                 (r["cell_idx"], r["run"]): r
                 for r in db.execute(
-                    "SELECT cell_idx, run, lease_id, worker, status, failure, seconds, metrics,"
-                    f" created{', series' if series else ''}"
+                    "SELECT cell_idx, run, lease_id, worker, status, failure, seconds,"
+                    f" cpu_seconds, metrics, created{', series' if series else ''}"
                     " FROM results WHERE job_seq = ? AND (cell_idx, run) >= (?, ?)"
                     " AND (cell_idx, run) <= (?, ?)",
                     (seq, first_cell, first_run, last_cell, last_run),
@@ -298,6 +300,7 @@ class RunViewsMixin(StoreBase):
             "status": r["status"],
             "failure": r["failure"],
             "seconds": r["seconds"],
+            "cpu_seconds": r["cpu_seconds"],
             "metrics": _metrics(r["metrics"]),
             "created": r["created"],
             **series,
@@ -307,19 +310,20 @@ class RunViewsMixin(StoreBase):
 _MAX_ROWID = 2**63 - 1  # SQLite's largest rowid
 #: The results columns a recorder record is made of, in the order :func:`_record_of` reads them.
 _RECORD_COLUMNS = ("cell_idx", "run", "worker", "lease_id", "status", "failure", "seconds",
-                   "metrics", "created", "series")
+                   "cpu_seconds", "metrics", "created", "series")
 
 
 def _record_of(job_id: str, kind: str, seed: int, rpc: int, row: tuple[Any, ...],
                cells: dict[int, tuple[str, dict[str, Any]]]) -> dict[str, Any]:
     """:meth:`RunsMixin._record` of a tuple ``(rowid, *_RECORD_COLUMNS)``."""
-    _, cell_idx, run, worker, lease_id, status, failure, seconds, metrics, created, blob = row
+    (_, cell_idx, run, worker, lease_id, status, failure, seconds, cpu_seconds, metrics, created,
+     blob) = row
     key, spec = cells[cell_idx]
     out = {
         "job_id": job_id, "kind": kind, "run_id": cell_idx * rpc + run, "cell_index": cell_idx,
         "cell": key, "spec": spec, "run": run, "seed": seed, "worker": worker,
         "lease_id": lease_id, "status": status, "failure": failure, "seconds": seconds,
-        "metrics": _metrics(metrics), "created": created,
+        "cpu_seconds": cpu_seconds, "metrics": _metrics(metrics), "created": created,
     }
     out.update(decode_series(blob, arrays=("curve",)))
     return out

@@ -25,7 +25,7 @@ from swarmpath.service.summary_stats import (
 
 BENCHMARK_COLUMNS = (
     "algorithm", "function", "dim", "runs", "failed", "min", "max", "avg", "std", "median", "iqr",
-    "rank",
+    "rank", "seconds_mean", "cpu_seconds_mean",
     "origin_suspect", *BENCHMARK_TEST_COLUMNS,
 )
 MAP_COLUMNS = (
@@ -116,7 +116,9 @@ class SummariesMixin(StoreBase):
         """The tables of the CLI for a job (partial while it runs); None for unknown jobs.
 
         benchmark rows: algorithm, function, dim, runs, failed, min, max, avg, std, median, rank
-        (rank of the avg among the algorithms at that function and dim; 1 = best), marker, p,
+        (rank of the avg among the algorithms at that function and dim; 1 = best), seconds_mean
+        and cpu_seconds_mean (wall and CPU seconds per run; the CPU mean over the runs that
+        have one, null when none has: stored before it was measured), marker, p,
         p_holm (Wilcoxon rank-sum test against the spec's reference, docs/statistics.md).
         map rows: planner, map, runs, failed, success_rate, collisions, length_mean, length_std,
         error_mean, seconds_mean, gap_mean (length and gap over successful runs), and per measure
@@ -140,12 +142,17 @@ class SummariesMixin(StoreBase):
             ).fetchall()
             if kind == "benchmark":
                 values: dict[int, list[float]] = {}
-                for idx, value in db.execute(
-                    "SELECT cell_idx, value FROM results WHERE job_seq = ? AND status = 'ok' "
-                    "ORDER BY cell_idx, run",
+                times: dict[int, tuple[list[float], list[float]]] = {}  # wall, CPU
+                for idx, value, seconds, cpu in db.execute(
+                    "SELECT cell_idx, value, seconds, cpu_seconds FROM results WHERE job_seq = ?"
+                    " AND status = 'ok' ORDER BY cell_idx, run",
                     (seq,),
                 ):
                     values.setdefault(idx, []).append(math.inf if value is None else value)
+                    wall, cpus = times.setdefault(idx, ([], []))
+                    wall.append(seconds)
+                    if cpu is not None:  # NULL: a run stored before CPU times were measured
+                        cpus.append(cpu)
             else:
                 metrics: dict[int, list[dict[str, Any]]] = {}
                 for idx, m in db.execute(
@@ -164,6 +171,9 @@ class SummariesMixin(StoreBase):
                     "algorithm": spec["algorithm"], "function": spec["function"],
                     "dim": spec["dim"], "runs": len(values.get(c["idx"], ())),
                     "failed": c["failed"],
+                    # means over the runs that have them (the CPU of older rows is missing)
+                    "seconds_mean": _mean(times.get(c["idx"], ([], []))[0]),
+                    "cpu_seconds_mean": _mean(times.get(c["idx"], ([], []))[1]),
                 }
                 if c["idx"] in values:
                     row.update(describe(values[c["idx"]]))

@@ -26,7 +26,7 @@ import numpy as np
 
 from swarmpath.evidence.buckets import BucketCell, bucket_curve
 from swarmpath.evidence.legend import legend
-from swarmpath.service.web.cells import _BenchmarkCell, _f_star, _MapCell
+from swarmpath.service.web.cells import Times, _BenchmarkCell, _f_star, _MapCell
 from swarmpath.service.web.series import (
     GRID_POINTS,
     MAX_OUTLIERS,
@@ -53,7 +53,7 @@ __all__ = [
     "thin_path",
 ]
 
-SAVE_FORMAT = "swarmpath-dashboard-1"
+SAVE_FORMAT = "swarmpath-dashboard-2"  # 2: benchmark cells keep wall and CPU seconds
 #: Columns of the job page whose meaning is shown under it (swarmpath.evidence.legend).
 BENCHMARK_LEGEND = ("failed", "rank", "marker")
 MAP_LEGEND = ("failed", "success_rate", "success_marker", "collisions", "length_mean",
@@ -100,8 +100,11 @@ class JobAggregates:
         metrics: Mapping[str, Any],
         curve: Any = None,
         path: Any = None,
+        times: Times = None,
     ) -> bool:
-        """One finished run; False (ignored) when it was added before or is out of range."""
+        """One finished run; False (ignored) when it was added before or is out of range.
+        ``times``: its (wall, CPU) seconds, either None when not known (a benchmark cell shows
+        their medians; a map cell the planner's, from ``metrics``)."""
         with self._lock:
             if not 0 <= cell_index < len(self._cells):
                 return False
@@ -109,34 +112,35 @@ class JobAggregates:
             if not 0 <= run < cell.seen.size or cell.seen[run]:
                 return False
             if isinstance(cell, _BenchmarkCell):
-                cell.add(run, ok, metrics, curve)
+                cell.add(run, ok, metrics, curve, times)
             else:
                 cell.add(run, ok, metrics, path)
             self.version += 1
             self.finished += 1
             return True
 
-    def add_many(self, entries: Iterable[tuple[int, int, bool, Mapping[str, Any], Any, Any]]
-                 ) -> int:
-        """Finished runs (cell index, run, ok, metrics, curve, path) at once, as :meth:`add`
-        each (repeats and runs out of range ignored); a benchmark cell samples its runs' curves
-        together. Returns how many were added."""
+    def add_many(self, entries: Iterable[tuple[int, int, bool, Mapping[str, Any], Any, Any,
+                                               Times]]) -> int:
+        """Finished runs (cell index, run, ok, metrics, curve, path, times) at once, as
+        :meth:`add` each (repeats and runs out of range ignored); a benchmark cell samples its
+        runs' curves together. Returns how many were added."""
         with self._lock:
-            by_cell: dict[int, dict[int, tuple[bool, Mapping[str, Any], Any, Any]]] = {}
-            for index, run, ok, metrics, curve, path in entries:
+            by_cell: dict[int, dict[int, tuple[bool, Mapping[str, Any], Any, Any, Times]]] = {}
+            for index, run, ok, metrics, curve, path, times in entries:
                 if not 0 <= index < len(self._cells):
                     continue
                 cell = self._cells[index]
                 if 0 <= run < cell.seen.size and not cell.seen[run]:
-                    by_cell.setdefault(index, {}).setdefault(run, (ok, metrics, curve, path))
+                    by_cell.setdefault(index, {}).setdefault(
+                        run, (ok, metrics, curve, path, times))
             added = 0
             for index, runs in by_cell.items():
                 cell = self._cells[index]
                 if isinstance(cell, _BenchmarkCell):
-                    cell.add_many([(run, ok, m, curve) for run, (ok, m, curve, _p) in
+                    cell.add_many([(run, ok, m, curve, t) for run, (ok, m, curve, _p, t) in
                                    runs.items()])
                 else:
-                    for run, (ok, m, _c, path) in runs.items():
+                    for run, (ok, m, _c, path, _t) in runs.items():
                         cell.add(run, ok, m, path)
                 added += len(runs)
             self.version += added  # as many versions as runs, like one add per run
@@ -148,7 +152,7 @@ class JobAggregates:
         return self.add(
             int(record["cell_index"]), int(record["run"]), ok=record["status"] == "ok",
             metrics=record.get("metrics") or {}, curve=record.get("curve"),
-            path=record.get("path"),
+            path=record.get("path"), times=(record.get("seconds"), record.get("cpu_seconds")),
         )
 
     def set_loading(self, loading: bool) -> None:
@@ -262,6 +266,7 @@ class JobAggregates:
             samples.setdefault((s["function"], int(s["dim"])), {})[s["algorithm"]] = (
                 cell.best[cell.ok])
         return {"job_id": self.job_id, "kind": "benchmark", "version": self.version,
+                "format": SAVE_FORMAT,
                 "loading": self.loading, "finished": self.finished,
                 "runs_per_cell": self.runs_per_cell, "legend": legend(BENCHMARK_LEGEND),
                 "racing": self.racing, "algorithms": algorithms, "groups": list(groups.values()),
@@ -289,6 +294,7 @@ class JobAggregates:
                     s["planner"], s["map"], self.buckets[s["map"]],
                     cell.finished - cell.crashed, cell.succeeded, list(cell.values["gap"])))
         return {"job_id": self.job_id, "kind": "map", "version": self.version,
+                "format": SAVE_FORMAT,
                 "loading": self.loading, "finished": self.finished,
                 "runs_per_cell": self.runs_per_cell, "legend": legend(MAP_LEGEND),
                 "planners": planners, "groups": list(groups.values()),

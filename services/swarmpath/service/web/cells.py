@@ -24,6 +24,13 @@ from swarmpath.service.web.series import (
 )
 
 MAX_PATHS = 200  # paths kept per map cell (the first ones by run index arrive first)
+#: A run's (wall seconds, CPU seconds), either None when not known; or None for neither.
+Times = tuple[Any, Any] | None
+
+
+def _median(values: np.ndarray) -> float | None:
+    known = values[np.isfinite(values)]
+    return float(np.median(known)) if known.size else None
 
 
 class _BenchmarkCell:
@@ -35,12 +42,16 @@ class _BenchmarkCell:
         self.best = np.full(runs, np.nan)
         self.ok = np.zeros(runs, dtype=bool)
         self.seen = np.zeros(runs, dtype=bool)
+        #: each run's wall and CPU seconds (NaN: not known, e.g. stored before CPU was measured)
+        self.times = np.full((runs, 2), np.nan)
         self.failed = 0
         self.cache: dict[str, Any] | None = None
 
-    def add(self, run: int, ok: bool, metrics: Mapping[str, Any], curve: Any) -> None:
+    def add(self, run: int, ok: bool, metrics: Mapping[str, Any], curve: Any,
+            times: Times = None) -> None:
         self.seen[run] = True
         self.cache = None
+        self._time(run, times)
         if not ok:
             self.failed += 1
             return
@@ -52,22 +63,32 @@ class _BenchmarkCell:
             err = sample_curve(curve, self.grid, stride) - self.f_star
             self.rows[run] = np.maximum(err, 0.0)
 
-    def add_many(self, items: Sequence[tuple[int, bool, Mapping[str, Any], Any]]) -> None:
-        """Several new runs (run, ok, metrics, curve) at once: the whole curves (one value per
-        iteration) are sampled in one numpy operation, the others one by one (:meth:`add`)."""
+    def _time(self, run: int, times: Times) -> None:
+        if times is not None:
+            for k, v in enumerate(times):
+                number = _number(v)
+                if number is not None:
+                    self.times[run, k] = number
+
+    def add_many(self, items: Sequence[tuple[int, bool, Mapping[str, Any], Any, Times]]
+                 ) -> None:
+        """Several new runs (run, ok, metrics, curve, (wall, CPU seconds) or None) at once: the
+        whole curves (one value per iteration) are sampled in one numpy operation, the others
+        one by one (:meth:`add`)."""
         length = int(self.grid[-1])
         runs: list[int] = []
         curves: list[Any] = []
         bests: list[float] = []
-        for run, ok, metrics, curve in items:
+        for run, ok, metrics, curve, times in items:
             if ok and curve is not None and len(curve) == length \
                     and "curve_stride" not in metrics:
                 best = _number(metrics.get("best_fitness"))
                 bests.append(math.inf if best is None else best)
                 runs.append(run)
                 curves.append(curve)
+                self._time(run, times)
             else:
-                self.add(run, ok, metrics, curve)
+                self.add(run, ok, metrics, curve, times)
         if runs:  # (the runs are distinct: JobAggregates.add_many keeps one entry per run)
             self.seen[runs] = self.ok[runs] = True
             self.best[runs] = bests
@@ -82,8 +103,11 @@ class _BenchmarkCell:
             rows = self.rows[self.ok]
             best = self.best[self.ok]
             valid = np.where(self.ok, self.best, np.inf)
+            wall, cpu = (self.times[self.ok, k] for k in (0, 1))
             self.cache = {
                 "runs": int(self.ok.sum()), "failed": self.failed,
+                # medians over the finished runs that have them (None: none has)
+                "seconds": _median(wall), "cpu_seconds": _median(cpu),
                 "best_run": int(np.argmin(valid)) if best.size else None,
                 "band": band(rows), "box": box_stats(best),
                 "describe": describe(best) if best.size else None,
@@ -93,10 +117,10 @@ class _BenchmarkCell:
 
     def state(self) -> dict[str, Any]:
         return {"rows": self.rows, "best": self.best, "ok": self.ok, "seen": self.seen,
-                "failed": np.array(self.failed)}
+                "times": self.times, "failed": np.array(self.failed)}
 
     def restore(self, state: Mapping[str, Any]) -> None:
-        for name in ("rows", "best", "ok", "seen"):
+        for name in ("rows", "best", "ok", "seen", "times"):
             value = np.asarray(state[name])
             if value.shape != getattr(self, name).shape:
                 raise ValueError(f"saved {name} has shape {value.shape}")

@@ -25,7 +25,7 @@ from typing import Any
 
 from swarmpath.service.store import FINAL_STATES
 from swarmpath.service.util import json_safe
-from swarmpath.service.web.aggregates import JobAggregates
+from swarmpath.service.web.aggregates import SAVE_FORMAT, JobAggregates
 
 _SAFE_ID = re.compile(r"^[A-Za-z0-9_.-]{1,64}$")
 
@@ -59,12 +59,15 @@ class Dashboard:
     def observe(self, job_id: str, results: Iterable[Any], now: float | None = None) -> None:
         """Results just accepted for ``job_id`` (``RunResult`` objects): update the job's
         aggregates (created on its first results) and its rate."""
-        self.observe_runs(job_id, [(r.cell, r.run, r.status == "ok", r.metrics, r.curve, r.path)
+        self.observe_runs(job_id, [(r.cell, r.run, r.status == "ok", r.metrics, r.curve, r.path,
+                                    (getattr(r, "seconds", None), getattr(r, "cpu_seconds", None)))
                                    for r in results], now)
 
-    def observe_runs(self, job_id: str, runs: Sequence[tuple[str, int, bool, Any, Any, Any]],
+    def observe_runs(self, job_id: str,
+                     runs: Sequence[tuple[str, int, bool, Any, Any, Any, Any]],
                      now: float | None = None) -> None:
-        """:meth:`observe` of runs given as (cell, run, ok, metrics, curve, path)."""
+        """:meth:`observe` of runs given as (cell, run, ok, metrics, curve, path, times), times
+        the run's (wall, CPU) seconds or None."""
         now = time.time() if now is None else now
         with self._lock:
             rate = self._rates.setdefault(job_id, deque())
@@ -81,10 +84,10 @@ class Dashboard:
             return
         entries = []
         index_of = job.cell_index
-        for cell, run, ok, metrics, curve, path in runs:
+        for cell, run, ok, metrics, curve, path, times in runs:
             index = index_of(cell)
             if index is not None:
-                entries.append((index, run, ok, metrics, curve, path))
+                entries.append((index, run, ok, metrics, curve, path, times))
         job.add_many(entries)
 
     def aggregates(self, job_id: str, wait: bool = True,
@@ -310,8 +313,8 @@ class Dashboard:
             version, complete = int(page["version"]), int(page["finished"]) == finished
         except (OSError, ValueError, KeyError, TypeError):
             return None
-        if not complete or page.get("loading"):  # stale or partial: rebuild
-            return None
+        if not complete or page.get("loading") or page.get("format") != SAVE_FORMAT:
+            return None  # stale, partial or of an earlier layout: rebuild
         return self._remember(job_id, version, body)
 
     # --------------------------------------------------------------------------------- rates

@@ -1,7 +1,9 @@
 """The work itself, plain functions: a benchmark lease is one vectorized
 ``minimize(..., run_ids=lease.runs)`` (split into memory-bounded batches, as ``swarmpath bench``
 does; runs are independent so the numbers are the same), a map lease one
-``Episode(scenario, planner, seed, run, params)`` per run. A run that raises is a ``failed`` result
+``Episode(scenario, planner, seed, run, params)`` per run. Each result carries its wall seconds
+and CPU seconds (this thread's, ``time.thread_time``, as ``minimize`` and a map run's outcome
+measure it; a slot runs BLAS single-threaded). A run that raises is a ``failed`` result
 (not retried); cancellation is checked every iteration/step. Slots run the benchmark leases of a
 bundle that differ only in their function as one batch (:mod:`.stacking`), with the same numbers
 and the same per-lease results as here."""
@@ -76,10 +78,12 @@ def execute_lease(
     return [(r.run, fit_result(r, capability=lease.capability)) for r in results]
 
 
-def _result(lease: Lease, run: int, seconds: float, **fields: Any) -> RunResult:
+def _result(lease: Lease, run: int, seconds: float, cpu_seconds: float | None = None,
+            **fields: Any) -> RunResult:
     return RunResult(
         lease_id=lease.lease_id, job_id=lease.job_id, cell=lease.cell, run=run,
-        worker=lease.worker, seconds=max(0.0, seconds), **fields,
+        worker=lease.worker, seconds=max(0.0, seconds),
+        cpu_seconds=None if cpu_seconds is None else max(0.0, cpu_seconds), **fields,
     )
 
 
@@ -116,7 +120,7 @@ def _benchmark(
     for batch in benchmark_batches(lease.runs, spec.agents, spec.dim):
         if cancelled():
             raise Cancelled(lease.lease_id)
-        started = time.perf_counter()
+        started, cpu_started = time.perf_counter(), time.thread_time()
         try:
             res = minimize(
                 spec.algorithm, spec.function, run_ids=batch, on_iteration=hook,
@@ -126,10 +130,12 @@ def _benchmark(
             raise
         except Exception as exc:
             seconds = (time.perf_counter() - started) / len(batch)
+            cpu = (time.thread_time() - cpu_started) / len(batch)
             failure = _failure_text(exc)
             log.warning("lease %s: runs %s of %s failed: %s", lease.lease_id, batch, lease.cell,
                         failure.splitlines()[-1] if failure else "")
-            out += [_result(lease, r, seconds, status="failed", failure=failure) for r in batch]
+            out += [_result(lease, r, seconds, cpu, status="failed", failure=failure)
+                    for r in batch]
             continue
         out += ok_results(lease, res)
     return out
@@ -153,11 +159,12 @@ def minimize_options(lease: Lease, spec: BenchmarkCell) -> dict[str, Any]:
 
 def ok_results(lease: Lease, res: Any) -> list[RunResult]:
     """The results of ``res`` (a ``minimize`` Result of the lease's cell; its runs, in its
-    order), each charged an equal share of its seconds."""
+    order), each charged an equal share of its wall and CPU seconds."""
     share = res.seconds / len(res.run_ids)
+    cpu = None if res.cpu_seconds is None else res.cpu_seconds / len(res.run_ids)
     return [
         _result(
-            lease, r, share,
+            lease, r, share, cpu,
             metrics={"best_fitness": float(res.best_fitness[i]),
                      "evaluations": int(res.evaluations[i])},
             curve=res.curve[i].tolist(),  # float64 -> float, exact (and 20x faster
@@ -203,7 +210,7 @@ def _map(
     for r in lease.runs:
         if cancelled():
             raise Cancelled(lease.lease_id)
-        started = time.perf_counter()
+        started, cpu_started = time.perf_counter(), time.thread_time()
         try:
             episode = Episode(scenario, spec.planner, lease.seed, r, spec.params,
                               optimum_budget=budget)
@@ -218,7 +225,8 @@ def _map(
         except Cancelled:
             raise
         except Exception as exc:
-            out.append(_result(lease, r, time.perf_counter() - started, status="failed",
+            out.append(_result(lease, r, time.perf_counter() - started,
+                               time.thread_time() - cpu_started, status="failed",
                                failure=_failure_text(exc)))
             continue
         data = outcome.to_dict()
@@ -228,7 +236,8 @@ def _map(
         reason = optimum_of(scenario, budget)[1] if data.get("optimum") is None else None
         metrics.update(note_metrics(reason, warnings))
         out.append(_result(
-            lease, r, time.perf_counter() - started, metrics=metrics,
+            lease, r, time.perf_counter() - started, time.thread_time() - cpu_started,
+            metrics=metrics,
             path=[(float(p[0]), float(p[1]), float(p[2])) for p in path],
         ))
     return out

@@ -57,7 +57,7 @@ def _encode(result: RunResult, capability: str | None) -> bytes:
     head = RunResultHead(
         lease_id=result.lease_id, job_id=result.job_id, cell=result.cell, run=result.run,
         worker=result.worker, status=result.status, failure=result.failure,
-        seconds=result.seconds, metrics=result.metrics,
+        seconds=result.seconds, cpu_seconds=result.cpu_seconds, metrics=result.metrics,
     )
     arrays = {"curve": result.curve, "best_position": result.best_position, "path": result.path}
     if result.path is not None and not result.path:
