@@ -216,6 +216,19 @@ def test_benchmark_job_page_table_curves_and_boxes(server, jobs, browser):
         assert len(row.find_elements(By.CSS_SELECTOR, ".marker")) == len(BENCH["algorithms"]) - 1
     foot = texts(browser.find_elements(By.CSS_SELECTOR, "#pivot tfoot th"))
     assert any("mean rank" in t for t in foot) and any("+/=/-" in t for t in foot)
+    # time per run beside the table: wall / CPU medians, as the aggregates hold them
+    view = _app.state.core.dashboard.aggregates(jobs["benchmark"]).view()
+    times = browser.find_elements(By.CSS_SELECTOR, "#times tbody tr")
+    assert len(times) == groups
+    for row, g in zip(times, view["groups"], strict=True):
+        for a in BENCH["algorithms"]:
+            cell = row.find_element(By.CSS_SELECTOR, f'td[data-algorithm="{a}"]')
+            wall = float(cell.find_element(By.CSS_SELECTOR, ".wall").text)
+            cpu = float(cell.find_element(By.CSS_SELECTOR, ".cpu").text)  # measured: a number
+            want = g["algorithms"][a]
+            assert cpu >= 0.0 and wall >= 0.0
+            assert abs(cpu - want["cpu_seconds"]) <= 0.001 * abs(want["cpu_seconds"]) + 1e-12
+            assert abs(wall - want["seconds"]) <= 0.001 * abs(want["seconds"]) + 1e-12
     for chart in browser.find_elements(By.CSS_SELECTOR, "#charts .conv"):
         assert len(chart.find_elements(By.CSS_SELECTOR, "g.sp-series")) == len(BENCH["algorithms"])
         assert len(chart.find_elements(By.CSS_SELECTOR, "polygon.sp-band")) == len(
@@ -301,6 +314,10 @@ def test_map_job_page_paths_failures_and_boxes(server, jobs, browser):
     for m in maps:
         assert len(m.find_elements(By.CSS_SELECTOR, "polyline.sp-path")) == runs_per_map
         assert m.find_elements(By.CSS_SELECTOR, ".sp-obstacle")
+        # presets have no frame of their own: the chart says its positions are the scenario's
+        label = m.find_element(By.CSS_SELECTOR, "text.sp-frame")
+        assert label.get_attribute("data-frame") == "scenario"
+        assert label.text.startswith("scenario frame (m): lower left (0, 0), upper right (")
     view = app.state.core.dashboard.aggregates(jobs["map"]).view()
     paths = [p for g in view["groups"] for c in g["planners"].values() for p in c["paths"]]
     hits = sum(len(p["collisions"]) for p in paths)
@@ -665,6 +682,42 @@ def test_maps_are_uploaded_and_chosen_in_the_submit_form(server, browser):
     labels = [e.get_attribute("textContent").strip()
               for e in wait_for(browser, "#uploaded-maps label", 2)]
     assert any(t.startswith("arena") for t in labels), labels
+
+
+def test_a_nav2_map_chart_names_its_map_frame_and_positions_in_it(server, browser):
+    """The map chart of a job on a nav2 map is drawn in the scenario frame and labelled with
+    the map's frame: its corners and the start/goal there are the scenario's plus the YAML
+    origin (tb3_sandbox: -10, -10), what the tables and GET /maps report."""
+    import base64
+
+    import httpx
+
+    url, app = server
+    data = Path(__file__).parent / "data"
+    up = httpx.post(f"{url}/maps", timeout=WAIT, json={
+        "name": "tb3", "format": "nav2", "yaml": (data / "tb3_sandbox.yaml").read_text(),
+        "image": base64.b64encode((data / "tb3_sandbox.pgm").read_bytes()).decode()})
+    assert up.status_code == 201, up.text
+    tb3 = up.json()
+    assert (tb3["frame"], tb3["origin"]) == ("map", [-10.0, -10.0])
+    r = httpx.post(f"{url}/jobs", json={
+        "kind": "map", "planners": ["OMPL-RRTstar"], "maps": [{"map": tb3["id"]}], "runs": 1,
+        "seed": 1, "params": {"OMPL-RRTstar": {"iterations": 500}}})
+    assert r.status_code == 201, r.text
+    work_off(app.state.core)
+    browser.get(f"{url}/ui/jobs/{r.json()['id']}")
+    (chart,) = wait_for(browser, "#maps section .mapchart svg")
+    label = chart.find_element(By.CSS_SELECTOR, "text.sp-frame")
+    assert label.get_attribute("data-frame") == "map"
+    w, h = tb3["size"]
+    assert label.text == (f"map frame (m): lower left (-10, -10), upper right "
+                          f"({round(w - 10.0, 2):g}, {round(h - 10.0, 2):g})")
+    titles = [t.get_attribute("textContent") for t in
+              chart.find_elements(By.CSS_SELECTOR, "circle.sp-start title, circle.sp-goal title")]
+    x0, y0 = tb3["start"]  # GET /maps gives start and goal in the map frame
+    assert titles[0] == f"start ({round(x0, 2):g}, {round(y0, 2):g}), map frame"
+    gx, gy = tb3["goal"]
+    assert titles[1] == f"goal ({round(gx, 2):g}, {round(gy, 2):g}), map frame"
 
 
 def test_a_store_that_cannot_write_shows_a_banner(server, browser):

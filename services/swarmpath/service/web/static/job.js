@@ -91,6 +91,23 @@
     return html;
   }
 
+  /* Time per run beside the table: wall and CPU seconds (medians over the finished runs; "-"
+     where no run has one: CPU times of runs stored before they were measured are missing). */
+  function times(data) {
+    const algs = data.algorithms;
+    const t = (v) => (v === null || v === undefined ? "-" : SP.sig(v, 3));
+    let html = `<h2>Time per run (s): wall / CPU, median</h2><table id="times"><thead><tr><th class="l">function</th><th>dim</th>`
+      + algs.map((a) => `<th>${SP.esc(a)}</th>`).join("") + `</tr></thead><tbody>`;
+    for (const g of data.groups) {
+      html += `<tr data-group="${g.function}/${g.dim}"><td class="l">${g.function}</td><td>${g.dim}</td>`
+        + algs.map((a) => {
+          const c = g.algorithms[a];
+          return c && c.runs ? `<td data-algorithm="${SP.esc(a)}"><span class="wall">${t(c.seconds)}</span> / <span class="cpu">${t(c.cpu_seconds)}</span></td>` : "<td>-</td>";
+        }).join("") + "</tr>";
+    }
+    return html + `</tbody></table><p class="legend">Wall: the run's share of the elapsed time of the batch that computed it (grows with the worker's load). CPU: its share of the CPU time of the thread that computed it (does not). Batches of stacked runs share both evenly.</p>`;
+  }
+
   /* A race's markers against the reference per "function/dim" and their +/=/- counts. */
   function raceMarkers(r, ref) {
     const markers = {}, counts = {};
@@ -142,7 +159,7 @@
   function renderBenchmark(data) {
     const algs = data.algorithms;
     const content = SP.q("#content");
-    content.innerHTML = pivot(data) + (race ? raceTables(race, algs) : "") + `<h2>Convergence and best fitness per function and dimension</h2><div id="charts"></div>`;
+    content.innerHTML = pivot(data) + times(data) + (race ? raceTables(race, algs) : "") + `<h2>Convergence and best fitness per function and dimension</h2><div id="charts"></div>`;
     const charts = SP.q("#charts");
     for (const g of data.groups) {
       const row = document.createElement("div");
@@ -284,7 +301,7 @@
         leg.innerHTML = planners.map((p) => `<span data-planner="${SP.esc(p)}">&#9632; ${SP.esc(p)}</span>`).join(" ")
           + " &nbsp; dashed: failed run; &#10005; where a run touched an obstacle; &#9633; end of a stalled (purple) or timed-out (orange) run"
           + (r.data.dynamic ? "; orange lines: moving obstacles' tracks (run 0's world)" : "")
-          + (r.data.frame && r.data.frame !== "scenario" ? `; positions from the map's lower-left corner: in the ${SP.esc(r.data.frame)} frame add the origin (${r.data.origin.map((v) => SP.num(v, 3)).join(", ")})` : "");
+          + "; under the map: its frame and corners (hover start and goal for their positions in it)";
         for (const span of leg.querySelectorAll("span[data-planner]")) span.style.color = color(span.dataset.planner, planners);  /* CSSOM: no inline style under the CSP */
         sec.querySelector(".mapchart").appendChild(leg);
       }

@@ -200,13 +200,22 @@
     return [tr[i - 1][0] + f * (tr[i][0] - tr[i - 1][0]), tr[i - 1][1] + f * (tr[i][1] - tr[i - 1][1])];
   };
 
-  /* Map: scene (size, start, goal, obstacles, motion), paths [{color, points, failure, run,
-     success, name}], opts.time (draw moving obstacles and the robot at that time). */
+  /* Map: scene (size, start, goal, obstacles, motion; frame and origin: the map's own frame,
+     e.g. a nav2 map's "map" frame and YAML origin), paths [{color, points, failure, run,
+     success, name}], opts.time (draw moving obstacles and the robot at that time). Drawn in
+     the scenario frame (0, 0 at the lower-left corner); the line under it names the map's
+     frame and gives the corners there, and start and goal say where they are in it. */
   SP.mapChart = function (container, scene, paths, opts) {
     opts = opts || {};
-    const [w, h] = scene.size, m = 0.02 * Math.max(w, h);
+    const [w, h] = scene.size, m = 0.02 * Math.max(w, h), fs = 0.03 * Math.max(w, h);
+    const frameName = scene.frame || "scenario", o = scene.origin || [0, 0];
+    const at = (x, y) => `(${SP.num(x + o[0], 2)}, ${SP.num(y + o[1], 2)})`;
     container.innerHTML = "";
-    const svg = el("svg", { viewBox: `${-m} ${-m} ${w + 2 * m} ${h + 2 * m}`, class: "sp-chart sp-map", role: "img" }, container);
+    const svg = el("svg", { viewBox: `${-m} ${-m} ${w + 2 * m} ${h + 2 * m + 1.6 * fs}`, class: "sp-chart sp-map", role: "img" }, container);
+    const label = text(svg, -m, h + m + 1.2 * fs, `${frameName} frame (m): lower left ${at(0, 0)}, upper right ${at(w, h)}`,
+      { class: "sp-frame", "font-size": fs, "data-frame": frameName });
+    el("title", {}, label).textContent = frameName === "scenario" ? "positions as the scenario states them"
+      : `the scenario's positions plus the origin (${SP.num(o[0], 3)}, ${SP.num(o[1], 3)}) of the ${frameName} frame`;
     const world = el("g", { transform: `translate(0 ${h}) scale(1 -1)` }, svg);
     el("rect", { x: 0, y: 0, width: w, height: h, class: "sp-world" }, world);
     const motion = scene.motion || { times: [], offsets: {}, goal: [] };
@@ -240,13 +249,15 @@
         el("title", {}, mk).textContent = `run ${p.run}: ${p.failure || "failed"}${p.reason ? " (" + p.reason + ")" : ""}`;
       }
     }
-    el("circle", { cx: scene.start[0], cy: scene.start[1], r: 0.015 * Math.max(w, h), class: "sp-start" }, world);
+    const start = el("circle", { cx: scene.start[0], cy: scene.start[1], r: 0.015 * Math.max(w, h), class: "sp-start" }, world);
+    el("title", {}, start).textContent = `start ${at(scene.start[0], scene.start[1])}, ${frameName} frame`;
     let goal = scene.goal;
     if (opts.time !== undefined && motion.goal && motion.goal.length) {
       const i = Math.min(motion.goal.length - 1, Math.max(0, motion.times.findIndex((t) => t >= opts.time)));
       goal = motion.goal[i];
     }
-    el("circle", { cx: goal[0], cy: goal[1], r: 0.02 * Math.max(w, h), class: "sp-goal" }, world);
+    const goalMark = el("circle", { cx: goal[0], cy: goal[1], r: 0.02 * Math.max(w, h), class: "sp-goal" }, world);
+    el("title", {}, goalMark).textContent = `goal ${at(goal[0], goal[1])}, ${frameName} frame`;
     if (opts.robot) el("circle", { cx: opts.robot[0], cy: opts.robot[1], r: scene.robot_radius, class: "sp-robot" }, world);
     return svg;
   };
