@@ -25,7 +25,7 @@ from swarmpath.service.summary_stats import (
 
 BENCHMARK_COLUMNS = (
     "algorithm", "function", "dim", "runs", "failed", "min", "max", "avg", "std", "median", "iqr",
-    "rank", "seconds_mean", "cpu_seconds_mean",
+    "seconds_mean", "cpu_seconds_mean", "rank",
     "origin_suspect", *BENCHMARK_TEST_COLUMNS,
 )
 MAP_COLUMNS = (

@@ -212,10 +212,8 @@
     const at = (x, y) => `(${SP.num(x + o[0], 2)}, ${SP.num(y + o[1], 2)})`;
     container.innerHTML = "";
     const svg = el("svg", { viewBox: `${-m} ${-m} ${w + 2 * m} ${h + 2 * m + 1.6 * fs}`, class: "sp-chart sp-map", role: "img" }, container);
-    const label = text(svg, -m, h + m + 1.2 * fs, `${frameName} frame (m): lower left ${at(0, 0)}, upper right ${at(w, h)}`,
-      { class: "sp-frame", "font-size": fs, "data-frame": frameName });
-    el("title", {}, label).textContent = frameName === "scenario" ? "positions as the scenario states them"
-      : `the scenario's positions plus the origin (${SP.num(o[0], 3)}, ${SP.num(o[1], 3)}) of the ${frameName} frame`;
+    text(svg, -m, h + m + 1.2 * fs, `${frameName} frame (m): lower left ${at(0, 0)}, upper right ${at(w, h)}`,
+      { class: "sp-frame", "font-size": fs, "data-frame": frameName, "data-origin": o.join(",") });
     const world = el("g", { transform: `translate(0 ${h}) scale(1 -1)` }, svg);
     el("rect", { x: 0, y: 0, width: w, height: h, class: "sp-world" }, world);
     const motion = scene.motion || { times: [], offsets: {}, goal: [] };
