@@ -6,7 +6,9 @@ raced through ``swarmpath up``.
     .venv/bin/python scripts/bench/racing.py power [--races 300] [--max-runs 1000]
     .venv/bin/python scripts/bench/racing.py table2 [--max-runs 1000] [--margin 0.05]
                                                     [--workers 2] [--full FILE] [--full-up]
-                                                    [--again]
+                                                    [--again] [--full-only --save-full FILE]
+    .venv/bin/python scripts/bench/racing.py seeds --full FILE FILE [--final-test]
+    .venv/bin/python scripts/bench/racing.py needed [--races 200]
 
 ``error``: races between one optimizer and itself on two seeds' streams (exchangeable runs: any
 declared difference is a false one), for every registered optimizer on F1-F13 (5 dims, 10
@@ -423,15 +425,15 @@ def main(argv: list[str] | None = None) -> int:
     t.add_argument("--full-up", action="store_true", help="run the full study too")
     t.add_argument("--again", action="store_true",
                    help="with --full-up: the raced job once more after the full one")
-    t.add_argument("--save-full", type=Path, help="with --full-up: write the full job's runs "
-                   "there (a swarmpath bench --json document's cells)")
+    t.add_argument("--save-full", type=Path, help="with --full-up or --full-only: write the "
+                   "full job's runs there (a swarmpath bench --json document's cells)")
+    t.add_argument("--full-only", action="store_true",
+                   help="only the full job through the service, its runs to --save-full")
     n = sub.add_parser("needed", help="runs a small effect needs: fixed-n and the race")
     n.add_argument("--races", type=int, default=200)
     n.add_argument("--max-runs", type=int, default=20000)
     n.add_argument("--power", type=float, default=0.8)
     n.add_argument("--seed", type=int, default=1)
-    t.add_argument("--full-only", action="store_true",
-                   help="only the full job through the service, its runs to --save-full")
     o = sub.add_parser("seeds", help="two full studies' verdicts against each other")
     o.add_argument("--full", type=Path, nargs=2, required=True, metavar="FILE")
     o.add_argument("--max-runs", type=int, default=1000)
