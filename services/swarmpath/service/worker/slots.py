@@ -162,7 +162,7 @@ def warm_compiled() -> None:
 
 def _slot_main(
     conn: Any, cancel: Any, done: Any, running: Any, parent: int, stacking: bool = True,
-    warm: bool = True,
+    warm: bool = False,
 ) -> None:
     """A slot's child process: groups of leases in, one reply per lease out, until told to stop
     or orphaned."""
@@ -242,10 +242,11 @@ class ProcessSlot(Slot):
     """Leases run in a spawned child process (true parallelism; killed and respawned if it
     dies). The child is started with the multiprocessing *spawn* method, never forked; it says
     ready after its warm-up (imports, a tiny run, and with ``warm`` the compiled kernels:
-    :func:`warm_compiled`)."""
+    :func:`warm_compiled`; a worker passes its ``--warm`` setting, other users of a slot, such
+    as the conformance check, run the numpy cells they give it and need none)."""
 
     def __init__(self, index: int, on_done: Callable[[Slot, Outcomes], None],
-                 stacking: bool = True, warm: bool = True):
+                 stacking: bool = True, warm: bool = False):
         super().__init__(index, on_done, stacking)
         self.warm = warm
         import multiprocessing
