@@ -57,6 +57,15 @@ Rules for kernel authors:
    messages most), one signature per function (the same argument types at every call).
 7. Speed: ``scripts/bench/kernels.py`` times the kernel against an independent fused loop of
    the algorithm (``scripts/bench/fused_*.py``), which must reach the same bests; add yours.
+   A helper called in a loop that creates no array and returns none (it writes into arrays
+   its caller made) is ``@njit(cache=True, **NO_REFCOUNT)`` (:mod:`.norefcount`: numba's
+   ``_nrt=False``), not ``inline="always"``: numba
+   counts references to every array a function holds, and an inlined helper binds each array
+   argument to a new variable whose count it raises and lowers (an NRT_incref/NRT_decref call
+   each, an atomic add, which numba's pruning pass leaves in place across the helper's
+   branches); without reference counting its caller's arrays are simply borrowed for the call
+   (numba refuses to compile such a helper if it allocates or returns an array). HPO, which
+   evaluates and moves one agent at a time, spent a fifth of its run in those calls (perf).
 """
 
 import hashlib

@@ -21,6 +21,7 @@ from numba import njit
 
 from swarmpath.optimizers.compiled.best import record_first_min
 from swarmpath.optimizers.compiled.functions import pairwise_sum
+from swarmpath.optimizers.compiled.norefcount import NO_REFCOUNT
 from swarmpath.optimizers.compiled.objectives import evaluate, work_for
 from swarmpath.optimizers.compiled.registry import Kernel, register_kernel
 from swarmpath.optimizers.compiled.streams import RANDOM, open_stream, take
@@ -53,7 +54,7 @@ def _packer(name: str):
     return pack
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def evaluate_bats(stream, objective, shifted, shift, lower, upper, S, F, everyone, work, G,
                   Fb, Zb, epoch, best, best_x):
     """``BatSwarms._evaluate_bats``: evaluate, record, each sub-swarm's z* (the first minimum of

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 from numba import njit
 
+from swarmpath.optimizers.compiled.norefcount import NO_REFCOUNT
 
-@njit(cache=True, inline="always")
+
+@njit(cache=True, **NO_REFCOUNT)
 def record_first_min(F, X, m, best, best_x):
     """The first minimum of F[:m] (ties: first index), recorded if below ``best[0]``."""
     k = 0
@@ -18,7 +20,7 @@ def record_first_min(F, X, m, best, best_x):
             best_x[j] = X[k, j]
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def record_masked(F, X, mask, best, best_x):
     """:func:`record_first_min` over the rows of ``mask`` (a masked evaluation: the others are
     neither counted nor eligible); returns how many rows were evaluated."""

@@ -28,6 +28,7 @@ import numpy as np
 from numba import njit
 
 from swarmpath.optimizers.compiled.best import record_masked
+from swarmpath.optimizers.compiled.norefcount import NO_REFCOUNT
 from swarmpath.optimizers.compiled.objectives import evaluate, work_for
 from swarmpath.optimizers.compiled.registry import Kernel, register_kernel
 from swarmpath.optimizers.compiled.streams import NORMAL, open_stream, take
@@ -46,7 +47,7 @@ def pack(p: Mapping[str, ParamValue]) -> np.ndarray:
     ])
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def levy(stream, n, L, S, call):
     """L[:n] = n Levy steps from one two-part normal draw (u, v): (u / cbrt(v^2)) * scale, the
     reference's ``_levy``; S[:n] = copysign(L, v) (its ``_levy_pair``) when S has room."""
@@ -65,7 +66,7 @@ def levy(stream, n, L, S, call):
             S[k] = np.copysign(w[k], z[start + n + k])
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def bound(stream, C, lower, upper, steps, call):
     """The author's bound rule in place (``_bound``, ``bound = "author"``): a component above
     the box becomes ub L, below lb L (a fresh Levy step L), then everything is clipped."""

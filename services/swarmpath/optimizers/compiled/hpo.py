@@ -29,6 +29,7 @@ from numba import njit
 
 from swarmpath.optimizers.compiled.best import record_first_min
 from swarmpath.optimizers.compiled.functions import dot
+from swarmpath.optimizers.compiled.norefcount import NO_REFCOUNT
 from swarmpath.optimizers.compiled.objectives import evaluate, evaluate_rows, work_for
 from swarmpath.optimizers.compiled.registry import Kernel, register_kernel
 from swarmpath.optimizers.compiled.streams import RANDOM, open_stream, take
@@ -71,7 +72,7 @@ def matlab_round(x):
     return int(math.copysign(r, x))
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def anchor(X, kbest, P, mu, dist2):
     """``HPO._hunter_anchor``: mu the population mean (added in agent order) and P the agent of
     the kbest-th smallest squared distance to it (a stable order: ties by index)."""
@@ -106,7 +107,7 @@ def hunter_move(hunter, z, x, target, centre):
     return (target - base) * z + base
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def draw_terms(stream, N, d, C, t, T, params, CZ, S, alpha, hunters, call):
     """One iteration's numbers (``HPO._draw`` and IHPO's alpha): C Z, the prey's factor S (times
     alpha where eq 14b applies it), alpha (IHPO) and the hunters' test, in place."""
@@ -153,11 +154,11 @@ def draw_terms(stream, N, d, C, t, T, params, CZ, S, alpha, hunters, call):
                     S[i, j] = S[i, j] * alpha[i, j]  # eq 14b: T + alpha C Z cos(.) (T - x)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, **NO_REFCOUNT)
 def move(X, i, C, kbest, params, CZ, S, alpha, hunters, T, lower, upper, centre, P, mu, dist2,
-         out):
+         out, k):
     """Agent i's new position (``HPO._moved`` / ``IHPO._moved`` of one row), clipped, into
-    ``out``: from the population X as it is and toward the best point T."""
+    ``out[k]``: from the population X as it is and toward the best point T."""
     ihpo, hunter, on, branches = params[0] == 1.0, int(params[4]), int(params[5]), int(params[6])
     d = X.shape[1]
     plain = not ihpo or branches == HUNTER_ONLY or on == STEP or on == LITERAL
@@ -170,7 +171,7 @@ def move(X, i, C, kbest, params, CZ, S, alpha, hunters, T, lower, upper, centre,
             v = x + (T[j] - x) * ((s + 1.0) * alpha[i, j])
         else:  # position: alpha (T + S (T - x))
             v = ((T[j] - x) * s + T[j]) * alpha[i, j]
-        out[j] = v
+        out[k, j] = v
     if hunters[i]:
         anchor(X, kbest, P, mu, dist2)
         scaled = ihpo and branches != PREY_ONLY
@@ -191,9 +192,9 @@ def move(X, i, C, kbest, params, CZ, S, alpha, hunters, T, lower, upper, centre,
                 h = a * h
             elif scaled and (on == STEP or on == DISPLACEMENT):
                 h = x + a * (h - x)
-            out[j] = h
+            out[k, j] = h
     for j in range(d):
-        out[j] = min(max(out[j], lower[j]), upper[j])
+        out[k, j] = min(max(out[k, j], lower[j]), upper[j])
 
 
 @njit(cache=True)
@@ -236,7 +237,7 @@ def run(rng, objective, shifted, shift, lower, upper, agents, iterations, params
         for i in range(N):
             if sequential:  # the authors' sweep: moved, clipped and evaluated in turn
                 move(X, i, C, kbest, params, CZ, S, alpha, hunters, best_x, lower, upper,
-                     centre, P, mu, dist2, B[0])
+                     centre, P, mu, dist2, B, 0)
                 for j in range(d):
                     X[i, j] = B[0, j]
                 evaluate_rows(stream, objective, shifted, shift, lower, upper, X, i, i + 1, F,
@@ -247,7 +248,7 @@ def run(rng, objective, shifted, shift, lower, upper, agents, iterations, params
                         best_x[j] = X[i, j]
             else:
                 move(X, i, C, kbest, params, CZ, S, alpha, hunters, start, lower, upper,
-                     centre, P, mu, dist2, B[i])
+                     centre, P, mu, dist2, B, i)
         if not sequential:
             for i in range(N):
                 for j in range(d):

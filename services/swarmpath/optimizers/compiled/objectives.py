@@ -53,6 +53,7 @@ from swarmpath.optimizers.compiled.functions import (
     step,
     step_floor,
 )
+from swarmpath.optimizers.compiled.norefcount import NO_REFCOUNT
 from swarmpath.optimizers.compiled.streams import RANDOM, take
 from swarmpath.optimizers.compiled.ufuncs import exp_inplace
 
@@ -321,7 +322,7 @@ def work_for(m, d):
     return np.empty(m * d + 3 * d + 2 * m)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, **NO_REFCOUNT)
 def evaluate_rows(stream, objective, shifted, shift, lower, upper, X, start, stop, F, mask,
                   work):
     """Values of the rows [start, stop) of the population X into F[start:stop], as the
@@ -357,7 +358,7 @@ def evaluate_rows(stream, objective, shifted, shift, lower, upper, X, start, sto
             F[i] = np.inf
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, **NO_REFCOUNT)
 def evaluate(stream, objective, shifted, shift, lower, upper, X, F, mask, work):
     """:func:`evaluate_rows` of the whole population X (m, d) into F (m,)."""
     evaluate_rows(stream, objective, shifted, shift, lower, upper, X, 0, X.shape[0], F, mask,

@@ -36,6 +36,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from swarmpath.optimizers.compiled.norefcount import NO_REFCOUNT
 from swarmpath.optimizers.streams import BLOCK
 
 RANDOM = 0
@@ -61,7 +62,7 @@ def open_stream(rng, capacity, mixed):
     return rng, buf, meta
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _fill(rng, kind, row, start, stop):
     """row[start:stop] <- fresh numbers of ``kind``, one generator call each (what the
     generator's own fill does, without an array to allocate and copy)."""
@@ -73,7 +74,7 @@ def _fill(rng, kind, row, start, stop):
             row[j] = rng.standard_normal()
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _refill(stream, kind, size):
     rng, buf, meta = stream
     new = max(BLOCK, size)
@@ -96,7 +97,7 @@ def _refill(stream, kind, size):
     meta[_NEWEST] = kind
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def take(stream, kind, size):
     """Reserve ``size`` numbers of ``kind``: their offset in ``stream[1][kind]``."""
     rng, buf, meta = stream
@@ -125,7 +126,7 @@ def take(stream, kind, size):
     return start
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def random_into(stream, out):
     """Fill the contiguous array ``out`` (any shape) with the next uniforms, in C order."""
     flat = out.reshape(out.size)
@@ -135,7 +136,7 @@ def random_into(stream, out):
         flat[j] = row[start + j]
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def normal_into(stream, out):
     """Fill the contiguous array ``out`` with the next standard normals, in C order."""
     flat = out.reshape(out.size)

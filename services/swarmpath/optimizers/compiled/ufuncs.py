@@ -27,6 +27,8 @@ from numba import types as nbtypes
 from numba.core import cgutils
 from numba.extending import intrinsic
 
+from swarmpath.optimizers.compiled.norefcount import NO_REFCOUNT
+
 # PyUFuncObject (numpy/ufuncobject.h): PyObject_HEAD (16 bytes), int nin, nout, nargs,
 # identity; PyUFuncGenericFunction *functions; void **data; int ntypes, reserved1;
 # const char *name; char *types.
@@ -110,7 +112,7 @@ _call_log1p = _linked_loop("swarmpath_numpy_log1p_dd", np.log1p, "dd")
 _call_matmul = _linked_loop("swarmpath_numpy_matmul_ddd", np.matmul, "ddd")
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _in_place(x, call):
     """numpy's loop arguments (args, dimensions, steps) for x = f(x), x contiguous float64, in
     ``call`` (int64, 5): the addresses of the three arrays."""
@@ -125,32 +127,32 @@ def _in_place(x, call):
 # x = f(x) in place for a contiguous float64 x with numpy's own loop (on AVX-512 not the C
 # library's: exp, cos, sin and log1p differ from it in the last bit for about one argument in a
 # hundred, cbrt for about half); ``call`` is int64 scratch (5,).
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def exp_inplace(x, call):
     _call_exp(*_in_place(x, call))
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def cbrt_inplace(x, call):
     _call_cbrt(*_in_place(x, call))
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def cos_inplace(x, call):
     _call_cos(*_in_place(x, call))
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def sin_inplace(x, call):
     _call_sin(*_in_place(x, call))
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def log1p_inplace(x, call):
     _call_log1p(*_in_place(x, call))
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def matmul_into(A, B, C, call):
     """C = A @ B (float64 matrices, any strides) with numpy's matmul loop, as one item of
     ``np.matmul``'s outer loop (its BLAS call, so its order of additions); ``call`` is int64
@@ -174,7 +176,7 @@ def matmul_into(A, B, C, call):
     _call_matmul(call.ctypes.data, call[3:].ctypes.data, call[7:].ctypes.data)
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def power(x, e, call):
     """``x ** e`` for float64 numbers as numpy computes an array to a scalar power (the
     exponent's stride 0: numpy's loop takes its x * x, 1 / x, sqrt(x) shortcuts for e = 2, -1,
