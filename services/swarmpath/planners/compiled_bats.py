@@ -25,6 +25,7 @@ import numpy as np
 from numba import njit
 
 import swarmpath.optimizers.compiled  # noqa: F401 - first: numba's versioned cache directory
+from swarmpath.optimizers.compiled.bat_move import move_bats
 from swarmpath.optimizers.compiled.coot_phases import _clip
 from swarmpath.optimizers.compiled.ufuncs import exp_inplace
 from swarmpath.planners.compiled_coot import record, stalled_after
@@ -181,7 +182,7 @@ def bats_decide(rng: Any, lb: Array, ub: Array, N: int, T: int, params: Array, d
             clock = t - start
         # ---- one bat move (``_bat_move``), clock (t, T) of eqs 10 and 15
         u = rng.random(Nb * (d + 2 + e))
-        o_walk, o_acc, o_beta = Nb * d, Nb * (d + 1), Nb * (d + 2)
+        o_acc, o_beta = Nb * (d + 1), Nb * (d + 2)
         if beta_time == 2:
             freq[:] = u[o_beta:]
         else:
@@ -198,18 +199,8 @@ def bats_decide(rng: Any, lb: Array, ub: Array, N: int, T: int, params: Array, d
             if Fb[g] < Fb[kb]:
                 kb = g
         _mean_loudness(A, group, G, amean)
-        for i in range(Nb):
-            z = kb if shared else group[i]
-            scale = (2.0 * sigma) * amean[group[i]]
-            walk = u[o_walk + i] > r[i]
-            for j in range(d):
-                D = (Zb[z, j] - X[i, j]) * freq[i * e + (j if per_dim else 0)]
-                V[i, j] = V[i, j] + D if toward else V[i, j] - D
-                s = X[i, j] + V[i, j]
-                if walk:
-                    sc = scale * span[j] if span_walk else scale
-                    s = u[i * d + j] * sc + (Zb[z, j] - 0.5 * sc)
-                S[i, j] = _clip(s, lb[j], ub[j])
+        move_bats(X, V, S, Zb, freq, per_dim, u, 0, r, amean, G, shared, kb, sigma, toward,
+                  span_walk, lb, ub)
         fb_before = Fb.copy()
         _evaluate(S, Fnew, geo, hits, k, best, best_x, group, G, Fb, Zb, epoch, hpso)
         if hpso:

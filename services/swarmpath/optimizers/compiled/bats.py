@@ -19,6 +19,7 @@ from collections.abc import Mapping
 import numpy as np
 from numba import njit
 
+from swarmpath.optimizers.compiled.bat_move import move_bats
 from swarmpath.optimizers.compiled.best import record_first_min
 from swarmpath.optimizers.compiled.functions import pairwise_sum
 from swarmpath.optimizers.compiled.norefcount import NO_REFCOUNT
@@ -164,7 +165,7 @@ def run(rng, objective, shifted, shift, lower, upper, agents, iterations, params
                     length -= 1
         if clock > 0:  # ---- one bat move (``_bat_move``) on the clock of eqs 10 and 15
             o = take(stream, RANDOM, Nb * (d + 2 + e))
-            o_walk, o_acc, o_beta = o + Nb * d, o + Nb * (d + 1), o + Nb * (d + 2)
+            o_acc, o_beta = o + Nb * (d + 1), o + Nb * (d + 2)
             if beta_time == 2:  # "uniform": Yang's beta
                 for i in range(Nb * e):
                     freq[i] = buf[o_beta + i]
@@ -192,18 +193,8 @@ def run(rng, objective, shifted, shift, lower, upper, agents, iterations, params
                         s += A[i]
                         n += 1
                     amean[g] = s / float(n)
-            for i in range(Nb):
-                z = kb if shared else i % G
-                scale = (2.0 * sigma) * amean[i % G]
-                walk = buf[o_walk + i] > r[i]
-                for j in range(d):
-                    D = (Zb[z, j] - X[i, j]) * freq[i * e + (j if per_dim else 0)]
-                    V[i, j] = V[i, j] + D if toward else V[i, j] - D
-                    s = X[i, j] + V[i, j]
-                    if walk:  # eq 13: z* + sigma eps <A> (ub - lb)
-                        sc = scale * (upper[j] - lower[j]) if span_walk else scale
-                        s = buf[o + i * d + j] * sc + (Zb[z, j] - 0.5 * sc)
-                    S[i, j] = min(max(s, lower[j]), upper[j])
+            move_bats(X, V, S, Zb, freq, per_dim, buf, o, r, amean, G, shared, kb, sigma, toward,
+                      span_walk, lower, upper)
             for i in range(Nb):  # keep the acceptance numbers: a noisy evaluation takes too
                 level[i] = buf[o_acc + i]
             evaluate_bats(stream, objective, shifted, shift, lower, upper, S, Fnew, everyone,
