@@ -95,7 +95,7 @@ def test_benchmark_job_file(store):
     for item in store.runs(job, limit=100):
         assert by_run[item["run_id"]]["best_fitness"] == item["best_fitness"]
         assert by_run[item["run_id"]]["algorithm"] == item["algorithm"]
-        assert by_run[item["run_id"]]["backend"] == "numpy"  # provenance of the numbers
+        assert by_run[item["run_id"]]["backend"] == "auto"  # the job spec's default backend
         assert by_run[item["run_id"]]["cpu_seconds"] == item["cpu_seconds"] >= 0.0
     assert all(len(c["best_fitness"]) == c["iterations"] == 8 for c in curves)
     names = {s.name: s for s in summary.schemas.values()}

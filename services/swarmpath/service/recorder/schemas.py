@@ -33,7 +33,8 @@ BENCHMARK_RESULT_SCHEMA: dict[str, Any] = {
         "algorithm": {"type": "string"},
         "function": {"type": "string"},
         "dim": {"type": "integer"},
-        "backend": {"type": "string", "description": "numpy (the reference) or numba"},
+        "backend": {"type": "string", "description": "the job's backend: auto, numpy (the "
+                    "reference) or numba; the numbers are the same under each"},
         **_OUTCOME,
         "best_fitness": {"type": "number"},
         "evaluations": {"type": "integer"},
