@@ -73,3 +73,6 @@ def test_resume_runs_only_what_the_jsonl_file_lacks_and_counts_the_rest(maps, tm
     table = run(maps, monkeypatch, capsys, "--table", str(sink))
     assert "| MFB (map) | arena.map#0 | 1/1 |" in table
     assert "| MFB | arena.map#0 | 1/1 |" in table
+    grid = run(maps, monkeypatch, capsys, "--table", str(sink), "--matrix").splitlines()
+    assert grid[0] == "| planner | arena.map |"
+    assert grid[2].startswith("| MFB (map) | 2/2, ") and grid[3].startswith("| MFB | 1/1, ")

@@ -3,7 +3,7 @@
 
     .venv/bin/python scripts/bench/maps.py --planners ICOOT,IHPO --maps all --seeds 1-5
         [--params JSON] [--knowledge map] [--jsonl FILE [--resume]] [--by-map]
-    .venv/bin/python scripts/bench/maps.py --table FILE.jsonl[,FILE2.jsonl] [--by-map]
+    .venv/bin/python scripts/bench/maps.py --table FILE.jsonl[,FILE2.jsonl] [--by-map | --matrix]
 
 ``--maps`` takes preset names (``all`` = every registered preset), scenario ``.json`` files,
 nav2 map ``.yaml`` files and MovingAI ``.map`` files (their importers' default start and goal;
@@ -16,7 +16,9 @@ split into robot-driven / obstacle-driven (``metrics.contact_causes``), median a
 the exact optimum over the successful runs, median planning wall time and CPU time per run.
 The exact optimum has no wall-clock budget unless ``--optimum-budget S`` (the episode's
 default of 30 s gave up on Berlin_1_256 at load 20, and the time limit of a run follows it).
-``--by-map`` puts the rows of one ``.scen`` together (one table row per planner x map file).
+``--by-map`` puts the rows of one ``.scen`` together (one table row per planner x map file);
+``--matrix`` (with ``--table``) prints planners x map files, each cell successes / runs, median /
+worst gap and the failures by class.
 ``--jsonl`` also writes every run as a JSON line (for re-tabulating without re-running:
 ``--table``); with ``--resume`` the runs already in that file (same planner, map, seed and
 parameters) are not run again but are counted in the table, so a stopped run goes on where it
@@ -135,6 +137,31 @@ def table(records: list[dict[str, Any]], by_map: bool) -> None:
               flush=True)
 
 
+def matrix(records: list[dict[str, Any]]) -> None:
+    """One row per planner (and knowledge), one column per map file: successes / runs, median /
+    worst gap, the failures by class."""
+    cells: dict[str, dict[str, list[dict[str, Any]]]] = {}
+    for r in records:
+        given = r.get("params") or {}
+        p = r["planner"] + (f" ({given['knowledge']})" if "knowledge" in given else "")
+        cells.setdefault(p, {}).setdefault(r["map"].split("#")[0], []).append(r)
+    columns = list(dict.fromkeys(m for row in cells.values() for m in row))
+    print("| planner | " + " | ".join(columns) + " |")
+    print("| --- |" + " --- |" * len(columns))
+    for p, row in cells.items():
+        out = []
+        for m in columns:
+            rows = row.get(m, [])
+            gaps = [100 * r["gap"] for r in rows if r["success"] and r["gap"] is not None]
+            text = f"{sum(r['success'] for r in rows)}/{len(rows)}" if rows else "-"
+            if gaps:
+                text += f", {float(np.median(gaps)):.2f} / {max(gaps):.2f} %"
+            classes = Counter(r["failure_class"] for r in rows if not r["success"])
+            text += "".join(f", {k} {v}" for k, v in sorted(classes.items()))
+            out.append(text)
+        print(f"| {p} | " + " | ".join(out) + " |")
+
+
 def read_jsonl(paths: str) -> list[dict[str, Any]]:
     out = []
     for p in paths.split(","):
@@ -161,9 +188,11 @@ def main() -> None:
                     help="only tabulate these --jsonl files (comma-separated)")
     ap.add_argument("--by-map", action="store_true",
                     help="one table row per planner x map file (its .scen rows together)")
+    ap.add_argument("--matrix", action="store_true",
+                    help="with --table: planners x map files, success and median / worst gap")
     a = ap.parse_args()
     if a.table:
-        table(read_jsonl(a.table), a.by_map)
+        (matrix if a.matrix else lambda rs: table(rs, a.by_map))(read_jsonl(a.table))
         return
     if a.resume and not a.jsonl:
         ap.error("--resume needs --jsonl FILE")
