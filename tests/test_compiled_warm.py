@@ -39,6 +39,30 @@ def test_warmup_command_lists_what_it_compiled():
     assert set(kernel_names()) >= {"PSO", "GWO"} and "F1" in compiled_names()
 
 
+def test_the_map_piece_compiles_every_clearance_and_sensing_kernel():
+    """A worker's warm-up of everything includes the kernels every map run calls: in a fresh
+    process none of them has a compiled signature before the piece, each has one after."""
+    import subprocess
+    import sys
+
+    code = """
+import swarmpath.world.clearance_compiled as cc
+from numba.core.registry import CPUDispatcher
+from swarmpath.optimizers.compiled.warm import warm
+kernels = {n: k for n, k in vars(cc).items() if isinstance(k, CPUDispatcher) and n.endswith(
+    ("_kernel", "build_index"))}
+assert len(kernels) >= 5 and not any(k.signatures for k in kernels.values()), kernels
+done = warm([], [], maps=True)
+assert [(w.kind, w.name) for w in done] == [("map", "clearance")], done
+missing = sorted(n for n, k in kernels.items() if not k.signatures)
+assert not missing, missing
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=600, env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert [w.kind for w in warm([], ["F1"])] == ["function"]  # a list of pieces: no map piece
+
+
 def test_warmup_names_the_option_of_what_has_no_kernel():
     for args, field in ((["-a", "NOPE"], "--algorithms"), (["-a", "RS"], "--algorithms"),
                         (["-f", "cec2022:F1"], "--functions"), (["-f", "F99"], "--functions")):

@@ -27,7 +27,8 @@ def warmup(
     as_json: Annotated[bool, typer.Option("--json", help="One JSON document.")] = False,
 ) -> None:
     """Compile (or load from numba's cache) the compiled kernels and objectives that backend
-    "auto" and "numba" run, and print the CPU seconds each took: a fresh environment's first
+    "auto" and "numba" run (without --algorithms and --functions also the clearance and sensing
+    kernels every map run calls), and print the CPU seconds each took: a fresh environment's first
     study then starts without compiling. The cache is per installed tree and shared by every
     process of it (workers' slots included)."""
     from swarmpath.functions import expand_function_names
@@ -47,7 +48,8 @@ def warmup(
             None if functions is None else expand_function_names(functions))
     except (KeyError, ValueError) as exc:
         raise InputError("--functions", str(exc.args[0] if exc.args else exc)) from None
-    done = warm(algos, names)
+    # the map runs' kernels with a warm-up of everything (not with a list of pieces)
+    done = warm(algos, names, maps=algorithms is None and functions is None)
     if as_json:
         sys.stdout.write(json.dumps([{"kind": w.kind, "name": w.name, "cpu_seconds": w.seconds}
                                      for w in done]) + "\n")

@@ -174,3 +174,17 @@ def polygon_rays(obstacles: ObstacleSet, origin: Array, dirs: Array,
                             reach + slack, i.verts, i.starts, i.counts, i.bb_lo, i.bb_hi,
                             i.grid, i.start, i.items, i.stamp, i.mark(), i.buf)
     return np.asarray(t), bool(inside)
+
+
+def warm() -> None:
+    """Compile (or load from numba's cache) every clearance and sensing kernel by one tiny call
+    each (a kernel has one signature whatever the sizes): every map run calls them, so a
+    worker that warms before it leases compiles none inside a map lease (about 10 s of CPU
+    cold)."""
+    box = np.array([[2.0, 2.0], [3.0, 2.0], [3.0, 3.0], [2.0, 3.0]])
+    obstacles = ObstacleSet(circles=np.array([[0.0, 0.0, 0.5]]), polygons=(box,))
+    xy = np.array([[1.0, 0.0], [1.5, 1.0], [4.0, 4.0]])
+    step_clearances(xy, obstacles, None)
+    segment_clearance(obstacles, xy[0], xy[2], backend="numba")
+    point_clearances(obstacles, xy, backend="numba")
+    polygon_rays(obstacles, xy[0], np.array([[1.0, 0.0], [0.0, 1.0]]), 5.0)

@@ -23,7 +23,8 @@ from swarmpath.optimizers.compiled.registry import find_kernel, kernel_names
 
 @dataclass(frozen=True)
 class Warmed:
-    """One piece made ready: ``kind`` ("function" or "algorithm"), its name, the CPU seconds
+    """One piece made ready: ``kind`` ("function", "algorithm" or "map": the world's clearance
+    and sensing kernels every map run calls), its name, the CPU seconds
     its compilation (or its load from the cache) took in this process."""
 
     kind: str
@@ -62,11 +63,13 @@ def functions_with_objectives(functions: Sequence[str] | None) -> list[str]:
 
 def warm(algorithms: Sequence[str] | None = None,
          functions: Sequence[str] | None = None, *, shared: bool = False,
-         start: int = 0) -> list[Warmed]:
+         start: int = 0, maps: bool | None = None) -> list[Warmed]:
     """Make the compiled objectives of ``functions`` and the kernels of ``algorithms`` ready
     (None: every one there is; KeyError as :func:`algorithms_with_kernels` and
-    :func:`functions_with_objectives`). Functions first: an algorithm's first run then times
-    its kernel alone.
+    :func:`functions_with_objectives`), and with ``maps`` (None: when both are None, i.e. a
+    warm-up of everything) the world's clearance and sensing kernels as the piece
+    ``("map", "clearance")``. Functions first: an algorithm's first run then times its kernel
+    alone.
 
     ``shared``: other processes of this tree may be warming at the same time (a worker's slots,
     the workers of ``swarmpath up``): each piece is made ready under a lock of its own in the
@@ -91,6 +94,8 @@ def warm(algorithms: Sequence[str] | None = None,
     pieces: list[tuple[str, str, Callable[[str], None]]] = [
         ("function", n, function) for n in names]
     pieces += [("algorithm", a, algorithm) for a in algos]
+    if maps or (maps is None and algorithms is None and functions is None):
+        pieces.append(("map", "clearance", _warm_maps))
     order = {(kind, name): i for i, (kind, name, _make) in enumerate(pieces)}
     if shared and len(pieces) > 1:
         # the first function first (every kernel's warm-up run evaluates it), then in turn
@@ -105,6 +110,12 @@ def warm(algorithms: Sequence[str] | None = None,
         out.append(Warmed(kind, name, time.process_time() - started))
     out.sort(key=lambda w: order[(w.kind, w.name)])  # as asked, whatever order they were made in
     return out
+
+
+def _warm_maps(_name: str) -> None:
+    from swarmpath.world.clearance import warm as warm_clearance
+
+    warm_clearance()
 
 
 @contextlib.contextmanager
