@@ -40,7 +40,7 @@ def _upload(client: Any, scen: str | None = SCEN) -> dict[str, Any]:
     return dict(r.json())
 
 
-def _work_off(client: Any, job_id: str) -> int:
+def work_off(client: Any, job_id: str) -> int:
     """Every run of the job through a worker's lease, execute and result steps."""
     core = client.app.state.core
     core.publish = lambda key, payload: None
@@ -71,7 +71,7 @@ def test_scen_pairs_by_bucket_give_a_difficulty_curve_in_the_summary_and_dashboa
     assert r.status_code == 201, r.text
     job = r.json()
     assert job["runs_total"] == 2 * 4 * 2
-    assert _work_off(client, job["id"]) == 16
+    assert work_off(client, job["id"]) == 16
     summary = client.get(f"/jobs/{job['id']}/summary").json()
     maps = [f"arena#{i}" for i in (0, 1, 150, 151)]
     assert [r["map"] for r in summary["rows"]] == maps * 2

@@ -10,10 +10,9 @@ import pytest
 from fastapi.testclient import TestClient
 
 from swarmpath.service.http.app import create_app
-from swarmpath.service.protocol import Lease, LeaseRequest, decode_work_reply, encode
 from swarmpath.service.settings import CoordinatorSettings
-from swarmpath.service.worker import execute_lease, pack_batches
 from swarmpath.world.importers import MAX_CELLS, MAX_OBSTACLES
+from test_service_buckets import work_off
 
 DATA = Path(__file__).parent / "data"
 ARENA = (DATA / "arena.map").read_text()
@@ -164,20 +163,7 @@ def test_a_job_on_an_uploaded_map_is_worked_off(data_dir: Path) -> None:
             "kind": "map", "planners": ["OMPL-RRTstar"], "runs": 2, "seed": 3,
             "params": {"OMPL-RRTstar": {"iterations": 2000}}, "maps": [{"map": arena["id"]}],
         }).json()
-        core = client.app.state.core  # type: ignore[attr-defined]
-        core.publish = lambda key, payload: None
-        core.worker_alive("w1")
-        done = 0
-        reply = decode_work_reply(core.handle_lease_request(
-            encode(LeaseRequest(worker="w1", max_runs=10))))
-        while isinstance(reply, Lease):
-            results = execute_lease(reply)
-            for payload in pack_batches("w1", [data for _run, data in results]):
-                core.handle_results(f"swarmpath/results/{reply.job_id}", payload)
-            done += len(results)
-            reply = decode_work_reply(core.handle_lease_request(
-                encode(LeaseRequest(worker="w1", max_runs=10))))
-        assert done == 2
+        assert work_off(client, job["id"]) == 2
         status = client.get(f"/jobs/{job['id']}").json()
         assert status["state"] == "done" and status["runs_done"] + status["runs_failed"] == 2
         rows = client.get(f"/jobs/{job['id']}/summary").json()["rows"]
