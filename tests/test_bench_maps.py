@@ -76,3 +76,59 @@ def test_resume_runs_only_what_the_jsonl_file_lacks_and_counts_the_rest(maps, tm
     grid = run(maps, monkeypatch, capsys, "--table", str(sink), "--matrix").splitlines()
     assert grid[0] == "| planner | arena.map |"
     assert grid[2].startswith("| MFB (map) | 2/2, ") and grid[3].startswith("| MFB | 1/1, ")
+
+
+ROOM = str(ROOT / "tests" / "data" / "room-32-32-4-even-10.scen")
+EVEN = [str(ROOT / "tests" / "data" / f"{m}-even-10.scen")
+        for m in ("random-32-32-20", "room-32-32-4", "maze-32-32-4")]
+
+
+def test_per_bucket_rows_of_a_mapf_scen_are_the_first_of_each_bucket(maps):
+    rows = (ROOT / "tests" / "data" / "room-32-32-4-even-10.scen").read_text().splitlines()[1:]
+    buckets = [int(line.split("\t")[0]) for line in rows]
+    one = maps.scen_rows(f"{ROOM}#b1")
+    assert [int(n.split("#")[1]) for n in one] == [buckets.index(b) for b in sorted(set(buckets))]
+    two = maps.scen_rows(f"{ROOM}#b2")
+    assert len(two) == 2 * len(set(buckets)) and set(one) < set(two)
+    assert maps.scen_rows(f"{ROOM}#4-6") == [f"{ROOM}#4", f"{ROOM}#5", f"{ROOM}#6"]
+
+
+def test_a_mapf_scen_row_runs_on_the_map_its_rows_name_beside_it(maps):
+    from swarmpath.world.movingai import movingai_cell_center
+
+    f = (ROOT / "tests" / "data" / "room-32-32-4-even-10.scen").read_text().splitlines()[8]
+    f = f.split("\t")
+    scenario, about = maps.load(f"{ROOM}#7")
+    assert scenario.name == "room-32-32-4-even-10#7"
+    assert scenario.start == movingai_cell_center(int(f[4]), int(f[5]), 32)
+    assert scenario.goal == movingai_cell_center(int(f[6]), int(f[7]), 32)
+    assert about == {"bucket": int(f[0]), "octile": float(f[8])}
+    assert str(ROOT / "tests" / "data" / "room-32-32-4.map") in maps._BASES
+
+
+def test_octile_lengths_follow_movingai_rules(maps):
+    import numpy as np
+
+    blocked = np.zeros((3, 3), dtype=bool)
+    assert maps.octile_lengths(blocked, [((0, 0), (2, 1)), ((0, 0), (2, 2))]) == pytest.approx(
+        [1 + np.sqrt(2), 2 * np.sqrt(2)])
+    blocked[0, 1] = True  # x = 1, y = 0: the diagonal (0, 0) -> (1, 1) would cut its corner
+    assert maps.octile_lengths(blocked, [((0, 0), (1, 1))]) == [2.0]
+    blocked[1, 0] = True  # the start boxed in
+    assert maps.octile_lengths(blocked, [((0, 0), (1, 1))]) == [np.inf]
+
+
+def test_every_row_of_the_mapf_scen_files_has_the_octile_length_of_its_map(maps):
+    checked = maps.check_scen([f"{p}#b10" for p in EVEN], exact=False)
+    assert [(e["file"], e["rows"], e["buckets"]) for e in checked] == [
+        ("random-32-32-20-even-10.scen", 100, 10), ("room-32-32-4-even-10.scen", 130, 13),
+        ("maze-32-32-4-even-10.scen", 200, 20)]
+    for e in checked:
+        assert e["octile_agree"] == e["bucket_agree"] == e["rows"], e
+
+
+def test_the_exact_optimum_of_the_disk_robot_lies_between_the_line_and_the_octile_path(maps):
+    # any angle is shorter than the grid's 8 directions; a 0.105 m robot fits the octile path
+    (e,) = maps.check_scen([f"{EVEN[0]}#0-1"])
+    assert e["exact_ge_line"] == e["exact_le_octile"] == 2
+    assert e["ratio_min"] <= e["ratio_max"] < 1

@@ -3,13 +3,22 @@
 
     .venv/bin/python scripts/bench/maps.py --planners ICOOT,IHPO --maps all --seeds 1-5
         [--params JSON] [--knowledge map] [--jsonl FILE [--resume]] [--by-map]
-    .venv/bin/python scripts/bench/maps.py --table FILE.jsonl[,FILE2.jsonl] [--by-map | --matrix]
+    .venv/bin/python scripts/bench/maps.py --table FILE.jsonl[,FILE2.jsonl] [--by-map | --matrix |
+        --buckets]
+    .venv/bin/python scripts/bench/maps.py --check-scen tests/data/maze-32-32-4-even-10.scen#0-199
 
 ``--maps`` takes preset names (``all`` = every registered preset), scenario ``.json`` files,
 nav2 map ``.yaml`` files and MovingAI ``.map`` files (their importers' default start and goal;
 ``X.map#i``: row i of ``X.map.scen``, its start and goal; ``X.map#a-b``: rows a to b;
-``X.map#a-b/s``: every s-th of them). ``--knowledge map`` sets the parameter ``knowledge`` of
-every planner that has it (under ``--params``).
+``X.map#a-b/s``: every s-th of them; ``X.map#bN``: the first N rows of every bucket, in file
+order). ``F.scen#...`` (same row choices) takes the rows of a scenario file of the MAPF benchmark
+(``random-32-32-20-even-10.scen``), whose map is the file its rows name, beside it.
+``--knowledge map`` sets the parameter ``knowledge`` of every planner that has it (under
+``--params``).
+``--check-scen NAMES`` (rows chosen as in ``--maps``) runs no planner: per ``.scen`` file, how
+many rows' own optimal length equals an octile shortest path computed here on the map's grid
+(8-connected, diagonal sqrt 2, no corner cutting: scipy's Dijkstra), and how the exact optimum
+of the disk robot (any angle, what the gap is measured against) compares with it.
 Each run is ``Episode(scenario, planner, seed=s, run=0, params).run()``, what ``swarmpath plan
 --seed s --runs 1`` runs. Markdown on stdout, one row per planner x map: successes, collisions
 split into robot-driven / obstacle-driven (``metrics.contact_causes``), median and worst gap to
@@ -18,7 +27,8 @@ The exact optimum has no wall-clock budget unless ``--optimum-budget S`` (the ep
 default of 30 s gave up on Berlin_1_256 at load 20, and the time limit of a run follows it).
 ``--by-map`` puts the rows of one ``.scen`` together (one table row per planner x map file);
 ``--matrix`` (with ``--table``) prints planners x map files, each cell successes / runs, median /
-worst gap and the failures by class.
+worst gap and the failures by class; ``--buckets`` one table per ``.scen`` file, planners x
+MovingAI buckets.
 ``--jsonl`` also writes every run as a JSON line (for re-tabulating without re-running:
 ``--table``); with ``--resume`` the runs already in that file (same planner, map, seed and
 parameters) are not run again but are counted in the table, so a stopped run goes on where it
@@ -30,6 +40,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import math
 import re
 import sys
 import time
@@ -40,35 +51,67 @@ from typing import Any
 import numpy as np
 
 _BASES: dict[str, Any] = {}  # a .map imported once, its .scen rows are copies with new ends
+_ROWS: dict[str, list[Any]] = {}  # a .scen parsed once
+_SCEN_NAME = r"(.+\.(?:map|scen))#(?:b(\d+)|(\d+)(?:-(\d+)(?:/(\d+))?)?)"
+
+
+def scen_files(path: str) -> tuple[str, str]:
+    """(the .scen, the .map) of ``X.map`` (its ``X.map.scen``) or of a MAPF benchmark ``F.scen``
+    (the map its first row names, in the same directory)."""
+    if not path.endswith(".scen"):
+        return path + ".scen", path
+    lines = Path(path).read_text().splitlines()
+    first = lines[1].split("\t") if len(lines) > 1 else []
+    if len(first) < 9:
+        raise SystemExit(f"{path}: no scenario row after the 'version' line")
+    return path, str(Path(path).parent / first[1])
+
+
+def scen_table(path: str) -> list[Any]:
+    """The rows of the .scen of ``path`` (:func:`swarmpath.world.movingai_scen.parse_scen`)."""
+    from swarmpath.world.movingai_scen import parse_scen
+
+    scen, _ = scen_files(path)
+    if scen not in _ROWS:
+        _ROWS[scen] = parse_scen(Path(scen).read_text(), scen)
+    return _ROWS[scen]
 
 
 def scen_rows(name: str) -> list[str]:
-    """``X.map#i``, ``X.map#a-b`` or ``X.map#a-b/s`` -> one ``X.map#i`` per row; else [name]."""
-    m = re.fullmatch(r"(.+\.map)#(\d+)(?:-(\d+)(?:/(\d+))?)?", name)
-    if not m or m.group(3) is None:
+    """``X#i``, ``X#a-b``, ``X#a-b/s`` or ``X#bN`` (X a ``.map`` or ``.scen``) -> one ``X#i`` per
+    row; else [name]."""
+    from swarmpath.world.movingai_scen import bucket_counts, choose_rows
+
+    m = re.fullmatch(_SCEN_NAME, name)
+    if not m or (m.group(2) is None and m.group(4) is None):
         return [name]
-    a, b, step = int(m.group(2)), int(m.group(3)), int(m.group(4) or 1)
+    if m.group(2) is not None:  # the first N rows of every bucket
+        rows = scen_table(m.group(1))
+        chosen = choose_rows(rows, buckets=list(bucket_counts(rows)), per_bucket=int(m.group(2)))
+        return [f"{m.group(1)}#{r.row}" for r in chosen]
+    a, b, step = int(m.group(3)), int(m.group(4)), int(m.group(5) or 1)
     return [f"{m.group(1)}#{i}" for i in range(a, b + 1, step)]
 
 
-def scen_row(path: str, row: int) -> tuple[list[str], Any]:
-    """The ``.scen`` row's columns and the map with the row's start and goal."""
+def scen_row(path: str, row: int) -> tuple[Any, Any]:
+    """The ``.scen`` row (:class:`~swarmpath.world.movingai_scen.ScenRow`) and the map with the
+    row's start and goal."""
     from swarmpath.world.importers import load_movingai_map
     from swarmpath.world.movingai import movingai_cell_center
 
-    lines = Path(path + ".scen").read_text().splitlines()[1:]
-    f = lines[row].split("\t")
-    h = int(f[3])
-    if path not in _BASES:
-        _BASES[path] = load_movingai_map(path).scenario
+    r = scen_table(path)[row]
+    _, grid = scen_files(path)
+    if grid not in _BASES:
+        _BASES[grid] = load_movingai_map(grid).scenario
+    base = _BASES[grid]
+    height = round(base.size[1])
     scenario = dataclasses.replace(
-        _BASES[path], name=f"{Path(path).stem}#{row}",
-        start=movingai_cell_center(int(f[4]), int(f[5]), h),
-        goal=movingai_cell_center(int(f[6]), int(f[7]), h))
+        base, name=f"{Path(path).stem}#{row}",
+        start=movingai_cell_center(*r.start, height), goal=movingai_cell_center(*r.goal, height))
     problems = [m for k, m in scenario.problems() if k in ("start", "goal")]
     if problems:
         raise SystemExit(f"{path}#{row}: {'; '.join(problems)}")
-    return f, scenario
+    return r, scenario
 
 
 def load(name: str) -> tuple[Any, dict[str, Any]]:
@@ -82,10 +125,10 @@ def load(name: str) -> tuple[Any, dict[str, Any]]:
         return load_scenario(name), {}
     if name.endswith(".yaml"):
         return load_ros_map(name).scenario, {}
-    if ".map#" in name:
+    if ".map#" in name or ".scen#" in name:
         path, row = name.split("#")
-        f, scenario = scen_row(path, int(row))
-        return scenario, {"bucket": int(f[0]), "octile": float(f[8])}
+        r, scenario = scen_row(path, int(row))
+        return scenario, {"bucket": r.bucket, "octile": r.octile}
     if name.endswith(".map"):
         return load_movingai_map(name).scenario, {}
     return get_map(name), {}
@@ -162,6 +205,118 @@ def matrix(records: list[dict[str, Any]]) -> None:
         print(f"| {p} | " + " | ".join(out) + " |")
 
 
+def octile_lengths(blocked: np.ndarray, pairs: list[tuple[tuple[int, int], tuple[int, int]]]
+                   ) -> list[float]:
+    """Shortest 8-connected path lengths between cells (x, y from the top left) of a blocked mask
+    (row 0 = the top line): a straight step costs 1, a diagonal one sqrt 2 and needs both
+    cells beside it free (MovingAI's rule, Sturtevant 2012). Dijkstra from each start (scipy)."""
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import dijkstra
+
+    h, w = blocked.shape
+    free = ~blocked
+    index = np.arange(h * w).reshape(h, w)
+    tails, heads, costs = [], [], []
+    for dy, dx in ((0, 1), (1, 0), (1, 1), (1, -1)):
+        x0, x1 = max(0, -dx), w - max(0, dx)
+        ok = free[: h - dy, x0:x1] & free[dy:, x0 + dx:x1 + dx]
+        if dy and dx:  # no corner cutting: the two cells the diagonal passes between are free
+            ok &= free[: h - dy, x0 + dx:x1 + dx] & free[dy:, x0:x1]
+        tails.append(index[: h - dy, x0:x1][ok])
+        heads.append(index[dy:, x0 + dx:x1 + dx][ok])
+        costs.append(np.full(int(ok.sum()), np.sqrt(2.0) if dy and dx else 1.0))
+    graph = csr_matrix((np.concatenate(costs), (np.concatenate(tails), np.concatenate(heads))),
+                       shape=(h * w, h * w))
+    starts = sorted({s for s, _ in pairs})
+    dist = dijkstra(graph, directed=False, indices=[index[y, x] for x, y in starts])
+    at = {s: k for k, s in enumerate(starts)}
+    return [float(dist[at[s], index[g[1], g[0]]]) for s, g in pairs]
+
+
+def check_scen(names: list[str], exact: bool = True) -> list[dict[str, Any]]:
+    """One row per .scen file: its rows' own optimal lengths against :func:`octile_lengths` on
+    the map, and (``exact``) the disk robot's exact optimum against the octile length."""
+    from swarmpath.planners.episode import optimum_of
+    from swarmpath.world.movingai import parse_movingai_map
+
+    by_file: dict[str, list[int]] = {}
+    for name in names:
+        for item in scen_rows(name):
+            path, _, row = item.partition("#")
+            if not row:
+                raise SystemExit(f"{name}: choose .scen rows (X.map#... or F.scen#...)")
+            by_file.setdefault(path, []).append(int(row))
+    out = []
+    for path, ids in by_file.items():
+        rows = [scen_table(path)[i] for i in ids]
+        _, grid = scen_files(path)
+        blocked = parse_movingai_map(Path(grid).read_text(), grid)
+        mine = octile_lengths(blocked, [(r.start, r.goal) for r in rows])
+        diff = [abs(a - r.octile) for a, r in zip(mine, rows, strict=True)]
+        entry: dict[str, Any] = {
+            "file": Path(path).name if path.endswith(".scen") else Path(path).name + ".scen",
+            "rows": len(rows), "buckets": len({r.bucket for r in rows}),
+            # to the printed digits: the DAO files (arena) print 6 significant ones
+            "octile_agree": sum(d <= 5e-6 * max(1.0, r.octile)
+                                for d, r in zip(diff, rows, strict=True)),
+            "octile_max_diff": max(diff), "bucket_agree": sum(
+                r.bucket == int(r.octile // 4) for r in rows)}
+        if exact:
+            ratios, above_line = [], 0
+            for i, r in zip(ids, rows, strict=True):
+                length, why = optimum_of(scen_row(path, i)[1], None)
+                if length is None:
+                    raise SystemExit(f"{path}#{i}: no exact optimum: {why}")
+                ratios.append(length / r.octile if r.octile else 1.0)
+                above_line += length >= math.dist(r.start, r.goal) - 1e-9
+            entry.update(exact_le_octile=sum(q <= 1 + 1e-9 for q in ratios),
+                         exact_ge_line=above_line,
+                         ratio_min=min(ratios), ratio_median=float(np.median(ratios)),
+                         ratio_max=max(ratios))
+        out.append(entry)
+    return out
+
+
+def print_check(rows: list[dict[str, Any]]) -> None:
+    print("| .scen | rows (buckets) | own optimum = octile here | largest difference | "
+          "bucket = floor(optimum / 4) | straight line <= exact optimum | exact optimum <= "
+          "octile | exact / octile (min / median / max) |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+    for e in rows:
+        ex = (f"{e['exact_ge_line']}/{e['rows']} | {e['exact_le_octile']}/{e['rows']} | "
+              f"{e['ratio_min']:.4f} / {e['ratio_median']:.4f} / {e['ratio_max']:.4f}"
+              if "ratio_min" in e else "- | - | -")
+        print(f"| {e['file']} | {e['rows']} ({e['buckets']}) | {e['octile_agree']}/{e['rows']} | "
+              f"{e['octile_max_diff']:.1e} | {e['bucket_agree']}/{e['rows']} | {ex} |")
+
+
+def buckets(records: list[dict[str, Any]]) -> None:
+    """Per map file (the rows of one .scen), planners x MovingAI buckets: successes / runs and
+    the median gap (:func:`swarmpath.evidence.buckets.bucket_rows`)."""
+    from swarmpath.evidence.buckets import bucket_rows
+
+    files: dict[str, list[dict[str, Any]]] = {}
+    for r in records:
+        if r.get("bucket") is not None:
+            given = r.get("params") or {}
+            p = r["planner"] + (f" ({given['knowledge']})" if "knowledge" in given else "")
+            files.setdefault(r["map"].split("#")[0], []).append({**r, "planner": p})
+    for name, runs in files.items():
+        rows = bucket_rows(runs, {r["map"]: r["bucket"] for r in runs})
+        columns = sorted({row["bucket"] for row in rows})
+        print(f"\n{name}, by bucket (successes / runs, median gap):\n")
+        print("| planner | " + " | ".join(f"b{b}" for b in columns) + " |")
+        print("| --- |" + " --- |" * len(columns))
+        cells: dict[str, dict[int, str]] = {}
+        for row in rows:
+            gap = row["gap_median"]
+            cells.setdefault(row["planner"], {})[row["bucket"]] = (
+                f"{row['successes']}/{row['runs']}"
+                + (f", {100 * gap:.2f} %" if gap is not None else ""))
+        for p, by in cells.items():
+            print(f"| {p} | " + " | ".join(by.get(b, "-") for b in columns) + " |")
+
+
 def read_jsonl(paths: str) -> list[dict[str, Any]]:
     out = []
     for p in paths.split(","):
@@ -190,9 +345,25 @@ def main() -> None:
                     help="one table row per planner x map file (its .scen rows together)")
     ap.add_argument("--matrix", action="store_true",
                     help="with --table: planners x map files, success and median / worst gap")
+    ap.add_argument("--buckets", action="store_true",
+                    help="with --table: per .scen file, planners x buckets")
+    ap.add_argument("--check-scen", default=None, metavar="NAMES",
+                    help="no runs: the .scen rows' optimal lengths against an octile search "
+                         "and the exact optimum (comma-separated X.map#... / F.scen#...)")
+    ap.add_argument("--no-exact", action="store_true",
+                    help="with --check-scen: the octile check only")
     a = ap.parse_args()
+    if a.check_scen:
+        print_check(check_scen(a.check_scen.split(","), exact=not a.no_exact))
+        return
     if a.table:
-        (matrix if a.matrix else lambda rs: table(rs, a.by_map))(read_jsonl(a.table))
+        records = read_jsonl(a.table)
+        if a.buckets:
+            buckets(records)
+        elif a.matrix:
+            matrix(records)
+        else:
+            table(records, a.by_map)
         return
     if a.resume and not a.jsonl:
         ap.error("--resume needs --jsonl FILE")
