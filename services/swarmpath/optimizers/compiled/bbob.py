@@ -14,7 +14,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numba import carray, njit
+from numba import njit
 
 from swarmpath.optimizers.compiled.bbob_data import HEADER
 from swarmpath.optimizers.compiled.bbob_data import data_for as data_for
@@ -23,9 +23,11 @@ from swarmpath.optimizers.compiled.functions import dot, total
 from swarmpath.optimizers.compiled.suite_ops import (
     asymmetric_into,
     cos_into,
+    errors_into,
     exp_into,
     oscillate_into,
     penalty_row,
+    population_views,
     pow_into,
     pow_scalar_into,
     rotate,
@@ -38,12 +40,6 @@ _TWO_PI = 2.0 * np.pi
 
 
 # --- access to the data array and the population (njit: called from the cfuncs) ---
-
-@njit(cache=True)
-def _io(m, d, xp, fp, mp, dp):
-    n = int(carray(dp, 1)[0])
-    return carray(xp, (m, d)), carray(fp, m), carray(mp, m), carray(dp, n)
-
 
 @njit(cache=True)
 def _mat(data, d, k):
@@ -70,14 +66,6 @@ def _minus_xopt(X, data, d):
         for j in range(d):
             Z[i, j] = X[i, j] - xopt[j]
     return Z
-
-
-@njit(cache=True)
-def _finish(F, mask, raw, data):
-    """The error (f + f_opt) - f_opt, as the numpy suite computes it; +inf off the mask."""
-    fopt = data[1]
-    for i in range(F.size):
-        F[i] = (raw[i] + fopt) - fopt if mask[i] else np.inf
 
 
 @njit(cache=True)
@@ -519,10 +507,10 @@ _RAW = {
 def _population(raw_fn: Any) -> Any:
     """The population objective (objectives.SIGNATURE's parameters) of one raw function."""
     def population(m, d, xp, fp, mp, wp, dp):
-        X, F, mask, data = _io(m, d, xp, fp, mp, dp)
+        X, F, mask, data = population_views(m, d, xp, fp, mp, dp)
         raw = np.empty(m)
         raw_fn(X, data, raw)
-        _finish(F, mask, raw, data)
+        errors_into(F, mask, raw, data)
     population.__name__ = population.__qualname__ = f"bbob{raw_fn.__name__}"
     return population
 

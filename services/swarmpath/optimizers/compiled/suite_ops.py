@@ -19,7 +19,7 @@ The functions take contiguous float64 arrays; ``call`` is int64 scratch of 8 ent
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import carray, njit
 
 from swarmpath.optimizers.compiled.functions import dot, pairwise_sum
 from swarmpath.optimizers.compiled.ufuncs import (
@@ -32,6 +32,23 @@ from swarmpath.optimizers.compiled.ufuncs import (
 )
 
 _call_log = _linked_loop("swarmpath_numpy_log_dd", np.log, "dd")
+
+
+@njit(cache=True)
+def population_views(m, d, xp, fp, mp, dp):
+    """A suite objective's arguments (objectives.SIGNATURE) as arrays: the points X (m, d),
+    the values F (m,), the mask (m,) and the data array, whose entry 0 is its length."""
+    n = int(carray(dp, 1)[0])
+    return carray(xp, (m, d)), carray(fp, m), carray(mp, m), carray(dp, n)
+
+
+@njit(cache=True)
+def errors_into(F, mask, raw, data):
+    """The error (f + f_opt) - f_opt, as the numpy suites compute it (data[1] is f_opt);
+    +inf off the mask."""
+    fopt = data[1]
+    for i in range(F.size):
+        F[i] = (raw[i] + fopt) - fopt if mask[i] else np.inf
 
 
 @njit(cache=True)
