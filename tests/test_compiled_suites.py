@@ -15,6 +15,7 @@ import pytest
 pytest.importorskip("numba")
 
 from swarmpath.functions import get_function
+from swarmpath.functions.suites.cec import data
 from swarmpath.optimizers.api import minimize_many, resolve_backend
 from swarmpath.optimizers.base import ParameterError
 from swarmpath.optimizers.compiled import functions, objectives, suite_ops
@@ -22,6 +23,8 @@ from swarmpath.optimizers.compiled.registry import kernel_names
 from swarmpath.optimizers.compiled.run import check_function
 
 BBOB = [f"bbob:f{k}" for k in range(1, 25)]
+CEC2022 = [f"cec2022:F{k}" for k in range(1, 13)]
+CEC = CEC2022
 
 
 def _points(fn, d, rng):
@@ -54,6 +57,41 @@ def test_the_comparison_sees_a_wrong_instance():
     X = _points(fn, 5, np.random.default_rng(0))
     other = get_function("bbob:f15@i3")
     assert not np.array_equal(objectives.population_values(other, X), fn.kernel(X[None])[0])
+
+
+def _cec_points(fn, d, rng):
+    """Points over the box [-100, 100]^d (every branch of Schwefel's, every composition
+    weight), the optimum, a point 1e-9 from it, a corner, a far point (no composition weight
+    left: cf_cal's equal weights) and one component's own optimum."""
+    X = rng.uniform(-100.0, 100.0, (24, d))
+    X[0] = fn.x_opt(d)
+    X[1] = fn.x_opt(d) + 1e-9
+    X[2] = 100.0
+    X[3] = -3000.0
+    X[4] = data(fn.suite)[f"O{fn.number}"][-1, :d]
+    return X
+
+
+@pytest.mark.parametrize("name", CEC)
+def test_cec_values_equal_numpy_bit_for_bit(name):
+    fn = get_function(name)
+    rng = np.random.default_rng(fn.number)
+    for d in fn.dimensions:
+        X = _cec_points(fn, d, rng)
+        want = fn.kernel(X[None])[0]
+        got = objectives.population_values(fn, X)
+        assert np.array_equal(got, want), (fn.name, d, np.flatnonzero(got != want))
+        for row in (0, 3, 5):  # one point alone (numpy's matmul takes another BLAS path)
+            one = objectives.population_values(fn, X[row:row + 1])
+            assert np.array_equal(one, fn.kernel(X[None, row:row + 1])[0]), (fn.name, d, row)
+
+
+def test_the_cec_comparison_sees_another_function_and_dimension():
+    fn = get_function("cec2022:F11")
+    X = _cec_points(fn, 10, np.random.default_rng(0))
+    assert not np.array_equal(objectives.population_values(get_function("cec2022:F12"), X),
+                              fn.kernel(X[None])[0])
+    assert not np.array_equal(objectives.data_for(fn, 10), objectives.data_for(fn, 20))
 
 
 @pytest.mark.parametrize("n", range(1, 101))
@@ -90,6 +128,23 @@ def test_every_kernel_gives_the_numpy_backends_runs(k):
     assert np.array_equal(out.best_position, ref.best_position), (algorithm, name)
 
 
+@pytest.mark.parametrize("name", CEC)
+def test_every_kernel_gives_the_numpy_backends_runs_on_cec(name):
+    """Each CEC function with one of the kernels (each in turn) in one of its dimensions."""
+    fn = get_function(name)
+    algorithms = kernel_names()
+    k = CEC.index(name)
+    algorithm = algorithms[k % len(algorithms)]
+    d = fn.dimensions[k % len(fn.dimensions)]
+    kw = dict(dim=d, agents=10, iterations=8, runs=2, seed=5)
+    (ref,) = minimize_many(algorithm, [name], backend="numpy", **kw)
+    (out,) = minimize_many(algorithm, [name], backend="numba", **kw)
+    assert out.backend == "numba"
+    assert np.array_equal(out.best_fitness, ref.best_fitness), (algorithm, name)
+    assert np.array_equal(out.curve, ref.curve), (algorithm, name)
+    assert np.array_equal(out.best_position, ref.best_position), (algorithm, name)
+
+
 def test_instances_share_their_functions_objective_and_centred_copies_have_none():
     fn = get_function("bbob:f3@i7")
     assert objectives.has_objective(fn)
@@ -105,3 +160,10 @@ def test_instances_share_their_functions_objective_and_centred_copies_have_none(
 
 def test_auto_runs_bbob_compiled():
     assert resolve_backend("auto", "GWO", ["bbob:f1", "bbob:f24@i3"]) == "numba"
+
+
+def test_auto_runs_cec_compiled_and_the_cec_functions_share_one_objective():
+    assert resolve_backend("auto", "GWO", CEC) == "numba"
+    first, last = (get_function(name) for name in (CEC[0], CEC[-1]))
+    assert objectives.objective_for(first)[0] == objectives.objective_for(last)[0]
+    assert not objectives.has_objective(first.centred_copy())

@@ -39,6 +39,17 @@ def test_warmup_command_lists_what_it_compiled():
     assert set(kernel_names()) >= {"PSO", "GWO"} and "F1" in compiled_names()
 
 
+def test_warmup_compiles_the_cec_objectives_like_bbobs():
+    out = runner.invoke(app, ["warmup", "-a", "PSO", "-f", "cec2022,bbob:f1", "--json"])
+    assert out.exit_code == 0, out.output
+    names = [(w["kind"], w["name"]) for w in json.loads(out.stdout)]
+    assert names == [*(("function", f"cec2022:F{k}") for k in range(1, 13)),
+                     ("function", "bbob:f1"), ("algorithm", "PSO")]
+    ref = minimize("PSO", "cec2022:F7", dim=10, agents=6, iterations=4, runs=2, backend="numpy")
+    fast = minimize("PSO", "cec2022:F7", dim=10, agents=6, iterations=4, runs=2)
+    assert fast.backend == "numba" and np.array_equal(ref.curve, fast.curve)
+
+
 def test_the_map_piece_compiles_every_clearance_and_sensing_kernel():
     """A worker's warm-up of everything includes the kernels every map run calls: in a fresh
     process none of them has a compiled signature before the piece, each has one after."""
@@ -65,7 +76,7 @@ assert not missing, missing
 
 def test_warmup_names_the_option_of_what_has_no_kernel():
     for args, field in ((["-a", "NOPE"], "--algorithms"), (["-a", "RS"], "--algorithms"),
-                        (["-f", "cec2022:F1"], "--functions"), (["-f", "F99"], "--functions")):
+                        (["-f", "cec2017:F1"], "--functions"), (["-f", "F99"], "--functions")):
         out = runner.invoke(app, ["warmup", *args])
         assert out.exit_code == 2, (args, out.output)
         assert f"error: {field}:" in out.output, (args, out.output)

@@ -34,12 +34,14 @@ def test_a_job_spec_expands_suite_instances_and_budgets_into_cells():
     assert benchmark_evaluations(spec) == 2 * 4 * 2 * 200  # algorithms x cells x runs x budget
 
 
-def test_a_bbob_job_may_ask_for_numba_and_cec_may_not():
+def test_a_job_may_ask_for_numba_on_compiled_suites_and_is_refused_naming_another():
     bbob = {**SPEC, "functions": ["bbob:f3", "bbob:f21"], "instances": [1, 2],
             "budget_evals": None, "backend": "numba"}
     assert parse_job_spec(bbob).backend == "numba"
-    with pytest.raises(ValidationError, match="cec2022:F1"):
-        parse_job_spec({**bbob, "functions": ["bbob:f3", "cec2022:F1"], "instances": [1]})
+    both = {**bbob, "functions": ["bbob:f3", "cec2022:F1"], "instances": [1]}
+    assert parse_job_spec(both).backend == "numba"
+    with pytest.raises(ValidationError, match="cec2017:F1"):  # no compiled objective yet
+        parse_job_spec({**both, "functions": ["cec2022:F1", "cec2017:F1"]})
 
 
 @pytest.mark.parametrize(("change", "field", "says"), [
@@ -50,7 +52,8 @@ def test_a_bbob_job_may_ask_for_numba_and_cec_may_not():
     ({"transform": "rotate"}, "transform", "transform must be 'none'"),
     ({"budget_evals": "3"}, "budget_evals", "less than GWO's 12"),
     ({"budget_evals": "ten"}, "budget_evals", "NxD"),
-    ({"backend": "numba"}, "backend", "no numba kernel"),
+    ({"functions": ["cec2017:F1"], "backend": "numba"}, "backend", "no numba kernel"),
+    ({"backend": "numba"}, "budget_evals", "backend 'numpy' only"),
 ])
 def test_bad_suite_fields_are_named(change, field, says):
     with pytest.raises(ValidationError) as err:

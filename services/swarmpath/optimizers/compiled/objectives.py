@@ -174,7 +174,7 @@ _POPULATIONS: dict[str, Callable[..., None]] = {
 }
 # Every built-in function has a compiled objective; suites' and plugins' register theirs.
 assert set(_POPULATIONS) == set(list_functions(builtin=True)), "a built-in has no objective"
-_COMPILED: dict[str, Any] = {}
+_COMPILED: dict[Callable[..., None], Any] = {}
 _NO_DATA = np.empty(0)
 _KEPT: dict[tuple[str, bytes], np.ndarray] = {}  # the data arrays objectives point to
 _DATA_OF: dict[str, DataOf] = {}
@@ -242,10 +242,10 @@ def _compiled(fn: BenchmarkFunction) -> Any:
     """``fn``'s compiled objective (the cfunc), compiled or loaded on first use."""
     if not has_objective(fn):
         raise KeyError(fn.name)
-    name = _population_name(fn)
-    compiled: Any = _COMPILED.get(name)
-    if compiled is None:
-        compiled = _COMPILED[name] = cfunc(SIGNATURE, cache=True)(_POPULATIONS[name])
+    population = _POPULATIONS[_population_name(fn)]
+    compiled: Any = _COMPILED.get(population)
+    if compiled is None:  # once per population function (the CEC functions share one)
+        compiled = _COMPILED[population] = cfunc(SIGNATURE, cache=True)(population)
     return compiled
 
 
@@ -277,10 +277,11 @@ def _register_suites() -> None:
     if _SUITES_REGISTERED:
         return
     _SUITES_REGISTERED = True
-    from swarmpath.optimizers.compiled import bbob
+    from swarmpath.optimizers.compiled import bbob, cec
 
-    for name, population in bbob.POPULATIONS.items():
-        register_population(name, population, bbob.data_for)
+    for suite in (bbob, cec):
+        for name, population in suite.POPULATIONS.items():
+            register_population(name, population, suite.data_for)
 
 
 def _typed_call(typingctx, address, X, x_at, d, F, row, m, mask, work, w_at, data):
