@@ -82,14 +82,15 @@ def warm(algorithms: Sequence[str] | None = None,
     algos = algorithms_with_kernels(algorithms)
     names = functions_with_objectives(functions)
     first = names[0] if names else "F1"
+    first_dim = _smallest_dim(first)
 
     def function(name: str) -> None:
         objective_for(get_function(name))
 
     def algorithm(a: str) -> None:
         # one tiny run: a kernel has one signature whatever the sizes, so this is its build
-        minimize(a, first, dim=2, agents=max(10, get_optimizer(a).min_agents), iterations=2,
-                 runs=1, backend="numba")
+        minimize(a, first, dim=first_dim, agents=max(10, get_optimizer(a).min_agents),
+                 iterations=2, runs=1, backend="numba")
 
     pieces: list[tuple[str, str, Callable[[str], None]]] = [
         ("function", n, function) for n in names]
@@ -110,6 +111,14 @@ def warm(algorithms: Sequence[str] | None = None,
         out.append(Warmed(kind, name, time.process_time() - started))
     out.sort(key=lambda w: order[(w.kind, w.name)])  # as asked, whatever order they were made in
     return out
+
+
+def _smallest_dim(name: str) -> int:
+    """The smallest dimension function ``name`` is defined in (a CEC function's smallest
+    official D; 2 for the others): an algorithm's warm-up run evaluates it there."""
+    fn = get_function(name)
+    dims = getattr(fn, "dimensions", None)
+    return int(min(dims)) if dims else max(2, int(getattr(fn, "min_dim", 2)))
 
 
 def _warm_maps(_name: str) -> None:
