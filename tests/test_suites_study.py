@@ -144,6 +144,17 @@ def test_bench_names_the_bad_option(args, option):
     assert option in out.output
 
 
+def test_bench_runs_cec_on_numba_and_auto_with_the_numpy_backends_numbers():
+    args = ("-f", "cec2022:F4,cec2022:F12", "-d", "10", "--iterations", "6", "--json")
+    docs = [json.loads(out.stdout) for out in (
+        _bench(*args, "--backend", "numba"), _bench(*args), _bench(*args, "--backend", "numpy"))]
+    assert [doc["settings"]["backend"] for doc in docs] == ["numba", "auto", "numpy"]
+    assert len(docs[0]["cells"]) == 4
+    for cells in zip(*(doc["cells"] for doc in docs), strict=True):
+        assert len({(c["algorithm"], c["function"]) for c in cells}) == 1
+        assert cells[0]["best_fitness"] == cells[1]["best_fitness"] == cells[2]["best_fitness"]
+
+
 def test_bench_runs_bbob_on_numba_with_the_numpy_backends_numbers():
     args = ("-f", "bbob:f7,bbob:f21", "-d", "4", "--instances", "1-2", "--iterations", "8",
             "--json")
