@@ -685,6 +685,104 @@ def test_maps_are_uploaded_and_chosen_in_the_submit_form(server, browser):
     assert any(t.startswith("arena") for t in labels), labels
 
 
+def test_a_scen_is_uploaded_with_its_map_and_its_pairs_picked_in_the_submit_form(
+        server, browser, tmp_path):
+    """The submit page uploads a MovingAI .map with its .scen (a broken .scen is refused at
+    its field, nothing stored), shows a pairs picker for it, counts the pairs each choice
+    names, and submits the job spec the API takes: N pairs per bucket, rows, every pair, the
+    map's own start and goal; a choice the page can tell is wrong is not sent, and one the API
+    refuses is shown in the picker with the field it names."""
+    url, app = server
+    core = app.state.core
+    data = Path(__file__).parent / "data"
+
+    def put(name: str, text: str) -> None:
+        field[name].clear()
+        field[name].send_keys(text)
+
+    def shows(element, want: str) -> None:
+        try:
+            WebDriverWait(browser, WAIT).until(lambda d: element.text == want)
+        except TimeoutException:
+            raise AssertionError(f"{element.text!r} != {want!r}") from None
+
+    browser.get(url + "/ui/submit")
+    wait_for(browser, "#submit-form input[name=algorithms]")
+    form = browser.find_element(By.ID, "submit-form")
+    browser.find_element(By.CSS_SELECTOR, "input[name=kind][value=map]").click()
+    Select(form.find_element(By.NAME, "up_format")).select_by_value("movingai")
+    form.find_element(By.NAME, "up_map").send_keys(str(data / "arena.map"))
+    bad = tmp_path / "arena.scen"
+    bad.write_text("version 1\n0\tarena.map\t50\t49\t1\t1\t2\t2\t1.4\n")
+    form.find_element(By.NAME, "up_scen").send_keys(str(bad))
+    stored = len(core.store.list_maps(1000, 0))
+    browser.find_element(By.ID, "upload-button").click()
+    error = wait_for(browser, '[data-error="up.scen"]:not(:empty)')[0].text
+    assert error.startswith("scen: ") and "line 2: a pair of a 50 x 49 map" in error, error
+    assert len(core.store.list_maps(1000, 0)) == stored
+    form.find_element(By.NAME, "up_scen").send_keys(str(data / "arena.map.scen"))
+    browser.find_element(By.ID, "upload-button").click()
+    map_id = wait_for(browser, "#uploaded-id")[0].text
+    assert "160 .scen pairs in buckets 0-15" in browser.find_element(By.ID, "upload-result").text
+    assert not browser.find_element(By.CSS_SELECTOR, '[data-error="up.scen"]').text
+    picker = wait_for(browser, f'fieldset.pairs[data-map="{map_id}"]:not([hidden])')[0]
+    field = {k: picker.find_element(By.CSS_SELECTOR, f'[data-pairs="{k}"]')
+             for k in ("mode", "buckets", "per_bucket", "rows", "count")}
+    box = picker.find_element(By.CSS_SELECTOR, f'[data-error="pairs.{map_id}"]')
+    assert field["buckets"].get_attribute("value") == "0-15"
+    shows(field["count"], "16 pairs: one map each")
+    assert not field["rows"].is_displayed()
+    form.find_element(By.CSS_SELECTOR, "input[name=planners][value=MFB]").click()
+    form.find_element(By.CSS_SELECTOR, "input[name=maps][value=mfb-static]").click()
+    runs = form.find_element(By.NAME, "map_runs")
+    runs.clear()
+    runs.send_keys("1")
+
+    def submit() -> list[str]:
+        """The maps of the job the form submits (cancelled: only its spec is looked at)."""
+        before = texts(browser.find_elements(By.ID, "new-job"))
+        browser.find_element(By.ID, "submit-button").click()
+        WebDriverWait(browser, WAIT, ignored_exceptions=(NoSuchElementException,)).until(
+            lambda d: texts(d.find_elements(By.ID, "new-job")) not in ([], before))
+        job = browser.find_element(By.ID, "new-job").text
+        spec = core.store.job_spec(job)
+        core.cancel(job)
+        names = [m if isinstance(m, str) else m["name"] for m in spec.maps]
+        assert names[0] == "mfb-static"
+        assert spec.buckets == {n: int(n.split("#")[1]) // 10 for n in names[1:] if "#" in n}
+        return names[1:]
+
+    put("buckets", "0, 15")
+    put("per_bucket", "2")
+    shows(field["count"], "4 pairs: one map each")
+    shot(browser, "submit-pairs")
+    assert submit() == ["arena#0", "arena#1", "arena#150", "arena#151"]
+    Select(field["mode"]).select_by_value("rows")
+    assert field["rows"].is_displayed() and not field["buckets"].is_displayed()
+    put("rows", "3 40-41")
+    shows(field["count"], "3 pairs: one map each")
+    assert submit() == ["arena#3", "arena#40", "arena#41"]
+    put("rows", "158-160")  # the page knows the .scen's 160 pairs: not sent
+    shows(box, "rows: 160 is beyond the 160 pairs of the .scen (0 = first)")
+    browser.find_element(By.ID, "submit-button").click()
+    WebDriverWait(browser, WAIT).until(
+        lambda d: d.find_element(By.ID, "result").text == "not sent")
+    assert box.text.startswith("rows: 160 is beyond")
+    put("rows", "7, 7")  # the API refuses it: shown in the picker, naming the field
+    browser.find_element(By.ID, "submit-button").click()
+    WebDriverWait(browser, WAIT).until(lambda d: box.text != "")
+    assert box.text.startswith("scen.rows: ") and "duplicate" in box.text, box.text
+    assert browser.find_element(By.ID, "result").text == "rejected (422)"
+    Select(field["mode"]).select_by_value("all")
+    shows(field["count"], "160 pairs: one map each")
+    assert submit() == [f"arena#{k}" for k in range(160)]
+    Select(field["mode"]).select_by_value("none")
+    shows(field["count"], "")
+    assert submit() == ["arena"]
+    form.find_element(By.CSS_SELECTOR, f'input[name=uploaded][value="{map_id}"]').click()
+    assert not picker.is_displayed()  # unchosen: no picker
+
+
 def test_a_nav2_map_chart_names_its_map_frame_and_positions_in_it(server, browser):
     """The map chart of a job on a nav2 map is drawn in the scenario frame and labelled with
     the map's frame: its corners and the start/goal there are the scenario's plus the YAML

@@ -357,3 +357,48 @@ def test_a_raced_job_page_holds_every_run_the_race_gives(client, app, monkeypatc
     assert cold.view()["racing"] is True
     plain = client.post("/jobs", json={k: v for k, v in RACED.items() if k != "racing"}).json()
     assert client.get(f"/ui/jobs/{plain['id']}/data").json()["racing"] is False
+
+
+def test_the_submit_pages_pairs_picker_reads_its_limit_and_the_maps_pairs(client):
+    """What the submit page's .scen upload and pairs picker talk to, without a browser: the
+    page loads pairs.js; /ui/config gives the pairs one map entry may name; the upload body the
+    page sends (a .map with its .scen) is imported and GET /maps (the page's list) reports its
+    pairs per bucket; the three choices the picker builds (every pair as rows, a range of rows,
+    pairs per bucket beside a preset) are the job spec POST /jobs takes, and a bad one is a 422
+    at the entry's index (the page puts it in that map's picker)."""
+    from pathlib import Path
+
+    from swarmpath.service.jobspec_map import MAX_SCEN_PAIRS_PER_MAP
+
+    page = client.get("/ui/submit").text
+    assert page.index("/static/pairs.js") < page.index("/static/submit.js")
+    js = client.get("/static/pairs.js")
+    assert js.status_code == 200 and js.headers["content-type"].startswith("text/javascript")
+    assert client.get("/ui/config").json()["limits"] == {
+        "scen_pairs_per_map": MAX_SCEN_PAIRS_PER_MAP}
+    data = Path(__file__).parent / "data"
+    up = client.post("/maps", json={"name": "arena", "format": "movingai", "resolution": 1,
+                                    "map": (data / "arena.map").read_text(),
+                                    "scen": (data / "arena.map.scen").read_text()})
+    assert up.status_code == 201, up.text
+    map_id = up.json()["id"]
+    (listed,) = client.get("/maps?limit=1000").json()
+    assert listed["scen"] == {"pairs": 160, "buckets": {str(b): 10 for b in range(16)}}
+    store = client.app.state.core.store
+    for choice, names in (
+            ({"rows": list(range(160))}, [f"arena#{k}" for k in range(160)]),
+            ({"rows": [5, 6, 7]}, ["arena#5", "arena#6", "arena#7"]),
+            ({"buckets": [0, 15], "per_bucket": 2}, ["arena#0", "arena#1", "arena#150",
+                                                     "arena#151"])):
+        r = client.post("/jobs", json={"kind": "map", "planners": ["MFB"], "runs": 1,
+                                       "maps": ["mfb-static", {"map": map_id, "scen": choice}]})
+        assert r.status_code == 201, r.text
+        assert r.json()["runs_total"] == 1 + len(names)
+        spec = store.job_spec(r.json()["id"])
+        assert [m if isinstance(m, str) else m["name"] for m in spec.maps] == [
+            "mfb-static", *names]
+        assert spec.buckets == {n: int(n.split("#")[1]) // 10 for n in names}
+    r = client.post("/jobs", json={"kind": "map", "planners": ["MFB"], "runs": 1, "maps": [
+        "mfb-static", {"map": map_id, "scen": {"rows": [159, 160]}}]})
+    assert r.status_code == 422
+    assert r.json()["detail"][0]["loc"] == ["body", "maps", 1, "scen", "rows", 1]

@@ -8,7 +8,8 @@
 * ``GET /ui/jobs`` - the same snapshot, for clients without EventSource.
 * ``GET /ui/jobs/{id}/data`` - the job page's aggregates, with an ETag (304 when unchanged).
 * ``GET /ui/jobs/{id}/scene?cell=N`` (run 0's world) or ``?run=RUN_ID`` - a map cell's scene.
-* ``GET /ui/config`` - whether mutating requests need a token, and the job specs' defaults.
+* ``GET /ui/config`` - whether mutating requests need a token, the job specs' defaults and the
+  limits the submit form checks before it sends (the API checks them again).
 """
 
 from __future__ import annotations
@@ -50,9 +51,11 @@ def _json(data: Any, status: int = 200, headers: dict[str, str] | None = None) -
 
 @router.get("/ui/config")
 def config(request: Request) -> dict[str, Any]:
-    """Whether submit/cancel need a bearer token, the defaults of the job specs' fields, and the
-    registered function transforms (the benchmark form's choices)."""
+    """Whether submit/cancel need a bearer token, the defaults of the job specs' fields, the
+    registered function transforms (the benchmark form's choices), and ``limits``: the most
+    ``.scen`` pairs one map entry of a job may name (the pairs picker's count)."""
     from swarmpath.functions.transforms import TRANSFORMS
+    from swarmpath.service.jobspec_map import MAX_SCEN_PAIRS_PER_MAP
     from swarmpath.service.protocol import BenchmarkJobSpec, MapJobSpec
 
     token = getattr(request.app.state, "token", None)  # create_app resolved $SWARMPATH_TOKEN
@@ -63,7 +66,8 @@ def config(request: Request) -> dict[str, Any]:
 
     return {"token_required": bool(token),
             "defaults": {"benchmark": defaults(BenchmarkJobSpec), "map": defaults(MapJobSpec)},
-            "transforms": list(TRANSFORMS)}
+            "transforms": list(TRANSFORMS),
+            "limits": {"scen_pairs_per_map": MAX_SCEN_PAIRS_PER_MAP}}
 
 
 @router.get("/ui/jobs")

@@ -1,6 +1,7 @@
 /* Submit page: a form built from /catalog (names, parameters and their defaults), the job
    specs' defaults (/ui/config) and the uploaded maps (/maps), posting to /jobs; each validation
-   error is shown at its field. A map can be uploaded here too (POST /maps) and is then chosen. */
+   error is shown at its field. A map can be uploaded here too (POST /maps, a MovingAI .map with
+   its .scen) and is then chosen; a map with a .scen gets a pairs picker (pairs.js). */
 (function () {
   "use strict";
   SP.header("submit");
@@ -25,13 +26,25 @@
       }).join("") + `<div class="err" data-error="params.${SP.esc(item.name)}"></div></fieldset>`;
   }
 
+  /* the uploaded maps by id (the pairs pickers read their .scen counts) and the pairs limit */
+  const known = {};
+  let pairLimit = 500;
   function uploaded(maps) {
     return `<div class="choices" data-field="uploaded" id="uploaded-maps">` + maps.map(uploadedChoice).join("")
-      + `</div>`;
+      + `</div><div id="pair-pickers">` + maps.filter((m) => m.scen).map((m) => SP.pairs.fields(m, pairLimit)).join("") + `</div>`;
   }
   function uploadedChoice(m) {
+    known[m.id] = m;
     const size = m.size ? ` ${SP.num(m.size[0], 3)} x ${SP.num(m.size[1], 3)} m` : "";
-    return `<label title="${SP.esc(m.id)}: ${SP.esc(m.format)},${SP.esc(size)}, ${m.obstacles} obstacles"><input type="checkbox" name="uploaded" value="${SP.esc(m.id)}"> ${SP.esc(m.name)} <span class="muted">(uploaded)</span></label>`;
+    const scen = m.scen ? `, ${m.scen.pairs} .scen pairs` : "";
+    return `<label title="${SP.esc(m.id)}: ${SP.esc(m.format)},${SP.esc(size)}, ${m.obstacles} obstacles${scen}"><input type="checkbox" name="uploaded" value="${SP.esc(m.id)}"> ${SP.esc(m.name)} <span class="muted">(uploaded${m.scen ? ", .scen" : ""})</span></label>`;
+  }
+  const picker = (id) => SP.q(`#pair-pickers fieldset.pairs[data-map="${CSS.escape(id)}"]`);
+  function showPicker(id, on) {
+    const fs = picker(id);
+    if (!fs) return;
+    fs.hidden = !on;
+    if (on) SP.pairs.refresh(fs, known[id], pairLimit);
   }
   function uploadFields() {
     return `<fieldset id="upload"><legend>Upload a map</legend>
@@ -40,8 +53,10 @@
       <span class="up-nav2"><label>YAML <input type="file" name="up_yaml" accept=".yaml,.yml"></label>
       <label>image <input type="file" name="up_image" accept=".pgm,.png,.bmp"></label></span>
       <span class="up-movingai" hidden><label>.map <input type="file" name="up_map" accept=".map"></label>
-      <label>metres per cell <input type="text" name="up_resolution" value="1"></label></span>
+      <label>metres per cell <input type="text" name="up_resolution" value="1"></label>
+      <label>.scen (optional: its start/goal pairs) <input type="file" name="up_scen" accept=".scen"></label></span>
       <button type="button" id="upload-button">Upload</button> <span id="upload-result"></span>
+      ${["name", "yaml", "image", "map", "resolution", "scen"].map((f) => `<div class="err" data-error="up.${f}"></div>`).join("")}
       <div class="err" data-error="upload"></div></fieldset>`;
   }
 
@@ -55,7 +70,8 @@
 
   async function upload(form) {
     const box = form.querySelector('[data-error="upload"]'), result = SP.q("#upload-result");
-    box.textContent = ""; result.textContent = "uploading...";
+    for (const e of SP.q("#upload").querySelectorAll(".err")) e.textContent = "";
+    result.textContent = "uploading...";
     const fmt = form.querySelector("[name=up_format]").value;
     const file = (n) => form.querySelector(`[name=${n}]`).files[0];
     const main = fmt === "nav2" ? file("up_yaml") : file("up_map");
@@ -67,22 +83,31 @@
     const name = value(form, "up_name") || main.name.replace(/\.[^.]*$/, "").replace(/[^A-Za-z0-9_.-]/g, "-");
     const body = fmt === "nav2"
       ? { name: name, format: "nav2", yaml: await main.text(), image: await base64(file("up_image")) }
-      : { name: name, format: "movingai", map: await main.text(), resolution: asNumber(value(form, "up_resolution")) };
+      : { name: name, format: "movingai", map: await main.text(), resolution: asNumber(value(form, "up_resolution")),
+        ...(file("up_scen") ? { scen: await file("up_scen").text() } : {}) };
     const r = await SP.api("/maps", { method: "POST", json: body });
     if (!r.ok) {
       result.textContent = `rejected (${r.status})`;
       const detail = r.data && r.data.detail;
-      box.textContent = Array.isArray(detail) ? detail.map((e) => `${(e.loc || []).slice(1).join(".")}: ${e.msg}`).join("; ")
-        : String(typeof detail === "string" ? detail : JSON.stringify(detail));
+      const errors = Array.isArray(detail) ? detail : [{ loc: [], msg: typeof detail === "string" ? detail : JSON.stringify(detail) }];
+      for (const e of errors) {  /* at the upload's field (["body", "scen"]), named there too */
+        const field = (e.loc || []).slice(1).join(".");
+        const at = form.querySelector(`[data-error="up.${CSS.escape(field.split(".")[0])}"]`) || box;
+        at.textContent += (at.textContent ? "; " : "") + (field ? `${field}: ` : "") + e.msg;
+      }
       return;
     }
     SP.q("#uploaded-maps").insertAdjacentHTML("beforeend", uploadedChoice(r.data));
     SP.q("#uploaded-maps").lastElementChild.querySelector("input").checked = true;
-    result.innerHTML = `uploaded <span id="uploaded-id">${SP.esc(r.data.id)}</span> (${SP.esc(r.data.name)}), chosen below the presets`;
+    if (r.data.scen) SP.q("#pair-pickers").insertAdjacentHTML("beforeend", SP.pairs.fields(r.data, pairLimit));
+    showPicker(r.data.id, true);
+    const pairsNote = r.data.scen ? `, ${r.data.scen.pairs} .scen pairs in buckets ${SP.pairs.spans(Object.keys(r.data.scen.buckets).map(Number))}` : "";
+    result.innerHTML = `uploaded <span id="uploaded-id">${SP.esc(r.data.id)}</span> (${SP.esc(r.data.name)}${pairsNote}), chosen below the presets`;
   }
 
   function build(cat, cfg, maps) {
     const b = cfg.defaults.benchmark, m = cfg.defaults.map;
+    pairLimit = (cfg.limits || {}).scen_pairs_per_map || pairLimit;
     main.insertAdjacentHTML("beforeend", `<form class="submit" id="submit-form" novalidate>
       <label><input type="radio" name="kind" value="benchmark" checked> benchmark job</label>
       <label><input type="radio" name="kind" value="map"> map job</label>
@@ -117,10 +142,17 @@
       const fmt = form.querySelector("[name=up_format]").value;
       form.querySelector(".up-nav2").hidden = fmt !== "nav2";
       form.querySelector(".up-movingai").hidden = fmt !== "movingai";
+      if (e.target.name === "uploaded") showPicker(e.target.value, e.target.checked);
+      const pairsOf = e.target.closest("fieldset.pairs");
+      if (pairsOf) SP.pairs.refresh(pairsOf, known[pairsOf.dataset.map], pairLimit);
       if (e.target.name === "algorithms" || e.target.name === "planners") {
         const fs = form.querySelector(`fieldset.params[data-member="${CSS.escape(e.target.value)}"][data-kind="${kind()}"]`);
         if (fs) fs.hidden = !e.target.checked;
       }
+    });
+    form.addEventListener("input", (e) => {
+      const fs = e.target.closest("fieldset.pairs");
+      if (fs) SP.pairs.refresh(fs, known[fs.dataset.map], pairLimit);
     });
     form.onsubmit = (e) => { e.preventDefault(); send(form, kind()); };
     SP.q("#upload-button").onclick = () => upload(form);
@@ -156,18 +188,35 @@
         ...(value(form, "reference") ? { reference: value(form, "reference") } : {}) };
     }
     const planners = checked(form, "planners");
-    const maps = [...checked(form, "maps"), ...checked(form, "uploaded").map((id) => ({ map: id }))];
+    const maps = [...checked(form, "maps"), ...checked(form, "uploaded").map((id) => uploadedEntry(form, id))];
     return { kind: "map", planners: planners, maps: maps, runs: asNumber(value(form, "map_runs")),
       seed: asNumber(value(form, "map_seed")), params: params(form, "map", planners),
       ...(value(form, "map_reference") ? { reference: value(form, "map_reference") } : {}),
       ...(value(form, "optimum_budget") ? { optimum_budget: asNumber(value(form, "optimum_budget")) } : {}) };
   }
 
-  /* The form field of an error's loc: ["body", kind?, field, ...]. */
-  function fieldOf(loc, kind) {
+  /* An uploaded map's entry: {"map": id}, with the pairs its picker names (a picker that names
+     none sensible throws {field, msg}: the form is not sent). */
+  function uploadedEntry(form, id) {
+    const fs = picker(id);
+    if (!fs) return { map: id };
+    const c = SP.pairs.choice(fs, known[id], pairLimit);
+    if (c.error) throw { field: `pairs.${id}`, msg: c.error };
+    return c.scen ? { map: id, scen: c.scen } : { map: id };
+  }
+
+  /* The form field of an error's loc: ["body", kind?, field, ...]; an error of an uploaded map
+     with a pairs picker (["body", "maps", i, "scen", ...]) goes to its picker, the rest of the
+     loc named in the message. */
+  function fieldOf(loc, kind, sent) {
     let rest = loc.slice(loc[0] === "body" ? 1 : 0);
     if (rest[0] === kind || rest[0] === "benchmark" || rest[0] === "map") rest = rest.slice(1);
-    if (!rest.length) return "_general";
+    if (!rest.length) return ["_general", ""];
+    const entry = rest[0] === "maps" && sent && sent.maps ? sent.maps[rest[1]] : undefined;
+    if (entry && entry.map && picker(entry.map)) return [`pairs.${entry.map}`, rest.slice(2).join(".")];
+    return [fieldName(rest, kind), ""];
+  }
+  function fieldName(rest, kind) {
     let f = String(rest[0]);
     if (kind === "map" && (f === "runs" || f === "seed" || f === "reference")) f = "map_" + f;
     if (f === "params" && rest.length >= 3) return `params.${rest[1]}.${rest[2]}`;
@@ -177,8 +226,17 @@
 
   async function send(form, kind) {
     for (const e of form.querySelectorAll(".err")) e.textContent = "";
+    let sent;
+    try {
+      sent = spec(form, kind);
+    } catch (e) {
+      if (!e || !e.field) throw e;
+      SP.q("#result").textContent = "not sent";
+      form.querySelector(`[data-error="${CSS.escape(e.field)}"]`).textContent = e.msg;
+      return;
+    }
     SP.q("#result").textContent = "submitting...";
-    const r = await SP.api("/jobs", { method: "POST", json: spec(form, kind) });
+    const r = await SP.api("/jobs", { method: "POST", json: sent });
     if (r.ok) {
       SP.q("#result").innerHTML = `submitted: <a id="new-job" href="/ui/jobs/${encodeURIComponent(r.data.id)}">${SP.esc(r.data.id)}</a> (${r.data.runs_total} runs)`;
       return;
@@ -187,9 +245,10 @@
     const detail = r.data && r.data.detail;
     const errors = Array.isArray(detail) ? detail : [{ loc: [], msg: typeof detail === "string" ? detail : JSON.stringify(detail) }];
     for (const e of errors) {
-      let box = form.querySelector(`[data-error="${CSS.escape(fieldOf(e.loc || [], kind))}"]`);
+      const [field, within] = fieldOf(e.loc || [], kind, sent);
+      let box = form.querySelector(`[data-error="${CSS.escape(field)}"]`);
       if (!box) box = SP.q("#general-error");
-      box.textContent += (box.textContent ? "; " : "") + e.msg;
+      box.textContent += (box.textContent ? "; " : "") + (within ? `${within}: ` : "") + e.msg;
     }
   }
 
