@@ -579,6 +579,40 @@ def test_maps_have_their_own_frames_side_by_side_and_runs_their_metadata(tmp_pat
     assert small_run["frame_id"] == "map/small"
 
 
+def test_a_runs_movingai_bucket_is_in_its_result_metadata_and_entities(tmp_path):
+    """A map with a bucket (a .scen pair's, the spec's ``buckets``) gives its runs' /results
+    messages ``bucket`` (an integer the schema declares), their ``swarmpath.run`` records and
+    scene entities a ``bucket`` key; a map without one (every map of an older job) has no such
+    key anywhere, and a file written so reads as before."""
+    from mcap.reader import make_reader
+
+    from swarmpath.path_metrics import PATH_METRICS
+
+    declared = OWN_SCHEMAS["swarmpath.MapRunResult"]["properties"]
+    assert declared["bucket"]["type"] == "integer" and set(PATH_METRICS) <= set(declared)
+    pair = {**SCENARIO, "name": "arena#150"}
+    spec = {"kind": "map", "planners": ["P"], "maps": [SCENARIO, pair], "runs": 1, "seed": 1,
+            "buckets": {"arena#150": 15}}
+    rec = JobRecorder(tmp_path / "m.mcap", "job1", "map", spec, T0)
+    plain = map_record("job1", 0, T0 + 1)
+    paired = map_record("job1", 1, T0 + 2, pair)
+    paired["spec"]["map"], paired["cell"] = "arena#150", "P/arena#150"
+    assert rec.add(plain) and rec.add(paired)
+    rec.finish()
+    _summary, _metadata, messages = read_all(tmp_path / "m.mcap")
+    results = {m["map"]: m for _s, c, m, _t in messages if c.topic == "/results"}
+    assert results["arena#150"]["bucket"] == 15 and "bucket" not in results["demo"]
+    with open(tmp_path / "m.mcap", "rb") as f:
+        runs = {m.metadata["map"]: m.metadata for m in make_reader(f).iter_metadata()
+                if m.name == "swarmpath.run"}
+    assert runs["arena#150"]["bucket"] == "15" and "bucket" not in runs["demo"]
+    entities = [e for _s, c, m, _t in messages if c.topic.startswith("/scene/")
+                for e in m["entities"]]
+    about = {e["id"]: {kv["key"]: kv["value"] for kv in e["metadata"]} for e in entities}
+    assert about["run-1/path"]["bucket"] == "15" and about["run-1/robot"]["bucket"] == "15"
+    assert "bucket" not in about["run-0/path"]
+
+
 # -------------------------------------------------------------------------- recorder process
 def test_the_recorder_process_writes_what_the_store_holds_even_after_dying(store):
     """The MCAP written by the recorder process (poked as results are stored, killed once

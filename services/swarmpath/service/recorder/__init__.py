@@ -46,8 +46,9 @@ never overlap. Scene entities of a run are ``run-<run>/robot``, ``/goal``, ``/ob
 obstacles where they are at that time) and ``/path``, with the run's identity in their metadata.
 
 Metadata records: ``swarmpath.job`` (job id, kind, spec JSON, swarmpath version, layout version)
-first, one ``swarmpath.run`` per map run (run, run_id, cell, planner, map, success, reason,
-collisions, length, its scene and path topics, entity prefix and frame), and
+first, one ``swarmpath.run`` per map run (run, run_id, cell, planner, map, its MovingAI bucket
+when the map has one, success, reason, collisions, length, its scene and path topics, entity
+prefix and frame), and
 ``swarmpath.summary`` (final state and the summary table JSON) at the end. The Foxglove layout
 shipped beside this module (:data:`swarmpath.service.foxglove.LAYOUT_FILE`; ``swarmpath download
 JOB --layout`` writes one with the file's topics) shows the scene in 3D and plots ``/curves``.

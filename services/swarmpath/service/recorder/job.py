@@ -284,11 +284,21 @@ class JobRecorder:
             self._put_parts("/curves", "swarmpath.ConvergenceCurve", ns,
                             _curve_json(record, identity, curve))
 
+    def _bucket(self, map_: str) -> int | None:
+        """The MovingAI bucket of map ``map_`` (a ``.scen`` pair's, or one the spec gave it:
+        the spec's ``buckets``); None when it has none (every map of an older job)."""
+        bucket = (self.spec.get("buckets") or {}).get(map_)
+        return int(bucket) if isinstance(bucket, int) and not isinstance(bucket, bool) else None
+
     def _map_run(self, record: dict[str, Any]) -> None:
         spec = record["spec"]
         planner, map_ = spec["planner"], spec["map"]
+        bucket = self._bucket(map_)
+        identity: dict[str, Any] = {"planner": planner, "map": map_}
+        if bucket is not None:  # left out, not null, when the map has none
+            identity["bucket"] = bucket
         self._put("/results", "swarmpath.MapRunResult", _ns(record["created"]),
-                  self._result_message(record, {"planner": planner, "map": map_}))
+                  self._result_message(record, identity))
         if map_ not in self._scenarios:
             self._scenarios[map_] = scenario = scenario_for(spec)
             if scenario is not None:
@@ -297,7 +307,7 @@ class JobRecorder:
         topic = f"{_topic_name(planner)}/{_topic_name(map_)}"
         metrics = record.get("metrics") or {}
         self._writer.add_metadata("swarmpath.run", {
-            **_run_about(record, planner, map_), "cell": str(record["cell"]),
+            **_run_about(record, planner, map_, bucket), "cell": str(record["cell"]),
             "seed": str(record["seed"]), "scene_topic": f"/scene/{topic}",
             "path_topic": f"/paths/{topic}", "entity_prefix": f"run-{int(record['run'])}/",
             "frame_id": map_frame(map_), "collisions": str(metrics.get("collisions", "")),
@@ -368,7 +378,7 @@ class JobRecorder:
         topic = f"{_topic_name(planner)}/{_topic_name(map_)}"
         prefix = f"run-{run}"
         frame = map_frame(map_)
-        about = _run_about(record, planner, map_)
+        about = _run_about(record, planner, map_, self._bucket(map_))
         radius = float(scenario.robot.radius) if scenario is not None else 0.1
         world = None
         if scenario is not None and scenario.is_dynamic:

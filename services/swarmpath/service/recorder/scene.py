@@ -35,12 +35,17 @@ def source_frame(name: str, frame: str) -> str:
     return f"{map_frame(name)}/{_topic_name(frame)}"
 
 
-def _run_about(record: dict[str, Any], planner: str, map_: str) -> dict[str, str]:
-    """What identifies a map run, as strings (scene entity metadata, the run's metadata)."""
+def _run_about(record: dict[str, Any], planner: str, map_: str,
+               bucket: int | None = None) -> dict[str, str]:
+    """What identifies a map run, as strings (scene entity metadata, the run's metadata); the
+    map's MovingAI ``bucket`` only when it has one (a reader of an older file finds no key)."""
     metrics = record.get("metrics") or {}
-    return {"run": str(int(record["run"])), "run_id": str(record["run_id"]), "planner": planner,
-            "map": map_, "success": str(bool(metrics.get("success"))).lower(),
-            "reason": str(metrics.get("reason") or record.get("failure") or "")}
+    about = {"run": str(int(record["run"])), "run_id": str(record["run_id"]), "planner": planner,
+             "map": map_, "success": str(bool(metrics.get("success"))).lower(),
+             "reason": str(metrics.get("reason") or record.get("failure") or "")}
+    if bucket is not None:
+        about["bucket"] = str(bucket)
+    return about
 
 
 def _marker(x: float, y: float, rgba: dict[str, float], size: float = 0.3) -> dict[str, Any]:

@@ -24,6 +24,22 @@ _OUTCOME: dict[str, Any] = {
                     "thread's); absent: not measured"},
 }
 
+# the field's path metrics of a map run (docs/metrics.md; absent when the run has no value)
+_PATH_QUALITY: dict[str, Any] = {
+    "clearance_mean": {"type": "number", "description": "mean body gap along the path, m"},
+    "curvature_max": {"type": "number", "description": "1/m (Bench-MR)"},
+    "curvature_mean": {"type": "number", "description": "1/m (Bench-MR)"},
+    "cusps": {"type": "integer", "description": "turns over 60 degrees (Bench-MR)"},
+    "danger_share": {"type": "number", "description": "share of the travel time within the "
+                     "danger distance of an obstacle (MRPB safety)"},
+    "velocity_smoothness": {"type": "number", "description": "m/s^2 (MRPB)"},
+    "angular_smoothness": {"type": "number", "description": "rad/s^2"},
+    "jerk": {"type": "number", "description": "mean |da/dt|, m/s^3"},
+    "costmap_cost_mean": {"type": "number", "description": "nav2 maps: mean cost 0-254 of "
+                          "nav2's inflated costmap along the path"},
+    "costmap_cost_max": {"type": "number", "description": "nav2 maps: largest such cost"},
+}
+
 BENCHMARK_RESULT_SCHEMA: dict[str, Any] = {
     "title": "swarmpath.BenchmarkRunResult",
     "description": "One finished benchmark run (non-finite metrics are left out)",
@@ -49,6 +65,8 @@ MAP_RESULT_SCHEMA: dict[str, Any] = {
         **_IDENTITY,
         "planner": {"type": "string"},
         "map": {"type": "string"},
+        "bucket": {"type": "integer", "description": "MovingAI difficulty bucket of the map (a "
+                   ".scen pair: optimal length in [4b, 4b + 4) cells); absent: none"},
         **_OUTCOME,
         "success": {"type": "boolean"},
         "collisions": {"type": "integer"},
@@ -67,6 +85,8 @@ MAP_RESULT_SCHEMA: dict[str, Any] = {
         "failure_class": {"type": "string",
                           "description": "why a failed run failed (docs/planners.md)"},
         "failure_detail": {"type": "string", "description": "where and for how long"},
+        "travel_time": {"type": "number", "description": "simulated seconds"},
+        **_PATH_QUALITY,
     },
 }
 
