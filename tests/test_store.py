@@ -419,11 +419,12 @@ def test_map_summary(store):
     job = store.create_job(spec, now=T0)
     metrics = {
         "A": [{"success": True, "length": 10.0, "error": 0.1, "seconds": 1.0, "gap": 0.1,
-               "collisions": 0},
+               "collisions": 0, "min_clearance": 0.4},
               {"success": True, "length": 12.0, "error": 0.2, "seconds": 2.0, "gap": 0.3,
-               "collisions": 0},
+               "collisions": 0, "min_clearance": 0.25},
               {"success": False, "length": 3.0, "error": 5.0, "seconds": 3.0, "gap": None,
-               "collisions": 3, "robot_driven_contacts": 1, "obstacle_driven_contacts": 2}],
+               "collisions": 3, "robot_driven_contacts": 1, "obstacle_driven_contacts": 2,
+               "min_clearance": -0.05}],
         "B": [{"success": True, "length": 11.0, "error": 0.0, "seconds": 0.5, "gap": None,
                "collisions": 0}] * 3,
     }
@@ -447,6 +448,8 @@ def test_map_summary(store):
     assert a["collisions"] == 3
     assert (a["robot_driven_contacts"], a["obstacle_driven_contacts"]) == (1, 2)
     assert (b["robot_driven_contacts"], b["obstacle_driven_contacts"]) == (0, 0)
+    # the least clearance over every run, the failed one too (plan's "Clearance min")
+    assert a["min_clearance"] == -0.05 and b["min_clearance"] is None
     assert b["success_rate"] == 1.0 and b["gap_mean"] is None and b["length_std"] == 0.0
     item = store.run(job, 0)
     assert item["planner"] == "A" and item["map"] == "m" and item["length"] == 10.0

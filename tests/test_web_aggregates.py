@@ -138,9 +138,11 @@ def test_job_aggregates_map_view_counts_success_and_marks_failures():
                                           "runs": 3}])
     path = [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]]
     job.add(0, 0, ok=True, metrics={"success": True, "length": 1.4, "gap": 0.1,
-                                    "seconds": 0.2, "collisions": 0}, path=path)
+                                    "seconds": 0.2, "collisions": 0, "min_clearance": 0.3},
+            path=path)
     job.add(0, 1, ok=True, metrics={"success": False, "collisions": 2, "seconds": 0.3,
-                                    "reason": "collided 2 times", "length": 9.0}, path=path)
+                                    "reason": "collided 2 times", "length": 9.0,
+                                    "min_clearance": -0.02}, path=path)
     job.add(0, 2, ok=False, metrics={})
     g = job.view()["groups"][0]
     cell = g["planners"]["ICOOT"]
@@ -149,6 +151,8 @@ def test_job_aggregates_map_view_counts_success_and_marks_failures():
     assert cell["failures"] == {"collision": 1}
     assert cell["box"]["length"]["n"] == 1  # lengths of successful runs only
     assert cell["box"]["seconds"]["n"] == 2
+    # the least clearance of every finished run, the failed one too (the summary's)
+    assert cell["box"]["min_clearance"]["n"] == 2 and cell["box"]["min_clearance"]["min"] == -0.02
     assert [p["failure"] for p in cell["paths"]] == [None, "collision"]
 
 

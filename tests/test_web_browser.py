@@ -308,6 +308,8 @@ def test_raced_job_page_shows_the_race(server, browser):
 
 
 def test_map_job_page_paths_failures_and_boxes(server, jobs, browser):
+    import httpx
+
     url, app = server
     browser.get(f"{url}/ui/jobs/{jobs['map']}")
     maps = wait_for(browser, "#maps section .mapchart svg", len(MAP["maps"]))
@@ -351,11 +353,17 @@ def test_map_job_page_paths_failures_and_boxes(server, jobs, browser):
     quality = browser.find_elements(By.CSS_SELECTOR, "#quality tbody tr")
     assert len(quality) == len(MAP["maps"]) * len(MAP["planners"])
     head = texts(browser.find_elements(By.CSS_SELECTOR, "#quality thead th"))
-    assert head[2:5] == ["clearance mean (m)", "curvature max (1/m)", "curvature mean (1/m)"]
+    assert head[2:6] == ["clearance min (m)", "clearance mean (m)", "curvature max (1/m)",
+                         "curvature mean (1/m)"]
+    summary = httpx.get(f"{url}/jobs/{jobs['map']}/summary", timeout=WAIT).json()
     for row in quality:  # a cell with a successful run shows its path metrics
         tds = texts(row.find_elements(By.TAG_NAME, "td"))
         cell = next(g for g in view["groups"] if g["map"] == tds[0])["planners"][tds[1]]
-        assert (tds[2] != "") == (cell["succeeded"] > 0)
+        assert (tds[3] != "") == (cell["succeeded"] > 0)
+        # the least clearance over every run: the summary's, with three decimals
+        least = next(r["min_clearance"] for r in summary["rows"]
+                     if (r["map"], r["planner"]) == (tds[0], tds[1]))
+        assert float(tds[2]) == pytest.approx(least, abs=0.0006)
     ranks = browser.find_elements(By.CSS_SELECTOR, "#map-ranks tbody tr")
     assert [r.get_attribute("data-planner") for r in ranks] == MAP["planners"]
     header = texts(browser.find_elements(By.CSS_SELECTOR, "#map-ranks thead th"))

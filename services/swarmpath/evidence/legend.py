@@ -27,6 +27,9 @@ NOTES: dict[str, str] = {
                         "sharing the machine; blank when no run has one (stored before CPU "
                         "times were measured)",
     "travel_time_mean": "mean simulated time from start to goal of the successful runs (s)",
+    "min_clearance": "least body gap (clearance minus robot radius) over every step of every "
+                     "run, failed runs included (m; exact and swept against moving obstacles; "
+                     "<= 0: the body touched an obstacle)",
     "clearance_mean": "mean body gap (clearance minus robot radius) sampled every 5 cm along "
                       "the path, mean over successful runs (m; Bench-MR, OMPL)",
     "curvature_max": "largest curvature of the circles through three path points 0.3 m apart "

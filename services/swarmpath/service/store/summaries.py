@@ -32,7 +32,8 @@ MAP_COLUMNS = (
     "planner", "map", "bucket", "runs", "failed", "success_rate", "collisions", "length_mean",
     "length_std",
     "error_mean", "seconds_mean", "cpu_seconds_mean", "gap_mean", "robot_driven_contacts",
-    "obstacle_driven_contacts", "travel_time_mean", *PATH_METRICS, *MAP_TEST_COLUMNS,
+    "obstacle_driven_contacts", "travel_time_mean", "min_clearance", *PATH_METRICS,
+    *MAP_TEST_COLUMNS,
 )
 
 
@@ -54,7 +55,8 @@ def map_cell_summary(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
 
     success_rate over all finished runs; length mean/std (ddof=1), gap mean, travel time and the
     path metrics (:data:`swarmpath.path_metrics.PATH_METRICS`) over the successful runs;
-    error, seconds (wall), cpu_seconds and collisions over all runs, the collisions also by cause
+    error, seconds (wall), cpu_seconds and collisions over all runs, ``min_clearance`` the
+    least over all runs (as ``swarmpath plan`` reports it), the collisions also by cause
     (``robot_driven_contacts``, ``obstacle_driven_contacts``: :func:`swarmpath.metrics.
     contact_causes`). Missing values are left out; None when no run has the value."""
     from swarmpath.evidence.stats import describe
@@ -74,6 +76,7 @@ def map_cell_summary(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
         "cpu_seconds_mean": _mean(_numbers(runs, "cpu_seconds")),
         "gap_mean": _mean(_numbers(ok, "gap")),
         "travel_time_mean": _mean(_numbers(ok, "travel_time")),
+        "min_clearance": min(_numbers(runs, "min_clearance"), default=None),
         **{key: _mean(_numbers(ok, key)) for key in PATH_METRICS},
         **{key: _total(runs, key) for key in ("robot_driven_contacts", "obstacle_driven_contacts")},
         # why the failed runs failed (planners.failures), JSON only (a dict is no CSV cell)

@@ -131,9 +131,11 @@ class _BenchmarkCell:
 
 #: Values a map cell keeps per run for its box statistics: of the successful runs, the length,
 #: the gap and the field's path metrics (:data:`swarmpath.path_metrics.PATH_METRICS`); of
-#: every run, the planning wall and CPU time.
+#: every run, the planning wall and CPU time and the least clearance (the job page shows its
+#: smallest, as the summary and ``swarmpath plan`` do).
 SUCCESS_VALUES = ("length", "gap", "travel_time", *PATH_METRICS)
-MAP_VALUES = (*SUCCESS_VALUES, "seconds", "cpu_seconds")
+RUN_VALUES = ("seconds", "cpu_seconds", "min_clearance")
+MAP_VALUES = (*SUCCESS_VALUES, *RUN_VALUES)
 
 
 class _MapCell:
@@ -175,10 +177,10 @@ class _MapCell:
                     self.values[name].append(v)
         else:
             self.failures[kind or "other"] = self.failures.get(kind or "other", 0) + 1
-        for name in ("seconds", "cpu_seconds"):
-            seconds = _number(metrics.get(name))
-            if seconds is not None:
-                self.values[name].append(seconds)
+        for name in RUN_VALUES:
+            value = _number(metrics.get(name))
+            if value is not None:
+                self.values[name].append(value)
         if path is not None and len(path) and len(self.paths) < MAX_PATHS:
             self.paths[run] = {
                 "run": run, "success": success, "failure": kind,

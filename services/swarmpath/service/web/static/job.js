@@ -241,7 +241,7 @@
     }
     html += `</tbody></table>`;
     /* the field's path metrics (docs/metrics.md), medians over the successful runs */
-    const quality = [["clearance_mean", "clearance mean (m)", 3, 1], ["curvature_max", "curvature max (1/m)", 2, 1],
+    const quality = [["min_clearance", "clearance min (m)", 3, 1, "min"], ["clearance_mean", "clearance mean (m)", 3, 1], ["curvature_max", "curvature max (1/m)", 2, 1],
       ["curvature_mean", "curvature mean (1/m)", 3, 1], ["cusps", "cusps", 1, 1], ["danger_share", "in danger (%)", 1, 100],
       ["travel_time", "travel time (s)", 1, 1], ["velocity_smoothness", "velocity smoothness (m/s²)", 3, 1],
       ["angular_smoothness", "angular smoothness (rad/s²)", 2, 1], ["jerk", "jerk (m/s³)", 2, 1],
@@ -250,11 +250,11 @@
       quality.map(([, label]) => `<th>${label}</th>`).join("") + `</tr></thead><tbody>`;
     for (const g of data.groups) for (const p of planners) {
       const c = g.planners[p]; if (!c) continue;
-      html += `<tr><td class="l">${SP.esc(g.map)}</td><td class="l">${SP.esc(p)}</td>` + quality.map(([key, , digits, scale]) => {
-        const b = c.box[key]; return `<td>${b ? SP.num(scale * b.median, digits) : ""}</td>`;
+      html += `<tr><td class="l">${SP.esc(g.map)}</td><td class="l">${SP.esc(p)}</td>` + quality.map(([key, , digits, scale, stat]) => {
+        const b = c.box[key]; return `<td>${b ? SP.num(scale * b[stat || "median"], digits) : ""}</td>`;
       }).join("") + "</tr>";
     }
-    html += `</tbody></table><p class="legend">Medians over the runs that reached the goal. Clearance: body gap (clearance minus robot radius) sampled every 5 cm; curvature: circles through points 0.3 m apart (Bench-MR); cusps: turns over 60°; in danger: share of the travel time within 0.1 m of an obstacle (MRPB); smoothness: mean |change| per second of the speed (MRPB) and of the turn rate; jerk: mean |da/dt|; cost: nav2's inflated costmap along the path (nav2 maps only).</p>`;
+    html += `</tbody></table><p class="legend">Clearance min: the least over all runs (failed ones too; as the summary and swarmpath plan). The rest: medians over the runs that reached the goal. Clearance: body gap (clearance minus robot radius) sampled every 5 cm; curvature: circles through points 0.3 m apart (Bench-MR); cusps: turns over 60°; in danger: share of the travel time within 0.1 m of an obstacle (MRPB); smoothness: mean |change| per second of the speed (MRPB) and of the turn rate; jerk: mean |da/dt|; cost: nav2's inflated costmap along the path (nav2 maps only).</p>`;
     const warned = data.groups.map((g) => [g.map, Object.values(g.planners).find((c) => c && c.warnings && c.warnings.length)]).filter(([, c]) => c);
     if (warned.length) html += `<ul id="map-warnings" class="legend">` + warned.map(([map, c]) => c.warnings.map(([f, m]) => `<li>warning: ${SP.esc(map)}: ${SP.esc(f)}: ${SP.esc(m)}</li>`).join("")).join("") + `</ul>`;
     if (st.reference) {
