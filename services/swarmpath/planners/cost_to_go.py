@@ -46,10 +46,24 @@ class CostToGo:
             res = min(res, float(clearance))
         if math.ceil(w / res) * math.ceil(h / res) > MAX_CELLS:
             res = math.sqrt(w * h / MAX_CELLS) * 1.01
-        self.spec = GridSpec.covering((w, h), res)
-        self.free = ~rasterize(obstacles, self.spec, clearance)
+        spec = GridSpec.covering((w, h), res)
+        self._solve(spec, ~rasterize(obstacles, spec, clearance), goal)
+
+    @classmethod
+    def on_grid(cls, spec: GridSpec, free: NDArray[np.bool_], goal: Array) -> CostToGo:
+        """The field over a grid whose free cells are given (``free``, shape ``spec.shape``),
+        e.g. an occupancy memory's (:mod:`swarmpath.planners.swarm_memory`)."""
+        field = cls.__new__(cls)
+        field._solve(spec, np.asarray(free, dtype=bool), goal)
+        return field
+
+    def _solve(self, spec: GridSpec, free: NDArray[np.bool_], goal: Array) -> None:
+        """Dijkstra's distance to ``goal`` over the free cells of ``spec`` (module docstring)."""
+        self.spec = spec
+        self.free = free
         rows, cols = self.spec.shape
         self.goal = np.asarray(goal, dtype=float)
+        res = spec.resolution
         idx = np.arange(rows * cols).reshape(rows, cols)
 
         def part(dr: int, dc: int) -> tuple[slice, slice]:

@@ -134,67 +134,24 @@ def descend(field: CostToGo, p: Array, goal: Array) -> Array | None:
     return np.asarray(cells, dtype=float)
 
 
-class Guide:
-    """The way to the goal on the static map and the robot's place on it (module docstring)."""
+class Way:
+    """A way to the goal and the robot's place on it, followed as the module docstring says
+    ("Following"); subclasses say how a way is planned (:meth:`_plan`)."""
 
-    def __init__(self, scenario: Any, static: ObstacleSet, radius: float, clearance: float,
-                 source: str, rejoin: float, budget: float | None, backend: str) -> None:
-        self.scenario = scenario
-        self.static = static
-        self.radius = float(radius)
-        w, h = scenario.size
-        self.world = (0.0, 0.0, float(w), float(h))
-        ends = np.array([scenario.start, scenario.goal], dtype=float)
-        room = fast.point_clearances(static, ends) - self.radius if not static.is_empty else [
-            np.inf]
-        # keep the clearance, unless the start or goal is closer than that to an obstacle
-        self.clearance = float(min(clearance, 0.5 * float(np.min(room))))
-        self.source = source
+    def __init__(self, rejoin: float, backend: str) -> None:
         self.rejoin = float(rejoin)
-        self.budget = budget
         self.backend = backend
         self.way: Array | None = None
         self.at = 0  # index of the way's segment the robot is on
         self.plans = 0  # ways planned (for tests and traces)
-        self.planned_by: str | None = None  # "optimum" or "cost-to-go", the last way's source
 
-    # ------------------------------------------------------------------------------ the way
     def _plan(self, p: Array, goal: Array) -> Array:
-        """The way from p to the goal (module docstring); the straight line when none exists."""
-        self.plans += 1
-        margin = self.radius + self.clearance
-        if not self.static.is_empty:
-            room = float(fast.point_clearances(self.static, p[None, :])[0])
-            margin = min(margin, room - 1e-6)  # a robot pushed closer plans with what it has
-        if self.source == "optimum" and margin > 0:
-            try:
-                best = shortest_path(p, goal, self.static, margin, world=self.world,
-                                     budget=self.budget, backend=self.backend)
-            except ValueError:
-                best = None
-            if best is not None and best.exact and math.isfinite(best.length):
-                self.planned_by = "optimum"
-                return np.asarray(best.points, dtype=float)
-        field = CostToGo(self.static, self.scenario.size, goal, max(margin, 0.0))
-        cells = descend(field, p, goal)
-        self.planned_by = "cost-to-go"
-        if cells is None:
-            return np.array([p, goal], dtype=float)
-        return taut(cells, self.static, max(margin, 0.0))
+        """The way from p to the goal."""
+        raise NotImplementedError
 
     def _first(self, p: Array, goal: Array) -> Array:
-        """The way from the start, remembered per scenario, clearance and source."""
-        key = (self.scenario, self.clearance, self.source, self.budget, tuple(p), tuple(goal))
-        if key in _WAYS:
-            _WAYS.move_to_end(key)
-            self.plans += 1
-            way, self.planned_by = _WAYS[key]
-            return way
-        way = self._plan(p, goal)
-        _WAYS[key] = (way, self.planned_by)
-        while len(_WAYS) > KEPT:
-            _WAYS.popitem(last=False)
-        return way
+        """The first way, from the start."""
+        return self._plan(p, goal)
 
     def ahead(self, p: Array, goal: Array, lookahead: float) -> Array:
         """The rest of the way from the robot at p: p, then the way from its place on it."""
@@ -236,6 +193,65 @@ class Guide:
         if kind == "carrot":
             return sensed_map.along(way, lookahead)
         return sensed_map.shortcut(way, hits, margin, lookahead, backend=self.backend)
+
+
+class Guide(Way):
+    """The way to the goal on the static map and the robot's place on it (module docstring)."""
+
+    def __init__(self, scenario: Any, static: ObstacleSet, radius: float, clearance: float,
+                 source: str, rejoin: float, budget: float | None, backend: str) -> None:
+        super().__init__(rejoin, backend)
+        self.scenario = scenario
+        self.static = static
+        self.radius = float(radius)
+        w, h = scenario.size
+        self.world = (0.0, 0.0, float(w), float(h))
+        ends = np.array([scenario.start, scenario.goal], dtype=float)
+        room = fast.point_clearances(static, ends) - self.radius if not static.is_empty else [
+            np.inf]
+        # keep the clearance, unless the start or goal is closer than that to an obstacle
+        self.clearance = float(min(clearance, 0.5 * float(np.min(room))))
+        self.source = source
+        self.budget = budget
+        self.planned_by: str | None = None  # "optimum" or "cost-to-go", the last way's source
+
+    # ------------------------------------------------------------------------------ the way
+    def _plan(self, p: Array, goal: Array) -> Array:
+        """The way from p to the goal (module docstring); the straight line when none exists."""
+        self.plans += 1
+        margin = self.radius + self.clearance
+        if not self.static.is_empty:
+            room = float(fast.point_clearances(self.static, p[None, :])[0])
+            margin = min(margin, room - 1e-6)  # a robot pushed closer plans with what it has
+        if self.source == "optimum" and margin > 0:
+            try:
+                best = shortest_path(p, goal, self.static, margin, world=self.world,
+                                     budget=self.budget, backend=self.backend)
+            except ValueError:
+                best = None
+            if best is not None and best.exact and math.isfinite(best.length):
+                self.planned_by = "optimum"
+                return np.asarray(best.points, dtype=float)
+        field = CostToGo(self.static, self.scenario.size, goal, max(margin, 0.0))
+        cells = descend(field, p, goal)
+        self.planned_by = "cost-to-go"
+        if cells is None:
+            return np.array([p, goal], dtype=float)
+        return taut(cells, self.static, max(margin, 0.0))
+
+    def _first(self, p: Array, goal: Array) -> Array:
+        """The way from the start, remembered per scenario, clearance and source."""
+        key = (self.scenario, self.clearance, self.source, self.budget, tuple(p), tuple(goal))
+        if key in _WAYS:
+            _WAYS.move_to_end(key)
+            self.plans += 1
+            way, self.planned_by = _WAYS[key]
+            return way
+        way = self._plan(p, goal)
+        _WAYS[key] = (way, self.planned_by)
+        while len(_WAYS) > KEPT:
+            _WAYS.popitem(last=False)
+        return way
 
     def near(self, p: Array, reach: float) -> Array:
         """The static surfaces within ``reach`` (+ :data:`NEAR_SLACK`) of p, as points
