@@ -35,9 +35,12 @@ plans around it where it will be when the robot can get there (``lead``; behind 
 obstacle instead of ahead of it) and its remembered trail is forgotten (``moving_memory``,
 ``trail``). Erratic motion (a random walk) is not tracked and is handled as before.
 
-Local minima: when the robot gets no closer to the goal for ``escape`` seconds, the known path
-also avoids every static point sensed since the start, until it is closer than ever before
-(:mod:`swarmpath.planners.swarm_escape`).
+Local minima: when the robot gets no closer to the goal for ``escape`` seconds (a stall),
+``escape_plan = "memory"`` (default) hands the swarm, from then on, the shortcut point of the
+shortest way on the robot's occupancy memory of everything its scans showed, unseen cells free,
+planned again only when the memory changes on it (:mod:`swarmpath.planners.swarm_memory`);
+``"hulls"`` (the earlier rule) makes the known path also avoid every static point sensed since
+the start, until the robot is closer than ever before (:mod:`swarmpath.planners.swarm_escape`).
 
 The run ends within 0.2 m of the goal, or fails at the episode's step or time limit.
 """
@@ -57,6 +60,7 @@ from swarmpath.planners import local, sensed_map, swarm_aim
 from swarmpath.planners.base import Decision, Observation, PlannerError, register
 from swarmpath.planners.swarm_escape import Escape
 from swarmpath.planners.swarm_guide import Guide
+from swarmpath.planners.swarm_memory import MemoryWay
 from swarmpath.planners.swarm_moves import SwarmMoveLimits
 from swarmpath.planners.swarm_search import searcher
 from swarmpath.robot.sensors import get_sensor_model
@@ -131,6 +135,10 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         # avoids every static point sensed since the start (planners.swarm_escape; 0: off)
         "escape": 5.0,
         "escape_progress": 0.05,  # m
+        # at a stall (sensors only): "memory" follows, from then on, the way on the occupancy
+        # memory of every scan (planners.swarm_memory); "hulls": the known path also avoids the
+        # escape's points until a new record (the earlier rule)
+        "escape_plan": "memory",
         "give_way": 1.5,  # s: moves scored against predicted moving points this far (0: off)
         "give_way_spread": 1.0,  # an untracked moving point may be this x the top speed x t away
         # "numba": the repairs, the aim's clearances and sensing's surface distances compiled
@@ -146,6 +154,7 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         "guide": ("optimum", "cost-to-go"),
         "aim_hits": ("known", "near"),
         "no_path": ("grid", "line"),
+        "escape_plan": ("memory", "hulls"),
         "backend": COMPUTING_BACKENDS,
     }
     #: Optimizer parameters of the preset (e.g. ICOOT's two leaders), merged under user ones.
@@ -219,6 +228,14 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         self._escape = Escape(float(self.p["escape"]), float(self.p["escape_progress"]),
                               float(self.p["map_cell"]))
         self._path: Array | None = None  # the last known path (see ``rejoin``)
+        # sensors only: the occupancy memory and its way, followed from the first stall on
+        self._memory_way: MemoryWay | None = None
+        if (static_map is None and self.p["escape_plan"] == "memory"
+                and float(self.p["escape"]) > 0):
+            self._memory_way = MemoryWay(
+                (float(scenario.size[0]), float(scenario.size[1])), float(self.p["map_cell"]),
+                scenario.robot.radius + self._memory_clearance(scenario),
+                float(self.p["guide_rejoin"]), backend)
         self._moving_until = -np.inf  # motion was sensed in the last ``memory`` seconds
         self._moving: tuple[Array, Array] = (np.zeros((0, 2)), np.zeros((0, 2)))  # this scan's
         self._settled = np.zeros((0, 2))  # the known points but this scan's tracked ones
@@ -282,6 +299,13 @@ class SwarmLocalPlanner(SwarmMoveLimits):
             safety = float(self.p["safety"])
         return safety + float(self.p["carrot_clearance"])
 
+    def _memory_clearance(self, scenario: Any) -> float:
+        """m beyond the robot radius the memory's way keeps: the largest safety the planner may
+        keep (a diff drive's, else the corner safety: a maze is all corners) + the known path's
+        ``carrot_clearance``."""
+        key = "diff_drive_safety" if scenario.robot.model == "diff-drive" else "corner_safety"
+        return float(self.p[key]) + float(self.p["carrot_clearance"])
+
     # ----------------------------------------------------------------------------- deciding
     def _hold(self, p: Array, aim: Array, ctx: local.StepContext) -> bool:
         """Keep driving to the last swarm waypoint: still ahead, still feasible in the current
@@ -311,7 +335,10 @@ class SwarmLocalPlanner(SwarmMoveLimits):
         reach = float(self.p["step"])
         backend = str(self.p["backend"])
         known_hits = self._known_hits(obs)  # first: this scan may show a corner
-        self._escape.remember(*self._scan)
+        if self._memory_way is not None:
+            self._memory_way.remember(self._scan[0])
+        else:
+            self._escape.remember(*self._scan)
         margin = obs.robot_radius + self._safety(obs.time)
         # Only hits that can touch a candidate segment matter, one per HIT_CELL (1 cm) cell.
         hits = sensed_map.condense(known_hits, p, reach + 2 * margin, HIT_CELL, backend)
@@ -336,14 +363,8 @@ class SwarmLocalPlanner(SwarmMoveLimits):
             aim = self._guide.aim(p, goal, plan_hits, margin, float(self.p["lookahead"]),
                                   str(self.p["aim"]))
         else:
-            escaping = self._escape.stalled(obs.time, float(np.hypot(*(goal - p))))
-            if escaping:  # ``escape``: the path also avoids every static point sensed so far
-                known = np.concatenate([known, self._escape.points()])
-            if self.p["aim_hits"] == "known" or escaping:
-                known = sensed_map.condense(known, p, np.inf, float(self.p["map_cell"]), backend)
-            else:
-                known = plan_hits
-            aim = self._aim(p, goal, plan_hits, margin, (0.0, 0.0, float(w), float(h)), known)
+            aim = self._sensed_aim(obs.time, p, goal, plan_hits, margin, known,
+                                   (0.0, 0.0, float(w), float(h)))
         to_goal = float(np.hypot(*(goal - p)))
         lower = np.maximum(p - reach, [0.0, 0.0])
         upper = np.minimum(p + reach, [w, h])
@@ -382,6 +403,25 @@ class SwarmLocalPlanner(SwarmMoveLimits):
             return Decision(target, iterations, duration)
         self._held = None
         return self._avoid(obs, ctx, iterations, duration)
+
+    def _sensed_aim(self, time: float, p: Array, goal: Array, plan_hits: Array, margin: float,
+                    known: Array, world: tuple[float, float, float, float]) -> Array:
+        """The aim with sensors only: the known path's (module docstring, step 2), or, from the
+        first stall on with ``escape_plan = "memory"``, the memory's way's (local minima)."""
+        backend = str(self.p["backend"])
+        escaping = self._escape.stalled(time, float(np.hypot(*(goal - p))))
+        way = self._memory_way
+        if way is not None and (escaping or way.leading):
+            way.leading = True
+            return way.aim(p, goal, plan_hits, margin, float(self.p["lookahead"]),
+                           str(self.p["aim"]))
+        if escaping:  # ``escape``: the path also avoids every static point sensed so far
+            known = np.concatenate([known, self._escape.points()])
+        if self.p["aim_hits"] == "known" or escaping:
+            known = sensed_map.condense(known, p, np.inf, float(self.p["map_cell"]), backend)
+        else:
+            known = plan_hits
+        return self._aim(p, goal, plan_hits, margin, world, known)
 
     def _avoid(
         self, obs: Observation, ctx: local.StepContext, iterations: int, duration: float
