@@ -134,7 +134,8 @@ BAD = [
     (["--race", "--race-margin", "0.5"], "--race-margin"),
     (["--race", "--race-margin", "-0.1"], "--race-margin"),
     (["--race", "--race-pairs", "some"], "--race-pairs"),
-    (["--race-final-test"], "--race-final-test"),  # without --race
+    (["--race-final-test", "sign"], "--race-final-test"),  # without --race
+    (["--race", "--race-final-test", "t-test"], "--race-final-test"),
     (["--race", "-a", "GWO"], "--algorithms"),
     (["--race", "-f", "bbob:f1", "--instances", "1-2", "--pool-instances"], "--pool-instances"),
 ]

@@ -8,7 +8,13 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from swarmpath.evidence.racing import RaceSettings, comparisons_per_block, race_block
+from swarmpath.evidence.race_report import close_race, study_race
+from swarmpath.evidence.racing import (
+    RaceSettings,
+    closing_rejections,
+    comparisons_per_block,
+    race_block,
+)
 from swarmpath.evidence.sequential import (
     BET_CAP,
     confidence_sequence,
@@ -129,35 +135,121 @@ def test_one_optimizer_raced_against_itself_on_other_streams_rarely_differs():
     assert ours <= 0.05 + 3 * math.sqrt(0.05 * 0.95 / len(samples))
 
 
-def _raced(pairs, final_test, max_runs, comparisons=1):
-    settings = RaceSettings(max_runs=max_runs, min_runs=20, batch=20, final_test=final_test)
-    return [race_block({"A": a, "B": b}, ["A", "B"], settings, comparisons).duels[0]
+def _raced(pairs, final_test, max_runs, alpha=0.05, step=20):
+    """Each pair (A's runs, B's runs) raced alone (one comparison), its closing look taken: the
+    duel as the race document shows it."""
+    settings = RaceSettings(max_runs=max_runs, alpha=alpha, min_runs=step, batch=step,
+                            final_test=final_test)
+    return [study_race(settings, 1, [({}, race_block({"A": a, "B": b}, ["A", "B"], settings, 1,
+                                                     intervals=False),
+                                      [(0, "A"), (1, "B")])])["blocks"][0]["duels"][0]
             for a, b in pairs]
 
 
+def _rate(duels):
+    return float(np.mean([d["decision"] == "different" for d in duels]))
+
+
 def test_the_closing_sign_test_keeps_the_error_rate_under_optional_stopping():
-    """Null races (one distribution) with the closing look: the sequence at alpha/2 over 10
-    rounds, then one sign test at alpha/2 at max_runs; declared differences at most alpha."""
+    """Null races (one distribution) with the sign look of earlier jobs: the sequence at
+    alpha/2 over 10 rounds, then one sign test at alpha/2 at max_runs."""
     rng = np.random.default_rng(12)
     samples = [(rng.normal(size=200), rng.normal(size=200)) for _ in range(400)]
-    duels = _raced(samples, True, 200)
-    rate = np.mean([d.result.decision == "different" for d in duels])
-    assert rate <= 0.05 + 3 * math.sqrt(0.05 * 0.95 / 400)
-    assert any(d.final for d in duels)  # the look did fire (its alpha is spent, not idle)
+    duels = _raced(samples, "sign", 200)
+    assert _rate(duels) <= 0.05 + 3 * math.sqrt(0.05 * 0.95 / 400)
+    assert any(d["final"] for d in duels)  # the look did fire (its alpha is spent, not idle)
 
 
-def test_the_closing_sign_test_decides_a_small_effect_the_sequence_leaves_open():
-    """theta = 0.6 at 200 runs: the sequence alone decides some races; the closing look decides
-    most of the rest, always for the better algorithm, and only at max_runs."""
+def test_the_closing_rank_sum_look_keeps_the_error_rate_and_needs_the_union_bound():
+    """400 null races (two independent samples of one distribution) at alpha 0.2, the
+    sequence at 0.1 over 10 rounds, the rank-sum test at 0.1 at max_runs: false differences
+    at most alpha. The same races with each part at the whole 0.2 (no union bound: a race at
+    alpha 0.4) break the bound: the check can fail."""
+    rng = np.random.default_rng(21)
+    samples = [(rng.normal(size=100), rng.normal(size=100)) for _ in range(400)]
+    bound = 0.2 + 3 * math.sqrt(0.2 * 0.8 / 400)
+    ours = _raced(samples, "rank-sum", 100, alpha=0.2, step=10)
+    assert _rate(ours) <= bound  # measured: 0.16; with each part at 0.2, 0.30
+    assert sum(d["final"] for d in ours) > 20  # the look's share is spent, not idle
+    assert _rate(_raced(samples, "rank-sum", 100, alpha=0.4, step=10)) > bound
+
+
+def test_the_rank_sum_look_holds_the_study_error_rate_with_holm_over_open_comparisons():
+    """Studies of 4 blocks, each a strong effect (A) and a null (B) against the reference R:
+    the sequence declares the A's, Holm's family is what it left (the B's, which share R with
+    the A's); a false difference anywhere in the study at most alpha (0.2 here, 300 studies),
+    the look firing on the nulls (Holm at 0.1 over the 4 B's: about 0.1 of the studies)."""
+    rng = np.random.default_rng(22)
+    settings = RaceSettings(max_runs=80, alpha=0.2, min_runs=10, batch=10)
+    false = by_look = 0
+    for _ in range(300):
+        blocks = []
+        for _ in range(4):
+            v = {"A": rng.normal(size=80) - 2.0, "B": rng.normal(size=80),
+                 "R": rng.normal(size=80)}
+            blocks.append(({}, race_block(v, ["A", "B", "R"], settings, 8, intervals=False),
+                           [(0, "A"), (1, "B"), (2, "R")]))
+        duels = [d for b in study_race(settings, 8, blocks)["blocks"] for d in b["duels"]]
+        assert all(d["decision"] == "different" and not d["final"] for d in duels
+                   if d["a"] == "A")
+        null = [d for d in duels if d["a"] == "B"]
+        false += any(d["decision"] == "different" for d in null)
+        by_look += any(d["final"] for d in null)
+    assert false / 300 <= 0.2 + 3 * math.sqrt(0.2 * 0.8 / 300)
+    assert by_look >= 10
+
+
+def test_the_closing_looks_decide_a_small_effect_the_sequence_leaves_open():
+    """theta = 0.6 at 200 runs: the sequence alone decides some races; each closing look
+    decides most of the rest, the rank-sum look more than the sign test, always for the better
+    algorithm, and only at max_runs."""
     rng = np.random.default_rng(13)
     shift = math.sqrt(2.0) * stats.norm.ppf(0.6)
     samples = [(rng.normal(size=200) - shift, rng.normal(size=200)) for _ in range(100)]
-    alone, closed = _raced(samples, False, 200), _raced(samples, True, 200)
-    decided = [sum(d.result.decision == "different" for d in r) for r in (alone, closed)]
-    assert decided[1] >= decided[0] + 20
-    final = [d for d in closed if d.final]
-    assert final and all(d.result.better == "a" and d.result.at == 200 for d in final)
-    assert all(not d.final for d in alone)
+    looks = {look: _raced(samples, look, 200) for look in ("none", "sign", "rank-sum")}
+    decided = {look: sum(d["decision"] == "different" for d in r) for look, r in looks.items()}
+    assert decided["sign"] >= decided["none"] + 20
+    assert decided["rank-sum"] >= decided["sign"] + 10
+    for look in ("sign", "rank-sum"):
+        final = [d for d in looks[look] if d["final"]]
+        assert final and all(d["better"] == "A" and d["decided_after"] == 200 for d in final)
+    assert not any(d["final"] for d in looks["none"])
+
+
+def test_closing_rejections_are_holm_over_the_family_with_the_unknown_at_one():
+    assert closing_rejections([0.012, 0.02], 2, 0.025) == [True, True]
+    assert closing_rejections([0.012, 0.02], 4, 0.025) == [False, False]  # 0.048
+    assert closing_rejections([0.004, 0.02], 4, 0.025) == [True, False]
+    assert closing_rejections([], 3, 0.025) == []
+    with pytest.raises(ValueError, match="family"):
+        closing_rejections([0.01, 0.01], 1, 0.05)
+
+
+def _doc(look, p_open, declared):
+    """A race document of one block: ``declared`` duels the sequence decided, one open at
+    max_runs per p in ``p_open`` (B's runs lower)."""
+    settings = RaceSettings(max_runs=100, final_test=look).to_json()
+    duels = [{"a": f"D{i}", "b": "R", "decision": "different", "better": "R", "marker": "-",
+              "round": 1, "pairs": 20, "decided_after": 20, "final": False,
+              "closing_p": None, "closing_better": None} for i in range(declared)]
+    duels += [{"a": f"O{i}", "b": "R", "decision": "open", "better": None, "marker": "=",
+               "round": None, "pairs": 100, "decided_after": 0, "final": False,
+               "closing_p": p, "closing_better": "R"} for i, p in enumerate(p_open)]
+    return {"settings": settings, "comparisons": declared + len(p_open),
+            "blocks": [{"block": {}, "rounds": 10, "finished": True, "cells": [],
+                        "duels": duels}]}
+
+
+def test_close_race_decides_what_holm_rejects_and_only_for_the_rank_sum_look():
+    doc = _doc("rank-sum", [0.012, 0.02], 2)
+    closed = close_race(doc)
+    opened = [d for d in closed["blocks"][0]["duels"] if d["a"].startswith("O")]
+    assert [(d["decision"], d["better"], d["marker"], d["final"], d["round"],
+             d["decided_after"]) for d in opened] == [("different", "R", "-", True, 9, 100)] * 2
+    assert doc == _doc("rank-sum", [0.012, 0.02], 2)  # the input is left as it was
+    assert close_race(closed) == closed  # its own decisions do not shrink the family again
+    for look in ("sign", "none"):
+        assert close_race(_doc(look, [1e-9], 0)) == _doc(look, [1e-9], 0)
 
 
 def test_sign_test_drops_ties_and_names_the_side_that_wins_more_pairs():

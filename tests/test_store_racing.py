@@ -4,11 +4,15 @@ a reopened store going on with the same decisions; racing fields validated."""
 
 from __future__ import annotations
 
+import json
+import sqlite3
+from pathlib import Path
+
 import numpy as np
 import pytest
 from pydantic import ValidationError
 
-from swarmpath.evidence.race_report import RACE_COLUMNS
+from swarmpath.evidence.race_report import RACE_COLUMNS, study_race
 from swarmpath.evidence.racing import race_block
 from swarmpath.optimizers import minimize
 from swarmpath.service.protocol import expand_cells, parse_job_spec
@@ -41,6 +45,18 @@ def drain(store: Store, job: str, max_runs: int = 7, stop_after: int | None = No
     return leased
 
 
+def replay(raw: dict, names_per_block: dict[str, list[str]], comparisons: int) -> dict:
+    """The race document of ``raw``'s study replayed over directly computed runs."""
+    spec = parse_job_spec(raw)
+    settings = spec.racing.settings(raw["runs"])
+    blocks = []
+    for function, names in names_per_block.items():
+        values = {a: direct(raw, a, function) for a in names}
+        blocks.append(({"function": function}, race_block(values, names, settings, comparisons),
+                       list(enumerate(names))))
+    return study_race(settings, comparisons, blocks)
+
+
 def check_race_against_direct_runs(store: Store, job: str, raw: dict = SPEC) -> dict:
     race = store.race(job)
     assert race is not None and race["settings"]["max_runs"] == raw["runs"]
@@ -48,15 +64,14 @@ def check_race_against_direct_runs(store: Store, job: str, raw: dict = SPEC) -> 
     cells = [(i, c.model_dump()) for i, c in enumerate(expand_cells(spec))]
     blocks = group_blocks(cells, None, "reference")
     assert race["comparisons"] == blocks.comparisons == 4
-    for block in race["blocks"]:
-        function = block["block"]["function"]
-        names = [c["algorithm"] for c in block["cells"]]
-        values = {a: direct(raw, a, function) for a in names}
-        expected = race_block(values, names, spec.racing.settings(raw["runs"]), 4)
-        assert block["rounds"] == expected.rounds and block["finished"] == expected.finished
-        assert {c["algorithm"]: c["runs"] for c in block["cells"]} == expected.allowance
-        assert [(d["decision"], d["final"]) for d in block["duels"]] == [
-            (d.result.decision, d.final) for d in expected.duels]
+    expected = replay(raw, {b["block"]["function"]: [c["algorithm"] for c in b["cells"]]
+                            for b in race["blocks"]}, 4)
+    for block, want in zip(race["blocks"], expected["blocks"], strict=True):
+        assert block["rounds"] == want["rounds"] and block["finished"] == want["finished"]
+        assert [c["runs"] for c in block["cells"]] == [c["runs"] for c in want["cells"]]
+        assert [(d["decision"], d["better"], d["final"], d["closing_p"]) for d in block[
+            "duels"]] == [(d["decision"], d["better"], d["final"], d["closing_p"])
+                          for d in want["duels"]]
         for c in block["cells"]:
             assert c["finished_runs"] == c["runs"]
     return race
@@ -91,33 +106,79 @@ def test_a_raced_job_runs_its_rounds_and_finishes_with_the_runs_it_used(tmp_path
         assert store.run(job, gap) is None and store.run_record(job, gap) is None
 
 
-def test_a_raced_job_with_the_closing_look_is_its_replay(tmp_path):
-    """racing.final_test reaches the store's race: the job's decisions, the closing sign test's
-    among them, are those of race_block over the directly computed runs."""
+@pytest.mark.parametrize("look", ["rank-sum", True])
+def test_a_raced_job_with_a_closing_look_is_its_replay(tmp_path, look):
+    """racing.final_test reaches the store's race: the job's decisions, the closing look's
+    among them, are those of the replay over the directly computed runs; true, the look of
+    jobs stored before the rank-sum look, is the sign test."""
     spec = {**SPEC, "functions": ["F1", "F5"],
-            "racing": {**SPEC["racing"], "final_test": True}}
+            "racing": {**SPEC["racing"], "final_test": look}}
     with Store(tmp_path) as store:
         job = store.create_job(spec, now=T0)
         drain(store, job)
         assert store.job_status(job).state == "done"
         race = check_race_against_direct_runs(store, job, spec)
-    assert race["settings"]["final_test"] is True
+    assert race["settings"]["final_test"] == ("sign" if look is True else look)
     # PSO against GWO on F5 is open after 60 runs (theta 0.7) and the look decides it
     finals = [(b["block"]["function"], d["a"], d["better"]) for b in race["blocks"]
               for d in b["duels"] if d["final"]]
     assert finals == [("F5", "PSO", "PSO")]
 
 
-def test_a_reopened_store_goes_on_with_the_same_rounds(tmp_path):
+def _as_stored_before_the_rank_sum_look(path: Path, job: str, look: bool | None) -> None:
+    """The store file as schema version 4 wrote it: the job's racing spec without final_test
+    (None: the code before any closing look), or with the boolean of the sign look's code."""
+    db = sqlite3.connect(path)
+    (text,) = db.execute("SELECT spec FROM jobs WHERE id = ?", (job,)).fetchone()
+    spec = json.loads(text)
+    del spec["racing"]["final_test"]
+    if look is not None:
+        spec["racing"]["final_test"] = look
+    db.execute("UPDATE jobs SET spec = ? WHERE id = ?", (json.dumps(spec), job))
+    db.execute("UPDATE meta SET value = '4' WHERE key = 'schema_version'")
+    db.commit()
+    db.close()
+
+
+@pytest.mark.parametrize(("stored", "look"), [(None, "none"), (False, "none"), (True, "sign")])
+def test_a_job_stored_before_the_rank_sum_look_resumes_with_its_decisions(tmp_path, stored,
+                                                                         look):
+    """A raced job stored without final_test (raced by the sequence alone) or with the boolean
+    of the sign look, half run, then the coordinator restarts with this code (whose default is
+    the rank-sum look): the migration writes its look into its spec, and it finishes as the
+    replay with that look. Without the migration it would end otherwise (the replay with the
+    rank-sum look differs: the check can fail). A new job's stored spec names its look, so no
+    later default changes it."""
+    spec = {**SPEC, "functions": ["F1", "F5"], "racing": {**SPEC["racing"], "final_test": look}}
     with Store(tmp_path) as store:
-        job = store.create_job(SPEC, now=T0)
-        drain(store, job, stop_after=45)
+        job = store.create_job(spec, now=T0)
+        drain(store, job, stop_after=100)
         before = store.race(job)
-    with Store(tmp_path) as store:  # the coordinator restarted
+    _as_stored_before_the_rank_sum_look(tmp_path / "swarmpath.sqlite3", job, stored)
+    with Store(tmp_path) as store:
+        assert store.job_spec(job).racing.final_test == look
         assert store.race(job) == before
         drain(store, job)
-        assert store.job_status(job).state == "done"
-        check_race_against_direct_runs(store, job)
+        race = check_race_against_direct_runs(store, job, spec)
+        fresh = store.create_job({**spec, "racing": SPEC["racing"]}, now=T0)
+        stored_spec = store._db.execute("SELECT spec FROM jobs WHERE id = ?", (fresh,)).fetchone()
+    assert json.loads(stored_spec[0])["racing"]["final_test"] == "rank-sum"
+    assert race["settings"]["final_test"] == look
+    names = {b["block"]["function"]: [c["algorithm"] for c in b["cells"]]
+             for b in race["blocks"]}
+    with_look = replay({**spec, "racing": SPEC["racing"]}, names, 4)
+    assert with_look["blocks"] != race["blocks"]
+
+
+def test_the_job_spec_offers_the_closing_looks_the_race_knows():
+    from typing import get_args
+
+    from swarmpath.evidence.racing import CLOSING
+    from swarmpath.service.racing import RacingSpec
+
+    field = RacingSpec.model_fields["final_test"]
+    assert get_args(field.annotation) == CLOSING and field.default == CLOSING[0]
+    assert parse_job_spec(SPEC).racing.settings(60).final_test == "rank-sum"
 
 
 @pytest.mark.parametrize("racing, loc", [
@@ -210,12 +271,19 @@ def test_an_extended_race_reuses_its_runs_and_goes_on(tmp_path):
         assert store.job_status(job).state == "done"
         new, reused = store.extend_job(job, 60, now=T0)
         assert reused == store.job_status(job).runs_done
-        # the copied runs replay the old race: decided comparisons stay, the others go on
+        # the copied runs replay the old race: the sequence's decisions stay, the others go
+        # on (the closing look of 30 runs is not carried over: the new look is at 60)
         race = store.race(new)
+        carried = looked = 0
         for before, after in zip(old["blocks"], race["blocks"], strict=True):
             for a, b in zip(before["duels"], after["duels"], strict=True):
-                if a["decision"] != "open":
+                if a["decision"] != "open" and not a["final"]:
                     assert (b["decision"], b["round"]) == (a["decision"], a["round"])
+                    carried += 1
+                elif a["final"]:
+                    assert b["decision"] == "open" and not b["final"]
+                    looked += 1
+        assert carried and looked
         leased = drain(store, new)
         status = store.job_status(new)
         assert status.state == "done" and leased == status.runs_total - reused

@@ -7,14 +7,15 @@ raced through ``swarmpath up``.
     .venv/bin/python scripts/bench/racing.py table2 [--max-runs 1000] [--margin 0.05]
                                                     [--workers 2] [--full FILE] [--full-up]
                                                     [--again] [--full-only --save-full FILE]
-    .venv/bin/python scripts/bench/racing.py seeds --full FILE FILE [--final-test]
+                                                    [--final-test rank-sum|sign|none]
+    .venv/bin/python scripts/bench/racing.py seeds --full FILE FILE [--final-test LOOK]
     .venv/bin/python scripts/bench/racing.py needed [--races 200]
 
 ``error``: races between one optimizer and itself on two seeds' streams (exchangeable runs: any
 declared difference is a false one), for every registered optimizer on F1-F13 (5 dims, 10
-agents, 50 iterations), each race at level alpha alone; prints the rate of false differences per
-optimizer and overall with its 95 % Monte Carlo interval. The same optimizer under two names
-(every pair a tie) never differs: ``tests/test_racing.py`` checks that.
+agents, 50 iterations), each race at level alpha alone, with each closing look; prints the rate
+of false differences per optimizer and overall with its 95 % Monte Carlo interval. The same
+optimizer under two names (every pair a tie) never differs: ``tests/test_racing.py`` checks that.
 
 ``power``: races between samples with a known theta = P(A's run beats B's) (normal runs shifted
 by sqrt(2) Phi^-1(theta)), at the level of a 65-comparison table (Table 2 against its reference:
@@ -50,43 +51,50 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from service import TABLE2_ALGORITHMS, TABLE2_FUNCTIONS, Up, elapsed, note
 
 from swarmpath.evidence import report
-from swarmpath.evidence.race_report import block_json
-from swarmpath.evidence.racing import RaceSettings, race_block
+from swarmpath.evidence.race_report import study_race
+from swarmpath.evidence.racing import CLOSING, RaceSettings, race_block
 from swarmpath.evidence.sequential import rejection_times
 from swarmpath.optimizers import list_optimizers, minimize
 
 
+def _decision(values: dict[str, np.ndarray], settings: RaceSettings) -> str:
+    """The decision of a race of A against B alone (one comparison), its closing look taken."""
+    race = race_block(values, ["A", "B"], settings, 1, intervals=False)
+    doc = study_race(settings, 1, [({}, race, [(0, "A"), (1, "B")])])
+    return str(doc["blocks"][0]["duels"][0]["decision"])
+
+
 def error(args: argparse.Namespace) -> None:
-    """Each null race twice: the confidence sequence alone, and with the closing sign test at
-    max_runs (``final_test``: half the level each), over the same runs."""
-    plain = RaceSettings(max_runs=args.max_runs, alpha=args.alpha, min_runs=10, batch=10)
-    closing = RaceSettings(max_runs=args.max_runs, alpha=args.alpha, min_runs=10, batch=10,
-                           final_test=True)
+    """Each null race three times over the same runs: with each closing look at max_runs
+    (``final_test``: rank-sum, the default; sign; none, the confidence sequence alone)."""
+    looks = [RaceSettings(max_runs=args.max_runs, alpha=args.alpha, min_runs=10, batch=10,
+                          final_test=look) for look in CLOSING]
     functions = [f"F{i}" for i in range(1, 14)]
     print(f"{args.seeds} seed pairs x F1-F13 x {len(list_optimizers())} optimizers, max_runs "
           f"{args.max_runs}, min_runs 10, batch 10, alpha {args.alpha} per race; each race "
-          "without and with the closing sign test (final_test)\n")
-    print("| optimizer | races | of them not all ties | false differences | rate | "
-          "with final_test | rate |\n| --- | ---: | ---: | ---: | ---: | ---: | ---: |")
+          f"with each closing look (final_test: {', '.join(CLOSING)})\n")
+    print("| optimizer | races | of them not all ties | "
+          + " | ".join(f"false differences, {look} | rate" for look in CLOSING)
+          + " |\n| --- | ---: | ---: | " + " | ".join("---: | ---:" for _ in CLOSING) + " |")
     total = varied = 0
-    wrong = [0, 0]
+    wrong = [0] * len(CLOSING)
     for name in list_optimizers():
         races = live = 0
-        false = [0, 0]
+        false = [0] * len(CLOSING)
         for f in functions:
             for s in range(args.seeds):
                 a = minimize(name, f, 5, 10, 50, seed=1000 + s, runs=args.max_runs).best_fitness
                 b = minimize(name, f, 5, 10, 50, seed=9000 + s, runs=args.max_runs).best_fitness
                 races += 1
                 live += bool(np.any(a != b))  # every pair tied: a difference is impossible
-                for i, settings in enumerate((plain, closing)):
-                    race = race_block({"A": a, "B": b}, ["A", "B"], settings, 1)
-                    false[i] += race.duels[0].result.decision == "different"
+                for i, settings in enumerate(looks):
+                    false[i] += _decision({"A": a, "B": b}, settings) == "different"
         total, varied = total + races, varied + live
         wrong = [w + x for w, x in zip(wrong, false, strict=True)]
-        print(f"| {name} | {races} | {live} | {false[0]} | {false[0] / races:.3f} | {false[1]} "
-              f"| {false[1] / races:.3f} |")
-        note(f"{name}: {false[0]}/{races}, with final_test {false[1]}/{races}")
+        print(f"| {name} | {races} | {live} | "
+              + " | ".join(f"{x} | {x / races:.3f}" for x in false) + " |")
+        note(f"{name}: " + ", ".join(f"{look} {x}/{races}"
+                                      for look, x in zip(CLOSING, false, strict=True)))
     for label, n in (("all", total), ("not all ties", varied)):
         cols = []
         for w in wrong:
@@ -170,12 +178,12 @@ def needed(args: argparse.Namespace) -> None:
 
 
 def table2_spec(max_runs: int, margin: float, seed: int, backend: str,
-                final_test: bool = False) -> dict[str, Any]:
+                final_test: str = CLOSING[0]) -> dict[str, Any]:
     return {"kind": "benchmark", "algorithms": TABLE2_ALGORITHMS, "functions": TABLE2_FUNCTIONS,
             "dims": [30], "agents": 30, "iterations": 500, "runs": max_runs, "seed": seed,
             "backend": backend,
             "racing": {"min_runs": 10, "batch": 10, "alpha": 0.05, "margin": margin,
-                       **({"final_test": True} if final_test else {})}}
+                       "final_test": final_test}}
 
 
 def _full_values_from_up(up: Up, job: str) -> dict[tuple[str, str], list[float]]:
@@ -202,10 +210,10 @@ def replayed_race(values: dict[tuple[str, str], list[float]], settings: RaceSett
     for f in TABLE2_FUNCTIONS:
         per = {a: np.where(np.isnan(v := np.asarray(values[(a, f)], dtype=float)), np.inf, v)
                for a in TABLE2_ALGORITHMS}
-        race = race_block(per, TABLE2_ALGORITHMS, settings, comparisons)
-        members = list(enumerate(TABLE2_ALGORITHMS))
-        blocks.append({"block": {"function": f, "dim": 30}, **block_json(race, members)})
-    return {"settings": settings.to_json(), "comparisons": comparisons, "blocks": blocks}
+        blocks.append(({"function": f, "dim": 30},
+                       race_block(per, TABLE2_ALGORITHMS, settings, comparisons),
+                       list(enumerate(TABLE2_ALGORITHMS))))
+    return study_race(settings, comparisons, blocks)
 
 
 def _decisions(race: dict[str, Any]) -> list[Any]:
@@ -249,7 +257,9 @@ def agreement(race: dict[str, Any], values: dict[tuple[str, str], list[float]],
                             f"{runs[d['a']]} runs{interval}) | {full_marker} (A12 "
                             f"{t.a12 if t is not None else float('nan'):.3f}, p_holm "
                             f"{t.p_holm if t is not None else float('nan'):.2g}) |")
-    print(f"decisions: {kinds['different']} different, {kinds['equivalent']} equivalent, "
+    final = sum(d["final"] for b in race["blocks"] for d in b["duels"])
+    print(f"decisions: {kinds['different']} different ({final} by the closing look "
+          f"{s.get('final_test')}), {kinds['equivalent']} equivalent, "
           f"{kinds['open']} open at max_runs; **verdicts agreeing with the full {max_runs}-run "
           f"study: {agree}/{n} ({100 * agree / n:.1f} %)**\n")
     per_function = " | ".join(f"{b['block']['function']} {sum(c['runs'] for c in b['cells'])}"
@@ -312,8 +322,8 @@ def seeds(args: argparse.Namespace) -> None:
             print(f"| {f} | {a} | {cols[0]} | {cols[1]} |")
     settings = RaceSettings(max_runs=args.max_runs, alpha=0.05, min_runs=10, batch=10,
                             margin=args.margin, final_test=args.final_test)
-    print(f"\nraces (replayed, margin {args.margin}"
-          f"{', closing sign test' if args.final_test else ''}) against each full study's "
+    print(f"\nraces (replayed, margin {args.margin}, closing look {args.final_test}) against "
+          f"each full study's "
           "verdicts:\n\n"
           f"| race over | runs used | against {names[0]} | against {names[1]} |\n"
           "| --- | ---: | ---: | ---: |")
@@ -414,8 +424,8 @@ def main(argv: list[str] | None = None) -> int:
     t.add_argument("--margin", type=float, default=0.05)
     t.add_argument("--workers", type=int, default=2)
     t.add_argument("--seed", type=int, default=1)
-    t.add_argument("--final-test", action="store_true",
-                   help="race with the closing sign test at max_runs (racing.final_test)")
+    t.add_argument("--final-test", choices=CLOSING, default=CLOSING[0],
+                   help="the closing look at max_runs (racing.final_test)")
     t.add_argument("--replay", action="store_true", help="no service: replay the race over "
                    "--full's runs (what a raced job decides, run for run)")
     t.add_argument("--margins", type=lambda v: [float(x) for x in v.split(",")],
@@ -438,7 +448,7 @@ def main(argv: list[str] | None = None) -> int:
     o.add_argument("--full", type=Path, nargs=2, required=True, metavar="FILE")
     o.add_argument("--max-runs", type=int, default=1000)
     o.add_argument("--margin", type=float, default=0.0)
-    o.add_argument("--final-test", action="store_true")
+    o.add_argument("--final-test", choices=CLOSING, default=CLOSING[0])
     args = ap.parse_args(argv)
     if args.what == "table2" and args.full_only and args.save_full is None:
         ap.error("table2 --full-only: --save-full FILE")

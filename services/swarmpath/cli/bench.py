@@ -378,7 +378,7 @@ def bench(
     race_batch: bench_race.RaceBatchOpt = None,
     race_margin: bench_race.RaceMarginOpt = None,
     race_pairs: bench_race.RacePairsOpt = None,
-    race_final_test: bench_race.RaceFinalOpt = False,
+    race_final_test: bench_race.RaceFinalOpt = None,
 ) -> None:
     """Run optimizers on benchmark functions; print min/max/avg/std (or median/IQR) per function
     and dimension, with Wilcoxon rank-sum markers, effect sizes and Bayesian probabilities

@@ -23,8 +23,14 @@ import typer
 from swarmpath.cli.bench_spec import BenchSpec
 from swarmpath.cli.core import InputError
 from swarmpath.evidence import report
-from swarmpath.evidence.race_report import block_json
-from swarmpath.evidence.racing import PAIRS, RaceSettings, comparisons_per_block, race_block
+from swarmpath.evidence.race_report import study_race
+from swarmpath.evidence.racing import (
+    CLOSING,
+    PAIRS,
+    RaceSettings,
+    comparisons_per_block,
+    race_block,
+)
 from swarmpath.parallel import TaskPool
 
 __all__ = ["RaceBlock", "race_blocks", "race_settings", "run_race"]
@@ -45,9 +51,10 @@ RaceBatchOpt = Annotated[int | None, typer.Option(
 RaceMarginOpt = Annotated[float | None, typer.Option(
     "--race-margin", help="Equivalence margin on P(run beats the other's run) - 1/2 (Vargha-"
     "Delaney's negligible: 0.06); 0: only differences stop a comparison. Default 0.")]
-RaceFinalOpt = Annotated[bool, typer.Option(
-    "--race-final-test", help="Give half of the race's alpha to one sign test at --runs for the "
-    "comparisons still open there, so they get a verdict too (docs/statistics.md, Racing).")]
+RaceFinalOpt = Annotated[str | None, typer.Option(
+    "--race-final-test", metavar="rank-sum|sign|none", help="The closing look at --runs for the "
+    "comparisons still open there (docs/statistics.md, Racing): the full study's rank-sum test, "
+    "Holm over them, at half of alpha (default); the sign test at half of alpha; none.")]
 RacePairsOpt = Annotated[str | None, typer.Option(
     "--race-pairs", metavar="reference|all", help="Compare every algorithm with the reference "
     "(default) or every pair.")]
@@ -55,12 +62,12 @@ RacePairsOpt = Annotated[str | None, typer.Option(
 
 def race_settings(spec: BenchSpec, race: bool, alpha: float | None, min_runs: int | None,
                   batch: int | None, margin: float | None, pairs: str | None,
-                  final_test: bool = False) -> RaceSettings | None:
+                  final_test: str | None = None) -> RaceSettings | None:
     """The race of ``--race`` and its options (None without ``--race``), ``--runs`` its
     ``max_runs``; :class:`InputError` naming the option that is wrong."""
     given = {"--race-alpha": alpha, "--race-min-runs": min_runs, "--race-batch": batch,
              "--race-margin": margin, "--race-pairs": pairs,
-             "--race-final-test": final_test or None}
+             "--race-final-test": final_test}
     if not race:
         for option, value in given.items():
             if value is not None:
@@ -71,6 +78,7 @@ def race_settings(spec: BenchSpec, race: bool, alpha: float | None, min_runs: in
     batch = RaceSettings.batch if batch is None else batch
     margin = RaceSettings.margin if margin is None else margin
     pairs = RaceSettings.pairs if pairs is None else pairs
+    final_test = RaceSettings.final_test if final_test is None else final_test
     if not (math.isfinite(alpha) and 0.0 < alpha < 1.0):
         raise InputError("--race-alpha", f"must be in (0, 1), got {alpha}")
     if not 1 <= min_runs <= spec.runs:
@@ -83,6 +91,9 @@ def race_settings(spec: BenchSpec, race: bool, alpha: float | None, min_runs: in
                          f"run) - 1/2), got {margin}")
     if pairs not in PAIRS:
         raise InputError("--race-pairs", f"must be one of {', '.join(PAIRS)}, got {pairs!r}")
+    if final_test not in CLOSING:
+        raise InputError("--race-final-test", f"must be one of {', '.join(CLOSING)}, got "
+                         f"{final_test!r}")
     if len(spec.algorithms) < 2:
         raise InputError("--algorithms", "a race needs at least two algorithms")
     if spec.pool_instances:
@@ -189,15 +200,15 @@ def run_race(
 def race_document(spec: BenchSpec, settings: RaceSettings, blocks: list[RaceBlock],
                   comparisons: int, cells: dict[CellKey, report.Cell]) -> dict[str, Any]:
     """The race of the computed ``cells``, as ``GET /jobs/{id}/race`` shows a job's."""
-    out = []
-    for b in blocks:
-        values = {a: _values(cells.get((b.function, b.dim, a))) for a in b.names}
-        state = block_json(race_block(values, b.names, settings, comparisons), b.members)
+    values = [{a: _values(cells.get((b.function, b.dim, a))) for a in b.names} for b in blocks]
+    doc = study_race(settings, comparisons, [
+        (b.block, race_block(v, b.names, settings, comparisons), b.members)
+        for b, v in zip(blocks, values, strict=True)])
+    for b, v, state in zip(blocks, values, doc["blocks"], strict=True):
         for c in state["cells"]:
             c["key"] = f"{c['algorithm']}/{b.function}/{b.dim}"
-            c["finished_runs"] = int(values[c["algorithm"]].size)
-        out.append({"block": b.block, **state})
-    return {"settings": settings.to_json(), "comparisons": comparisons, "blocks": out}
+            c["finished_runs"] = int(v[c["algorithm"]].size)
+    return doc
 
 
 def race_summary(race: dict[str, Any]) -> dict[str, Any]:

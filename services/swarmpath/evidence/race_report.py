@@ -22,7 +22,7 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any, cast
 
-from swarmpath.evidence.racing import BlockRace, RaceSettings
+from swarmpath.evidence.racing import BlockRace, RaceSettings, closing_rejections
 
 if TYPE_CHECKING:
     from swarmpath.evidence.benchmark_stats import Statistics
@@ -35,8 +35,9 @@ RACE_COLUMNS = ("race_runs", "race_state", "race_round", "race_decision", "race_
                 "race_low", "race_high")
 RACE_TEST = "race: betting confidence sequence on P(run beats reference's run)"
 
-__all__ = ["RACE_COLUMNS", "RACE_TEST", "apply_race", "block_json", "cell_fields",
-           "comparison_json", "first_round_json", "race_legend", "race_line", "with_race"]
+__all__ = ["RACE_COLUMNS", "RACE_TEST", "apply_race", "block_json", "cell_fields", "close_race",
+           "comparison_json", "first_round_json", "race_legend", "race_line", "study_race",
+           "with_race"]
 
 
 def block_json(race: BlockRace, members: Sequence[tuple[int, str]]) -> dict[str, Any]:
@@ -59,6 +60,42 @@ def first_round_json(settings: RaceSettings, members: Sequence[tuple[int, str]]
             "cells": [{"cell": i, "algorithm": name, "runs": settings.allowance(0),
                        "racing": True, "stopped_round": None, "reason": None}
                       for i, name in members]}
+
+
+def close_race(race: dict[str, Any]) -> dict[str, Any]:
+    """The race document with the rank-sum look's decisions (``final_test: rank-sum``; any other
+    race is returned as it is). The look spans blocks, so it is taken here, over the whole
+    study, and not in a block's replay: Holm at :attr:`RaceSettings.closing_alpha` over the
+    study's comparisons that the confidence sequence has not declared different, the p-values
+    those still open at ``max_runs`` got there (``closing_p``; the others count as 1). A duel it
+    rejects becomes a difference with ``final: true``, decided in its block's last round after
+    its ``max_runs`` pairs. A pure function of the document; while blocks still race its
+    decisions are a subset of the finished study's (:func:`closing_rejections`)."""
+    settings = race["settings"]
+    if settings.get("final_test") != "rank-sum":
+        return race
+    blocks = [{**b, "duels": [dict(d) for d in b.get("duels", ())]} for b in race["blocks"]]
+    duels = [(b, d) for b in blocks for d in b["duels"]]
+    declared = sum(d["decision"] == "different" and not d["final"] for _, d in duels)
+    looked = [(b, d) for b, d in duels if d.get("closing_p") is not None]
+    rejected = closing_rejections([float(d["closing_p"]) for _, d in looked],
+                                  int(race["comparisons"]) - declared,
+                                  RaceSettings(**settings).closing_alpha)
+    for (b, d), reject in zip(looked, rejected, strict=True):
+        if reject and d["closing_better"] is not None:
+            d.update(decision="different", better=d["closing_better"], final=True,
+                     marker="+" if d["closing_better"] == d["a"] else "-",
+                     round=b["rounds"] - 1, decided_after=d["pairs"])
+    return {**race, "blocks": blocks}
+
+
+def study_race(settings: RaceSettings, comparisons: int,
+               blocks: Sequence[tuple[Mapping[str, Any], BlockRace, Sequence[tuple[int, str]]]]
+               ) -> dict[str, Any]:
+    """The race document of a study's blocks, each given as (what its cells share, its
+    :func:`~swarmpath.evidence.racing.race_block`, its members), the closing look taken."""
+    return close_race({"settings": settings.to_json(), "comparisons": comparisons, "blocks": [
+        {"block": dict(block), **block_json(race, members)} for block, race, members in blocks]})
 
 
 CellKey = tuple[str, int, str]  # (function, dim, algorithm)
@@ -157,8 +194,7 @@ def race_legend(race: Mapping[str, Any], reference: str) -> str:
     """What a raced table's markers and race rows mean (the terminal legend, LaTeX captions)."""
     s = race["settings"]
     equiv = f"equiv: within {s['margin']:g} of 1/2, " if s["margin"] else ""
-    final = (f", half of it to one sign test at {s['max_runs']} runs for the comparisons "
-             "still open there" if s.get("final_test") else "")
+    final = _closing_words(s)
     return (f"+/=/-: better / not decided different / worse than {reference} as the race "
             f"decided it (anytime-valid betting confidence sequence on the probability that a "
             f"run beats {reference}'s run of the same index, alpha {s['alpha']:g} over the "
@@ -177,11 +213,30 @@ def race_line(race: Mapping[str, Any]) -> str:
     stopped = sum(not c["racing"] for c in cells)
     decided = sum(c["reason"] == "decided" for c in cells)
     s = race["settings"]
-    final = ", closing sign test" if s.get("final_test") else ""
+    final = {"rank-sum": ", closing rank-sum test", "sign": ", closing sign test"}.get(
+        _closing(s), "")
     return (f"race (alpha {s['alpha']:g} over {race['comparisons']} comparisons, min_runs "
             f"{s['min_runs']}, batch {s['batch']}, margin {s['margin']:g}{final}): {stopped}/"
             f"{len(cells)} cells stopped ({decided} decided), {used} runs of {full} "
             f"({full / max(used, 1):.1f}x fewer)")
+
+
+def _closing(settings: Mapping[str, Any]) -> str:
+    """The race's closing look; a document written before it had a name holds a boolean."""
+    look = settings.get("final_test", "none")
+    return ("sign" if look else "none") if isinstance(look, bool) else str(look)
+
+
+def _closing_words(settings: Mapping[str, Any]) -> str:
+    """The closing look in a legend."""
+    look, runs = _closing(settings), settings["max_runs"]
+    if look == "rank-sum":
+        return (f"; the comparisons still open at {runs} runs: the rank-sum test there, Holm at "
+                f"{RaceSettings(**settings).closing_alpha:g} over those not declared different "
+                f"(the sequence at the rest of alpha)")
+    if look == "sign":
+        return f", half of it to one sign test at {runs} runs for the comparisons still open there"
+    return ""
 
 
 def _flipped(d: Mapping[str, Any]) -> dict[str, Any]:

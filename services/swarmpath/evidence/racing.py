@@ -20,13 +20,18 @@ the study declares a difference between algorithms that do not differ (theta = 1
 equivalence between algorithms that differ by more than the margin, is at most ``alpha``,
 whenever the race stops. See docs/statistics.md, "Racing".
 
-The closing look (``final_test``): a group-sequential design with two parts. The confidence
-sequence gets half of each comparison's level, ``alpha / (2 m)``; a comparison still open when its
-cells reach ``max_runs`` gets one fixed-n test at the other half: the exact sign test of theta = 1/2
-on its ``max_runs`` pairs (ties dropped: under theta = 1/2 a win is as likely as a loss, whatever
-the two algorithms' distributions). A false difference needs one of the two parts to err, so the
-union bound keeps each comparison at ``alpha / m``. The look happens once, at a run count fixed
-before the race (``max_runs``), so optional stopping does not touch it.
+The closing look (``final_test``, docs/statistics.md "Racing"): a comparison still open when its
+cells reach ``max_runs`` gets one fixed-n test there, at a level the confidence sequence does not
+use (union bound: a false difference needs one of the two parts to err). ``"rank-sum"`` (the
+default): the sequence gets ``alpha * SEQUENCE_SHARE / m`` per comparison; the look is the full
+study's own test, the two-sided rank-sum test of the two cells' ``max_runs`` runs, with Holm's
+procedure at ``alpha * (1 - SEQUENCE_SHARE)`` over the study's comparisons the sequence has not
+declared different (:func:`closing_rejections`; the race document's :func:`close_race
+<swarmpath.evidence.race_report.close_race>` applies it: it spans blocks). ``"sign"`` (the look
+of earlier jobs): the exact sign test of theta = 1/2 on the ``max_runs`` pairs at ``alpha /
+(2 m)``, the sequence at ``alpha / (2 m)``. ``"none"``: the sequence alone at ``alpha / m``. The
+look happens once, at a run count fixed before the race (``max_runs``), so optional stopping does
+not touch it.
 """
 
 from __future__ import annotations
@@ -43,8 +48,13 @@ from numpy.typing import ArrayLike
 from swarmpath.evidence.sequential import PairDecision, decide, pair_scores, sign_test
 
 PAIRS = ("reference", "all")
+#: The closing looks at max_runs (module text); the first is the default of new races.
+CLOSING = ("rank-sum", "sign", "none")
+#: The confidence sequence's share of alpha when the rank-sum look closes the race.
+SEQUENCE_SHARE = 0.5
 
-__all__ = ["PAIRS", "BlockRace", "Duel", "RaceSettings", "comparisons_per_block", "race_block"]
+__all__ = ["CLOSING", "PAIRS", "SEQUENCE_SHARE", "BlockRace", "Duel", "RaceSettings",
+           "closing_rejections", "comparisons_per_block", "race_block"]
 
 
 @dataclass(frozen=True)
@@ -58,8 +68,8 @@ class RaceSettings:
     batch: int = 10
     pairs: str = "reference"
     margin: float = 0.0
-    #: half the level to a sign test at max_runs for the comparisons still open (module text)
-    final_test: bool = False
+    #: the closing look at max_runs for the comparisons still open there (module text)
+    final_test: str = CLOSING[0]
 
     def __post_init__(self) -> None:
         if not 0.0 < self.alpha < 1.0:
@@ -74,13 +84,23 @@ class RaceSettings:
             raise ValueError(f"pairs must be one of {', '.join(PAIRS)}, got {self.pairs!r}")
         if not 0.0 <= self.margin < 0.5:
             raise ValueError(f"margin must be in [0, 0.5), got {self.margin}")
+        if self.final_test not in CLOSING:
+            raise ValueError(f"final_test must be one of {', '.join(CLOSING)}, got "
+                             f"{self.final_test!r}")
 
     def levels(self, comparisons: int) -> tuple[float, float]:
         """Each comparison's level for the confidence sequence and for the closing sign test
-        (0: none): Bonferroni over the study's ``comparisons``, halved between the two parts
-        when ``final_test``."""
+        (0: none): Bonferroni over the study's ``comparisons``, shared with the closing look
+        (module text)."""
         level = self.alpha / max(comparisons, 1)
-        return (level / 2, level / 2) if self.final_test else (level, 0.0)
+        if self.final_test == "sign":
+            return level / 2, level / 2
+        return (level * SEQUENCE_SHARE if self.final_test == "rank-sum" else level), 0.0
+
+    @property
+    def closing_alpha(self) -> float:
+        """The level of the rank-sum look's Holm procedure over the study (0: no such look)."""
+        return self.alpha * (1.0 - SEQUENCE_SHARE) if self.final_test == "rank-sum" else 0.0
 
     def allowance(self, round_: int) -> int:
         """Runs a racing cell may have in round ``round_`` (0-based)."""
@@ -113,8 +133,12 @@ class Duel:
     b: str
     result: PairDecision
     round: int | None
-    #: decided by the closing sign test at max_runs, not by the confidence sequence
+    #: decided by the closing look at max_runs, not by the confidence sequence
     final: bool = False
+    #: open at max_runs under the rank-sum look: its two-sided p there and the side its runs
+    #: lean to ("a", "b"; None on a perfect balance); the study's Holm decides (close_race)
+    closing_p: float | None = None
+    closing_better: str | None = None
 
     @property
     def marker(self) -> str:
@@ -130,7 +154,8 @@ class Duel:
                 None if r.better is None else (self.a if r.better == "a" else self.b),
                 "marker": self.marker, "round": self.round, "pairs": r.n, "decided_after": r.at,
                 "theta": _number(r.theta), "low": _number(r.low), "high": _number(r.high),
-                "final": self.final}
+                "final": self.final, "closing_p": self.closing_p, "closing_better":
+                None if self.closing_better is None else getattr(self, self.closing_better)}
 
 
 def _number(v: float) -> float | None:
@@ -163,17 +188,20 @@ def race_block(
     algorithms: Sequence[str],
     settings: RaceSettings,
     comparisons: int,
+    intervals: bool = True,
 ) -> BlockRace:
     """Replay a block's race over the values available: ``values[name]`` holds the best values
     of that cell's runs 0, 1, ... in run order (NaN for a run that failed; only runs with a
     result, contiguous from run 0). ``algorithms`` are the block's names with the reference last
     (for ``pairs="reference"``); ``comparisons`` is the number of comparisons of the whole study
-    (the Bonferroni divisor)."""
+    (the Bonferroni divisor). ``intervals=False`` leaves the duels' confidence intervals out
+    (NaN; the costly part, which no decision uses: simulations of many races)."""
     level, final_level = settings.levels(comparisons)
     arrays = {name: np.asarray(values.get(name, ()), dtype=float) for name in algorithms}
     pairs = comparisons_per_block(algorithms, settings.pairs)
     mine = {name: [p for p in pairs if name in p] for name in algorithms}
     decided: dict[tuple[str, str], Duel] = {}
+    closing: dict[tuple[str, str], tuple[float, str | None]] = {}
     racing = {name: True for name in algorithms}
     stopped: dict[str, int | None] = {name: None for name in algorithms}
     reason: dict[str, str | None] = {name: None for name in algorithms}
@@ -192,6 +220,9 @@ def race_block(
                 result = decide(z, level, settings.margin, interval=False)
                 if result.decision != "open":
                     decided[(a, b)] = Duel(a, b, result, round_)
+                elif settings.closing_alpha and need >= settings.max_runs:
+                    # open with both cells at max_runs: the rank-sum look's p (module text)
+                    closing[(a, b)] = _rank_sum(arrays[a][:need], arrays[b][:need])
                 elif final_level and need >= settings.max_runs:
                     # open with both cells at max_runs: the one fixed-n look (module text)
                     better = sign_test(z, final_level)
@@ -209,15 +240,46 @@ def race_block(
     for a, b in pairs:
         # the reported interval and score use every pair the two cells have so far
         n = min(allowance[a], allowance[b], arrays[a].size, arrays[b].size)
-        result = decide(pair_scores(arrays[a][:n], arrays[b][:n]), level, settings.margin)
+        result = decide(pair_scores(arrays[a][:n], arrays[b][:n]), level, settings.margin,
+                        interval=intervals)
         if (a, b) in decided:
             d = decided[(a, b)].result
             result = PairDecision(result.n, d.decision, d.better, d.at, result.theta,
                                   result.low, result.high)
             duels.append(Duel(a, b, result, decided[(a, b)].round, decided[(a, b)].final))
         else:  # a crossing inside an incomplete round waits for the round's end
-            duels.append(Duel(a, b, _open(result), None))
+            p, side = closing.get((a, b), (None, None))
+            duels.append(Duel(a, b, _open(result), None, closing_p=p, closing_better=side))
     return BlockRace(round_, allowance, racing, stopped, reason, duels)
+
+
+def _rank_sum(a: np.ndarray, b: np.ndarray) -> tuple[float, str | None]:
+    """The full study's test of one comparison (:func:`swarmpath.evidence.compare.rank_sum`,
+    NaN dropped): its two-sided p and the side whose runs tend lower."""
+    from swarmpath.evidence.compare import rank_sum  # scipy.stats: only when a look happens
+
+    res = rank_sum(a, b)
+    if res is None:
+        return 1.0, None
+    u, p = res
+    half = np.count_nonzero(~np.isnan(a)) * np.count_nonzero(~np.isnan(b)) / 2.0
+    return p, None if u == half else ("a" if u < half else "b")
+
+
+def closing_rejections(pvalues: Sequence[float], family: int, alpha: float) -> list[bool]:
+    """The rank-sum look's decisions: Holm's step-down procedure at ``alpha`` over ``family``
+    hypotheses of which ``pvalues`` are the ones known (every other counts as p = 1, never
+    rejected); a hypothesis is rejected where its adjusted p is below ``alpha``, as the full
+    study's table marks it (:mod:`swarmpath.evidence.compare`). Holm is monotone: a smaller
+    family or smaller p-values only add rejections, so decisions taken while some blocks still
+    race stand when they finish."""
+    from swarmpath.evidence.markers import holm
+
+    known = list(pvalues)
+    if family < len(known):
+        raise ValueError(f"a family of {family} cannot hold {len(known)} p-values")
+    adjusted = holm(known + [1.0] * (family - len(known)))
+    return [bool(q < alpha) for q in adjusted[: len(known)]]
 
 
 def _open(result: PairDecision) -> PairDecision:

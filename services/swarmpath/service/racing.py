@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 from pydantic import Field, field_validator
 
@@ -42,9 +42,17 @@ class RacingSpec(Model):
                        description="compare every algorithm with the reference, or all pairs")
     margin: float = Field(default=0.0, ge=0, lt=0.5, allow_inf_nan=False,
                           description="equivalence margin on P(A's run beats B's) - 1/2")
-    final_test: bool = Field(default=False, strict=True,
-                             description="half of alpha to one sign test at max_runs for the "
-                             "comparisons still open (docs/statistics.md, Racing)")
+    final_test: Literal["rank-sum", "sign", "none"] = Field(
+        default="rank-sum", description="the closing look at max_runs for the comparisons still "
+        "open there: the rank-sum test with Holm over them at half of alpha, the sign test at "
+        "half of alpha, or none (docs/statistics.md, Racing); false and true, what jobs "
+        "stored before the rank-sum look held, are none and sign")
+
+    @field_validator("final_test", mode="before")
+    @classmethod
+    def _boolean_look(cls, v: Any) -> Any:
+        # a spec written when the look was a boolean keeps its meaning: false none, true sign
+        return ("sign" if v else "none") if isinstance(v, bool) else v
 
     @field_validator("pairs")
     @classmethod

@@ -129,7 +129,10 @@ RACE_SCHEMA: dict[str, Any] = {
             "decided_after": {"type": "integer"}, "theta": {"type": "number"},
             "low": {"type": "number"}, "high": {"type": "number"},
             "final": {"type": "boolean",
-                      "description": "decided by the closing sign test at max_runs"}}}},
+                      "description": "decided by the closing look at max_runs"},
+            "closing_p": {"type": "number", "description": "open at max_runs under the "
+                          "rank-sum look: the rank-sum test's two-sided p there"},
+            "closing_better": {"type": "string", "description": "the side its runs lean to"}}}},
     },
 }
 

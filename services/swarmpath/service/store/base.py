@@ -19,7 +19,9 @@ from swarmpath.service.protocol import (
     MapCell,
 )
 
-SCHEMA_VERSION = 4  # 2: leases.capability, leases.beat; 3: jobs.pins; 4: results.cpu_seconds
+#: 2: leases.capability, leases.beat; 3: jobs.pins; 4: results.cpu_seconds; 5: a raced job's
+#: closing look written into its stored spec (the default changed: _keep_closing_looks)
+SCHEMA_VERSION = 5
 DB_NAME = "swarmpath.sqlite3"
 CACHE_KIB = 2048  # SQLite page cache of the connection, KiB (bounded; its default is 2,000)
 #: Page size of a new store file. A result row (a 500-point curve: ~4.3 KB) overflows a 4 KiB
@@ -177,6 +179,22 @@ def _safe(d: dict[str, Any]) -> dict[str, Any]:
     return {k: _json_number(v) for k, v in d.items()}
 
 
+def _keep_closing_looks(db: sqlite3.Connection) -> None:
+    """Raced jobs stored before version 5 replay as they were decided. A spec without
+    ``racing.final_test`` was raced without a closing look, the default of the code that stored
+    it (new jobs default to the rank-sum look); one with a boolean, by the sign look (true) or
+    none (false). The look is written into the spec by name: stored specs are read without
+    validation (``jobspec.load_job_spec``), so they must hold what the model holds."""
+    for row in db.execute("SELECT seq, spec FROM jobs WHERE kind = 'benchmark'").fetchall():
+        spec = json.loads(row["spec"])
+        racing = spec.get("racing")
+        look = racing.get("final_test") if isinstance(racing, dict) else "rank-sum"
+        if isinstance(racing, dict) and look not in ("rank-sum", "sign", "none"):
+            racing["final_test"] = "sign" if look is True else "none"
+            db.execute("UPDATE jobs SET spec = ? WHERE seq = ?",
+                       (json.dumps(spec, separators=(",", ":")), row["seq"]))
+
+
 class StoreBase:
     """The connection, its lock and transactions, the schema and small shared lookups; the
     mixins of :class:`~swarmpath.service.store.Store` build on it."""
@@ -230,7 +248,7 @@ class StoreBase:
                     "INSERT OR IGNORE INTO meta (key, value) VALUES (?, '0')",
                     [(f"counter.{c}",) for c in (*_COUNTERS, "lease_turn")],
                 )
-            elif int(row[0]) in (1, 2, 3):
+            elif int(row[0]) in (1, 2, 3, 4):
                 version = int(row[0])
                 if version == 1:  # leases granted before capabilities can prove nothing
                     db.execute("ALTER TABLE leases ADD COLUMN capability TEXT NOT NULL "
@@ -238,8 +256,9 @@ class StoreBase:
                     db.execute("ALTER TABLE leases ADD COLUMN beat INTEGER NOT NULL DEFAULT 0")
                 if version <= 2:  # jobs from before pins pinned nothing: any worker runs them
                     db.execute("ALTER TABLE jobs ADD COLUMN pins TEXT NOT NULL DEFAULT '{}'")
-                # results from before CPU times were not measured: NULL (missing), never 0
-                db.execute("ALTER TABLE results ADD COLUMN cpu_seconds REAL")
+                if version <= 3:  # results from before CPU times: NULL (missing), never 0
+                    db.execute("ALTER TABLE results ADD COLUMN cpu_seconds REAL")
+                _keep_closing_looks(db)
                 db.execute("UPDATE meta SET value = ? WHERE key = 'schema_version'",
                            (str(SCHEMA_VERSION),))
             elif int(row[0]) != SCHEMA_VERSION:

@@ -133,7 +133,7 @@
     const cells = r.blocks.flatMap((b) => b.cells);
     const used = cells.reduce((n, c) => n + c.runs, 0), full = s.max_runs * cells.length;
     const stopped = cells.filter((c) => !c.racing).length, decided = cells.filter((c) => c.reason === "decided").length;
-    let html = `<h2>Race</h2><p id="race-line">alpha ${s.alpha} over ${r.comparisons} comparisons (Bonferroni), min_runs ${s.min_runs}, batch ${s.batch}, margin ${s.margin}, at most ${s.max_runs} runs a cell: ${stopped}/${cells.length} cells stopped (${decided} decided), <b>${used} runs of ${full}</b> (${(full / Math.max(used, 1)).toFixed(1)}x fewer)</p>`;
+    let html = `<h2>Race</h2><p id="race-line">alpha ${s.alpha} over ${r.comparisons} comparisons (Bonferroni), min_runs ${s.min_runs}, batch ${s.batch}, margin ${s.margin}, closing look ${SP.esc(String(s.final_test))}, at most ${s.max_runs} runs a cell: ${stopped}/${cells.length} cells stopped (${decided} decided), <b>${used} runs of ${full}</b> (${(full / Math.max(used, 1)).toFixed(1)}x fewer)</p>`;
     html += `<table id="race-cells"><thead><tr><th class="l">function</th><th>dim</th>` + algs.map((a) => `<th>${SP.esc(a)}</th>`).join("") + `<th>rounds</th></tr></thead><tbody>`;
     for (const b of r.blocks) {
       const by = {}; for (const c of b.cells) by[c.algorithm] = c;
@@ -146,13 +146,13 @@
     }
     html += `</tbody></table><table id="race-pairs"><thead><tr><th class="l">function</th><th>dim</th><th class="l">pair</th><th class="l">verdict</th><th>round</th><th>pairs</th><th>P(a's run beats b's) [interval]</th></tr></thead><tbody>`;
     for (const b of r.blocks) for (const d of b.duels) {
-      const verdict = d.decision === "different" ? `${d.better} better` : d.decision;
+      const verdict = (d.decision === "different" ? `${d.better} better` : d.decision) + (d.final ? " (closing look)" : "");
       const theta = d.theta === null ? "" : `${d.theta.toFixed(3)} [${SP.num(d.low, 3)}, ${SP.num(d.high, 3)}]`;
       html += `<tr data-pair="${SP.esc(b.block.function)}/${b.block.dim}/${SP.esc(d.a)}/${SP.esc(d.b)}"><td class="l">${SP.esc(b.block.function)}</td><td>${b.block.dim}</td>
         <td class="l">${SP.esc(d.a)} vs ${SP.esc(d.b)}</td><td class="l verdict-${d.decision}">${SP.esc(verdict)} <span class="marker">${d.marker}</span></td>
         <td>${d.round === null ? (b.finished ? "-" : "open") : "r" + d.round}</td><td>${d.pairs}</td><td>${theta}</td></tr>`;
     }
-    html += `</tbody></table><p class="legend">Cells: the runs the race gave each (at most ${s.max_runs}), and whether it still races or why it stopped (decided: every comparison it is part of is decided; max_runs: it reached the job's runs undecided) in round rK (min_runs + K x batch runs). Pairs: each comparison's verdict (different: the better one named; equivalent: within the margin of 1/2; open: not decided), the round that decided it, the paired runs it used, and the share of paired runs (run r against run r) a won, ties half, with its anytime-valid confidence-sequence interval at alpha over the job's comparisons (docs/statistics.md, Racing). The markers in the table above are these decisions, not rank-sum tests (their p-values are not valid after stopping early).</p>`;
+    html += `</tbody></table><p class="legend">Cells: the runs the race gave each (at most ${s.max_runs}), and whether it still races or why it stopped (decided: every comparison it is part of is decided; max_runs: it reached the job's runs undecided) in round rK (min_runs + K x batch runs). Pairs: each comparison's verdict (different: the better one named; equivalent: within the margin of 1/2; open: not decided), the round that decided it, the paired runs it used, and the share of paired runs (run r against run r) a won, ties half, with its anytime-valid confidence-sequence interval at alpha over the job's comparisons (docs/statistics.md, Racing). A comparison still open at ${s.max_runs} runs is decided there by the closing look, if the job has one (rank-sum: the two-sample rank test of the ${s.max_runs} runs, Holm over the comparisons not declared different, at the share of alpha the sequence leaves; sign: the sign test of the paired runs). The markers in the table above are these decisions, not tests repeated after each round (their p-values are not valid after stopping early).</p>`;
     return html;
   }
 
