@@ -217,7 +217,7 @@ def test_auto_runs_the_kernels_where_the_study_has_them_and_numpy_elsewhere(monk
         dict(algorithm=WITHOUT_KERNEL[0], function="F1") if WITHOUT_KERNEL else None,
         dict(algorithm=algo, function="F1", transform="rotate"),
         dict(algorithm=algo, function=hand_made),
-        dict(algorithm=algo, function="cec2017:F1", dim=10),  # no compiled objective yet
+        dict(algorithm=algo, function="cec2017:F1@centre", dim=10),  # no compiled objective
         dict(algorithm=algo, function="F1", max_evaluations=12),
     ]
     for case in filter(None, numpy_only):

@@ -24,7 +24,8 @@ from swarmpath.optimizers.compiled.run import check_function
 
 BBOB = [f"bbob:f{k}" for k in range(1, 25)]
 CEC2022 = [f"cec2022:F{k}" for k in range(1, 13)]
-CEC = CEC2022
+CEC2017 = [f"cec2017:F{k}" for k in range(1, 31)]  # F2 too: excluded from the set, named
+CEC = CEC2022 + CEC2017
 
 
 def _points(fn, d, rng):

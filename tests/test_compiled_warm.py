@@ -76,7 +76,8 @@ assert not missing, missing
 
 def test_warmup_names_the_option_of_what_has_no_kernel():
     for args, field in ((["-a", "NOPE"], "--algorithms"), (["-a", "RS"], "--algorithms"),
-                        (["-f", "cec2017:F1"], "--functions"), (["-f", "F99"], "--functions")):
+                        (["-f", "cec2017:F1@centre"], "--functions"),
+                        (["-f", "F99"], "--functions")):
         out = runner.invoke(app, ["warmup", *args])
         assert out.exit_code == 2, (args, out.output)
         assert f"error: {field}:" in out.output, (args, out.output)

@@ -136,7 +136,7 @@ def test_bench_budget_in_evaluations_per_dimension():
     (["-f", "bbob:f1", "-d", "5", "--budget-evals", "10"], "--budget-evals"),
     (["-f", "cec2017", "-d", "20"], "--dims"),
     (["-f", "bbob:f2", "-d", "5", "--transform", "rotate"], "--transform"),
-    (["-f", "cec2017:F2", "-d", "10", "--backend", "numba"], "--backend"),
+    (["-f", "cec2017:F2@centre", "-d", "10", "--backend", "numba"], "--backend"),
 ])
 def test_bench_names_the_bad_option(args, option):
     out = _bench(*args)

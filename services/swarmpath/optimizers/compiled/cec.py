@@ -258,7 +258,7 @@ def _cec_population(m, d, xp, fp, mp, wp, dp):
 
 
 #: suite -> its function numbers with a compiled objective
-COMPILED = {"cec2022": tuple(range(1, 13))}
+COMPILED = {"cec2017": tuple(range(1, 31)), "cec2022": tuple(range(1, 13))}
 
 #: ``cec20xx:F<k>`` -> its population function (one for all: compiled once, on first use)
 POPULATIONS = {f"{suite}:F{k}": _cec_population
