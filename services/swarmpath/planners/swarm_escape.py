@@ -1,6 +1,11 @@
 """Escape from a local minimum of the swarm local planner (``escape``; docs/planners.md,
 "Escaping a local minimum").
 
+The progress monitor (:meth:`Escape.stalled`) starts both rules of ``escape_plan``; the long-term
+points and their use below are the ``"hulls"`` rule (the default before tree ``c36007d``); the
+default ``"memory"`` follows the way on an occupancy memory instead
+(:mod:`swarmpath.planners.swarm_memory`).
+
 The swarm's aim is the shortest path to the goal in the *sensed* map, and that map remembers the
 points of the last ``memory`` seconds only. Beside a long obstacle across the way (a thin wall
 whose far side holds the goal, ``tests/data/thin_wall.json``) the part of the wall sensed a few
