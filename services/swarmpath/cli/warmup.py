@@ -24,17 +24,25 @@ def warmup(
                                  help="Functions or ranges (default: every one with a compiled "
                                  "objective).")
     ] = None,
+    if_cold: Annotated[
+        bool, typer.Option("--if-cold", help="Only the pieces this tree's cache lacks (none when "
+                           "a warm-up or a study made them since the compiled sources last "
+                           "changed): what scripts/_venv.sh runs after an install.")
+    ] = False,
     as_json: Annotated[bool, typer.Option("--json", help="One JSON document.")] = False,
 ) -> None:
     """Compile (or load from numba's cache) the compiled kernels and objectives that backend
     "auto" and "numba" run (without --algorithms and --functions also the clearance and sensing
     kernels every map run calls), and print the CPU seconds each took: a fresh environment's first
     study then starts without compiling. The cache is per installed tree and shared by every
-    process of it (workers' slots included)."""
+    process of it (workers' slots included). With --if-cold only what the cache lacks: nothing
+    (and no output) when it is filled."""
     from swarmpath.functions import expand_function_names
     from swarmpath.optimizers.compiled.warm import (
         algorithms_with_kernels,
+        cold,
         functions_with_objectives,
+        pieces,
         warm,
     )
 
@@ -49,10 +57,22 @@ def warmup(
     except (KeyError, ValueError) as exc:
         raise InputError("--functions", str(exc.args[0] if exc.args else exc)) from None
     # the map runs' kernels with a warm-up of everything (not with a list of pieces)
-    done = warm(algos, names, maps=algorithms is None and functions is None)
+    maps = algorithms is None and functions is None
+    if if_cold and not as_json:
+        missing = cold(pieces(algos, names, maps))
+        if not missing:
+            return
+        typer.echo(f"swarmpath warmup: compiling the {len(missing)} pieces (numba kernels, "
+                   "objectives) this tree's cache lacks, once per installed tree (2-3 min of "
+                   "CPU for all of them)", err=True)
+    done = warm(algos, names, maps=maps, cold_only=if_cold)
     if as_json:
         sys.stdout.write(json.dumps([{"kind": w.kind, "name": w.name, "cpu_seconds": w.seconds}
                                      for w in done]) + "\n")
+        return
+    if if_cold:  # the install's warm-up: one line
+        typer.echo(f"swarmpath warmup: compiled {len(done)} pieces in "
+                   f"{sum(w.seconds for w in done):.0f} s of CPU", err=True)
         return
     for w in done:
         typer.echo(f"{w.kind:9} {w.name:10} {w.seconds:7.2f} s CPU")

@@ -10,6 +10,7 @@ or a worker before it leases.
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import os
 import re
 import time
@@ -61,15 +62,30 @@ def functions_with_objectives(functions: Sequence[str] | None) -> list[str]:
     return list(functions)
 
 
+def pieces(algorithms: Sequence[str] | None = None, functions: Sequence[str] | None = None,
+           maps: bool | None = None) -> list[tuple[str, str]]:
+    """The pieces :func:`warm` makes ready for these arguments, as ``(kind, name)``, functions
+    first (KeyError as :func:`algorithms_with_kernels` and :func:`functions_with_objectives`)."""
+    out = [("function", n) for n in functions_with_objectives(functions)]
+    out += [("algorithm", a) for a in algorithms_with_kernels(algorithms)]
+    if maps or (maps is None and algorithms is None and functions is None):
+        out.append(("map", "clearance"))
+    return out
+
+
 def warm(algorithms: Sequence[str] | None = None,
          functions: Sequence[str] | None = None, *, shared: bool = False,
-         start: int = 0, maps: bool | None = None) -> list[Warmed]:
+         start: int = 0, maps: bool | None = None, cold_only: bool = False) -> list[Warmed]:
     """Make the compiled objectives of ``functions`` and the kernels of ``algorithms`` ready
     (None: every one there is; KeyError as :func:`algorithms_with_kernels` and
     :func:`functions_with_objectives`), and with ``maps`` (None: when both are None, i.e. a
     warm-up of everything) the world's clearance and sensing kernels as the piece
     ``("map", "clearance")``. Functions first: an algorithm's first run then times its kernel
-    alone.
+    alone. Each piece made ready is marked so in the cache directory (:func:`cold`).
+
+    ``cold_only``: skip the pieces already marked (they are not in the list returned): what
+    the install's warm-up and a study's first run compile, nothing when the tree's cache is
+    filled.
 
     ``shared``: other processes of this tree may be warming at the same time (a worker's slots,
     the workers of ``swarmpath up``): each piece is made ready under a lock of its own in the
@@ -79,8 +95,8 @@ def warm(algorithms: Sequence[str] | None = None,
     from swarmpath.optimizers.api import minimize
     from swarmpath.optimizers.registry import get_optimizer
 
-    algos = algorithms_with_kernels(algorithms)
-    names = functions_with_objectives(functions)
+    wanted = pieces(algorithms, functions, maps)
+    names = [name for kind, name in wanted if kind == "function"]
     first = names[0] if names else "F1"
     first_dim = _smallest_dim(first)
 
@@ -92,22 +108,24 @@ def warm(algorithms: Sequence[str] | None = None,
         minimize(a, first, dim=first_dim, agents=max(10, get_optimizer(a).min_agents),
                  iterations=2, runs=1, backend="numba")
 
-    pieces: list[tuple[str, str, Callable[[str], None]]] = [
-        ("function", n, function) for n in names]
-    pieces += [("algorithm", a, algorithm) for a in algos]
-    if maps or (maps is None and algorithms is None and functions is None):
-        pieces.append(("map", "clearance", _warm_maps))
-    order = {(kind, name): i for i, (kind, name, _make) in enumerate(pieces)}
-    if shared and len(pieces) > 1:
+    makers: dict[str, Callable[[str], None]] = {
+        "function": function, "algorithm": algorithm, "map": _warm_maps}
+    order = {piece: i for i, piece in enumerate(wanted)}
+    todo = list(wanted)
+    if shared and len(todo) > 1:
         # the first function first (every kernel's warm-up run evaluates it), then in turn
-        head, rest = pieces[:1] if names else [], pieces[1:] if names else pieces
+        head, rest = todo[:1] if names else [], todo[1:] if names else todo
         k = start % len(rest)
-        pieces = head + rest[k:] + rest[:k]
+        todo = head + rest[k:] + rest[:k]
+    stamp = _source_stamp()
     out = []
-    for kind, name, make in pieces:
+    for kind, name in todo:
         started = time.process_time()
         with _piece_lock(kind, name) if shared else contextlib.nullcontext():
-            make(name)
+            if cold_only and _is_marked(kind, name, stamp):
+                continue
+            makers[kind](name)
+            _mark(kind, name, stamp)
         out.append(Warmed(kind, name, time.process_time() - started))
     out.sort(key=lambda w: order[(w.kind, w.name)])  # as asked, whatever order they were made in
     return out
@@ -119,6 +137,77 @@ def _smallest_dim(name: str) -> int:
     fn = get_function(name)
     dims = getattr(fn, "dimensions", None)
     return int(min(dims)) if dims else max(2, int(getattr(fn, "min_dim", 2)))
+
+
+def compile_cold(algorithms: Sequence[str], functions: Sequence[str], maps: bool,
+                 note: Callable[[str], None]) -> list[Warmed]:
+    """A study's first run in a tree whose cache lacks some of its pieces: tell ``note`` once
+    (one line: what compiles, and that ``swarmpath warmup`` does it ahead), then compile them
+    here, before the study's runs (its worker processes then load them from the cache instead
+    of each compiling the same kernels). Nothing, and no note, when every piece is ready."""
+    missing = cold(pieces(algorithms, functions, maps))
+    if not missing:
+        return []
+    names = ", ".join(name for _kind, name in missing[:6]) + (", ..." if len(missing) > 6 else "")
+    note(f"compiling the numba kernels this study needs ({names}): once per installed tree, "
+         "seconds of CPU each; `swarmpath warmup` compiles every kernel ahead")
+    return warm(algorithms, functions, maps=maps, cold_only=True)
+
+
+def cold(wanted: Sequence[tuple[str, str]]) -> list[tuple[str, str]]:
+    """The pieces of ``wanted`` (as :func:`pieces` lists them) that no process of this tree has
+    made ready since its compiled sources last changed: a marker file per piece in numba's
+    cache directory holds the sources' modification times and sizes (numba's own test of a
+    cached kernel: a source touched since is compiled again at its next use)."""
+    stamp = _source_stamp()
+    return [(kind, name) for kind, name in wanted if not _is_marked(kind, name, stamp)]
+
+
+def _source_stamp() -> str:
+    """The compiled sources' paths, modification times and sizes and numba's and Python's
+    versions, hashed: what numba compares (per kernel, its own file's) before it loads a kernel
+    from the cache."""
+    import sys
+
+    import numba
+
+    from swarmpath.optimizers.compiled import compiled_sources
+
+    digest = hashlib.sha256(f"{numba.__version__}\0{sys.version}\0".encode())
+    for path in compiled_sources():
+        st = path.stat()
+        digest.update(f"{path.as_posix()}\0{st.st_mtime!r}\0{st.st_size}\0".encode())
+    return digest.hexdigest()
+
+
+def _marker(kind: str, name: str, suffix: str) -> str:
+    from numba.core import config
+
+    safe = re.sub(r"[^A-Za-z0-9_.-]", "_", name)
+    return os.path.join(str(config.CACHE_DIR),  # type: ignore[attr-defined]
+                        f".warm-{kind}-{safe}.{suffix}")
+
+
+def _is_marked(kind: str, name: str, stamp: str) -> bool:
+    try:
+        with open(_marker(kind, name, "done")) as f:
+            return f.read() == stamp
+    except OSError:
+        return False
+
+
+def _mark(kind: str, name: str, stamp: str) -> None:
+    """Mark a piece ready (no marker where the directory cannot be written: numba cannot cache
+    there either, so the piece is not ready for the next process)."""
+    path = _marker(kind, name, "done")
+    try:
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        part = f"{path}.{os.getpid()}.tmp"  # processes marking the same piece at once
+        with open(part, "w") as f:
+            f.write(stamp)
+        os.replace(part, path)
+    except OSError:
+        pass
 
 
 def _warm_maps(_name: str) -> None:
@@ -134,14 +223,10 @@ def _piece_lock(kind: str, name: str) -> Iterator[None]:
     directory cannot be written (then numba cannot cache there either)."""
     import fcntl
 
-    from numba.core import config
-
     try:
-        folder = str(config.CACHE_DIR)  # type: ignore[attr-defined]
-        os.makedirs(folder, exist_ok=True)
-        safe = re.sub(r"[^A-Za-z0-9_.-]", "_", name)
-        fd = os.open(os.path.join(folder, f".warm-{kind}-{safe}.lock"),
-                     os.O_RDWR | os.O_CREAT, 0o644)
+        path = _marker(kind, name, "lock")
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
     except OSError:
         yield
         return
