@@ -162,11 +162,12 @@ def _compute(job: tuple[BenchSpec, Task], report_rows: Callable[[int], None]) ->
     )
 
 
-def compile_first(spec: BenchSpec) -> None:
-    """Compile the kernels the study will run (backend auto or numba) in this process, before
-    the tasks go to other processes: they then load them from numba's cache instead of each
-    compiling the same kernels side by side (seconds of CPU per kernel in a fresh
-    environment)."""
+def compile_first(spec: BenchSpec, note: Callable[[str], None] | None = None) -> None:
+    """Compile the kernels the study will run (backend auto or numba) that this tree's numba
+    cache lacks, in this process, before the tasks go to other processes: they then load them
+    from the cache instead of each compiling the same kernels side by side (seconds of CPU per
+    kernel in a fresh environment). ``note`` gets one line first when anything compiles
+    (:func:`swarmpath.optimizers.compiled.warm.compile_cold`)."""
     if spec.backend == "numpy":
         return
     from swarmpath.optimizers.api import resolve_backend
@@ -176,9 +177,10 @@ def compile_first(spec: BenchSpec) -> None:
                 if resolve_backend(spec.backend, a, spec.functions, spec.transform,
                                    spec.params.get(a), budget) == "numba"]
     if compiled:
-        from swarmpath.optimizers.compiled.warm import warm
+        from swarmpath.optimizers.compiled.warm import compile_cold
 
-        warm(compiled, list(dict.fromkeys(spec.functions)))
+        compile_cold(compiled, list(dict.fromkeys(spec.functions)), False,
+                     note or (lambda _text: None))
 
 
 def auto_jobs(spec: BenchSpec) -> int:
@@ -398,6 +400,9 @@ def bench(
     started = time.perf_counter()
     the_race = None
     try:
+        compile_first(spec, lambda text: stderr.print(f"swarmpath bench: {text}",
+                                                      highlight=False, markup=False,
+                                                      soft_wrap=True))
         if racing is None:
             cells = _run_with_progress(spec, stderr, jobs or auto_jobs(spec))
         else:

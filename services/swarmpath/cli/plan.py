@@ -426,6 +426,9 @@ def plan(
     spec.optima = compute_optima(spec.maps, spec.optimum_budget, note)
     started = time.perf_counter()
     total = len(spec.cells()) * spec.runs
+    from swarmpath.cli.plan_backend import compile_first
+
+    compile_first(note)  # the map kernels once, before the worker processes start
     cells = _run_with_progress(spec, stderr, jobs or min(parallel.usable_cpus(), total))
     seconds = time.perf_counter() - started
     if plot is not None:

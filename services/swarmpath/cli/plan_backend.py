@@ -1,5 +1,6 @@
 """``swarmpath plan --backend numpy|numba``: the ``backend`` parameter of every selected planner
-that has one (the swarm planners; RFO and OMPL have none and are left as they are).
+that has one (the swarm planners; RFO and OMPL have none and are left as they are); and the
+compiled kernels every map run calls, made ready before the runs (:func:`compile_first`).
 
 A planner's ``backend`` given in ``--params`` too must be the same value: two different values
 are refused (exit 2, naming both) rather than one silently overriding the other.
@@ -7,7 +8,7 @@ are refused (exit 2, naming both) rather than one silently overriding the other.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from swarmpath.cli.core import InputError
@@ -51,3 +52,17 @@ def apply_backend(backend: str | None, planners: Sequence[str],
                              f"{given!r} (give one of them)")
         out.setdefault(name, {})["backend"] = backend
     return out
+
+
+def compile_first(note: Callable[[str], None]) -> None:
+    """Compile the world's clearance and sensing kernels, which every map run calls (backend
+    auto: where numba is installed), in this process when this tree's numba cache lacks them,
+    before the runs go to worker processes: each of them would otherwise compile the same
+    kernels side by side (about 5 s of CPU each). ``note`` gets one line first when anything
+    compiles. A planner's own ``backend: numba`` compiles its decision in its runs."""
+    from swarmpath.world.clearance import compiled_available
+
+    if compiled_available():
+        from swarmpath.optimizers.compiled.warm import compile_cold
+
+        compile_cold([], [], True, note)
