@@ -1,0 +1,102 @@
+"""A fresh environment's first study does not compile: ``swarmpath warmup --if-cold`` (what
+scripts/_venv.sh runs after an install) fills the tree's numba cache, a later process loads
+every kernel from it, and ``bench``/``plan`` compile only what the cache lacks, in the parent,
+after one line that says so.
+
+Each test runs the CLI in subprocesses on a numba cache of its own (``NUMBA_CACHE_DIR``), so
+"cold" is really cold; the kernels are the cheap ones (SSA, GWO, F4). No timing is asserted:
+whether something compiled is read from numba's own counters (a dispatcher's cache misses, a
+cfunc's cache hits) and from the warm-up's markers.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("numba")
+
+HINT = "compiling the numba kernels this study needs"
+
+#: a run of an algorithm on a function with the kernels, then numba's counters of every
+#: dispatcher and of the function's cfunc: what compiled in this process and what was loaded
+PROBE = """
+import gc, json, sys
+from numba.core.dispatcher import Dispatcher
+from swarmpath.optimizers import minimize
+from swarmpath.optimizers.compiled import objectives
+minimize(sys.argv[1], sys.argv[2], dim=3, agents=10, iterations=3, runs=2, backend="numba")
+found = [o for o in gc.get_objects() if isinstance(o, Dispatcher)]
+print(json.dumps({
+    "compiled": sorted(f"{d.py_func.__module__}.{d.py_func.__qualname__}" for d in found
+                       if sum(d.stats.cache_misses.values())),
+    "loaded": sum(sum(d.stats.cache_hits.values()) for d in found),
+    "cfuncs": {name: c.cache_hits for name, c in objectives._COMPILED.items()},
+}))
+"""
+
+
+def run(cache: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache),
+           "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}
+    out = subprocess.run([sys.executable, *args], env=env, capture_output=True, text=True,
+                         timeout=900)
+    assert out.returncode == 0, out.stderr[-3000:]
+    return out
+
+
+def cli(cache: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    return run(cache, "-m", "swarmpath.cli", *args)
+
+
+def test_the_install_warm_up_fills_the_cache_that_later_processes_load(tmp_path):
+    first = cli(tmp_path, "warmup", "--if-cold", "-a", "SSA", "-f", "F4")
+    assert "compiling the 2 pieces" in first.stderr and "compiled 2 pieces" in first.stderr
+    # a later process runs the kernel: nothing compiles, the kernel and objective are loaded
+    probe = json.loads(run(tmp_path, "-c", PROBE, "SSA", "F4").stdout.splitlines()[-1])
+    assert probe["compiled"] == [] and probe["loaded"] > 0, probe
+    assert probe["cfuncs"]["F4"] > 0, probe
+    # the install's warm-up again (a refresh of .venv): nothing to do, nothing printed
+    again = cli(tmp_path, "warmup", "--if-cold", "-a", "SSA", "-f", "F4")
+    assert again.stdout == "" and again.stderr == ""
+    # a study's first run compiles only what the cache lacks (GWO), in one line that says so
+    study = ("bench", "-a", "SSA,GWO", "-f", "F4", "-d", "2", "--runs", "1", "--agents", "10",
+             "--iterations", "2", "-j", "1")
+    hints = [line for line in cli(tmp_path, *study).stderr.splitlines() if HINT in line]
+    assert len(hints) == 1 and "GWO" in hints[0] and "SSA" not in hints[0], hints
+    assert HINT not in cli(tmp_path, *study).stderr  # the first run marked what it compiled
+    probe = json.loads(run(tmp_path, "-c", PROBE, "GWO", "F4").stdout.splitlines()[-1])
+    assert probe["compiled"] == [] and probe["loaded"] > 0, probe
+
+
+def test_a_piece_is_cold_again_once_the_compiled_sources_change(monkeypatch):
+    """numba compiles a kernel again when its source's time stamp changed: so do the markers."""
+    from swarmpath.optimizers.compiled import warm as warm_module
+
+    wanted = [("function", "F4"), ("algorithm", "SSA")]
+    warm_module.warm(["SSA"], ["F4"])  # in this process's cache (loaded when it is filled)
+    assert warm_module.cold(wanted) == []
+    monkeypatch.setattr(warm_module, "_source_stamp", lambda: "the sources after an edit")
+    assert warm_module.cold(wanted) == wanted
+    done = warm_module.warm(["SSA"], ["F4"], cold_only=True)
+    assert [(w.kind, w.name) for w in done] == wanted and warm_module.cold(wanted) == []
+    assert warm_module.warm(["SSA"], ["F4"], cold_only=True) == []
+
+
+def test_plan_compiles_the_map_kernels_once_before_its_worker_processes(tmp_path):
+    """Two worker processes, a cold cache: the parent compiles the map kernels (one line says
+    so) before the runs start, and the piece is ready for every later process."""
+    fast = json.dumps({"OMPL-RRTstar": {"iterations": 300}})
+    study = ("plan", "-p", "OMPL-RRTstar", "-m", "mfb-static", "--runs", "2", "-j", "2",
+             "--params", fast)
+    hints = [line for line in cli(tmp_path, *study).stderr.splitlines() if HINT in line]
+    assert len(hints) == 1 and "clearance" in hints[0], hints
+    check = ("from swarmpath.optimizers.compiled.warm import cold, pieces;"
+             "print(cold(pieces([], [], True)))")
+    assert run(tmp_path, "-c", check).stdout.strip() == "[]"
+    assert HINT not in cli(tmp_path, *study).stderr
