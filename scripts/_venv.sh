@@ -18,6 +18,7 @@ if [[ ! -f "$stamp" || "$repo/pyproject.toml" -nt "$stamp" ]]; then
 fi
 export PATH="$venv/bin:$PATH"
 # Compile the numba kernels once per installed tree, so that a first study does not
-# (docs/benchmarks.md, "Cold start"); with the cache filled this prints nothing. A failure is
-# not fatal: the kernels then compile at their first use.
-swarmpath warmup --if-cold || echo "== swarmpath warmup failed: the kernels compile at first use"
+# (docs/benchmarks.md, "Cold start"): every kernel, the built-in functions' objectives and the
+# map kernels (a suite's objective compiles at its first study, a few seconds); with the cache
+# filled this prints nothing. A failure is not fatal: the kernels then compile at first use.
+swarmpath warmup --if-cold --no-suites || echo "== swarmpath warmup failed: the kernels compile at first use"

@@ -100,3 +100,32 @@ def test_plan_compiles_the_map_kernels_once_before_its_worker_processes(tmp_path
              "print(cold(pieces([], [], True)))")
     assert run(tmp_path, "-c", check).stdout.strip() == "[]"
     assert HINT not in cli(tmp_path, *study).stderr
+
+
+def test_the_install_warm_up_leaves_the_suites_to_their_first_study(monkeypatch):
+    """scripts/_venv.sh runs ``warmup --if-cold --no-suites``: every kernel, the built-in
+    functions' objectives and the map kernels, not the 60-odd BBOB and CEC objectives (a suite
+    study compiles the ones it runs); a plain ``warmup`` makes every piece."""
+    from typer.testing import CliRunner
+
+    from swarmpath.cli import app
+    from swarmpath.optimizers.compiled import kernel_names
+    from swarmpath.optimizers.compiled import warm as warm_module
+
+    asked: list[tuple[list[str], list[str], bool, bool]] = []
+
+    def record(algorithms, functions, *, maps=None, cold_only=False, **_kw):
+        asked.append((list(algorithms), list(functions), maps, cold_only))
+        return []
+
+    monkeypatch.setattr(warm_module, "warm", record)
+    monkeypatch.setattr(warm_module, "cold", lambda wanted: list(wanted))
+    line = Path(__file__).parents[1].joinpath("scripts", "_venv.sh").read_text()
+    assert "swarmpath warmup --if-cold --no-suites" in line
+    for args in (["--if-cold", "--no-suites"], []):
+        out = CliRunner().invoke(app, ["warmup", *args])
+        assert out.exit_code == 0, out.output
+    (algos, builtin, maps, cold_only), (_, everything, _, plain) = asked
+    assert algos == kernel_names() and maps and cold_only and not plain
+    assert "F1" in builtin and "F13" in builtin and not any(":" in n for n in builtin)
+    assert set(builtin) < set(everything) and "bbob:f1" in everything

@@ -6,9 +6,10 @@ numba cache against its second run in the same cache.
         [--modes install,none[,base]] [--baseline DIR] [--command "plan --runs 1"] ...
 
 A pair: a new empty cache directory (``NUMBA_CACHE_DIR``), then in mode ``install`` the
-install's warm-up (``swarmpath warmup --if-cold``, what scripts/_venv.sh runs; its CPU is shown
-apart), in mode ``none`` nothing (a pip user who skipped it), in mode ``base`` nothing either
-but the commands run the tree at ``--baseline`` (its ``services``: the code before a change);
+install's warm-up (``swarmpath warmup --if-cold --no-suites``, what scripts/_venv.sh runs; its
+CPU is shown apart), in mode ``none`` nothing (a pip user who skipped it), in mode ``base``
+nothing either but the commands run the tree at ``--baseline`` (its ``services``: the code
+before a change);
 then every command twice, in the order given. first - second is what the first run compiled
 (and loaded the first time): the runs do the same work otherwise. The modes alternate pair by
 pair, so that all see the same load. CPU is user + sys of the command's process and of every
@@ -31,6 +32,7 @@ import sys
 import tempfile
 
 DEFAULT_COMMANDS = ["plan --runs 1", "bench --runs 1 -d 10 --iterations 20"]
+INSTALL = ["warmup", "--if-cold", "--no-suites"]  # the last step of scripts/_venv.sh
 
 
 def cpu_of(args: list[str], env: dict[str, str]) -> float:
@@ -52,7 +54,7 @@ def one_pair(mode: str, commands: list[list[str]],
     if mode == "base":
         env["PYTHONPATH"] = os.path.join(baseline or ".", "services")
     try:
-        install = cpu_of(["warmup", "--if-cold"], env) if mode == "install" else 0.0
+        install = cpu_of(INSTALL, env) if mode == "install" else 0.0
         runs = [(cpu_of(c, env), cpu_of(c, env)) for c in commands]
     finally:
         shutil.rmtree(cache, ignore_errors=True)

@@ -24,10 +24,17 @@ def warmup(
                                  help="Functions or ranges (default: every one with a compiled "
                                  "objective).")
     ] = None,
+    suites: Annotated[
+        bool, typer.Option("--suites/--no-suites", help="Without --functions: also the "
+                           "suites' objectives (BBOB, CEC; --no-suites: the built-in functions "
+                           "only, a suite's objective then compiles at the first study that "
+                           "runs it, about 1-4 s of CPU each).")
+    ] = True,
     if_cold: Annotated[
         bool, typer.Option("--if-cold", help="Only the pieces this tree's cache lacks (none when "
                            "a warm-up or a study made them since the compiled sources last "
-                           "changed): what scripts/_venv.sh runs after an install.")
+                           "changed): scripts/_venv.sh runs --if-cold --no-suites after an "
+                           "install.")
     ] = False,
     as_json: Annotated[bool, typer.Option("--json", help="One JSON document.")] = False,
 ) -> None:
@@ -56,6 +63,8 @@ def warmup(
             None if functions is None else expand_function_names(functions))
     except (KeyError, ValueError) as exc:
         raise InputError("--functions", str(exc.args[0] if exc.args else exc)) from None
+    if functions is None and not suites:
+        names = [n for n in names if ":" not in n]  # a suite's functions are "suite:name"
     # the map runs' kernels with a warm-up of everything (not with a list of pieces)
     maps = algorithms is None and functions is None
     if if_cold and not as_json:
@@ -63,8 +72,8 @@ def warmup(
         if not missing:
             return
         typer.echo(f"swarmpath warmup: compiling the {len(missing)} pieces (numba kernels, "
-                   "objectives) this tree's cache lacks, once per installed tree (2-3 min of "
-                   "CPU for all of them)", err=True)
+                   "objectives) this tree's cache lacks, once per installed tree (seconds of CPU "
+                   "each)", err=True)
     done = warm(algos, names, maps=maps, cold_only=if_cold)
     if as_json:
         sys.stdout.write(json.dumps([{"kind": w.kind, "name": w.name, "cpu_seconds": w.seconds}
