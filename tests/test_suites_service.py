@@ -42,8 +42,10 @@ def test_a_job_may_ask_for_numba_on_compiled_suites_and_is_refused_naming_anothe
     assert parse_job_spec(both).backend == "numba"
     assert parse_job_spec({**both, "functions": ["cec2017:F2", "cec2022:F1"]}).backend == "numba"
     with pytest.raises(ValidationError, match="cec2017:F1@centre"):  # a centred copy: none
-        parse_job_spec({**both, "functions": ["cec2022:F1", "cec2017:F1@centre"],
-                        "instances": None})
+        parse_job_spec({**both, "functions": ["cec2022:F1", "cec2017:F1@centre"]})
+    centred = parse_job_spec({**SPEC, "functions": ["bbob:f3@centre", "F1"],
+                              "instances": [1, 2]})
+    assert centred.functions == ["bbob:f3@centre", "bbob:f3@i2@centre", "F1"]  # still centred
 
 
 @pytest.mark.parametrize(("change", "field", "says"), [
@@ -54,8 +56,7 @@ def test_a_job_may_ask_for_numba_on_compiled_suites_and_is_refused_naming_anothe
     ({"transform": "rotate"}, "transform", "transform must be 'none'"),
     ({"budget_evals": "3"}, "budget_evals", "less than GWO's 12"),
     ({"budget_evals": "ten"}, "budget_evals", "NxD"),
-    ({"functions": ["cec2017:F1@centre"], "instances": None, "backend": "numba"}, "backend",
-     "no numba kernel"),
+    ({"functions": ["cec2017:F1@centre"], "backend": "numba"}, "backend", "no numba kernel"),
     ({"backend": "numba"}, "budget_evals", "backend 'numpy' only"),
 ])
 def test_bad_suite_fields_are_named(change, field, says):

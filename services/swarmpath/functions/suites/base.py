@@ -210,7 +210,8 @@ def _unbound(x: Array) -> Array:  # replaced by with_instance
 
 
 def with_instances(names: list[str], instances: list[int] | None) -> list[str]:
-    """Each suite function of ``names`` once per instance (``bbob:f3``, ``bbob:f3@i2``, ...),
+    """Each suite function of ``names`` once per instance (``bbob:f3``, ``bbob:f3@i2``, ...;
+    ``bbob:f3@centre``: ``bbob:f3@centre``, ``bbob:f3@i2@centre``, ...),
     the other functions once, duplicates dropped; ValueError if a suite lacks one of the
     instances or none of ``names`` has instances."""
     from swarmpath.functions.registry import get_function
@@ -225,7 +226,9 @@ def with_instances(names: list[str], instances: list[int] | None) -> list[str]:
             out.append(name)
             continue
         suites += 1
-        out.extend(fn.with_instance(i).name for i in instances)
+        for i in instances:  # a centred copy stays centred: its instances' centred copies
+            bound = fn.with_instance(i)
+            out.append((bound.centred_copy() if fn.centred else bound).name)
     if not suites:
         raise ValueError("only suite functions (bbob:..., cec2017:..., cec2022:...) have "
                          "instances, and none is listed")
