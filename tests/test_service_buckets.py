@@ -81,6 +81,18 @@ def test_scen_pairs_by_bucket_give_a_difficulty_curve_in_the_summary_and_dashboa
     # the curve is bucket_rows (what swarmpath plan --scen prints) over the runs REST lists
     runs = client.get(f"/jobs/{job['id']}/runs", params={"limit": 100}).json()["items"]
     assert len(runs) == 16
+    # each run names its bucket: REST items and the exports' column
+    assert [r["bucket"] for r in runs] == [0 if r["map"] in maps[:2] else 15 for r in runs]
+    import csv
+
+    limit = csv.field_size_limit(2**31 - 1)  # a path is one JSON cell of the CSV
+    try:
+        table = list(csv.DictReader(client.get(f"/jobs/{job['id']}/runs",
+                                               params={"format": "csv"}).text.splitlines()))
+    finally:
+        csv.field_size_limit(limit)
+    assert [(row["map"], row["bucket"]) for row in table] == [
+        (r["map"], str(r["bucket"])) for r in runs]
     expected = bucket_rows(runs, dict.fromkeys(maps[:2], 0) | dict.fromkeys(maps[2:], 15))
     assert summary["buckets"] == expected
     assert [(b["planner"], b["bucket"], b["runs"], b["pairs"]) for b in summary["buckets"]] == [

@@ -453,6 +453,7 @@ def test_map_summary(store):
     assert b["success_rate"] == 1.0 and b["gap_mean"] is None and b["length_std"] == 0.0
     item = store.run(job, 0)
     assert item["planner"] == "A" and item["map"] == "m" and item["length"] == 10.0
+    assert item["bucket"] is None  # the map has no MovingAI bucket
     assert item["path"] == [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]]
     # a map without a MovingAI bucket: the column is empty, and the summary has no curve
     assert "planner,map,bucket,runs" in store.summary_csv(job)

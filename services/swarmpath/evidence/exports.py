@@ -37,7 +37,7 @@ BENCHMARK_COLUMNS: tuple[tuple[str, Any], ...] = (
 )
 MAP_IDENTITY: tuple[tuple[str, Any], ...] = (
     ("job_id", str), ("run_id", int), ("run", int), ("cell", str), ("planner", str),
-    ("map", str), ("seed", int), ("state", str), ("worker", str),
+    ("map", str), ("bucket", int), ("seed", int), ("state", str), ("worker", str),
 )
 MAP_TAIL: tuple[tuple[str, Any], ...] = (
     ("failure", str), ("completed", float), ("curve_stride", int), ("path", "list2"),

@@ -108,6 +108,8 @@ class RunItem(_Open):
     dim: int | None = None
     planner: str | None = None
     map: str | None = None
+    bucket: int | None = Field(None, description="map runs: the map's MovingAI bucket (a .scen "
+                               "pair's, the spec's buckets); null without one")
     best_fitness: Number = None
     evaluations: int | None = None
     success: bool | None = None

@@ -17,17 +17,20 @@ class RunViewsMixin(StoreBase):
     """Runs as REST and MCAP read them: one item per run, one run, records for the recorder."""
 
     @staticmethod
-    def _identity(kind: str, spec: dict[str, Any]) -> dict[str, Any]:
+    def _identity(kind: str, spec: dict[str, Any], buckets: dict[str, Any]) -> dict[str, Any]:
+        """A run's cell identity; a map run's MovingAI ``bucket`` (the job spec's ``buckets``:
+        a .scen pair's, None without one) beside its map."""
         if kind == "benchmark":
             return {
                 "algorithm": spec["algorithm"], "function": spec["function"], "dim": spec["dim"],
             }
-        return {"planner": spec["planner"], "map": spec["map"]}
+        return {"planner": spec["planner"], "map": spec["map"],
+                "bucket": buckets.get(spec["map"])}
 
     def _item(
         self,
         job: sqlite3.Row,
-        seed: int,
+        job_spec: dict[str, Any],
         cell_idx: int,
         key: str,
         cell_spec: dict[str, Any],
@@ -40,8 +43,8 @@ class RunViewsMixin(StoreBase):
             "run_id": cell_idx * job["runs_per_cell"] + run,
             "run": run,
             "cell": key,
-            **self._identity(job["kind"], cell_spec),
-            "seed": seed,
+            **self._identity(job["kind"], cell_spec, job_spec.get("buckets") or {}),
+            "seed": job_spec["seed"],
             "state": state,
             "worker": worker,
         }
@@ -72,7 +75,7 @@ class RunViewsMixin(StoreBase):
             if not positions:
                 return []
             (first_cell, first_run), (last_cell, last_run) = positions[0], positions[-1]
-            seed = json.loads(job["spec"])["seed"]
+            job_spec = json.loads(job["spec"])
             cells = {
                 c["idx"]: (c["key"], json.loads(c["spec"]))
                 for c in db.execute(
@@ -96,7 +99,7 @@ class RunViewsMixin(StoreBase):
             key, cell_spec = cells[cell_idx]
             res = results.get((cell_idx, run))
             state, worker = self._run_state(job["state"], cell_idx, run, res, leased)
-            item = self._item(job, seed, cell_idx, key, cell_spec, run, res, state, worker)
+            item = self._item(job, job_spec, cell_idx, key, cell_spec, run, res, state, worker)
             if series:
                 item["spec"] = cell_spec
                 if res is not None and res["series"] is not None:
@@ -195,10 +198,10 @@ class RunViewsMixin(StoreBase):
                 (seq, cell_idx, run),
             ).fetchone()
             leased = self._leased_runs(db, seq)
-        seed = json.loads(job["spec"])["seed"]
+        job_spec = json.loads(job["spec"])
         state, worker = self._run_state(job["state"], cell_idx, run, res, leased)
         item = self._item(
-            job, seed, cell_idx, cell["key"], json.loads(cell["spec"]), run, res, state, worker
+            job, job_spec, cell_idx, cell["key"], json.loads(cell["spec"]), run, res, state, worker
         )
         if res is not None and res["series"] is not None:
             item.update(decode_series(res["series"]))
