@@ -33,6 +33,7 @@ def test_list_names_exactly_the_reproducible_tables():
         "icoot-table2", "icoot-table3", "icoot-table4", "ihpo-table2",
         "icoot-maps", "ihpo-maps", "rfogwo-maps", "mfb-maps",
         "jso-cec2017-d10", "jso-cec2017-d30", "cmaes-pycma-bbob-d5",
+        "lshade-reference-cec2017-d10",
     ]
 
 

@@ -40,6 +40,7 @@ TABLES: tuple[str, ...] = (
     "jso-cec2017-d10",
     "jso-cec2017-d30",
     "cmaes-pycma-bbob-d5",
+    "lshade-reference-cec2017-d10",
 )
 ILLEGIBLE = "illegible"
 REASONS_FILE = "reasons.yaml"
