@@ -51,6 +51,7 @@ def test_a_job_may_ask_for_numba_on_compiled_suites_and_is_refused_naming_anothe
 @pytest.mark.parametrize(("change", "field", "says"), [
     ({"instances": [2]}, "functions", "cec2022 has instances 1"),
     ({"functions": ["F1"], "instances": [2]}, "functions", "only suite functions"),
+    ({"functions": ["bbob:f3@i7"], "instances": [1]}, "functions", "names its instance already"),
     ({"instances": [0]}, "instances", "greater than or equal to 1"),
     ({"dims": [30]}, "dims", "defined for dim in 10, 20"),
     ({"transform": "rotate"}, "transform", "transform must be 'none'"),

@@ -137,6 +137,8 @@ def test_bench_budget_in_evaluations_per_dimension():
     (["-f", "cec2017", "-d", "20"], "--dims"),
     (["-f", "bbob:f2", "-d", "5", "--transform", "rotate"], "--transform"),
     (["-f", "cec2017:F2@centre", "-d", "10", "--backend", "numba"], "--backend"),
+    # a name that fixes its instance is not silently re-instanced into other functions
+    (["-f", "bbob:f3@i7", "--instances", "1-2"], "--instances"),
 ])
 def test_bench_names_the_bad_option(args, option):
     out = _bench(*args)

@@ -209,11 +209,17 @@ def _unbound(x: Array) -> Array:  # replaced by with_instance
     raise RuntimeError("suite function without an instance")
 
 
+#: the instance part of a bound name (``@i7`` in ``bbob:f3@i7`` and ``bbob:f3@i7@centre``)
+_NAMED_INSTANCE = re.compile(r"@i\d+")
+
+
 def with_instances(names: list[str], instances: list[int] | None) -> list[str]:
     """Each suite function of ``names`` once per instance (``bbob:f3``, ``bbob:f3@i2``, ...;
     ``bbob:f3@centre``: ``bbob:f3@centre``, ``bbob:f3@i2@centre``, ...),
     the other functions once, duplicates dropped; ValueError if a suite lacks one of the
-    instances or none of ``names`` has instances."""
+    instances, none of ``names`` has instances, or a name fixes its instance already
+    (``bbob:f3@i7``: re-instancing it would run other functions than the one named, so it is
+    refused, not rewritten)."""
     from swarmpath.functions.registry import get_function
 
     if instances is None:
@@ -225,6 +231,10 @@ def with_instances(names: list[str], instances: list[int] | None) -> list[str]:
         if not isinstance(fn, SuiteFunction):
             out.append(name)
             continue
+        if _NAMED_INSTANCE.search(name):
+            raise ValueError(f"{name} names its instance already; list "
+                             f"{_NAMED_INSTANCE.sub('', name)} with instances, or {name} "
+                             "without them")
         suites += 1
         for i in instances:  # a centred copy stays centred: its instances' centred copies
             bound = fn.with_instance(i)
