@@ -5,7 +5,8 @@ The ``lshade-reference-cec2017-d10`` table keeps each of the reference's runs
 ``swarmpath reproduce lshade-reference-cec2017-d10 --json`` document holds (several documents,
 e.g. one per function, are joined), this prints per function, with errors floored at the table's
 1e-8: both means and medians, the log10 ratio of the means, the runs above the reference's max
-and below its min, the two-sided rank-sum test of the two samples, and how far the mean of
+and below its min (ours rounded to the 7 digits the reference's runs are kept at), the
+two-sided rank-sum test of the two samples, and how far the mean of
 ``n`` reference runs moves with the seeds alone (the range of the means of its consecutive
 blocks of ``n`` runs, ``n`` = the measured run count):
 
@@ -54,7 +55,10 @@ def main(argv: list[str] | None = None) -> int:
     floor = float(doc["setting"]["error_floor"])
     reference = {k: np.maximum(np.array(v, dtype=float), floor)
                  for k, v in doc["reference_runs"].items()}
-    ours = {k: np.maximum(v, floor) for k, v in measured_runs(args.documents).items()}
+    # ours at the precision the reference's runs are kept at (7 digits), so that a basin both
+    # sides end in (e.g. F30's 394.5008) compares as a tie, not as a difference in the 8th digit
+    ours = {k: np.maximum(np.array([float(f"{x:.6E}") for x in v]), floor)
+            for k, v in measured_runs(args.documents).items()}
     wanted = {f"cec2017:F{n}" for n in args.functions.split(",") if n}
     print("function  n_ref n_ours  mean_ref  mean_ours  log10  median_ref median_ours  "
           ">max <min  rank-sum p  ref block means (n_ours runs)")
