@@ -121,12 +121,7 @@ def test_every_kernel_gives_the_numpy_backends_runs(k):
     d, instance = (2, 5, 10, 40)[k % 4], (1, 3, 71, 2)[k % 4]
     name = get_function(f"bbob:f{k}").with_instance(instance).name
     kw = dict(dim=d, agents=12, iterations=12, runs=2, seed=3)
-    (ref,) = minimize_many(algorithm, [name], backend="numpy", **kw)
-    (out,) = minimize_many(algorithm, [name], backend="numba", **kw)
-    assert out.backend == "numba"
-    assert np.array_equal(out.best_fitness, ref.best_fitness), (algorithm, name)
-    assert np.array_equal(out.curve, ref.curve), (algorithm, name)
-    assert np.array_equal(out.best_position, ref.best_position), (algorithm, name)
+    _same_runs_on_both_backends(algorithm, name, kw)
 
 
 @pytest.mark.parametrize("name", CEC)
@@ -138,12 +133,7 @@ def test_every_kernel_gives_the_numpy_backends_runs_on_cec(name):
     algorithm = algorithms[k % len(algorithms)]
     d = fn.dimensions[k % len(fn.dimensions)]
     kw = dict(dim=d, agents=10, iterations=8, runs=2, seed=5)
-    (ref,) = minimize_many(algorithm, [name], backend="numpy", **kw)
-    (out,) = minimize_many(algorithm, [name], backend="numba", **kw)
-    assert out.backend == "numba"
-    assert np.array_equal(out.best_fitness, ref.best_fitness), (algorithm, name)
-    assert np.array_equal(out.curve, ref.curve), (algorithm, name)
-    assert np.array_equal(out.best_position, ref.best_position), (algorithm, name)
+    _same_runs_on_both_backends(algorithm, name, kw)
 
 
 def test_instances_share_their_functions_objective_and_centred_copies_have_none():
@@ -168,3 +158,13 @@ def test_auto_runs_cec_compiled_and_the_cec_functions_share_one_objective():
     first, last = (get_function(name) for name in (CEC[0], CEC[-1]))
     assert objectives.objective_for(first)[0] == objectives.objective_for(last)[0]
     assert not objectives.has_objective(first.centred_copy())
+
+
+def _same_runs_on_both_backends(algorithm, name, kw):
+    """The numba backend's runs of ``name`` equal the numpy backend's: bests, curves, positions."""
+    (ref,) = minimize_many(algorithm, [name], backend="numpy", **kw)
+    (out,) = minimize_many(algorithm, [name], backend="numba", **kw)
+    assert out.backend == "numba"
+    assert np.array_equal(out.best_fitness, ref.best_fitness), (algorithm, name)
+    assert np.array_equal(out.curve, ref.curve), (algorithm, name)
+    assert np.array_equal(out.best_position, ref.best_position), (algorithm, name)
