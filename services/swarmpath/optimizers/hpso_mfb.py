@@ -116,6 +116,13 @@ class HPSOMFB(BatSwarms):
         x = self.pos if self.G == 1 else self.pos[:, self.group]  # (R, Nb or 1, 2)
         return x[..., 0], x[..., 1]
 
+    def expected_evaluations(self) -> tuple[int, int]:
+        """Every bat each iteration and once first: ``agents`` bats with ``split="divide"``,
+        P x ``agents`` with ``"per_particle"``."""
+        p = self.p
+        n = self.N if p["split"] == "divide" else min(int(p["particles"]), self.N) * self.N
+        return n * (self.T + 1), n * (self.T + 1)
+
     # ------------------------------------------------------------------------------ run
     def _initialize(self) -> None:
         p = self.p
