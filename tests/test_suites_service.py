@@ -58,7 +58,6 @@ def test_a_job_may_ask_for_numba_on_compiled_suites_and_is_refused_naming_anothe
     ({"budget_evals": "3"}, "budget_evals", "less than GWO's 12"),
     ({"budget_evals": "ten"}, "budget_evals", "NxD"),
     ({"functions": ["cec2017:F1@centre"], "backend": "numba"}, "backend", "no numba kernel"),
-    ({"backend": "numba"}, "budget_evals", "backend 'numpy' only"),
 ])
 def test_bad_suite_fields_are_named(change, field, says):
     with pytest.raises(ValidationError) as err:

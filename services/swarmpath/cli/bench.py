@@ -172,10 +172,11 @@ def compile_first(spec: BenchSpec, note: Callable[[str], None] | None = None) ->
         return
     from swarmpath.optimizers.api import resolve_backend
 
-    budget = None if spec.budget_evals is None else 1  # any budget runs on numpy
-    compiled = [a for a in spec.algorithms
-                if resolve_backend(spec.backend, a, spec.functions, spec.transform,
-                                   spec.params.get(a), budget) == "numba"]
+    compiled = [a for a in spec.algorithms if any(
+        resolve_backend(spec.backend, a, spec.functions, spec.transform, spec.params.get(a),
+                        spec.evaluations(d), agents=spec.agents,
+                        iterations=spec.iterations_for(a, d), dim=d) == "numba"
+        for d in spec.dims)]
     if compiled:
         from swarmpath.optimizers.compiled.warm import compile_cold
 

@@ -22,7 +22,12 @@ from swarmpath.optimizers.api import (
     check_backend,
     resolve_transform,
 )
-from swarmpath.optimizers.budget import budget_at, parse_budget, study_iterations
+from swarmpath.optimizers.budget import (
+    budget_at,
+    check_compiled_budget,
+    parse_budget,
+    study_iterations,
+)
 from swarmpath.optimizers.registry import BASELINES
 
 MAX_RUNS = 10_000
@@ -211,8 +216,6 @@ def make_spec(
     checked = parse_params(params, algos)
     try:
         check_backend(backend, algos, kind, checked, fns)
-        if budget is not None and backend == "numba":
-            raise ParameterError("--budget-evals runs on backend 'numpy' only")
     except ParameterError as exc:
         raise InputError("--backend", str(exc)) from None
     for a in algos:
@@ -221,6 +224,10 @@ def make_spec(
                 study_iterations(a, budget, iterations, agents, d, checked.get(a))
             except ParameterError as exc:
                 raise InputError("--budget-evals", str(exc)) from None
+    try:
+        check_compiled_budget(backend, algos, budget, iterations, agents, ds, checked)
+    except ParameterError as exc:
+        raise InputError("--backend", str(exc)) from None
     return BenchSpec(
         algorithms=algos,
         functions=fns,

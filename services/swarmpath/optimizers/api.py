@@ -6,7 +6,7 @@ import itertools
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -172,7 +172,9 @@ def minimize_many(
     those of ``minimize(algorithm, function, ..., run_ids=its runs)``, number for number.
 
     ``max_evaluations``: no run counts an evaluation past this many (the field's budget:
-    :mod:`swarmpath.optimizers.budget` picks the iterations that spend it); numpy only.
+    :mod:`swarmpath.optimizers.budget` picks the iterations that spend it). On ``numba`` the
+    kernels give the same numbers under it where they can (the cap cannot bind, or the kernel
+    counts it: ``compiled.run.check_budget``), else ParameterError; ``auto`` then runs numpy.
     """
     if backend not in BACKENDS:
         raise ParameterError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
@@ -202,9 +204,8 @@ def minimize_many(
     if isinstance(elements, bool) or not isinstance(elements, int | np.integer) or elements < 0:
         raise ParameterError(f"chunk_elements must be an integer >= 0, got {elements!r}")
     cls = get_optimizer(algorithm)
-    if max_evaluations is not None and backend == "numba":
-        raise ParameterError("an evaluation budget (budget_evals) runs on backend 'numpy' only")
-    backend = _resolve(backend, cls.name, fns, kind, params, max_evaluations)
+    backend = _resolve(backend, cls.name, fns, kind, params,
+                       _Budget(max_evaluations, agents, iterations, dim))
     if backend == "numba":  # run by run: one call per distinct run list, progress spread
         if all(ids == cell_ids[0] for ids in cell_ids):
             groups = [(fns, cell_ids[0])]
@@ -213,7 +214,8 @@ def minimize_many(
         hook = _spread(on_iteration, iterations, iterations * len(groups))
         return [
             res for group, ids in groups for res in _minimize_compiled(
-                cls.name, group, dim, agents, iterations, ids, int(seed), params, kind, hook)
+                cls.name, group, dim, agents, iterations, ids, int(seed), params, kind, hook,
+                max_evaluations)
         ]
     started, cpu_started = time.perf_counter(), time.thread_time()
     # Large batches run as chunks of about ``elements`` coordinates per population array,
@@ -281,27 +283,39 @@ def resolve_backend(
     transform: str = "none",
     params: Mapping[str, Any] | None = None,
     max_evaluations: int | None = None,
+    *,
+    agents: int = 30,
+    iterations: int = 500,
+    dim: int = 30,
 ) -> str:
     """The backend that computes a study: ``backend`` itself unless it is ``"auto"``, which is
     ``"numba"`` when numba is installed and the study has kernels equal to the reference to the
-    last bit (the algorithm with these ``params`` and ``transform``, each function; no
-    evaluation budget), else ``"numpy"``. Never an error for ``"auto"``: what the kernels do not
-    cover runs on the reference."""
+    last bit (the algorithm with these ``params`` and ``transform``, each function, and under
+    ``max_evaluations`` with these ``agents``, ``iterations`` and ``dim``:
+    ``compiled.run.check_budget``), else ``"numpy"``. Never an error for ``"auto"``: what the
+    kernels do not cover runs on the reference."""
     if backend not in BACKENDS:
         raise ParameterError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
     fns = [get_function(f) if isinstance(f, str) else f for f in functions]
     return _resolve(backend, get_optimizer(algorithm).name, fns, transform, params,
-                    max_evaluations)
+                    _Budget(max_evaluations, agents, iterations, dim))
+
+
+class _Budget(NamedTuple):
+    """An evaluation budget and the run shape it is spent in (``check_budget``'s arguments)."""
+
+    evaluations: int | None
+    agents: int
+    iterations: int
+    dim: int
 
 
 def _resolve(backend: str, algorithm: str, fns: Sequence[BenchmarkFunction], transform: str,
-             params: Mapping[str, Any] | None, max_evaluations: int | None) -> str:
+             params: Mapping[str, Any] | None, budget: _Budget) -> str:
     if backend != "auto":
         return backend
-    if max_evaluations is not None:
-        return "numpy"
     try:
-        from swarmpath.optimizers.compiled.run import check_function, kernel_for
+        from swarmpath.optimizers.compiled.run import check_budget, check_function, kernel_for
         from swarmpath.optimizers.compiled.run import check_study as check
     except ImportError:  # numba missing or broken: the reference runs everything
         return "numpy"
@@ -310,6 +324,8 @@ def _resolve(backend: str, algorithm: str, fns: Sequence[BenchmarkFunction], tra
         for fn in fns:
             check_function(fn)
         kernel = kernel_for(algorithm, params, transform)[0]
+        check_budget(algorithm, params, budget.agents, budget.iterations, budget.dim,
+                     budget.evaluations)
     except ParameterError:
         return "numpy"
     return "numba" if kernel.tolerance == 0.0 else "numpy"
@@ -354,6 +370,7 @@ def _minimize_compiled(
     params: Mapping[str, Any] | None,
     kind: str,
     on_iteration: Callable[[Optimizer | None], None] | None,
+    max_evaluations: int | None,
 ) -> list[Result]:
     try:  # numba is optional and never imported by the reference path
         from swarmpath.optimizers.compiled.run import minimize_compiled
@@ -362,7 +379,8 @@ def _minimize_compiled(
             f"backend 'numba' needs numba (pip install 'swarmpath[fast]'): {exc}"
         ) from None
     parts = minimize_compiled(
-        algorithm, fns, dim, agents, iterations, ids, seed, params, kind, on_iteration
+        algorithm, fns, dim, agents, iterations, ids, seed, params, kind, on_iteration,
+        max_evaluations,
     )
     return [
         Result(algorithm=algorithm, function=fn.name, dim=dim, agents=agents,

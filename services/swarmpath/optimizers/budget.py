@@ -8,11 +8,16 @@ The iterations come from the algorithm itself: its evaluations after 1 and 2 ite
 study's agents, dimension and parameters, give e(T) = e0 + T e1 (every registered algorithm
 spends a fixed number per iteration, except FDO, whose extra evaluations vary by run: it gets
 the iterations of its probe run, and the cap ends it at N). T = max(1, floor((N - e0) / e1)).
+
+The compiled kernels (``backend="numba"``) honour a budget with the reference's numbers where
+the cap cannot bind: :func:`most_evaluations` in the study's iterations fits it (every
+algorithm with a fixed count per iteration, at the iterations above), or the kernel counts the
+budget itself (PSO's, FDO's); elsewhere ``auto`` runs numpy (``compiled.run.check_budget``).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from functools import lru_cache
 from typing import Any
 
@@ -68,6 +73,45 @@ def iterations_for_budget(algorithm: str, budget: int, agents: int, dim: int,
             f"budget_evals {budget} is less than {algorithm}'s {first + per_iteration} "
             f"evaluations for its initialization and one iteration with {agents} agents")
     return max(1, (budget - first) // max(per_iteration, 1))
+
+
+def check_compiled_budget(backend: str, algorithms: Sequence[str], budget: str | None,
+                          iterations: int, agents: int, dims: Sequence[int],
+                          params: Mapping[str, Mapping[str, Any]] | None = None) -> None:
+    """Before a study: ParameterError naming budget_evals where ``backend`` 'numba' could not
+    give the reference's numbers under ``budget`` (``compiled.run.check_budget`` at each
+    algorithm's study iterations and each dim); nothing for the other backends."""
+    if backend != "numba" or budget is None:
+        return
+    from swarmpath.optimizers.compiled.run import check_budget
+
+    for a in algorithms:
+        for d in dims:
+            p = (params or {}).get(a)
+            check_budget(a, p, agents, study_iterations(a, budget, iterations, agents, d, p), d,
+                         budget_at(budget, d))
+
+
+@lru_cache(maxsize=256)
+def most_evaluations(algorithm: str, agents: int, iterations: int, dim: int,
+                     params: tuple[tuple[str, Any], ...] = ()) -> int:
+    """The most evaluations a run of ``algorithm`` counts in ``iterations``: what it declares
+    (:meth:`Optimizer.expected_evaluations`, held to it by the conformance gate), read from an
+    instance on a one-run problem that is never evaluated. ``params``: sorted (name, value)
+    pairs (hashable, for the cache)."""
+    import numpy as np
+
+    from swarmpath.optimizers.problem import Problem
+    from swarmpath.optimizers.registry import get_optimizer
+    from swarmpath.optimizers.streams import RunStreams
+
+    def never(x: Any, streams: Any) -> Any:
+        raise AssertionError("most_evaluations evaluates nothing")
+
+    problem = Problem(never, np.zeros((1, dim)), np.ones((1, dim)))
+    opt = get_optimizer(algorithm)(problem, agents, iterations, RunStreams.for_runs(0, [0]),
+                                   dict(params))
+    return int(opt.expected_evaluations()[1])
 
 
 @lru_cache(maxsize=256)

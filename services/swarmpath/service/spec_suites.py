@@ -30,10 +30,15 @@ def _with_instances(names: list[str], instances: list[int] | None) -> list[str]:
 
 
 def _check_budget(v: str | None, info: ValidationInfo) -> str | None:
-    """'N' or 'NxD', normalised; ValueError if it is malformed, needs numba, is too small for
-    an algorithm's initialization and first iteration, or takes too many iterations."""
+    """'N' or 'NxD', normalised; ValueError if it is malformed, is too small for an
+    algorithm's initialization and first iteration, takes too many iterations, or asks the numba
+    backend for a budget a kernel cannot count (``check_compiled_budget``)."""
     from swarmpath.optimizers import ParameterError
-    from swarmpath.optimizers.budget import parse_budget, study_iterations
+    from swarmpath.optimizers.budget import (
+        check_compiled_budget,
+        parse_budget,
+        study_iterations,
+    )
 
     try:
         norm = parse_budget(v)
@@ -41,8 +46,6 @@ def _check_budget(v: str | None, info: ValidationInfo) -> str | None:
         raise ValueError(str(exc)) from None
     if norm is None:
         return None
-    if info.data.get("backend", "numpy") == "numba":
-        raise ValueError("an evaluation budget runs on backend 'numpy' only")
     for a in info.data.get("algorithms") or ():
         for d in info.data.get("dims") or ():
             try:
@@ -53,4 +56,10 @@ def _check_budget(v: str | None, info: ValidationInfo) -> str | None:
             if t > MAX_ITERATIONS:
                 raise ValueError(f"{norm} evaluations take {a} {t} iterations at dim {d}; "
                                  f"at most {MAX_ITERATIONS}")
+    try:
+        check_compiled_budget(info.data.get("backend", "numpy"), info.data.get("algorithms") or (),
+                              norm, 1, info.data.get("agents") or 1, info.data.get("dims") or (),
+                              info.data.get("params"))
+    except ParameterError as exc:
+        raise ValueError(str(exc)) from None
     return norm

@@ -66,6 +66,11 @@ Rules for kernel authors:
    branches); without reference counting its caller's arrays are simply borrowed for the call
    (numba refuses to compile such a helper if it allocates or returns an array). HPO, which
    evaluates and moves one agent at a time, spent a fifth of its run in those calls (perf).
+8. Budgets: a kernel whose evaluations per run vary (masked evaluations) counts a study's
+   evaluation budget itself, as ``Optimizer.max_evaluations`` does: ``Kernel(capped=True)``,
+   ``pack`` ends with a -1.0 slot the dispatcher fills, and every evaluation narrows its mask
+   with :func:`best.within_budget` (rows in order) before ``evaluate``. A kernel with a fixed
+   count needs nothing: it runs a budget only where the count fits it (``run.check_budget``).
 """
 
 import hashlib

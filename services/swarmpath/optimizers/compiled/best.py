@@ -36,3 +36,15 @@ def record_masked(F, X, mask, best, best_x):
         for j in range(best_x.size):
             best_x[j] = X[k, j]
     return n
+
+
+@njit(cache=True, **NO_REFCOUNT)
+def within_budget(mask, out, used, budget):
+    """out = ``mask`` narrowed to the rows that still fit ``budget`` evaluations after ``used``
+    were counted, in row order (budget < 0: no budget): ``Optimizer.max_evaluations``'s rule,
+    for a kernel that counts the budget itself (``Kernel.capped``)."""
+    left = budget - used
+    for i in range(mask.size):
+        out[i] = mask[i] and (budget < 0 or left > 0)
+        if out[i]:
+            left -= 1

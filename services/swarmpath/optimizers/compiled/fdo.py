@@ -18,6 +18,11 @@ reference.
 An iteration is one pass over the bees computing the three trial points of each (trial 1's
 pace, trial 2 from the stored pace, trial 3 from the second Levy step), then per trial the
 bound rule, the evaluation of the bees that try it and the greedy test.
+
+FDO's evaluations per run vary (trials 2 and 3 only where tried), so a study's budget can end a
+run inside an iteration: the kernel counts it itself (``Kernel.capped``), as the reference's
+``max_evaluations`` does: a tried point past the budget is neither computed nor counted, gets
++inf and so fails its greedy test, and the iterations go on drawing their numbers.
 """
 
 from __future__ import annotations
@@ -27,7 +32,7 @@ from collections.abc import Mapping
 import numpy as np
 from numba import njit
 
-from swarmpath.optimizers.compiled.best import record_masked
+from swarmpath.optimizers.compiled.best import record_masked, within_budget
 from swarmpath.optimizers.compiled.norefcount import NO_REFCOUNT
 from swarmpath.optimizers.compiled.objectives import evaluate, work_for
 from swarmpath.optimizers.compiled.registry import Kernel, register_kernel
@@ -44,6 +49,7 @@ def pack(p: Mapping[str, ParamValue]) -> np.ndarray:
         float(FDO.choices["weight_rule"].index(str(p["weight_rule"]))),
         float(FDO.choices["trials"].index(str(p["trials"]))),
         float(FDO.choices["bound"].index(str(p["bound"]))),
+        -1.0,  # the evaluation budget (Kernel.capped): the dispatcher fills it
     ])
 
 
@@ -88,6 +94,7 @@ def run(rng, objective, shifted, shift, lower, upper, agents, iterations, params
     n = N * d
     wf = params[0]
     threshold, nested, author = params[1] == 0.0, params[2] == 0.0, params[3] == 1.0
+    budget = params[4]
     stream = open_stream(rng, max(2 * n, N), True)  # uniforms and normals: buffered
     call = np.empty(5, dtype=np.int64)
     work = work_for(N, d)
@@ -102,8 +109,10 @@ def run(rng, objective, shifted, shift, lower, upper, agents, iterations, params
             X[i, j] = lower[j] + (upper[j] - lower[j]) * u[start + i * d + j]
     F = np.empty(N)
     tried = np.ones((3, N), dtype=np.bool_)
-    evaluate(stream, objective, shifted, shift, lower, upper, X, F, tried[0], work)
-    evals = record_masked(F, X, tried[0], best, best_x)
+    counted = np.empty(N, dtype=np.bool_)  # the tried rows that fit the budget
+    within_budget(tried[0], counted, 0, budget)
+    evaluate(stream, objective, shifted, shift, lower, upper, X, F, counted, work)
+    evals = record_masked(F, X, counted, best, best_x)
     pace = np.zeros((N, d))
     has_pace = np.zeros(N, dtype=np.bool_)
     L = np.empty(n)
@@ -180,9 +189,10 @@ def run(rng, objective, shifted, shift, lower, upper, agents, iterations, params
                                 C[1, i, j] = C[2, i, j]
             if author:
                 bound(stream, C[trial], lower, upper, steps, call)
+            within_budget(tried[trial], counted, evals, budget)
             evaluate(stream, objective, shifted, shift, lower, upper, C[trial], FC[trial],
-                     tried[trial], work)
-            evals += record_masked(FC[trial], C[trial], tried[trial], best, best_x)
+                     counted, work)
+            evals += record_masked(FC[trial], C[trial], counted, best, best_x)
             for i in range(N):
                 if took[i] == 0 and FC[trial, i] < F[i]:
                     took[i] = trial + 1 if nested or has_pace[i] or not trial else 3
@@ -198,4 +208,4 @@ def run(rng, objective, shifted, shift, lower, upper, agents, iterations, params
     return best[0], best_x, curve, evals
 
 
-KERNEL = register_kernel(Kernel("FDO", run, pack))
+KERNEL = register_kernel(Kernel("FDO", run, pack, capped=True))

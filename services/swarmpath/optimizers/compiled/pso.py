@@ -1,4 +1,9 @@
-"""PSO's compiled kernel: :mod:`swarmpath.optimizers.pso` run for run, every parameter."""
+"""PSO's compiled kernel: :mod:`swarmpath.optimizers.pso` run for run, every parameter.
+
+With ``bounds = "fly"`` a particle outside the box is not evaluated, so a run's evaluations
+vary and a study's budget can end it inside an iteration: the kernel counts the budget itself
+(``Kernel.capped``; a particle past it is neither computed nor counted, and keeps its pbest).
+"""
 
 from __future__ import annotations
 
@@ -7,7 +12,7 @@ from collections.abc import Mapping
 import numpy as np
 from numba import njit
 
-from swarmpath.optimizers.compiled.best import record_first_min
+from swarmpath.optimizers.compiled.best import record_masked, within_budget
 from swarmpath.optimizers.compiled.objectives import evaluate, work_for
 from swarmpath.optimizers.compiled.registry import Kernel, register_kernel
 from swarmpath.optimizers.compiled.streams import RANDOM, open_stream, take
@@ -22,19 +27,21 @@ def pack(p: Mapping[str, ParamValue]) -> np.ndarray:
         float(p["c1"]), float(p["c2"]), float(p["w_max"]), float(p["w_min"]), float(p["vmax"]),
         float(_VMAX_MODES.index(str(p["vmax_mode"]))), float(p["vmax_fraction"]),
         float(_BOUNDS.index(str(p["bounds"]))),
+        -1.0,  # the evaluation budget (Kernel.capped): the dispatcher fills it
     ])
 
 
 @njit(cache=True)
 def run(rng, objective, shifted, shift, lower, upper, agents, iterations, params):
     c1, c2, w_max, w_min = params[0], params[1], params[2], params[3]
-    mode, fraction, clip = int(params[5]), params[6], params[7] == 1.0
+    mode, fraction, clip, budget = int(params[5]), params[6], params[7] == 1.0, params[8]
     same, clamp = c1 == c2, mode != 2
     N, d, T = agents, lower.size, iterations
     stream = open_stream(rng, max(2 * N * d, N), False)
     buf = stream[1][RANDOM]
     work = work_for(N, d)
     inside = np.ones(N, dtype=np.bool_)
+    counted = np.empty(N, dtype=np.bool_)  # the particles inside that fit the budget
     vmax = np.empty(d)
     vmin = np.empty(d)
     for j in range(d):
@@ -50,9 +57,9 @@ def run(rng, objective, shifted, shift, lower, upper, agents, iterations, params
     best = np.full(1, np.inf)
     best_x = np.zeros(d)
     curve = np.empty(T)
-    evaluate(stream, objective, shifted, shift, lower, upper, X, F, inside, work)
-    evaluations = N
-    record_first_min(F, X, N, best, best_x)
+    within_budget(inside, counted, 0, budget)
+    evaluate(stream, objective, shifted, shift, lower, upper, X, F, counted, work)
+    evaluations = record_masked(F, X, counted, best, best_x)
     PF = np.empty(N)
     P = np.empty((N, d))
     for i in range(N):
@@ -86,9 +93,9 @@ def run(rng, objective, shifted, shift, lower, upper, agents, iterations, params
                     ok = False
                 X[i, j] = x
             inside[i] = ok
-            evaluations += ok
-        evaluate(stream, objective, shifted, shift, lower, upper, X, F, inside, work)
-        record_first_min(F, X, N, best, best_x)
+        within_budget(inside, counted, evaluations, budget)
+        evaluate(stream, objective, shifted, shift, lower, upper, X, F, counted, work)
+        evaluations += record_masked(F, X, counted, best, best_x)
         for i in range(N):
             if F[i] < PF[i]:
                 PF[i] = F[i]
@@ -98,4 +105,4 @@ def run(rng, objective, shifted, shift, lower, upper, agents, iterations, params
     return best[0], best_x, curve, evaluations
 
 
-KERNEL = register_kernel(Kernel("PSO", run, pack))
+KERNEL = register_kernel(Kernel("PSO", run, pack, capped=True))

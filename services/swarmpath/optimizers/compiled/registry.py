@@ -41,6 +41,7 @@ class Kernel:
     transforms: tuple[str, ...] = ("none", "shift")
     tolerance: float = 0.0
     check: Callable[[Mapping[str, ParamValue], int], None] | None = None
+    capped: bool = False
 
 
 def register_kernel(kernel: Kernel) -> Kernel:

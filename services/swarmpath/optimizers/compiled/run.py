@@ -11,6 +11,7 @@ import numpy as np
 from swarmpath.functions import BenchmarkFunction
 from swarmpath.functions.transforms import rotates
 from swarmpath.optimizers.base import ParameterError
+from swarmpath.optimizers.budget import most_evaluations
 from swarmpath.optimizers.compiled.objectives import (
     Objective,
     data_for,
@@ -62,6 +63,27 @@ def check_function(fn: BenchmarkFunction) -> None:
         raise ParameterError(f"function {fn.name!r} has no numba kernel; use backend='numpy'")
 
 
+def check_budget(algorithm: str, params: Mapping[str, Any] | None, agents: int, iterations: int,
+                 dim: int, max_evaluations: int | None) -> None:
+    """ParameterError naming budget_evals unless the kernel gives the reference's numbers under
+    ``max_evaluations``: it counts the budget itself (``Kernel.capped``), or no run of the
+    algorithm can reach it in ``iterations`` (its declared most evaluations fit), so the
+    reference's cap never binds and its numbers are those of the uncapped run."""
+    if max_evaluations is None:
+        return
+    cls = get_optimizer(algorithm)
+    kernel = find_kernel(cls.name)
+    if kernel is None or kernel.capped:
+        return  # kernel_for names a missing kernel
+    key = tuple(sorted(cls.resolve_params(params).items()))
+    most = most_evaluations(cls.name, agents, iterations, dim, key)
+    if most > max_evaluations:
+        raise ParameterError(
+            f"budget_evals {max_evaluations}: {cls.name}'s kernel does not count a budget and "
+            f"its runs may spend {most} evaluations in {iterations} iterations; use "
+            "backend='numpy' (or the iterations that fit the budget)")
+
+
 def compiled_objective(fn: BenchmarkFunction, dim: int) -> Objective:
     """The compiled objective of a registered function in ``dim`` dimensions, with its data
     (:func:`check_function`'s error if it has none)."""
@@ -80,12 +102,14 @@ def minimize_compiled(
     params: Mapping[str, Any] | None,
     transform: str,
     on_iteration: Callable[[Any], None] | None = None,
+    max_evaluations: int | None = None,
 ) -> list[dict[str, Any]]:
     """Per function: the fields of its Result (the caller builds the Result).
 
     Runs are computed one after another, each by its kernel from its own generator, so run r
     gives the same numbers in any batch. ``on_iteration`` (progress, cancellation) is called
     ``iterations`` times in all, spread over the runs as they finish, with ``None``.
+    ``max_evaluations``: the reference's evaluation budget (:func:`check_budget`).
     """
     cls = get_optimizer(algorithm)
     check_study(cls.name, params, transform)
@@ -94,6 +118,9 @@ def minimize_compiled(
         raise ParameterError(f"{cls.name} needs agents >= {cls.min_agents}, got {agents}")
     if kernel.check is not None:
         kernel.check(resolved, agents)
+    check_budget(cls.name, params, agents, iterations, dim, max_evaluations)
+    if kernel.capped:
+        packed[-1] = -1.0 if max_evaluations is None else float(max_evaluations)
     objectives = [compiled_objective(fn, dim) for fn in fns]
     started, cpu_started = time.perf_counter(), time.thread_time()
     total = len(fns) * len(ids)
@@ -118,6 +145,10 @@ def minimize_compiled(
             if on_iteration is not None:
                 for _ in range(iterations * done // total - iterations * (done - 1) // total):
                     on_iteration(None)
+        if max_evaluations is not None and np.any(evaluations > max_evaluations):
+            raise RuntimeError(  # a declaration (expected_evaluations) or a kernel is wrong
+                f"{cls.name}'s kernel counted {int(evaluations.max())} evaluations, past the "
+                f"budget of {max_evaluations}")
         out.append({
             "best_fitness": best, "best_position": position, "curve": curve,
             "evaluations": evaluations, "shifts": problem.shifts, "params": dict(resolved),
