@@ -63,6 +63,23 @@ def test_bench_race_is_the_store_race_and_the_replay_over_direct_runs(raced, tmp
     assert raced["settings"]["racing"]["max_runs"] == 60
 
 
+def test_bench_race_with_planned_looks_is_the_store_race(tmp_path):
+    """--race-looks, --race-look-share, --race-sequence-share and --race-spending are the job
+    spec's racing fields: the same race document as the store's job with them."""
+    looks = {"looks": [20, 30, 40], "look_share": 0.8, "sequence_share": 0.05,
+             "spending": "pocock"}
+    code, out, err = bench(*ARGS, "--json", "--race-looks", "20,30,40", "--race-look-share",
+                           "0.8", "--race-sequence-share", "0.05", "--race-spending", "pocock")
+    assert code == 0, err
+    spec = {**SPEC, "backend": "numpy", "racing": {**SPEC["racing"], **looks}}
+    with Store(tmp_path) as store:
+        job = store.create_job(spec, now=T0)
+        drain(store, job)
+        race = store.race(job)
+    assert json.loads(out)["race"] == race
+    assert race["settings"]["looks"] == [20, 30, 40]
+
+
 def test_the_markers_are_the_race_decisions_not_rank_sum_tests(raced):
     comparison = raced["statistics"]["comparison"]
     assert comparison["correction"] == "bonferroni" and comparison["test"].startswith("race")
@@ -136,6 +153,13 @@ BAD = [
     (["--race", "--race-pairs", "some"], "--race-pairs"),
     (["--race-final-test", "sign"], "--race-final-test"),  # without --race
     (["--race", "--race-final-test", "t-test"], "--race-final-test"),
+    (["--race-looks", "20"], "--race-looks"),  # without --race
+    (["--race", "--race-looks", "20,x", "--race-look-share", "0.5"], "--race-looks"),
+    (["--race", "--race-looks", "25", "--race-look-share", "0.4"], "--race-looks"),
+    (["--race", "--race-looks", "20", "--race-look-share", "0.6"], "--race-sequence-share"),
+    (["--race", "--race-look-share", "0.3"], "--race-looks"),
+    (["--race", "--race-looks", "20", "--race-look-share", "nan"], "--race-look-share"),
+    (["--race", "--race-spending", "linear"], "--race-spending"),
     (["--race", "-a", "GWO"], "--algorithms"),
     (["--race", "-f", "bbob:f1", "--instances", "1-2", "--pool-instances"], "--pool-instances"),
 ]

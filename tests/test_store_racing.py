@@ -69,9 +69,9 @@ def check_race_against_direct_runs(store: Store, job: str, raw: dict = SPEC) -> 
     for block, want in zip(race["blocks"], expected["blocks"], strict=True):
         assert block["rounds"] == want["rounds"] and block["finished"] == want["finished"]
         assert [c["runs"] for c in block["cells"]] == [c["runs"] for c in want["cells"]]
-        assert [(d["decision"], d["better"], d["final"], d["closing_p"]) for d in block[
-            "duels"]] == [(d["decision"], d["better"], d["final"], d["closing_p"])
-                          for d in want["duels"]]
+        keys = ("decision", "better", "final", "closing_p", "look")
+        assert [[d.get(k) for k in keys] for d in block["duels"]] == [
+            [d.get(k) for k in keys] for d in want["duels"]]
         for c in block["cells"]:
             assert c["finished_runs"] == c["runs"]
     return race
@@ -125,6 +125,38 @@ def test_a_raced_job_with_a_closing_look_is_its_replay(tmp_path, look):
     assert finals == [("F5", "PSO", "PSO")]
 
 
+def test_a_raced_job_with_planned_looks_resumes_after_a_restart_with_its_decisions(tmp_path):
+    """racing.looks reaches the store: a job with group-sequential looks, stopped in the middle
+    of its race and the store reopened (a coordinator restart), finishes as the replay over the
+    directly computed runs, some comparisons decided at a look, and with fewer runs than the
+    same job without looks."""
+    looks = {"looks": [20, 30, 40, 50], "look_share": 0.8, "sequence_share": 0.05,
+             "spending": "pocock"}
+    spec = {**SPEC, "functions": ["F1", "F5"], "racing": {**SPEC["racing"], **looks}}
+    with Store(tmp_path) as store:
+        job = store.create_job(spec, now=T0)
+        drain(store, job, stop_after=110)
+        before = store.race(job)
+        assert not all(b["finished"] for b in before["blocks"])
+    with Store(tmp_path) as store:
+        assert store.race(job) == before
+        drain(store, job)
+        assert store.job_status(job).state == "done"
+        race = check_race_against_direct_runs(store, job, spec)
+        plain = store.create_job({**spec, "racing": SPEC["racing"]}, now=T0)
+        drain(store, plain)
+        without = store.race(plain)
+    assert race["settings"]["looks"] == looks["looks"]
+    at_look = [(b["block"]["function"], d["a"], d["look"]) for b in race["blocks"]
+               for d in b["duels"] if d["look"]]
+    assert at_look and all(n in looks["looks"] for _, _, n in at_look)
+
+    def used(r: dict) -> int:
+        return sum(c["runs"] for b in r["blocks"] for c in b["cells"])
+
+    assert used(race) < used(without)
+
+
 def _as_stored_before_the_rank_sum_look(path: Path, job: str, look: bool | None) -> None:
     """The store file as schema version 4 wrote it: the job's racing spec without final_test
     (None: the code before any closing look), or with the boolean of the sign look's code."""
@@ -176,8 +208,12 @@ def test_the_job_spec_offers_the_closing_looks_the_race_knows():
     from swarmpath.evidence.racing import CLOSING
     from swarmpath.service.racing import RacingSpec
 
+    from swarmpath.evidence.group_sequential import SPENDING
+
     field = RacingSpec.model_fields["final_test"]
     assert get_args(field.annotation) == CLOSING and field.default == CLOSING[0]
+    field = RacingSpec.model_fields["spending"]
+    assert get_args(field.annotation) == SPENDING and field.default == SPENDING[0]
     assert parse_job_spec(SPEC).racing.settings(60).final_test == "rank-sum"
 
 
@@ -189,6 +225,12 @@ def test_the_job_spec_offers_the_closing_looks_the_race_knows():
     ({"alpha": 0}, ("racing", "alpha")),
     ({"rounds": 3}, ("racing", "rounds")),
     ({"final_test": "yes"}, ("racing", "final_test")),
+    ({"looks": [25], "look_share": 0.3}, ("racing", "looks")),
+    ({"looks": [20, 10], "look_share": 0.3}, ("racing", "looks")),
+    ({"looks": ["20"], "look_share": 0.3}, ("racing", "looks")),
+    ({"looks": [20], "look_share": 0.6}, ("racing", "sequence_share")),
+    ({"look_share": 1.0}, ("racing", "look_share")),
+    ({"spending": "linear"}, ("racing", "spending")),
 ])
 def test_bad_racing_fields_are_named(racing, loc):
     with pytest.raises(ValidationError) as err:

@@ -382,6 +382,10 @@ def bench(
     race_margin: bench_race.RaceMarginOpt = None,
     race_pairs: bench_race.RacePairsOpt = None,
     race_final_test: bench_race.RaceFinalOpt = None,
+    race_looks: bench_race.RaceLooksOpt = None,
+    race_look_share: bench_race.RaceLookShareOpt = None,
+    race_sequence_share: bench_race.RaceSequenceShareOpt = None,
+    race_spending: bench_race.RaceSpendingOpt = None,
 ) -> None:
     """Run optimizers on benchmark functions; print min/max/avg/std (or median/IQR) per function
     and dimension, with Wilcoxon rank-sum markers, effect sizes and Bayesian probabilities
@@ -394,7 +398,8 @@ def bench(
                      baselines)
     check_range("--jobs", jobs, 0, parallel.MAX_JOBS)
     racing = bench_race.race_settings(spec, race, race_alpha, race_min_runs, race_batch,
-                                      race_margin, race_pairs, race_final_test)
+                                      race_margin, race_pairs, race_final_test, race_looks,
+                                      race_look_share, race_sequence_share, race_spending)
     if plot is not None:
         plot = plot_dir(plot, "--plot")
     stderr = Console(stderr=True)

@@ -23,6 +23,7 @@ import typer
 from swarmpath.cli.bench_spec import BenchSpec
 from swarmpath.cli.core import InputError
 from swarmpath.evidence import report
+from swarmpath.evidence.group_sequential import SPENDING
 from swarmpath.evidence.race_report import study_race
 from swarmpath.evidence.racing import (
     CLOSING,
@@ -55,6 +56,18 @@ RaceFinalOpt = Annotated[str | None, typer.Option(
     "--race-final-test", metavar="rank-sum|sign|none", help="The closing look at --runs for the "
     "comparisons still open there (docs/statistics.md, Racing): the full study's rank-sum test, "
     "Holm over them, at half of alpha (default); the sign test at half of alpha; none.")]
+RaceLooksOpt = Annotated[str | None, typer.Option(
+    "--race-looks", metavar="N,N,...", help="Planned looks (docs/statistics.md, Racing): run "
+    "counts (each --race-min-runs + k x --race-batch, below --runs) at which every comparison "
+    "still open gets the rank-sum test at a group-sequential level; needs --race-look-share.")]
+RaceLookShareOpt = Annotated[float | None, typer.Option(
+    "--race-look-share", help="The planned looks' share of --race-alpha. Default 0 (no looks).")]
+RaceSequenceShareOpt = Annotated[float | None, typer.Option(
+    "--race-sequence-share", help="The confidence sequence's share of --race-alpha beside the "
+    "rank-sum closing look (which gets the rest). Default 0.5.")]
+RaceSpendingOpt = Annotated[str | None, typer.Option(
+    "--race-spending", metavar="obrien-fleming|pocock", help="How the looks' share is spent "
+    "across them (Lan-DeMets type). Default obrien-fleming.")]
 RacePairsOpt = Annotated[str | None, typer.Option(
     "--race-pairs", metavar="reference|all", help="Compare every algorithm with the reference "
     "(default) or every pair.")]
@@ -62,12 +75,16 @@ RacePairsOpt = Annotated[str | None, typer.Option(
 
 def race_settings(spec: BenchSpec, race: bool, alpha: float | None, min_runs: int | None,
                   batch: int | None, margin: float | None, pairs: str | None,
-                  final_test: str | None = None) -> RaceSettings | None:
+                  final_test: str | None = None, looks: str | None = None,
+                  look_share: float | None = None, sequence_share: float | None = None,
+                  spending: str | None = None) -> RaceSettings | None:
     """The race of ``--race`` and its options (None without ``--race``), ``--runs`` its
     ``max_runs``; :class:`InputError` naming the option that is wrong."""
     given = {"--race-alpha": alpha, "--race-min-runs": min_runs, "--race-batch": batch,
              "--race-margin": margin, "--race-pairs": pairs,
-             "--race-final-test": final_test}
+             "--race-final-test": final_test, "--race-looks": looks,
+             "--race-look-share": look_share, "--race-sequence-share": sequence_share,
+             "--race-spending": spending}
     if not race:
         for option, value in given.items():
             if value is not None:
@@ -99,8 +116,40 @@ def race_settings(spec: BenchSpec, race: bool, alpha: float | None, min_runs: in
     if spec.pool_instances:
         raise InputError("--pool-instances", "a race decides per instance; pooled rows would "
                          "mix its allowances: race without it")
-    return RaceSettings(max_runs=spec.runs, alpha=alpha, min_runs=min_runs, batch=batch,
-                        pairs=pairs, margin=margin, final_test=final_test)
+    plan = _planned_looks(looks, look_share, sequence_share, spending)
+    try:
+        return RaceSettings(max_runs=spec.runs, alpha=alpha, min_runs=min_runs, batch=batch,
+                            pairs=pairs, margin=margin, final_test=final_test, **plan)
+    except ValueError as e:  # the looks or shares against the rest (RaceSettings says which)
+        option = {"looks": "--race-looks", "look_share": "--race-look-share", "sequence_share":
+                  "--race-sequence-share", "spending": "--race-spending"}.get(
+                      str(e).split(" ", 1)[0].rstrip(":"), "--race-looks")
+        raise InputError(option, str(e)) from None
+
+
+def _planned_looks(looks: str | None, look_share: float | None, sequence_share: float | None,
+                   spending: str | None) -> dict[str, Any]:
+    """The planned looks' options as :class:`RaceSettings` fields (their defaults when not
+    given); a malformed list of run counts is an :class:`InputError`."""
+    out: dict[str, Any] = {}
+    if looks is not None:
+        try:
+            out["looks"] = tuple(int(x) for x in looks.split(",") if x.strip())
+        except ValueError:
+            raise InputError("--race-looks", f"must be run counts separated by commas, got "
+                             f"{looks!r}") from None
+    for option, key, value in (("--race-look-share", "look_share", look_share),
+                               ("--race-sequence-share", "sequence_share", sequence_share)):
+        if value is not None:
+            if not math.isfinite(value):
+                raise InputError(option, f"must be a number in [0, 1), got {value}")
+            out[key] = value
+    if spending is not None:
+        if spending not in SPENDING:
+            raise InputError("--race-spending", f"must be one of {', '.join(SPENDING)}, got "
+                             f"{spending!r}")
+        out["spending"] = spending
+    return out
 
 
 @dataclass(frozen=True)

@@ -215,6 +215,8 @@ def race_line(race: Mapping[str, Any]) -> str:
     s = race["settings"]
     final = {"rank-sum": ", closing rank-sum test", "sign": ", closing sign test"}.get(
         _closing(s), "")
+    if s.get("looks"):
+        final += f", looks at {','.join(str(n) for n in s['looks'])} ({s['spending']})"
     return (f"race (alpha {s['alpha']:g} over {race['comparisons']} comparisons, min_runs "
             f"{s['min_runs']}, batch {s['batch']}, margin {s['margin']:g}{final}): {stopped}/"
             f"{len(cells)} cells stopped ({decided} decided), {used} runs of {full} "
@@ -228,15 +230,20 @@ def _closing(settings: Mapping[str, Any]) -> str:
 
 
 def _closing_words(settings: Mapping[str, Any]) -> str:
-    """The closing look in a legend."""
+    """The planned looks and the closing look in a legend."""
     look, runs = _closing(settings), settings["max_runs"]
+    looks = ""
+    if settings.get("looks"):
+        looks = (f"; at {', '.join(str(n) for n in settings['looks'])} runs the rank-sum test of "
+                 f"each open comparison, {settings['look_share']:g} of alpha spent across these "
+                 f"looks ({settings['spending']} type)")
     if look == "rank-sum":
-        return (f"; the comparisons still open at {runs} runs: the rank-sum test there, Holm at "
-                f"{RaceSettings(**settings).closing_alpha:g} over those not declared different "
-                f"(the sequence at the rest of alpha)")
+        return (f"{looks}; the comparisons still open at {runs} runs: the rank-sum test there, "
+                f"Holm at {RaceSettings(**settings).closing_alpha:g} over those not declared "
+                f"different (the sequence at {settings.get('sequence_share', 0.5):g} of alpha)")
     if look == "sign":
         return f", half of it to one sign test at {runs} runs for the comparisons still open there"
-    return ""
+    return looks
 
 
 def _flipped(d: Mapping[str, Any]) -> dict[str, Any]:

@@ -32,6 +32,18 @@ of earlier jobs): the exact sign test of theta = 1/2 on the ``max_runs`` pairs a
 (2 m)``, the sequence at ``alpha / (2 m)``. ``"none"``: the sequence alone at ``alpha / m``. The
 look happens once, at a run count fixed before the race (``max_runs``), so optional stopping does
 not touch it.
+
+Planned looks (``looks``, a group-sequential design; docs/statistics.md "Racing"): run counts
+fixed before the race, each one of the rounds' allowances below ``max_runs``. At each, every
+comparison still open gets the two-sided rank-sum test of its two cells' runs so far, and is
+declared different when its p is below that look's nominal level: the looks of one comparison
+spend ``alpha * look_share / m`` together, across the looks by the spending function
+``spending`` with their correlation sqrt(n_i / n_j) (:mod:`swarmpath.evidence.group_sequential`),
+so a comparison's looks err with probability at most that, wherever the race stops it. The look
+is taken in the block's own replay (Bonferroni over the study: no block waits for another). The
+shares of alpha: the sequence ``sequence_share``, the looks ``look_share``, the rank-sum closing
+look the rest (``none``: the sequence gets all but the looks' share); by the union bound a false
+difference anywhere in the study has probability at most alpha.
 """
 
 from __future__ import annotations
@@ -45,6 +57,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from swarmpath.evidence.group_sequential import SPENDING, nominal_levels
 from swarmpath.evidence.sequential import PairDecision, decide, pair_scores, sign_test
 
 PAIRS = ("reference", "all")
@@ -70,8 +83,17 @@ class RaceSettings:
     margin: float = 0.0
     #: the closing look at max_runs for the comparisons still open there (module text)
     final_test: str = CLOSING[0]
+    #: planned looks: run counts at which open comparisons get the rank-sum test (module text)
+    looks: tuple[int, ...] = ()
+    #: the looks' share of alpha (0 without looks)
+    look_share: float = 0.0
+    #: the confidence sequence's share of alpha under the rank-sum closing look
+    sequence_share: float = SEQUENCE_SHARE
+    #: how the looks' share is spent across them (:data:`SPENDING`)
+    spending: str = SPENDING[0]
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "looks", tuple(int(n) for n in self.looks))
         if not 0.0 < self.alpha < 1.0:
             raise ValueError(f"alpha must be in (0, 1), got {self.alpha}")
         if self.min_runs < 1:
@@ -87,6 +109,34 @@ class RaceSettings:
         if self.final_test not in CLOSING:
             raise ValueError(f"final_test must be one of {', '.join(CLOSING)}, got "
                              f"{self.final_test!r}")
+        self._check_looks()
+
+    def _check_looks(self) -> None:
+        """The planned looks and the shares of alpha (module text)."""
+        if self.spending not in SPENDING:
+            raise ValueError(f"spending must be one of {', '.join(SPENDING)}, got "
+                             f"{self.spending!r}")
+        if not 0.0 < self.sequence_share <= 1.0:
+            raise ValueError(f"sequence_share must be in (0, 1], got {self.sequence_share}")
+        if self.final_test != "rank-sum" and self.sequence_share != SEQUENCE_SHARE:
+            raise ValueError("sequence_share is the sequence's share beside the rank-sum "
+                             f"closing look; final_test {self.final_test!r} sets it itself")
+        if not 0.0 <= self.look_share < 1.0:
+            raise ValueError(f"look_share must be in [0, 1), got {self.look_share}")
+        if bool(self.looks) != (self.look_share > 0.0):
+            raise ValueError("looks need a look_share > 0 and a look_share needs looks")
+        if self.looks and self.final_test == "sign":
+            raise ValueError("looks go with final_test rank-sum or none, not sign")
+        if self.final_test == "rank-sum" and self.sequence_share + self.look_share >= 1.0:
+            raise ValueError(f"sequence_share ({self.sequence_share}) + look_share "
+                             f"({self.look_share}) must leave the closing look a share (< 1)")
+        for i, n in enumerate(self.looks):
+            if not (self.min_runs <= n < self.max_runs and (n - self.min_runs) % self.batch == 0):
+                raise ValueError(f"looks: {n} is not a round's run count below max_runs "
+                                 f"(min_runs {self.min_runs} + k * batch {self.batch} < "
+                                 f"{self.max_runs})")
+            if i and n <= self.looks[i - 1]:
+                raise ValueError(f"looks must increase, got {list(self.looks)}")
 
     def levels(self, comparisons: int) -> tuple[float, float]:
         """Each comparison's level for the confidence sequence and for the closing sign test
@@ -95,12 +145,25 @@ class RaceSettings:
         level = self.alpha / max(comparisons, 1)
         if self.final_test == "sign":
             return level / 2, level / 2
-        return (level * SEQUENCE_SHARE if self.final_test == "rank-sum" else level), 0.0
+        if self.final_test == "rank-sum":
+            return level * self.sequence_share, 0.0
+        return level * (1.0 - self.look_share), 0.0
 
     @property
     def closing_alpha(self) -> float:
         """The level of the rank-sum look's Holm procedure over the study (0: no such look)."""
-        return self.alpha * (1.0 - SEQUENCE_SHARE) if self.final_test == "rank-sum" else 0.0
+        if self.final_test != "rank-sum":
+            return 0.0
+        return self.alpha * (1.0 - self.sequence_share - self.look_share)
+
+    def look_levels(self, comparisons: int) -> dict[int, float]:
+        """Each planned look's nominal level (the two-sided p to be below) for one comparison:
+        ``alpha * look_share / comparisons`` spent across the looks (module text)."""
+        if not self.looks:
+            return {}
+        share = self.alpha * self.look_share / max(comparisons, 1)
+        return dict(zip(self.looks, nominal_levels(self.looks, share, self.spending),
+                        strict=True))
 
     def allowance(self, round_: int) -> int:
         """Runs a racing cell may have in round ``round_`` (0-based)."""
@@ -112,7 +175,7 @@ class RaceSettings:
         return 1 + -(-(self.max_runs - self.min_runs) // self.batch)
 
     def to_json(self) -> dict[str, Any]:
-        return asdict(self)
+        return {**asdict(self), "looks": list(self.looks)}
 
 
 def comparisons_per_block(algorithms: Sequence[str], pairs: str) -> list[tuple[str, str]]:
@@ -139,6 +202,8 @@ class Duel:
     #: lean to ("a", "b"; None on a perfect balance); the study's Holm decides (close_race)
     closing_p: float | None = None
     closing_better: str | None = None
+    #: decided by the planned look at this many runs (module text), not by the sequence
+    look: int | None = None
 
     @property
     def marker(self) -> str:
@@ -155,7 +220,8 @@ class Duel:
                 "marker": self.marker, "round": self.round, "pairs": r.n, "decided_after": r.at,
                 "theta": _number(r.theta), "low": _number(r.low), "high": _number(r.high),
                 "final": self.final, "closing_p": self.closing_p, "closing_better":
-                None if self.closing_better is None else getattr(self, self.closing_better)}
+                None if self.closing_better is None else getattr(self, self.closing_better),
+                "look": self.look}
 
 
 def _number(v: float) -> float | None:
@@ -197,6 +263,7 @@ def race_block(
     (the Bonferroni divisor). ``intervals=False`` leaves the duels' confidence intervals out
     (NaN; the costly part, which no decision uses: simulations of many races)."""
     level, final_level = settings.levels(comparisons)
+    look_at = settings.look_levels(comparisons)
     arrays = {name: np.asarray(values.get(name, ()), dtype=float) for name in algorithms}
     pairs = comparisons_per_block(algorithms, settings.pairs)
     mine = {name: [p for p in pairs if name in p] for name in algorithms}
@@ -220,6 +287,13 @@ def race_block(
                 result = decide(z, level, settings.margin, interval=False)
                 if result.decision != "open":
                     decided[(a, b)] = Duel(a, b, result, round_)
+                elif need in look_at:
+                    # a planned look: the rank-sum test at its nominal level (module text)
+                    look_p, lean = _rank_sum(arrays[a][:need], arrays[b][:need])
+                    if look_p < look_at[need] and lean is not None:
+                        decided[(a, b)] = Duel(a, b, PairDecision(
+                            result.n, "different", lean, result.n, result.theta, math.nan,
+                            math.nan), round_, look=need)
                 elif settings.closing_alpha and need >= settings.max_runs:
                     # open with both cells at max_runs: the rank-sum look's p (module text)
                     closing[(a, b)] = _rank_sum(arrays[a][:need], arrays[b][:need])
@@ -246,7 +320,8 @@ def race_block(
             d = decided[(a, b)].result
             result = PairDecision(result.n, d.decision, d.better, d.at, result.theta,
                                   result.low, result.high)
-            duels.append(Duel(a, b, result, decided[(a, b)].round, decided[(a, b)].final))
+            duels.append(Duel(a, b, result, decided[(a, b)].round, decided[(a, b)].final,
+                              look=decided[(a, b)].look))
         else:  # a crossing inside an incomplete round waits for the round's end
             p, side = closing.get((a, b), (None, None))
             duels.append(Duel(a, b, _open(result), None, closing_p=p, closing_better=side))

@@ -17,7 +17,7 @@ from typing import Any, Literal
 
 from pydantic import Field, field_validator
 
-from swarmpath.evidence.racing import PAIRS, RaceSettings, comparisons_per_block
+from swarmpath.evidence.racing import PAIRS, SEQUENCE_SHARE, RaceSettings, comparisons_per_block
 from swarmpath.service.model import MAX_RUNS_PER_CELL, Model
 
 #: Cell spec fields that tell the algorithms of a block apart (the rest is the block): with an
@@ -48,6 +48,27 @@ class RacingSpec(Model):
         "half of alpha, or none (docs/statistics.md, Racing); false and true, what jobs "
         "stored before the rank-sum look held, are none and sign")
 
+    looks: list[int] = Field(
+        default_factory=list, max_length=MAX_RUNS_PER_CELL, description="planned looks: run "
+        "counts (each min_runs + k * batch, below max_runs, increasing) at which every "
+        "comparison still open gets the rank-sum test at a group-sequential level "
+        "(docs/statistics.md, Racing)")
+    look_share: float = Field(default=0.0, ge=0, lt=1, allow_inf_nan=False,
+                              description="the looks' share of alpha (> 0 with looks)")
+    sequence_share: float = Field(
+        default=SEQUENCE_SHARE, gt=0, le=1, allow_inf_nan=False, description="the confidence "
+        "sequence's share of alpha beside the rank-sum closing look (which gets the rest)")
+    spending: Literal["obrien-fleming", "pocock"] = Field(
+        default="obrien-fleming", description="how the looks' share is spent across them: "
+        "Lan-DeMets O'Brien-Fleming or Pocock type")
+
+    @field_validator("looks", mode="before")
+    @classmethod
+    def _strict_looks(cls, v: Any) -> Any:
+        if isinstance(v, list) and any(isinstance(n, bool) or not isinstance(n, int) for n in v):
+            raise ValueError("must be a list of integers (run counts)")
+        return v
+
     @field_validator("final_test", mode="before")
     @classmethod
     def _boolean_look(cls, v: Any) -> Any:
@@ -64,7 +85,9 @@ class RacingSpec(Model):
     def settings(self, runs: int) -> RaceSettings:
         return RaceSettings(max_runs=runs, alpha=self.alpha, min_runs=self.min_runs,
                             batch=self.batch, pairs=self.pairs, margin=self.margin,
-                            final_test=self.final_test)
+                            final_test=self.final_test, looks=tuple(self.looks),
+                            look_share=self.look_share, sequence_share=self.sequence_share,
+                            spending=self.spending)
 
 
 def check_racing(racing: RacingSpec, runs: int, algorithms: Sequence[str]) -> list[
@@ -79,6 +102,12 @@ def check_racing(racing: RacingSpec, runs: int, algorithms: Sequence[str]) -> li
                          f"{racing.min_runs}"))
     if len(algorithms) < 2:
         problems.append(((), "a race needs at least two algorithms"))
+    if not problems:
+        try:  # the looks and shares against the job's runs (RaceSettings checks them)
+            racing.settings(runs)
+        except ValueError as e:
+            field = str(e).split(" ", 1)[0].rstrip(":")
+            problems.append(((field,) if field in RacingSpec.model_fields else (), str(e)))
     return problems
 
 

@@ -132,7 +132,9 @@ RACE_SCHEMA: dict[str, Any] = {
                       "description": "decided by the closing look at max_runs"},
             "closing_p": {"type": "number", "description": "open at max_runs under the "
                           "rank-sum look: the rank-sum test's two-sided p there"},
-            "closing_better": {"type": "string", "description": "the side its runs lean to"}}}},
+            "closing_better": {"type": "string", "description": "the side its runs lean to"},
+            "look": {"type": "integer", "description": "decided by the planned look (the "
+                     "rank-sum test at a group-sequential level) at this many runs"}}}},
     },
 }
 

@@ -146,7 +146,7 @@
     }
     html += `</tbody></table><table id="race-pairs"><thead><tr><th class="l">function</th><th>dim</th><th class="l">pair</th><th class="l">verdict</th><th>round</th><th>pairs</th><th>P(a's run beats b's) [interval]</th></tr></thead><tbody>`;
     for (const b of r.blocks) for (const d of b.duels) {
-      const verdict = (d.decision === "different" ? `${d.better} better` : d.decision) + (d.final ? " (closing look)" : "");
+      const verdict = (d.decision === "different" ? `${d.better} better` : d.decision) + (d.final ? " (closing look)" : "") + (d.look ? ` (look at ${d.look} runs)` : "");
       const theta = d.theta === null ? "" : `${d.theta.toFixed(3)} [${SP.num(d.low, 3)}, ${SP.num(d.high, 3)}]`;
       html += `<tr data-pair="${SP.esc(b.block.function)}/${b.block.dim}/${SP.esc(d.a)}/${SP.esc(d.b)}"><td class="l">${SP.esc(b.block.function)}</td><td>${b.block.dim}</td>
         <td class="l">${SP.esc(d.a)} vs ${SP.esc(d.b)}</td><td class="l verdict-${d.decision}">${SP.esc(verdict)} <span class="marker">${d.marker}</span></td>

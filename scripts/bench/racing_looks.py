@@ -1,0 +1,149 @@
+#!/usr/bin/env python3
+"""Races with planned group-sequential looks (``racing.looks``; docs/statistics.md, Racing) on the
+ICOOT paper's Table 2: replayed over full 1000-run studies, and over null studies.
+
+    .venv/bin/python scripts/bench/racing_looks.py replay --full full.json [full2.json]
+                                                          [--designs NAME,...]
+    .venv/bin/python scripts/bench/racing_looks.py null [--studies 200] [--seed 1]
+                                                        [--designs NAME,...]
+
+Each design of :data:`DESIGNS` is a ``racing`` field (min_runs 10, batch 10, alpha 0.05,
+max_runs 1000). ``replay``: the race of Table 2 replayed over each full study's runs with the
+product's own code (``racing.py``'s ``replayed_race``: :func:`swarmpath.evidence.racing.
+race_block` per function and the study's closing look, what the store runs as results arrive;
+run r of a cell is the same run raced or not), its runs against the 78,000 of the full study,
+and every +/=/- against the full study's (rank-sum, Holm over the table, alpha 0.05), the
+disagreements listed. ``null``: ``--studies`` studies of Table 2's shape (13 blocks of 6
+algorithms, 1000 independent standard normal runs a cell: nothing differs) raced by each design:
+the share of studies with any difference declared (each one false), at most alpha = 0.05 within
+its Monte Carlo error when the design is valid. Markdown to stdout, progress to stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from racing import _bench_values, _verdicts, replayed_race
+from service import TABLE2_ALGORITHMS, TABLE2_FUNCTIONS, note
+
+from swarmpath.evidence.racing import RaceSettings
+
+EVERY_ROUND = tuple(range(20, 1000, 10))
+#: name -> the racing fields besides min_runs 10, batch 10, alpha 0.05 (the default: none).
+DESIGNS: dict[str, dict[str, Any]] = {
+    "default": {},
+    "obf-50": dict(looks=tuple(range(50, 1000, 50)), look_share=0.8, sequence_share=0.05),
+    "pocock-100": dict(looks=tuple(range(100, 1000, 100)), look_share=0.5, sequence_share=0.1,
+                       spending="pocock"),
+    "pocock-50": dict(looks=tuple(range(50, 1000, 50)), look_share=0.8, sequence_share=0.05,
+                      spending="pocock"),
+    "pocock-rounds": dict(looks=EVERY_ROUND, look_share=0.8, sequence_share=0.05,
+                          spending="pocock"),
+}
+MAX_RUNS = 1000
+
+
+def settings_of(name: str) -> RaceSettings:
+    return RaceSettings(max_runs=MAX_RUNS, alpha=0.05, min_runs=10, batch=10, **DESIGNS[name])
+
+
+def describe(name: str) -> str:
+    """A design in a table: its name, spending, looks and shares of alpha."""
+    d = settings_of(name)
+    if not d.looks:
+        return (f"{name}: no looks, sequence {d.sequence_share:g} / closing "
+                f"{d.closing_alpha / d.alpha:.2g}")
+    return (f"{name}: {d.spending}, looks {d.looks[0]}-{d.looks[-1]} ({len(d.looks)}), sequence "
+            f"{d.sequence_share:g} / looks {d.look_share:g} / closing "
+            f"{d.closing_alpha / d.alpha:.2g}")
+
+
+def _runs(race: dict[str, Any]) -> int:
+    return sum(c["runs"] for b in race["blocks"] for c in b["cells"])
+
+
+def replay(args: argparse.Namespace) -> None:
+    docs = [json.loads(Path(f).read_text()) for f in args.full]
+    values = [_bench_values(d) for d in docs]
+    verdicts = [_verdicts(v, MAX_RUNS) for v in values]
+    full = len(TABLE2_ALGORITHMS) * len(TABLE2_FUNCTIONS) * MAX_RUNS
+    print("design: spending, looks (how many), shares of alpha (sequence / looks / closing "
+          f"rank-sum look)\n\n| design | full study | runs | fewer than {full:,} | at a look "
+          "| agree with its full study | with the other | disagreements (raced marker; full "
+          "study's) |\n"
+          "| --- | --- | ---: | ---: | ---: | ---: | ---: | --- |")
+    for name in args.designs:
+        settings = settings_of(name)
+        for i, (doc, v) in enumerate(zip(docs, values, strict=True)):
+            race = replayed_race(v, settings)
+            duels = [(b["block"]["function"], d) for b in race["blocks"] for d in b["duels"]]
+            agree = [sum(d["marker"] == verdicts[j][(f, d["a"])].marker for f, d in duels)
+                     for j in range(len(docs))]
+            wrong = [f"{f} {d['a']} {d['marker']} ({d['decision']}; "
+                     f"{verdicts[i][(f, d['a'])].marker}, p_holm "
+                     f"{verdicts[i][(f, d['a'])].p_holm:.2g})"
+                     for f, d in duels if d["marker"] != verdicts[i][(f, d["a"])].marker]
+            other = f"{agree[1 - i]}/{len(duels)}" if len(docs) == 2 else ""
+            used = _runs(race)
+            print(f"| {describe(name)} | seed {doc['settings']['seed']} | {used:,} | "
+                  f"{full / used:.2f}x | "
+                  f"{sum(d['look'] is not None for _, d in duels)} | {agree[i]}/{len(duels)} | "
+                  f"{other} | {', '.join(wrong)} |", flush=True)
+            note(f"{name}, seed {doc['settings']['seed']}: {used} runs")
+
+
+def null(args: argparse.Namespace) -> None:
+    rng = np.random.default_rng(args.seed)
+    false = dict.fromkeys(args.designs, 0)
+    by_look = dict.fromkeys(args.designs, 0)
+    for s in range(args.studies):
+        values = {(a, f): rng.normal(size=MAX_RUNS).tolist() for a in TABLE2_ALGORITHMS
+                  for f in TABLE2_FUNCTIONS}
+        for name in args.designs:
+            duels = [d for b in replayed_race(values, settings_of(name))["blocks"]
+                     for d in b["duels"]]
+            false[name] += any(d["decision"] == "different" for d in duels)
+            by_look[name] += any(d["look"] is not None for d in duels)
+        if (s + 1) % 10 == 0:
+            note(f"{s + 1} studies: " + ", ".join(f"{v}" for v in false.values()))
+    print(f"{args.studies} null studies (13 blocks x 6 algorithms, {MAX_RUNS} standard normal "
+          f"runs a cell, seed {args.seed}), raced by the product's code: studies with a false "
+          "difference (95 % Monte Carlo interval; valid: at most 0.05 within it)\n\n"
+          "| design | studies with a false difference | rate | of them at a look |\n"
+          "| --- | ---: | --- | ---: |")
+    for name in args.designs:
+        rate = false[name] / args.studies
+        half = 1.96 * math.sqrt(max(rate * (1 - rate), 0.05 * 0.95) / args.studies)
+        print(f"| {describe(name)} | {false[name]}/{args.studies} | {rate:.3f} "
+              f"({max(rate - half, 0):.3f}-{rate + half:.3f}) | {by_look[name]} |")
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    sub = ap.add_subparsers(dest="what", required=True)
+    r = sub.add_parser("replay")
+    r.add_argument("--full", type=Path, nargs="+", required=True, metavar="FILE")
+    n = sub.add_parser("null")
+    n.add_argument("--studies", type=int, default=200)
+    n.add_argument("--seed", type=int, default=1)
+    for p in (r, n):
+        p.add_argument("--designs", type=lambda v: v.split(","), default=list(DESIGNS),
+                       help=f"names of DESIGNS, comma-separated: {', '.join(DESIGNS)}")
+    args = ap.parse_args(argv)
+    unknown = [d for d in args.designs if d not in DESIGNS]
+    if unknown:
+        ap.error(f"--designs: unknown {unknown}")
+    {"replay": replay, "null": null}[args.what](args)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
