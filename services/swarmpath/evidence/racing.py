@@ -281,6 +281,7 @@ def race_block(
             allowance[name] = need
         if any(arrays[name].size < need for name in active):
             break  # the round is not complete: its missing runs are what may be leased now
+        looked: list[tuple[str, str, PairDecision]] = []
         for a, b in pairs:
             if (a, b) not in decided and (racing[a] or racing[b]):
                 z = pair_scores(arrays[a][:need], arrays[b][:need])
@@ -288,12 +289,7 @@ def race_block(
                 if result.decision != "open":
                     decided[(a, b)] = Duel(a, b, result, round_)
                 elif need in look_at:
-                    # a planned look: the rank-sum test at its nominal level (module text)
-                    look_p, lean = _rank_sum(arrays[a][:need], arrays[b][:need])
-                    if look_p < look_at[need] and lean is not None:
-                        decided[(a, b)] = Duel(a, b, PairDecision(
-                            result.n, "different", lean, result.n, result.theta, math.nan,
-                            math.nan), round_, look=need)
+                    looked.append((a, b, result))
                 elif settings.closing_alpha and need >= settings.max_runs:
                     # open with both cells at max_runs: the rank-sum look's p (module text)
                     closing[(a, b)] = _rank_sum(arrays[a][:need], arrays[b][:need])
@@ -304,6 +300,14 @@ def race_block(
                         decided[(a, b)] = Duel(a, b, PairDecision(
                             result.n, "different", better, result.n, result.theta, math.nan,
                             math.nan), round_, final=True)
+        # a planned look: the rank-sum test at its nominal level (module text), all the open
+        # comparisons of the round in one vectorized call (they have the same run count)
+        tests = _rank_sums([(arrays[a][:need], arrays[b][:need]) for a, b, _ in looked])
+        for (a, b, result), (look_p, lean) in zip(looked, tests, strict=True):
+            if look_p < look_at[need] and lean is not None:
+                decided[(a, b)] = Duel(a, b, PairDecision(
+                    result.n, "different", lean, result.n, result.theta, math.nan, math.nan),
+                    round_, look=need)
         for name in active:
             if mine[name] and all(p in decided for p in mine[name]):
                 racing[name], stopped[name], reason[name] = False, round_, "decided"
@@ -331,14 +335,26 @@ def race_block(
 def _rank_sum(a: np.ndarray, b: np.ndarray) -> tuple[float, str | None]:
     """The full study's test of one comparison (:func:`swarmpath.evidence.compare.rank_sum`,
     NaN dropped): its two-sided p and the side whose runs tend lower."""
-    from swarmpath.evidence.compare import rank_sum  # scipy.stats: only when a look happens
+    return _rank_sums([(a, b)])[0]
 
-    res = rank_sum(a, b)
-    if res is None:
-        return 1.0, None
-    u, p = res
-    half = np.count_nonzero(~np.isnan(a)) * np.count_nonzero(~np.isnan(b)) / 2.0
-    return p, None if u == half else ("a" if u < half else "b")
+
+def _rank_sums(samples: Sequence[tuple[np.ndarray, np.ndarray]]
+               ) -> list[tuple[float, str | None]]:
+    """:func:`_rank_sum` of each pair of samples, the large ones in one vectorized call
+    (:func:`swarmpath.evidence.compare.rank_sum_many`: the same p as one call each)."""
+    if not samples:
+        return []
+    from swarmpath.evidence.compare import rank_sum_many  # scipy.stats: only when a look happens
+
+    out: list[tuple[float, str | None]] = []
+    for (a, b), res in zip(samples, rank_sum_many(samples), strict=True):
+        if res is None:
+            out.append((1.0, None))
+            continue
+        u, p = res
+        half = np.count_nonzero(~np.isnan(a)) * np.count_nonzero(~np.isnan(b)) / 2.0
+        out.append((p, None if u == half else ("a" if u < half else "b")))
+    return out
 
 
 def closing_rejections(pvalues: Sequence[float], family: int, alpha: float) -> list[bool]:
