@@ -112,7 +112,7 @@ def null(args: argparse.Namespace) -> None:
                      for d in b["duels"]]
             false[name] += any(d["decision"] == "different" for d in duels)
             by_look[name] += any(d["look"] is not None for d in duels)
-        if (s + 1) % 10 == 0:
+        if (s + 1) % 5 == 0:
             note(f"{s + 1} studies: " + ", ".join(f"{v}" for v in false.values()))
     print(f"{args.studies} null studies (13 blocks x 6 algorithms, {MAX_RUNS} standard normal "
           f"runs a cell, seed {args.seed}), raced by the product's code: studies with a false "
