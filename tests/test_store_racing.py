@@ -205,10 +205,9 @@ def test_a_job_stored_before_the_rank_sum_look_resumes_with_its_decisions(tmp_pa
 def test_the_job_spec_offers_the_closing_looks_the_race_knows():
     from typing import get_args
 
+    from swarmpath.evidence.group_sequential import SPENDING
     from swarmpath.evidence.racing import CLOSING
     from swarmpath.service.racing import RacingSpec
-
-    from swarmpath.evidence.group_sequential import SPENDING
 
     field = RacingSpec.model_fields["final_test"]
     assert get_args(field.annotation) == CLOSING and field.default == CLOSING[0]
