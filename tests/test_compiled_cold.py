@@ -129,3 +129,36 @@ def test_the_install_warm_up_leaves_the_suites_to_their_first_study(monkeypatch)
     assert algos == kernel_names() and maps and cold_only and not plain
     assert "F1" in builtin and "F13" in builtin and not any(":" in n for n in builtin)
     assert set(builtin) < set(everything) and "bbob:f1" in everything
+
+
+#: compiles (or loads) the objectives named on the command line, then each cfunc's cache hits
+OBJECTIVES = """
+import json, sys
+from swarmpath.functions import get_function
+from swarmpath.optimizers.compiled.objectives import _compiled
+print(json.dumps({name: _compiled(get_function(name)).cache_hits for name in sys.argv[1:]}))
+"""
+
+
+def test_a_suite_objective_is_loaded_from_the_cache_by_a_later_process(tmp_path):
+    """A BBOB objective (one code for the 24 functions, each calling its own raw function)
+    compiled in one process is loaded by the next, like the built-ins' and the CEC ones (its
+    raw function was a closure cell, which numba's cache key pickles with a random id: every
+    process compiled it again, and a slot's warm-up spent most of its time on it)."""
+    names = ["bbob:f1", "bbob:f2", "F4"]
+    first = json.loads(run(tmp_path, "-c", OBJECTIVES, *names).stdout.splitlines()[-1])
+    assert first == dict.fromkeys(names, 0), first  # a cold cache: compiled here
+    later = json.loads(run(tmp_path, "-c", OBJECTIVES, *names).stdout.splitlines()[-1])
+    assert all(hits > 0 for hits in later.values()), later
+
+
+def test_no_registered_objective_is_a_closure():
+    """numba's cache keys a closure by its cells pickled; a compiled function among them
+    pickles differently in every process, so such an objective never loads from the cache.
+    Every registered objective (built-ins, suites) is a plain function."""
+    from swarmpath.optimizers.compiled import objectives
+
+    objectives.compiled_names()  # registers the suites' objectives
+    closures = [name for name, population in objectives._POPULATIONS.items()
+                if population.__closure__]
+    assert closures == [], closures

@@ -11,6 +11,7 @@ An instance's constants are packed into the objective's ``data`` array by
 
 from __future__ import annotations
 
+import types
 from typing import Any
 
 import numpy as np
@@ -504,14 +505,29 @@ _RAW = {
 }
 
 
+#: the raw function of a copy of :func:`_population_code`: each copy has its own (_population)
+RAW: Any = None
+
+
+def _population_code(m, d, xp, fp, mp, wp, dp):
+    """The population objective (objectives.SIGNATURE's parameters) of the raw function
+    ``RAW``, a global that :func:`_population` gives each copy of this code."""
+    X, F, mask, data = population_views(m, d, xp, fp, mp, dp)
+    raw = np.empty(m)
+    RAW(X, data, raw)
+    errors_into(F, mask, raw, data)
+
+
 def _population(raw_fn: Any) -> Any:
-    """The population objective (objectives.SIGNATURE's parameters) of one raw function."""
-    def population(m, d, xp, fp, mp, wp, dp):
-        X, F, mask, data = population_views(m, d, xp, fp, mp, dp)
-        raw = np.empty(m)
-        raw_fn(X, data, raw)
-        errors_into(F, mask, raw, data)
-    population.__name__ = population.__qualname__ = f"bbob{raw_fn.__name__}"
+    """:func:`_population_code` for one raw function, with ``RAW`` = ``raw_fn`` a global of its
+    own, not a closure: numba's cache key hashes a closure's cells pickled, and a compiled
+    function pickles with a random id, so a closure's objective was compiled again in every
+    process (0.2-0.9 s of CPU each, a new cache entry each time) instead of loaded."""
+    scope = {**globals(), "RAW": raw_fn}
+    name = f"bbob{raw_fn.__name__}"
+    population = types.FunctionType(_population_code.__code__, scope, name)
+    population.__qualname__ = name  # numba's cache file: one per raw function
+    population.__doc__ = _population_code.__doc__
     return population
 
 
