@@ -20,5 +20,6 @@ export PATH="$venv/bin:$PATH"
 # Compile the numba kernels once per installed tree, so that a first study does not
 # (docs/benchmarks.md, "Cold start"): every kernel, the built-in functions' objectives and the
 # map kernels (a suite's objective compiles at its first study, a few seconds); with the cache
-# filled this prints nothing. A failure is not fatal: the kernels then compile at first use.
-swarmpath warmup --if-cold --no-suites || echo "== swarmpath warmup failed: the kernels compile at first use"
+# filled this prints nothing. Two processes (-j 2) share the pieces: on two cores about 0.6 of
+# the wall time of one. A failure is not fatal: the kernels then compile at first use.
+swarmpath warmup --if-cold --no-suites -j 2 || echo "== swarmpath warmup failed: the kernels compile at first use"

@@ -116,6 +116,52 @@ def test_a_shared_warm_up_waits_for_the_process_making_a_piece_then_loads_it():
     assert [(w.kind, w.name) for w in done[0]] == [("function", "F9"), ("function", "F1")]
 
 
+def test_a_shared_warm_up_makes_the_next_piece_while_another_process_makes_one(monkeypatch,
+                                                                            tmp_path):
+    """Processes walking the same pieces do not wait at each one (they did, in turn, at every
+    piece: two took as long as one): a piece another holds is passed over, the next one made
+    meanwhile, the held one waited for at the end."""
+    from numba.core import config
+
+    from swarmpath.optimizers.compiled.warm import cold
+
+    monkeypatch.setattr(config, "CACHE_DIR", str(tmp_path))  # the markers: none made yet
+    done: list = []
+    with piece_held("function", "F2"):
+        thread = threading.Thread(target=lambda: done.append(
+            warm([], ["F9", "F2", "F1"], shared=True, cold_only=True)), daemon=True)
+        thread.start()
+        deadline = time.monotonic() + 120
+        while cold([("function", "F1")]) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert cold([("function", "F9"), ("function", "F1")]) == []  # made while F2 was held
+        assert thread.is_alive() and cold([("function", "F2")]) == [("function", "F2")]
+    thread.join(120)
+    assert [(w.kind, w.name) for w in done[0]] == [
+        ("function", "F9"), ("function", "F2"), ("function", "F1")]
+
+
+def test_warmup_in_two_processes_makes_each_piece_once(tmp_path):
+    """``swarmpath warmup -j 2`` (scripts/_venv.sh): every piece ready, each listed once."""
+    import subprocess
+    import sys
+
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path),
+           "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}
+    out = subprocess.run([sys.executable, "-m", "swarmpath.cli", "warmup", "--if-cold", "-a",
+                          "SSA,GWO", "-f", "F4,F1", "-j", "2", "--json"], env=env,
+                         capture_output=True, text=True, timeout=900)
+    assert out.returncode == 0, out.stderr[-3000:]
+    names = [(w["kind"], w["name"]) for w in json.loads(out.stdout)]
+    assert names == [("function", "F4"), ("function", "F1"), ("algorithm", "SSA"),
+                     ("algorithm", "GWO")]
+    check = ("from swarmpath.optimizers.compiled.warm import cold, pieces;"
+             "print(cold(pieces(['SSA', 'GWO'], ['F4', 'F1'], False)))")
+    again = subprocess.run([sys.executable, "-c", check], env=env, capture_output=True,
+                           text=True, timeout=300)
+    assert again.stdout.strip() == "[]", again.stderr[-3000:]
+
+
 @pytest.mark.skipif(not Path("/proc/locks").is_file(), reason="needs Linux's /proc/locks")
 def test_a_process_slot_says_ready_only_after_its_kernels_and_without_warm_at_once():
     """A slot process compiles (or loads) the kernels before it says ready, so a worker never

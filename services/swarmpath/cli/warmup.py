@@ -36,6 +36,10 @@ def warmup(
                            "changed): scripts/_venv.sh runs --if-cold --no-suites after an "
                            "install.")
     ] = False,
+    jobs: Annotated[
+        int, typer.Option("--jobs", "-j", min=1, help="Processes compiling at once, each piece "
+                          "by one of them (scripts/_venv.sh: 2).")
+    ] = 1,
     as_json: Annotated[bool, typer.Option("--json", help="One JSON document.")] = False,
 ) -> None:
     """Compile (or load from numba's cache) the compiled kernels and objectives that backend
@@ -50,7 +54,7 @@ def warmup(
         cold,
         functions_with_objectives,
         pieces,
-        warm,
+        warm_in_processes,
     )
 
     try:
@@ -74,7 +78,7 @@ def warmup(
         typer.echo(f"swarmpath warmup: compiling the {len(missing)} pieces (numba kernels, "
                    "objectives) this tree's cache lacks, once per installed tree (seconds of CPU "
                    "each)", err=True)
-    done = warm(algos, names, maps=maps, cold_only=if_cold)
+    done = warm_in_processes(algos, names, jobs=jobs, maps=maps, cold_only=if_cold)
     if as_json:
         sys.stdout.write(json.dumps([{"kind": w.kind, "name": w.name, "cpu_seconds": w.seconds}
                                      for w in done]) + "\n")
