@@ -34,7 +34,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from racing import _bench_values, _verdicts, replayed_race
 from service import TABLE2_ALGORITHMS, TABLE2_FUNCTIONS, note
 
-from swarmpath.evidence.racing import RaceSettings
+from swarmpath.evidence.race_report import study_race
+from swarmpath.evidence.racing import RaceSettings, race_block
 
 EVERY_ROUND = tuple(range(20, 1000, 10))
 #: name -> the racing fields besides min_runs 10, batch 10, alpha 0.05 (the default: none).
@@ -100,6 +101,18 @@ def replay(args: argparse.Namespace) -> None:
             note(f"{name}, seed {doc['settings']['seed']}: {used} runs")
 
 
+def _null_race(values: dict[tuple[str, str], list[float]], settings: RaceSettings
+               ) -> dict[str, Any]:
+    """``replayed_race`` without the duels' confidence intervals (no decision uses them; they
+    are most of a replay's time)."""
+    m = len(TABLE2_FUNCTIONS) * (len(TABLE2_ALGORITHMS) - 1)
+    blocks = [({"function": f}, race_block({a: np.asarray(values[(a, f)]) for a in
+                                            TABLE2_ALGORITHMS}, TABLE2_ALGORITHMS, settings, m,
+                                           intervals=False), list(enumerate(TABLE2_ALGORITHMS)))
+              for f in TABLE2_FUNCTIONS]
+    return study_race(settings, m, blocks)
+
+
 def null(args: argparse.Namespace) -> None:
     rng = np.random.default_rng(args.seed)
     false = dict.fromkeys(args.designs, 0)
@@ -108,7 +121,7 @@ def null(args: argparse.Namespace) -> None:
         values = {(a, f): rng.normal(size=MAX_RUNS).tolist() for a in TABLE2_ALGORITHMS
                   for f in TABLE2_FUNCTIONS}
         for name in args.designs:
-            duels = [d for b in replayed_race(values, settings_of(name))["blocks"]
+            duels = [d for b in _null_race(values, settings_of(name))["blocks"]
                      for d in b["duels"]]
             false[name] += any(d["decision"] == "different" for d in duels)
             by_look[name] += any(d["look"] is not None for d in duels)
