@@ -30,6 +30,11 @@ from test_service_e2e import ENV, PY, Service
 SPEC = {"kind": "benchmark", "algorithms": ["SSA", "PSO", "GWO"], "functions": ["F1", "F5"],
         "dims": [6], "runs": 60, "agents": 10, "iterations": 300, "seed": 4,
         "racing": {"min_runs": 8, "batch": 8}}
+# the same study with planned looks (Pocock-spent rank-sum tests every round from 16 runs): F1's
+# comparisons and F5's SSA are decided at the looks at 16 and 24 runs, PSO stays open: 192 runs
+LOOKS_SPEC = {**SPEC, "racing": {**SPEC["racing"], "looks": [16, 24, 32, 40, 48, 56],
+                                 "look_share": 0.8, "sequence_share": 0.05,
+                                 "spending": "pocock"}}
 
 
 @pytest.fixture(scope="module")
@@ -45,10 +50,10 @@ def service(tmp_path_factory) -> Iterator[Service]:
         svc.close()
 
 
-def expected_race(race: dict) -> dict:
+def expected_race(race: dict, spec: dict = SPEC) -> dict:
     """The race document of the job's study replayed over directly computed runs, its blocks
     (and their cells' order) as in ``race``."""
-    settings = parse_job_spec(SPEC).racing.settings(60)
+    settings = parse_job_spec(spec).racing.settings(60)
     blocks = []
     for block in race["blocks"]:
         names = [c["algorithm"] for c in block["cells"]]
@@ -60,7 +65,8 @@ def expected_race(race: dict) -> dict:
 
 def test_a_raced_job_survives_kills_and_decides_as_the_replay(service, tmp_path):
     job = service.submit(SPEC)
-    service.wait_for(lambda: service.status(job)["runs_done"] >= 20, 120, "the first round")
+    looked = service.submit(LOOKS_SPEC)  # races beside it, through the same kills
+    service.wait_for(lambda: service.status(job)["runs_done"] >= 20, 300, "the first round")
     busy = [w["id"] for w in service.get("/workers").json() if w["alive"] and w["current_runs"]]
     victim = busy[0] if busy else "w1"
     service.kill(service.workers[victim])
@@ -76,6 +82,16 @@ def test_a_raced_job_survives_kills_and_decides_as_the_replay(service, tmp_path)
     service.start_coordinator(lease_seconds=6.0)
     status = service.wait_done(job, 300)
     assert status["state"] == "done" and status["runs_failed"] == 0
+    assert service.wait_done(looked, 300)["state"] == "done"
+    race = service.get(f"/jobs/{looked}/race").json()
+    for block, expected in zip(race["blocks"], expected_race(race, LOOKS_SPEC)["blocks"],
+                               strict=True):
+        assert [c["runs"] for c in block["cells"]] == [c["runs"] for c in expected["cells"]]
+        assert [(d["decision"], d["look"]) for d in block["duels"]] == [
+            (d["decision"], d["look"]) for d in expected["duels"]]
+    assert sorted(d["look"] for b in race["blocks"] for d in b["duels"] if d["look"]) == [
+        16, 16, 24]
+    assert sum(c["runs"] for b in race["blocks"] for c in b["cells"]) == 192
 
     race = service.get(f"/jobs/{job}/race").json()
     used = 0
