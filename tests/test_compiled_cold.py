@@ -55,7 +55,7 @@ def cli(cache: Path, *args: str) -> subprocess.CompletedProcess[str]:
 
 
 def test_the_install_warm_up_fills_the_cache_that_later_processes_load(tmp_path):
-    first = cli(tmp_path, "warmup", "--if-cold", "-a", "SSA", "-f", "F4")
+    first = cli(tmp_path, "warmup", "--if-cold", "-a", "SSA", "-f", "F4", "-j", "2")  # _venv.sh's
     assert "compiling the 2 pieces" in first.stderr and "compiled 2 pieces" in first.stderr
     # a later process runs the kernel: nothing compiles, the kernel and objective are loaded
     probe = json.loads(run(tmp_path, "-c", PROBE, "SSA", "F4").stdout.splitlines()[-1])

@@ -141,27 +141,6 @@ def test_a_shared_warm_up_makes_the_next_piece_while_another_process_makes_one(m
         ("function", "F9"), ("function", "F2"), ("function", "F1")]
 
 
-def test_warmup_in_two_processes_makes_each_piece_once(tmp_path):
-    """``swarmpath warmup -j 2`` (scripts/_venv.sh): every piece ready, each listed once."""
-    import subprocess
-    import sys
-
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path),
-           "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}
-    out = subprocess.run([sys.executable, "-m", "swarmpath.cli", "warmup", "--if-cold", "-a",
-                          "SSA,GWO", "-f", "F4,F1", "-j", "2", "--json"], env=env,
-                         capture_output=True, text=True, timeout=900)
-    assert out.returncode == 0, out.stderr[-3000:]
-    names = [(w["kind"], w["name"]) for w in json.loads(out.stdout)]
-    assert names == [("function", "F4"), ("function", "F1"), ("algorithm", "SSA"),
-                     ("algorithm", "GWO")]
-    check = ("from swarmpath.optimizers.compiled.warm import cold, pieces;"
-             "print(cold(pieces(['SSA', 'GWO'], ['F4', 'F1'], False)))")
-    again = subprocess.run([sys.executable, "-c", check], env=env, capture_output=True,
-                           text=True, timeout=300)
-    assert again.stdout.strip() == "[]", again.stderr[-3000:]
-
-
 @pytest.mark.skipif(not Path("/proc/locks").is_file(), reason="needs Linux's /proc/locks")
 def test_a_process_slot_says_ready_only_after_its_kernels_and_without_warm_at_once():
     """A slot process compiles (or loads) the kernels before it says ready, so a worker never
