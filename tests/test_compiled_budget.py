@@ -15,7 +15,11 @@ from swarmpath.cli import bench, bench_spec
 from swarmpath.cli.core import InputError
 from swarmpath.optimizers import ParameterError, get_optimizer, list_optimizers, minimize_many
 from swarmpath.optimizers.api import resolve_backend
-from swarmpath.optimizers.budget import iterations_for_budget, most_evaluations
+from swarmpath.optimizers.budget import (
+    declared_evaluations,
+    iterations_for_budget,
+    most_evaluations,
+)
 from swarmpath.optimizers.compiled import find_kernel
 from swarmpath.optimizers.compiled import run as compiled_run
 from swarmpath.service.jobspec import parse_job_spec
@@ -80,15 +84,22 @@ def test_a_budget_that_ends_runs_early_is_compiled_only_where_the_kernel_counts_
                 assert_same(a, c)
 
 
-def test_most_evaluations_is_what_the_reference_counts():
+def test_the_declared_evaluations_are_what_the_reference_counts():
     for algo in WITH_KERNEL:
         for params in _settings(algo):
-            res = minimize_many(algo, ["F1", "F9"], dim=3, agents=7, iterations=9, runs=3,
-                                params=params, backend="numpy")
-            most = most_evaluations(algo, 7, 9, 3, tuple(sorted(params.items())))
-            assert all(r.evaluations.max() <= most for r in res), (algo, params)
-            if not find_kernel(algo).capped:  # a fixed count per iteration: reached
-                assert all(r.evaluations.min() == most for r in res), (algo, params)
+            for dim in (3, 12):
+                res = minimize_many(algo, ["F1", "F9"], dim=dim, agents=7, iterations=9, runs=3,
+                                    params=params, backend="numpy")
+                key = tuple(sorted(params.items()))
+                few, most = declared_evaluations(algo, 7, 9, dim, key)
+                assert most == most_evaluations(algo, 7, 9, dim, key)
+                counted = {int(e) for r in res for e in r.evaluations}
+                assert few <= min(counted) and max(counted) <= most, (algo, params, counted)
+                if not find_kernel(algo).capped:  # a fixed count per iteration: reached
+                    assert counted == {most}, (algo, params)
+    flying = minimize_many("PSO", ["F1"], dim=12, agents=7, iterations=9, runs=3,
+                           params={"vmax_mode": "none"}, backend="numpy")[0]
+    assert flying.evaluations.max() < 7 * 10  # particles out of the box are not counted
 
 
 def test_bench_budget_tables_are_the_same_on_numba_and_numpy():

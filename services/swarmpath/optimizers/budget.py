@@ -6,8 +6,11 @@ evaluations of every run (:attr:`Optimizer.max_evaluations`).
 
 The iterations come from the algorithm itself: its evaluations after 1 and 2 iterations, on the
 study's agents, dimension and parameters, give e(T) = e0 + T e1 (every registered algorithm
-spends a fixed number per iteration, except FDO, whose extra evaluations vary by run: it gets
-the iterations of its probe run, and the cap ends it at N). T = max(1, floor((N - e0) / e1)).
+spends a fixed number per iteration, except FDO, whose extra evaluations vary by run, and PSO
+with bounds "fly", whose particles outside the box are not evaluated: they get the iterations
+of their probe run, and the cap ends them at N; a PSO whose particles leave the box for good,
+``vmax_mode="none"`` at d >= 10, probes few evaluations per iteration and so gets many
+iterations). T = max(1, floor((N - e0) / e1)).
 
 The compiled kernels (``backend="numba"``) honour a budget with the reference's numbers where
 the cap cannot bind: :func:`most_evaluations` in the study's iterations fits it (every
@@ -92,13 +95,20 @@ def check_compiled_budget(backend: str, algorithms: Sequence[str], budget: str |
                          budget_at(budget, d))
 
 
-@lru_cache(maxsize=256)
 def most_evaluations(algorithm: str, agents: int, iterations: int, dim: int,
                      params: tuple[tuple[str, Any], ...] = ()) -> int:
-    """The most evaluations a run of ``algorithm`` counts in ``iterations``: what it declares
-    (:meth:`Optimizer.expected_evaluations`, held to it by the conformance gate), read from an
-    instance on a one-run problem that is never evaluated. ``params``: sorted (name, value)
-    pairs (hashable, for the cache)."""
+    """The most evaluations a run of ``algorithm`` counts in ``iterations``
+    (:func:`declared_evaluations`)."""
+    return declared_evaluations(algorithm, agents, iterations, dim, params)[1]
+
+
+@lru_cache(maxsize=256)
+def declared_evaluations(algorithm: str, agents: int, iterations: int, dim: int,
+                         params: tuple[tuple[str, Any], ...] = ()) -> tuple[int, int]:
+    """(fewest, most) evaluations a run of ``algorithm`` counts in ``iterations``: what it
+    declares (:meth:`Optimizer.expected_evaluations`, held to it by the conformance gate), read
+    from an instance on a one-run problem that is never evaluated. ``params``: sorted (name,
+    value) pairs (hashable, for the cache)."""
     import numpy as np
 
     from swarmpath.optimizers.problem import Problem
@@ -106,12 +116,13 @@ def most_evaluations(algorithm: str, agents: int, iterations: int, dim: int,
     from swarmpath.optimizers.streams import RunStreams
 
     def never(x: Any, streams: Any) -> Any:
-        raise AssertionError("most_evaluations evaluates nothing")
+        raise AssertionError("declared_evaluations evaluates nothing")
 
     problem = Problem(never, np.zeros((1, dim)), np.ones((1, dim)))
     opt = get_optimizer(algorithm)(problem, agents, iterations, RunStreams.for_runs(0, [0]),
                                    dict(params))
-    return int(opt.expected_evaluations()[1])
+    few, most = opt.expected_evaluations()
+    return int(few), int(most)
 
 
 @lru_cache(maxsize=256)

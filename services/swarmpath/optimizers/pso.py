@@ -82,6 +82,13 @@ class PSO(Optimizer):
         if not 0 < float(p["vmax_fraction"]) <= 1:
             raise ParameterError("PSO.vmax_fraction must be in (0, 1]")
 
+    def expected_evaluations(self) -> tuple[int, int]:
+        """The first population and every particle each iteration at most; with ``bounds =
+        "fly"`` a particle outside the box is not evaluated, so a run may count as few as the
+        first population."""
+        most = self.N * (self.T + 1)
+        return (self.N if self.p["bounds"] == "fly" else most), most
+
     def _initialize(self) -> None:
         self.X = self.random_population()
         self.V = np.zeros_like(self.X)
