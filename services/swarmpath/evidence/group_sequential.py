@@ -36,7 +36,24 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
-from scipy import optimize, special, stats
+from scipy import optimize, special
+
+# The normal tail, quantile and density from scipy.special (what scipy.stats.norm computes
+# them with), so that a race with looks does not import scipy.stats: a one-planner `plan`
+# never loads it (tests/test_cli_plan.py), and the racing module is on its import path.
+
+
+def _norm_sf(x: float) -> float:
+    return float(special.ndtr(-x))
+
+
+def _norm_isf(p: float) -> float:
+    return float(-special.ndtri(p))
+
+
+def _norm_pdf(x: np.ndarray, scale: float) -> np.ndarray:
+    y = x / scale
+    return np.exp(-(y**2) / 2.0) / np.sqrt(2 * np.pi) / scale
 
 #: Spending functions by name (module text); the first is the default of raced jobs' looks.
 SPENDING = ("obrien-fleming", "pocock")
@@ -52,7 +69,7 @@ def spent(kind: str, level: float, t: float) -> float:
     if not 0.0 < t <= 1.0:
         raise ValueError(f"information time must be in (0, 1], got {t}")
     if kind == "obrien-fleming":
-        return float(2.0 * stats.norm.sf(stats.norm.isf(level / 2.0) / math.sqrt(t)))
+        return float(2.0 * _norm_sf(_norm_isf(level / 2.0) / math.sqrt(t)))
     if kind == "pocock":
         return level * math.log1p((math.e - 1.0) * t)
     raise ValueError(f"spending must be one of {', '.join(SPENDING)}, got {kind!r}")
@@ -102,10 +119,10 @@ def _bounds(looks: tuple[int, ...], level: float, kind: str) -> tuple[float, ...
     """Boundaries c_k on the Z scale (inf: the look spends nothing)."""
     t = _times(looks)
     budget = [spent(kind, level, float(x)) for x in t]
-    c = [float(stats.norm.isf(budget[0] / 2.0))]
+    c = [float(_norm_isf(budget[0] / 2.0))]
     b = c[0] * math.sqrt(t[0])  # on W's scale
     x, w = _grid(b)
-    density = stats.norm.pdf(x, scale=math.sqrt(t[0])) * w  # mass of W(t_1) at the points
+    density = _norm_pdf(x, math.sqrt(t[0])) * w  # mass of W(t_1) at the points
     for k in range(1, len(t)):
         sd = math.sqrt(t[k] - t[k - 1])
         target = budget[k] - budget[k - 1]
@@ -136,7 +153,7 @@ def nominal_levels(looks: Sequence[int], level: float, kind: str = SPENDING[0]
     if kind not in SPENDING:
         raise ValueError(f"spending must be one of {', '.join(SPENDING)}, got {kind!r}")
     c = _bounds(tuple(int(n) for n in looks), float(level), kind)
-    return tuple(float(2.0 * stats.norm.sf(x)) for x in c)
+    return tuple(float(2.0 * _norm_sf(x)) for x in c)
 
 
 def crossing_probabilities(looks: Sequence[int], levels: Sequence[float]) -> float:
@@ -144,11 +161,11 @@ def crossing_probabilities(looks: Sequence[int], levels: Sequence[float]) -> flo
     (``looks`` the run counts): the design's real error, for any nominal levels (a check of
     :func:`nominal_levels`, and of allocations that are not spent this way)."""
     t = _times(looks)
-    c = [float(stats.norm.isf(p / 2.0)) for p in levels]
+    c = [float(_norm_isf(p / 2.0)) for p in levels]
     b = c[0] * math.sqrt(t[0])
     x, w = _grid(b)
-    density = stats.norm.pdf(x, scale=math.sqrt(t[0])) * w
-    total = float(2.0 * stats.norm.sf(c[0]))
+    density = _norm_pdf(x, math.sqrt(t[0])) * w
+    total = float(2.0 * _norm_sf(c[0]))
     for k in range(1, len(t)):
         sd = math.sqrt(t[k] - t[k - 1])
         b = c[k] * math.sqrt(t[k])
