@@ -59,17 +59,26 @@ def test_bench_race_is_the_store_race_and_the_replay_over_direct_runs(raced, tmp
                                                                     ].tolist()
     used = sum(runs.values())
     assert raced["race_summary"]["runs"] == used < 6 * 60
+    # the default design: the job spec's and --race's, Pocock-spent looks every round
+    assert {k: race["settings"][k] for k in ("looks", "look_share", "sequence_share",
+                                             "spending")} == {
+        "looks": "every-round", "look_share": 0.8, "sequence_share": 0.05, "spending": "pocock"}
+    assert "looks every round from 20 (pocock)" in raced["race_summary"]["line"]
     assert raced["race_summary"]["unraced_runs"] == 6 * 60
     assert raced["settings"]["racing"]["max_runs"] == 60
 
 
-def test_bench_race_with_planned_looks_is_the_store_race(tmp_path):
+@pytest.mark.parametrize(("options", "looks"), [
+    (["--race-looks", "20,30,40", "--race-look-share", "0.8", "--race-sequence-share", "0.05",
+      "--race-spending", "obrien-fleming"],
+     {"looks": [20, 30, 40], "look_share": 0.8, "sequence_share": 0.05,
+      "spending": "obrien-fleming"}),
+    (["--race-looks", "none"], {"looks": []}),  # the race without looks, the default before
+], ids=["looks", "none"])
+def test_bench_race_with_planned_looks_is_the_store_race(tmp_path, options, looks):
     """--race-looks, --race-look-share, --race-sequence-share and --race-spending are the job
     spec's racing fields: the same race document as the store's job with them."""
-    looks = {"looks": [20, 30, 40], "look_share": 0.8, "sequence_share": 0.05,
-             "spending": "pocock"}
-    code, out, err = bench(*ARGS, "--json", "--race-looks", "20,30,40", "--race-look-share",
-                           "0.8", "--race-sequence-share", "0.05", "--race-spending", "pocock")
+    code, out, err = bench(*ARGS, "--json", *options)
     assert code == 0, err
     spec = {**SPEC, "backend": "numpy", "racing": {**SPEC["racing"], **looks}}
     with Store(tmp_path) as store:
@@ -77,7 +86,7 @@ def test_bench_race_with_planned_looks_is_the_store_race(tmp_path):
         drain(store, job)
         race = store.race(job)
     assert json.loads(out)["race"] == race
-    assert race["settings"]["looks"] == [20, 30, 40]
+    assert race["settings"]["looks"] == looks["looks"]
 
 
 def test_the_markers_are_the_race_decisions_not_rank_sum_tests(raced):
@@ -156,8 +165,12 @@ BAD = [
     (["--race-looks", "20"], "--race-looks"),  # without --race
     (["--race", "--race-looks", "20,x", "--race-look-share", "0.5"], "--race-looks"),
     (["--race", "--race-looks", "25", "--race-look-share", "0.4"], "--race-looks"),
-    (["--race", "--race-looks", "20", "--race-look-share", "0.6"], "--race-sequence-share"),
-    (["--race", "--race-look-share", "0.3"], "--race-looks"),
+    (["--race", "--race-looks", "20", "--race-look-share", "0.6", "--race-sequence-share",
+      "0.5"], "--race-sequence-share"),
+    (["--race", "--race-sequence-share", "0.5"], "--race-sequence-share"),  # default looks
+    (["--race", "--race-looks", "none", "--race-look-share", "0.3"], "--race-looks"),
+    (["--race", "--race-looks", "every-round", "--race-final-test", "sign"], "--race-looks"),
+    (["--race", "--race-looks", "every-other"], "--race-looks"),
     (["--race", "--race-looks", "20", "--race-look-share", "nan"], "--race-look-share"),
     (["--race", "--race-spending", "linear"], "--race-spending"),
     (["--race", "-a", "GWO"], "--algorithms"),

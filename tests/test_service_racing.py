@@ -24,17 +24,16 @@ from swarmpath.service.protocol import parse_job_spec
 sys.path.insert(0, str(Path(__file__).parent))
 from test_service_e2e import ENV, PY, Service
 
-# F1 is decided after two rounds; on F5 SSA loses to GWO after four and PSO against GWO stays
-# open to the end (8 rounds; the closing rank-sum look at 60 runs does not decide it either):
-# 200 of the 360 runs
+# The default design (Pocock-spent rank-sum looks every round from 16 runs, written into the
+# stored spec): F1's comparisons and F5's SSA are decided at the looks at 16 and 24 runs, PSO
+# against GWO stays open to the end (8 rounds; the closing rank-sum look at 60 runs does not
+# decide it either): 192 of the 360 runs
 SPEC = {"kind": "benchmark", "algorithms": ["SSA", "PSO", "GWO"], "functions": ["F1", "F5"],
         "dims": [6], "runs": 60, "agents": 10, "iterations": 300, "seed": 4,
         "racing": {"min_runs": 8, "batch": 8}}
-# the same study with planned looks (Pocock-spent rank-sum tests every round from 16 runs): F1's
-# comparisons and F5's SSA are decided at the looks at 16 and 24 runs, PSO stays open: 192 runs
-LOOKS_SPEC = {**SPEC, "racing": {**SPEC["racing"], "looks": [16, 24, 32, 40, 48, 56],
-                                 "look_share": 0.8, "sequence_share": 0.05,
-                                 "spending": "pocock"}}
+# the same study without looks (looks [], the default before): F1 is decided by the sequence
+# after two rounds, F5's SSA after four, PSO stays open: 200 runs
+PLAIN_SPEC = {**SPEC, "racing": {**SPEC["racing"], "looks": []}}
 
 
 @pytest.fixture(scope="module")
@@ -65,7 +64,7 @@ def expected_race(race: dict, spec: dict = SPEC) -> dict:
 
 def test_a_raced_job_survives_kills_and_decides_as_the_replay(service, tmp_path):
     job = service.submit(SPEC)
-    looked = service.submit(LOOKS_SPEC)  # races beside it, through the same kills
+    plain = service.submit(PLAIN_SPEC)  # races beside it, through the same kills
     service.wait_for(lambda: service.status(job)["runs_done"] >= 20, 300, "the first round")
     busy = [w["id"] for w in service.get("/workers").json() if w["alive"] and w["current_runs"]]
     victim = busy[0] if busy else "w1"
@@ -82,25 +81,27 @@ def test_a_raced_job_survives_kills_and_decides_as_the_replay(service, tmp_path)
     service.start_coordinator(lease_seconds=6.0)
     status = service.wait_done(job, 300)
     assert status["state"] == "done" and status["runs_failed"] == 0
-    assert service.wait_done(looked, 300)["state"] == "done"
-    race = service.get(f"/jobs/{looked}/race").json()
-    for block, expected in zip(race["blocks"], expected_race(race, LOOKS_SPEC)["blocks"],
+    assert service.wait_done(plain, 300)["state"] == "done"
+    race = service.get(f"/jobs/{plain}/race").json()
+    for block, expected in zip(race["blocks"], expected_race(race, PLAIN_SPEC)["blocks"],
                                strict=True):
         assert [c["runs"] for c in block["cells"]] == [c["runs"] for c in expected["cells"]]
-        assert [(d["decision"], d["look"]) for d in block["duels"]] == [
-            (d["decision"], d["look"]) for d in expected["duels"]]
-    assert sorted(d["look"] for b in race["blocks"] for d in b["duels"] if d["look"]) == [
-        16, 16, 24]
-    assert sum(c["runs"] for b in race["blocks"] for c in b["cells"]) == 192
+        assert [(d["decision"], d["final"], d["look"]) for d in block["duels"]] == [
+            (d["decision"], d["final"], d["look"]) for d in expected["duels"]]
+    assert not any(d["look"] for b in race["blocks"] for d in b["duels"])
+    assert sum(c["runs"] for b in race["blocks"] for c in b["cells"]) == 200
 
     race = service.get(f"/jobs/{job}/race").json()
+    assert race["settings"]["looks"] == "every-round"
     used = 0
     for block, expected in zip(race["blocks"], expected_race(race)["blocks"], strict=True):
         assert [c["runs"] for c in block["cells"]] == [c["runs"] for c in expected["cells"]]
-        assert [(d["decision"], d["final"]) for d in block["duels"]] == [
-            (d["decision"], d["final"]) for d in expected["duels"]]
+        assert [(d["decision"], d["final"], d["look"]) for d in block["duels"]] == [
+            (d["decision"], d["final"], d["look"]) for d in expected["duels"]]
         used += sum(c["runs"] for c in block["cells"])
-    assert status["runs_done"] == status["runs_total"] == used == 200
+    assert sorted(d["look"] for b in race["blocks"] for d in b["duels"] if d["look"]) == [
+        16, 16, 24]
+    assert status["runs_done"] == status["runs_total"] == used == 192
 
     runs = service.get(f"/jobs/{job}/runs", params={"limit": 1000}).json()["items"]
     assert len(runs) == used and {r["state"] for r in runs} == {"done"}
@@ -142,7 +143,10 @@ def test_a_race_extended_through_the_cli_reuses_its_runs(service):
     reused = int(out.stderr.split(" runs reused")[0].rsplit(" ", 1)[1])
     assert reused == service.status(job)["runs_done"]
     race = service.get(f"/jobs/{new}/race").json()
-    for block, expected in zip(race["blocks"], expected_race(race)["blocks"], strict=True):
+    assert race["settings"]["looks"] == [16]  # the old job's rounds' looks (store.extend)
+    frozen = {**SPEC, "racing": {**SPEC["racing"], "looks": [16]}}
+    for block, expected in zip(race["blocks"], expected_race(race, frozen)["blocks"],
+                               strict=True):
         assert [c["runs"] for c in block["cells"]] == [c["runs"] for c in expected["cells"]]
     runs = service.get(f"/jobs/{new}/runs", params={"limit": 1000}).json()["items"]
     old = {(r["cell"], r["run"]): r for r in service.get(

@@ -110,9 +110,10 @@ def test_a_raced_job_runs_its_rounds_and_finishes_with_the_runs_it_used(tmp_path
 def test_a_raced_job_with_a_closing_look_is_its_replay(tmp_path, look):
     """racing.final_test reaches the store's race: the job's decisions, the closing look's
     among them, are those of the replay over the directly computed runs; true, the look of
-    jobs stored before the rank-sum look, is the sign test."""
+    jobs stored before the rank-sum look, is the sign test. Without planned looks (looks [];
+    the default's look at 50 runs decides F5's PSO before its closing look)."""
     spec = {**SPEC, "functions": ["F1", "F5"],
-            "racing": {**SPEC["racing"], "final_test": look}}
+            "racing": {**SPEC["racing"], "final_test": look, "looks": []}}
     with Store(tmp_path) as store:
         job = store.create_job(spec, now=T0)
         drain(store, job)
@@ -126,13 +127,12 @@ def test_a_raced_job_with_a_closing_look_is_its_replay(tmp_path, look):
 
 
 def test_a_raced_job_with_planned_looks_resumes_after_a_restart_with_its_decisions(tmp_path):
-    """racing.looks reaches the store: a job with group-sequential looks, stopped in the middle
-    of its race and the store reopened (a coordinator restart), finishes as the replay over the
-    directly computed runs, some comparisons decided at a look, and with fewer runs than the
-    same job without looks."""
-    looks = {"looks": [20, 30, 40, 50], "look_share": 0.8, "sequence_share": 0.05,
-             "spending": "pocock"}
-    spec = {**SPEC, "functions": ["F1", "F5"], "racing": {**SPEC["racing"], **looks}}
+    """A raced job's default design, group-sequential looks at every round (20, 30, 40, 50 runs
+    here), reaches the store, written into its spec: the job, stopped in the middle of its race
+    and the store reopened (a coordinator restart), finishes as the replay over the directly
+    computed runs, some comparisons decided at a look, and with fewer runs than the same job
+    without looks (looks [], the default before)."""
+    spec = {**SPEC, "functions": ["F1", "F5"]}
     with Store(tmp_path) as store:
         job = store.create_job(spec, now=T0)
         drain(store, job, stop_after=110)
@@ -143,13 +143,19 @@ def test_a_raced_job_with_planned_looks_resumes_after_a_restart_with_its_decisio
         drain(store, job)
         assert store.job_status(job).state == "done"
         race = check_race_against_direct_runs(store, job, spec)
-        plain = store.create_job({**spec, "racing": SPEC["racing"]}, now=T0)
+        plain = store.create_job({**spec, "racing": {**SPEC["racing"], "looks": []}}, now=T0)
         drain(store, plain)
         without = store.race(plain)
-    assert race["settings"]["looks"] == looks["looks"]
+        stored = json.loads(store._db.execute("SELECT spec FROM jobs WHERE id = ?",
+                                              (job,)).fetchone()[0])["racing"]
+    assert {k: stored[k] for k in ("looks", "look_share", "sequence_share", "spending")} == {
+        "looks": "every-round", "look_share": 0.8, "sequence_share": 0.05, "spending": "pocock"}
+    assert race["settings"]["looks"] == "every-round"
+    assert without["settings"]["looks"] == [] and without["settings"]["sequence_share"] == 0.5
     at_look = [(b["block"]["function"], d["a"], d["look"]) for b in race["blocks"]
                for d in b["duels"] if d["look"]]
-    assert at_look and all(n in looks["looks"] for _, _, n in at_look)
+    assert at_look and all(n in (20, 30, 40, 50) for _, _, n in at_look)
+    assert not any(d["look"] for b in without["blocks"] for d in b["duels"])
 
     def used(r: dict) -> int:
         return sum(c["runs"] for b in r["blocks"] for c in b["cells"])
@@ -157,19 +163,32 @@ def test_a_raced_job_with_planned_looks_resumes_after_a_restart_with_its_decisio
     assert used(race) < used(without)
 
 
-def _as_stored_before_the_rank_sum_look(path: Path, job: str, look: bool | None) -> None:
-    """The store file as schema version 4 wrote it: the job's racing spec without final_test
-    (None: the code before any closing look), or with the boolean of the sign look's code."""
+#: The racing fields of the planned looks, which specs stored before them do not hold.
+LOOK_FIELDS = ("looks", "look_share", "sequence_share", "spending")
+
+
+def _as_stored_by(path: Path, job: str, version: int, without: tuple[str, ...],
+                  **fields: object) -> None:
+    """The store file as schema ``version`` wrote it: the job's racing spec without the fields
+    ``without``, with ``fields``."""
     db = sqlite3.connect(path)
     (text,) = db.execute("SELECT spec FROM jobs WHERE id = ?", (job,)).fetchone()
     spec = json.loads(text)
-    del spec["racing"]["final_test"]
-    if look is not None:
-        spec["racing"]["final_test"] = look
+    for key in without:
+        del spec["racing"][key]
+    spec["racing"].update(fields)
     db.execute("UPDATE jobs SET spec = ? WHERE id = ?", (json.dumps(spec), job))
-    db.execute("UPDATE meta SET value = '4' WHERE key = 'schema_version'")
+    db.execute("UPDATE meta SET value = ? WHERE key = 'schema_version'", (str(version),))
     db.commit()
     db.close()
+
+
+def _as_stored_before_the_rank_sum_look(path: Path, job: str, look: bool | None) -> None:
+    """The store file as schema version 4 wrote it: the job's racing spec without final_test
+    (None: the code before any closing look), or with the boolean of the sign look's code, and
+    without the planned looks' fields."""
+    closing = {} if look is None else {"final_test": look}
+    _as_stored_by(path, job, 4, ("final_test", *LOOK_FIELDS), **closing)
 
 
 @pytest.mark.parametrize(("stored", "look"), [(None, "none"), (False, "none"), (True, "sign")])
@@ -202,18 +221,46 @@ def test_a_job_stored_before_the_rank_sum_look_resumes_with_its_decisions(tmp_pa
     assert with_look["blocks"] != race["blocks"]
 
 
+@pytest.mark.parametrize("version", [4, 5])
+def test_a_job_stored_before_looks_every_round_resumes_with_its_decisions(tmp_path, version):
+    """A raced job stored before the planned looks existed (no looks fields: the rank-sum
+    closing look, no looks), half run, then the coordinator restarts with this code, whose
+    default is a look every round: the migration (schema 6) writes the race without looks into
+    its spec, and it finishes as the replay without looks. Without the migration it would end
+    otherwise (the replay with the default's looks differs: the check can fail)."""
+    spec = {**SPEC, "functions": ["F1", "F5"], "racing": {**SPEC["racing"], "looks": []}}
+    with Store(tmp_path) as store:
+        job = store.create_job(spec, now=T0)
+        drain(store, job, stop_after=100)
+        before = store.race(job)
+    _as_stored_by(tmp_path / "swarmpath.sqlite3", job, version, LOOK_FIELDS)
+    with Store(tmp_path) as store:
+        racing = store.job_spec(job).racing
+        assert (racing.looks, racing.look_share, racing.sequence_share) == ([], 0.0, 0.5)
+        assert store.race(job) == before
+        drain(store, job)
+        race = check_race_against_direct_runs(store, job, spec)
+    assert race["settings"]["looks"] == [] and race["settings"]["final_test"] == "rank-sum"
+    names = {b["block"]["function"]: [c["algorithm"] for c in b["cells"]]
+             for b in race["blocks"]}
+    by_default = replay({**spec, "racing": SPEC["racing"]}, names, 4)
+    assert by_default["blocks"] != race["blocks"]
+
+
 def test_the_job_spec_offers_the_closing_looks_the_race_knows():
     from typing import get_args
 
     from swarmpath.evidence.group_sequential import SPENDING
-    from swarmpath.evidence.racing import CLOSING
+    from swarmpath.evidence.racing import CLOSING, DEFAULT_DESIGN
     from swarmpath.service.racing import RacingSpec
 
     field = RacingSpec.model_fields["final_test"]
     assert get_args(field.annotation) == CLOSING and field.default == CLOSING[0]
     field = RacingSpec.model_fields["spending"]
-    assert get_args(field.annotation) == SPENDING and field.default == SPENDING[0]
-    assert parse_job_spec(SPEC).racing.settings(60).final_test == "rank-sum"
+    assert get_args(get_args(field.annotation)[0]) == SPENDING
+    settings = parse_job_spec(SPEC).racing.settings(60)
+    assert settings.final_test == "rank-sum" and settings.spending == DEFAULT_DESIGN["spending"]
+    assert settings.look_runs == (20, 30, 40, 50)  # every round after the first
 
 
 @pytest.mark.parametrize("racing, loc", [
@@ -227,7 +274,11 @@ def test_the_job_spec_offers_the_closing_looks_the_race_knows():
     ({"looks": [25], "look_share": 0.3}, ("racing", "looks")),
     ({"looks": [20, 10], "look_share": 0.3}, ("racing", "looks")),
     ({"looks": ["20"], "look_share": 0.3}, ("racing", "looks")),
-    ({"looks": [20], "look_share": 0.6}, ("racing", "sequence_share")),
+    ({"looks": [20], "look_share": 0.6, "sequence_share": 0.5}, ("racing", "sequence_share")),
+    ({"sequence_share": 0.5}, ("racing", "sequence_share")),  # beside the default's looks
+    ({"looks": [], "look_share": 0.3}, ("racing", "looks")),
+    ({"looks": "every-other"}, ("racing", "looks")),
+    ({"looks": "every-round", "final_test": "sign"}, ("racing", "looks")),
     ({"look_share": 1.0}, ("racing", "look_share")),
     ({"spending": "linear"}, ("racing", "spending")),
 ])
@@ -303,8 +354,13 @@ def json_key(block):
     return block["block"]["function"]
 
 
-def test_an_extended_race_reuses_its_runs_and_goes_on(tmp_path):
-    short = {**SPEC, "runs": 30}
+@pytest.mark.parametrize("looks", [None, []], ids=["every-round", "no-looks"])
+def test_an_extended_race_reuses_its_runs_and_goes_on(tmp_path, looks):
+    """The default design's looks every round are the old job's rounds' in the extended job
+    (its looks at 20 runs decide as they did); without looks, the closing look's decisions of
+    the old job are not carried over (the new closing look is at 60)."""
+    racing = SPEC["racing"] if looks is None else {**SPEC["racing"], "looks": looks}
+    short = {**SPEC, "runs": 30, "racing": racing}
     with Store(tmp_path) as store:
         job = store.create_job(short, now=T0)
         drain(store, job)
@@ -312,23 +368,32 @@ def test_an_extended_race_reuses_its_runs_and_goes_on(tmp_path):
         assert store.job_status(job).state == "done"
         new, reused = store.extend_job(job, 60, now=T0)
         assert reused == store.job_status(job).runs_done
-        # the copied runs replay the old race: the sequence's decisions stay, the others go
-        # on (the closing look of 30 runs is not carried over: the new look is at 60)
+        extended = store.job_spec(new).racing
+        # the copied runs replay the old race: the sequence's and the looks' decisions stay,
+        # the others go on
         race = store.race(new)
-        carried = looked = 0
+        carried = at_look = looked = 0
         for before, after in zip(old["blocks"], race["blocks"], strict=True):
             for a, b in zip(before["duels"], after["duels"], strict=True):
                 if a["decision"] != "open" and not a["final"]:
-                    assert (b["decision"], b["round"]) == (a["decision"], a["round"])
+                    assert (b["decision"], b["round"], b["look"]) == (
+                        a["decision"], a["round"], a["look"])
                     carried += 1
+                    at_look += a["look"] is not None
                 elif a["final"]:
                     assert b["decision"] == "open" and not b["final"]
                     looked += 1
-        assert carried and looked
         leased = drain(store, new)
         status = store.job_status(new)
         assert status.state == "done" and leased == status.runs_total - reused
-        check_race_against_direct_runs(store, new)  # as if it had raced to 60 from the start
+        # as if it had raced to 60 from the start with the extended spec's looks
+        check_race_against_direct_runs(store, new, {**SPEC, "racing": {
+            **racing, "looks": extended.looks, "look_share": extended.look_share}})
+    assert carried
+    if looks is None:
+        assert extended.looks == [20] and at_look and old["settings"]["looks"] == "every-round"
+    else:
+        assert extended.looks == [] and looked
 
 
 def test_an_unraced_job_extended_keeps_its_runs_and_adds_the_rest(tmp_path):

@@ -257,7 +257,7 @@ def test_benchmark_job_page_table_curves_and_boxes(server, jobs, browser):
     assert "/runs/" in browser.current_url
 
 
-# a race of three rounds and more (FDO decided after 40 runs, PSO after 30: see test_bench_race)
+# a raced job with the default design (looks every round; see test_store_racing)
 RACED = {"kind": "benchmark", "algorithms": ["FDO", "PSO", "GWO"], "functions": ["F1", "F10"],
          "dims": [5], "runs": 60, "agents": 8, "iterations": 30, "seed": 3,
          "racing": {"min_runs": 10, "batch": 10}}

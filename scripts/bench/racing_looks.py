@@ -36,11 +36,14 @@ from service import TABLE2_ALGORITHMS, TABLE2_FUNCTIONS, note
 
 from swarmpath.evidence.race_report import study_race
 from swarmpath.evidence.racing import RaceSettings, race_block
+from swarmpath.service.racing import RacingSpec
 
 EVERY_ROUND = tuple(range(20, 1000, 10))
-#: name -> the racing fields besides min_runs 10, batch 10, alpha 0.05 (the default: none).
+#: name -> the racing fields besides min_runs 10, batch 10, alpha 0.05 ("default": the job
+#: spec's default, through RacingSpec; "plain": no looks, the default before it).
 DESIGNS: dict[str, dict[str, Any]] = {
     "default": {},
+    "plain": dict(looks=()),
     "obf-50": dict(looks=tuple(range(50, 1000, 50)), look_share=0.8, sequence_share=0.05),
     "pocock-100": dict(looks=tuple(range(100, 1000, 100)), look_share=0.5, sequence_share=0.1,
                        spending="pocock"),
@@ -53,16 +56,19 @@ MAX_RUNS = 1000
 
 
 def settings_of(name: str) -> RaceSettings:
+    if name == "default":  # what a job spec's racing {min_runs 10, batch 10} races with
+        return RacingSpec(min_runs=10, batch=10, alpha=0.05).settings(MAX_RUNS)
     return RaceSettings(max_runs=MAX_RUNS, alpha=0.05, min_runs=10, batch=10, **DESIGNS[name])
 
 
 def describe(name: str) -> str:
     """A design in a table: its name, spending, looks and shares of alpha."""
     d = settings_of(name)
-    if not d.looks:
+    runs = d.look_runs
+    if not runs:
         return (f"{name}: no looks, sequence {d.sequence_share:g} / closing "
                 f"{d.closing_alpha / d.alpha:.2g}")
-    return (f"{name}: {d.spending}, looks {d.looks[0]}-{d.looks[-1]} ({len(d.looks)}), sequence "
+    return (f"{name}: {d.spending}, looks {runs[0]}-{runs[-1]} ({len(runs)}), sequence "
             f"{d.sequence_share:g} / looks {d.look_share:g} / closing "
             f"{d.closing_alpha / d.alpha:.2g}")
 

@@ -27,9 +27,11 @@ from swarmpath.evidence.group_sequential import SPENDING
 from swarmpath.evidence.race_report import study_race
 from swarmpath.evidence.racing import (
     CLOSING,
+    EVERY_ROUND,
     PAIRS,
     RaceSettings,
     comparisons_per_block,
+    default_design,
     race_block,
 )
 from swarmpath.parallel import TaskPool
@@ -40,8 +42,9 @@ CellKey = tuple[str, int, str]  # (function, dim, algorithm)
 
 RaceOpt = Annotated[bool, typer.Option(
     "--race", help="Race the cells (docs/statistics.md, Racing): runs in rounds, a cell stops "
-    "once its comparisons are decided by an anytime-valid test; --runs is the most a cell gets; "
-    "the markers are the race's decisions.")]
+    "once its comparisons are decided (an anytime-valid sequence, Pocock-spent rank-sum looks "
+    "every round, the rank-sum test at --runs: --race-looks); --runs is the most a cell "
+    "gets; the markers are the race's decisions.")]
 RaceAlphaOpt = Annotated[float | None, typer.Option(
     "--race-alpha", help="Error rate of all the race's decisions together (Bonferroni over the "
     "comparisons). Default 0.05.")]
@@ -57,17 +60,20 @@ RaceFinalOpt = Annotated[str | None, typer.Option(
     "comparisons still open there (docs/statistics.md, Racing): the full study's rank-sum test, "
     "Holm over them, at half of alpha (default); the sign test at half of alpha; none.")]
 RaceLooksOpt = Annotated[str | None, typer.Option(
-    "--race-looks", metavar="N,N,...", help="Planned looks (docs/statistics.md, Racing): run "
-    "counts (each --race-min-runs + k x --race-batch, below --runs) at which every comparison "
-    "still open gets the rank-sum test at a group-sequential level; needs --race-look-share.")]
+    "--race-looks", metavar="every-round|none|N,N,...", help="Planned looks (docs/statistics.md, "
+    "Racing): at every round after the first, none, or at these run counts (each "
+    "--race-min-runs + k x --race-batch, below --runs); each comparison still open there gets "
+    "the rank-sum test at a group-sequential level. Default every-round with the rank-sum "
+    "closing look, none with the others.")]
 RaceLookShareOpt = Annotated[float | None, typer.Option(
-    "--race-look-share", help="The planned looks' share of --race-alpha. Default 0 (no looks).")]
+    "--race-look-share", help="The planned looks' share of --race-alpha. Default 0.8 with "
+    "looks, 0 without.")]
 RaceSequenceShareOpt = Annotated[float | None, typer.Option(
     "--race-sequence-share", help="The confidence sequence's share of --race-alpha beside the "
-    "rank-sum closing look (which gets the rest). Default 0.5.")]
+    "rank-sum closing look (which gets the rest). Default 0.05 with looks, 0.5 without.")]
 RaceSpendingOpt = Annotated[str | None, typer.Option(
     "--race-spending", metavar="obrien-fleming|pocock", help="How the looks' share is spent "
-    "across them (Lan-DeMets type). Default obrien-fleming.")]
+    "across them (Lan-DeMets type). Default pocock.")]
 RacePairsOpt = Annotated[str | None, typer.Option(
     "--race-pairs", metavar="reference|all", help="Compare every algorithm with the reference "
     "(default) or every pair.")]
@@ -116,7 +122,8 @@ def race_settings(spec: BenchSpec, race: bool, alpha: float | None, min_runs: in
     if spec.pool_instances:
         raise InputError("--pool-instances", "a race decides per instance; pooled rows would "
                          "mix its allowances: race without it")
-    plan = _planned_looks(looks, look_share, sequence_share, spending)
+    plan = default_design(final_test, **_planned_looks(looks, look_share, sequence_share,
+                                                       spending))
     try:
         return RaceSettings(max_runs=spec.runs, alpha=alpha, min_runs=min_runs, batch=batch,
                             pairs=pairs, margin=margin, final_test=final_test, **plan)
@@ -129,15 +136,18 @@ def race_settings(spec: BenchSpec, race: bool, alpha: float | None, min_runs: in
 
 def _planned_looks(looks: str | None, look_share: float | None, sequence_share: float | None,
                    spending: str | None) -> dict[str, Any]:
-    """The planned looks' options as :class:`RaceSettings` fields (their defaults when not
-    given); a malformed list of run counts is an :class:`InputError`."""
+    """The planned looks' options given, as :class:`RaceSettings` fields (for
+    :func:`~swarmpath.evidence.racing.default_design`); a malformed list of run counts is an
+    :class:`InputError`."""
     out: dict[str, Any] = {}
-    if looks is not None:
+    if looks is not None and looks.strip() in (EVERY_ROUND, "none"):
+        out["looks"] = EVERY_ROUND if looks.strip() == EVERY_ROUND else ()
+    elif looks is not None:
         try:
             out["looks"] = tuple(int(x) for x in looks.split(",") if x.strip())
         except ValueError:
-            raise InputError("--race-looks", f"must be run counts separated by commas, got "
-                             f"{looks!r}") from None
+            raise InputError("--race-looks", f"must be {EVERY_ROUND}, none or run counts "
+                             f"separated by commas, got {looks!r}") from None
     for option, key, value in (("--race-look-share", "look_share", look_share),
                                ("--race-sequence-share", "sequence_share", sequence_share)):
         if value is not None:

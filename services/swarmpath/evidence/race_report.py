@@ -22,7 +22,7 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any, cast
 
-from swarmpath.evidence.racing import BlockRace, RaceSettings, closing_rejections
+from swarmpath.evidence.racing import EVERY_ROUND, BlockRace, RaceSettings, closing_rejections
 
 if TYPE_CHECKING:
     from swarmpath.evidence.benchmark_stats import Statistics
@@ -215,8 +215,8 @@ def race_line(race: Mapping[str, Any]) -> str:
     s = race["settings"]
     final = {"rank-sum": ", closing rank-sum test", "sign": ", closing sign test"}.get(
         _closing(s), "")
-    if s.get("looks"):
-        final += f", looks at {','.join(str(n) for n in s['looks'])} ({s['spending']})"
+    if _look_runs(s, ","):
+        final += f", looks {_look_runs(s, ',')} ({s['spending']})"
     return (f"race (alpha {s['alpha']:g} over {race['comparisons']} comparisons, min_runs "
             f"{s['min_runs']}, batch {s['batch']}, margin {s['margin']:g}{final}): {stopped}/"
             f"{len(cells)} cells stopped ({decided} decided), {used} runs of {full} "
@@ -229,14 +229,23 @@ def _closing(settings: Mapping[str, Any]) -> str:
     return ("sign" if look else "none") if isinstance(look, bool) else str(look)
 
 
+def _look_runs(settings: Mapping[str, Any], sep: str) -> str:
+    """Where the planned looks are: 'at N, N, ...', 'every round from N', or '' (none)."""
+    looks = settings.get("looks")
+    if looks == EVERY_ROUND:
+        first = settings["min_runs"] + settings["batch"]
+        return f"every round from {first}" if first < settings["max_runs"] else ""
+    return "at " + sep.join(str(n) for n in looks) if looks else ""
+
+
 def _closing_words(settings: Mapping[str, Any]) -> str:
     """The planned looks and the closing look in a legend."""
     look, runs = _closing(settings), settings["max_runs"]
     looks = ""
-    if settings.get("looks"):
-        looks = (f"; at {', '.join(str(n) for n in settings['looks'])} runs the rank-sum test of "
-                 f"each open comparison, {settings['look_share']:g} of alpha spent across these "
-                 f"looks ({settings['spending']} type)")
+    if _look_runs(settings, ", "):
+        looks = (f"; {_look_runs(settings, ', ')} runs the rank-sum test of each open "
+                 f"comparison, {settings['look_share']:g} of alpha spent across these looks "
+                 f"({settings['spending']} type)")
     if look == "rank-sum":
         return (f"{looks}; the comparisons still open at {runs} runs: the rank-sum test there, "
                 f"Holm at {RaceSettings(**settings).closing_alpha:g} over those not declared "

@@ -15,9 +15,16 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal
 
-from pydantic import Field, field_validator
+from pydantic import Field, field_validator, model_validator
 
-from swarmpath.evidence.racing import PAIRS, SEQUENCE_SHARE, RaceSettings, comparisons_per_block
+from swarmpath.evidence.racing import (
+    EVERY_ROUND,
+    PAIRS,
+    SEQUENCE_SHARE,
+    RaceSettings,
+    comparisons_per_block,
+    default_design,
+)
 from swarmpath.service.model import MAX_RUNS_PER_CELL, Model
 
 #: Cell spec fields that tell the algorithms of a block apart (the rest is the block): with an
@@ -48,26 +55,49 @@ class RacingSpec(Model):
         "half of alpha, or none (docs/statistics.md, Racing); false and true, what jobs "
         "stored before the rank-sum look held, are none and sign")
 
-    looks: list[int] = Field(
-        default_factory=list, max_length=MAX_RUNS_PER_CELL, description="planned looks: run "
-        "counts (each min_runs + k * batch, below max_runs, increasing) at which every "
-        "comparison still open gets the rank-sum test at a group-sequential level "
-        "(docs/statistics.md, Racing)")
-    look_share: float = Field(default=0.0, ge=0, lt=1, allow_inf_nan=False,
-                              description="the looks' share of alpha (> 0 with looks)")
-    sequence_share: float = Field(
-        default=SEQUENCE_SHARE, gt=0, le=1, allow_inf_nan=False, description="the confidence "
-        "sequence's share of alpha beside the rank-sum closing look (which gets the rest)")
-    spending: Literal["obrien-fleming", "pocock"] = Field(
-        default="obrien-fleming", description="how the looks' share is spent across them: "
-        "Lan-DeMets O'Brien-Fleming or Pocock type")
+    # The planned looks and the shares of alpha. Left out (null), they are those of the
+    # default design (evidence.racing.default_design: with the rank-sum closing look a
+    # Pocock-spent look every round, shares 0.05 / 0.8 / 0.15), written into the validated spec
+    # so that a stored job keeps its design when a later default changes (store schema 6
+    # wrote the race without looks into the specs stored before).
+    looks: list[int] | Literal["every-round"] | None = Field(
+        default=None, max_length=MAX_RUNS_PER_CELL, description="planned looks: run counts "
+        "(each min_runs + k * batch, below max_runs, increasing), or 'every-round' (each "
+        "round's after the first), at which every comparison still open gets the rank-sum "
+        "test at a group-sequential level (docs/statistics.md, Racing); [] races without "
+        "looks. Default: 'every-round' with the rank-sum closing look, none with the others")
+    look_share: float | None = Field(
+        default=None, ge=0, lt=1, allow_inf_nan=False, description="the looks' share of alpha "
+        "(> 0 with looks). Default: 0.8 with looks, 0 without")
+    sequence_share: float | None = Field(
+        default=None, gt=0, le=1, allow_inf_nan=False, description="the confidence "
+        "sequence's share of alpha beside the rank-sum closing look (which gets the rest). "
+        f"Default: 0.05 with looks, {SEQUENCE_SHARE} without")
+    spending: Literal["obrien-fleming", "pocock"] | None = Field(
+        default=None, description="how the looks' share is spent across them: Lan-DeMets "
+        "O'Brien-Fleming or Pocock type. Default: pocock with looks")
 
     @field_validator("looks", mode="before")
     @classmethod
     def _strict_looks(cls, v: Any) -> Any:
-        if isinstance(v, list) and any(isinstance(n, bool) or not isinstance(n, int) for n in v):
-            raise ValueError("must be a list of integers (run counts)")
-        return v
+        # one error at racing.looks, not one per member of the union
+        if v is None or v == EVERY_ROUND or (isinstance(v, list) and all(
+                isinstance(n, int) and not isinstance(n, bool) for n in v)):
+            return v
+        raise ValueError(f"must be a list of integers (run counts) or {EVERY_ROUND!r}")
+
+    @model_validator(mode="after")
+    def _design_written(self) -> RacingSpec:
+        """The design's fields left out filled in (the default design), so that the stored
+        spec names them."""
+        design = default_design(self.final_test, self.looks, self.look_share,
+                                self.sequence_share, self.spending)
+        design["looks"] = design["looks"] if isinstance(design["looks"], str) else list(
+            design["looks"])
+        for key, value in design.items():
+            if getattr(self, key) is None:
+                setattr(self, key, value)
+        return self
 
     @field_validator("final_test", mode="before")
     @classmethod
@@ -83,11 +113,11 @@ class RacingSpec(Model):
         return v
 
     def settings(self, runs: int) -> RaceSettings:
+        design = default_design(self.final_test, self.looks, self.look_share,
+                                self.sequence_share, self.spending)
         return RaceSettings(max_runs=runs, alpha=self.alpha, min_runs=self.min_runs,
                             batch=self.batch, pairs=self.pairs, margin=self.margin,
-                            final_test=self.final_test, looks=tuple(self.looks),
-                            look_share=self.look_share, sequence_share=self.sequence_share,
-                            spending=self.spending)
+                            final_test=self.final_test, **design)
 
 
 def check_racing(racing: RacingSpec, runs: int, algorithms: Sequence[str]) -> list[

@@ -4,7 +4,10 @@ job already computed are taken over, not run again.
 Run r of a cell is a pure function of (cell spec, seed, r), so the old job's result of run r *is*
 the new job's run r: it is copied as stored. A raced job (or a job extended into a race) replays
 its race over the copied runs (:func:`swarmpath.evidence.racing.race_block`): comparisons the old
-race decided stay decided, cells it stopped at its ``max_runs`` race on.
+race decided stay decided, cells it stopped at its ``max_runs`` race on. Its planned looks are the
+old race's: looks at every round become the old job's rounds, written out (the looks' levels,
+spent over those run counts, are then the old race's; re-planned over the new ``max_runs`` they
+would be smaller and could reopen what a look decided), so the new rounds have no look.
 """
 
 from __future__ import annotations
@@ -13,7 +16,9 @@ import json
 import time
 from typing import Any
 
+from swarmpath.evidence.racing import EVERY_ROUND
 from swarmpath.service.protocol import BenchmarkJobSpec, MapJobSpec, parse_job_spec
+from swarmpath.service.racing import RacingSpec
 from swarmpath.service.store.base import FINAL_STATES, StoreBase, StoreError
 
 
@@ -91,9 +96,13 @@ class ExtendMixin(StoreBase):
 
 def _with_runs(spec: dict[str, Any], runs: int) -> BenchmarkJobSpec | MapJobSpec:
     """The stored spec with ``runs`` (and a race's ``max_runs``), validated again."""
-    spec = {**spec, "runs": runs}
+    old_runs, spec = spec["runs"], {**spec, "runs": runs}
     if spec.get("racing"):
         spec["racing"] = {**spec["racing"], "max_runs": runs}
+        if spec["racing"].get("looks") == EVERY_ROUND:  # the old rounds' looks (module text)
+            old = RacingSpec.model_validate(spec["racing"]).settings(old_runs)
+            spec["racing"]["looks"] = list(old.look_runs)
+            spec["racing"]["look_share"] = old.look_share if old.look_runs else 0.0
     try:
         return parse_job_spec(spec)
     except ValueError as exc:
