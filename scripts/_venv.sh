@@ -21,5 +21,10 @@ export PATH="$venv/bin:$PATH"
 # (docs/benchmarks.md, "Cold start"): every kernel, the built-in functions' objectives and the
 # map kernels (a suite's objective compiles at its first study, a few seconds); with the cache
 # filled this prints nothing. Two processes (-j 2) share the pieces: on two cores about 0.6 of
-# the wall time of one. A failure is not fatal: the kernels then compile at first use.
-swarmpath warmup --if-cold --no-suites -j 2 || echo "== swarmpath warmup failed: the kernels compile at first use"
+# the wall time of one. A failure is not fatal: the kernels then compile at first use. A caller
+# that has other work meanwhile sets defer_warmup=1 and runs warm_kernels itself (scripts/test:
+# beside mypy, one process that would leave a core idle).
+warm_kernels() {
+    swarmpath warmup --if-cold --no-suites -j 2 || echo "== swarmpath warmup failed: the kernels compile at first use"
+}
+[[ -n "${defer_warmup:-}" ]] || warm_kernels
