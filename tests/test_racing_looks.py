@@ -106,3 +106,90 @@ def test_without_looks_the_shares_are_those_of_earlier_races():
     assert plain.look_levels(10) == {}
     none = RaceSettings(max_runs=100, final_test="none", looks=(50,), look_share=0.25)
     assert none.levels(10) == (0.05 / 10 * 0.75, 0.0) and none.closing_alpha == 0.0
+
+
+def test_looks_every_round_follow_the_race_s_rounds():
+    """looks 'every-round': each round's run count after the first below max_runs, from the
+    race's own min_runs, batch and max_runs; the same boundaries as those run counts listed; a
+    race with no such round gives the looks' share to the closing look."""
+    every = dict(LOOKS, looks=racing.EVERY_ROUND)
+    settings = RaceSettings(max_runs=100, **every)
+    assert settings.look_runs == LOOKS["looks"]
+    assert settings.look_levels(13) == RaceSettings(max_runs=100, **LOOKS).look_levels(13)
+    assert RaceSettings(max_runs=57, min_runs=8, batch=8, **every).look_runs == (
+        16, 24, 32, 40, 48, 56)
+    short = RaceSettings(max_runs=20, **every)  # rounds at 10 and 20: no look between
+    assert short.look_runs == () and short.look_levels(4) == {}
+    assert short.closing_alpha == pytest.approx(0.05 * 0.95)
+    doc = study_race(settings, 1, [({"function": "F1", "dim": 2}, race_block(
+        {"A": np.arange(100.0), "B": np.arange(100.0) + 50}, ["A", "B"], settings, 1),
+        [(0, "A"), (1, "B")])])
+    assert doc["settings"]["looks"] == "every-round"
+    assert RaceSettings(**doc["settings"]) == settings
+    assert "looks every round from 20 (pocock)" in race_line(doc)
+    with pytest.raises(ValueError, match=r"^looks"):
+        RaceSettings(max_runs=100, **dict(LOOKS, looks="every-other"))
+
+
+def _stepped(values, names, settings, memo):
+    """The block's race as the store replays it: from the first round, once per completed
+    round, each cell holding the runs its allowance gave it; every step's race."""
+    steps = []
+    have = {a: settings.min_runs for a in names}
+    while True:
+        race = race_block({a: values[a][:have[a]] for a in names}, names, settings, 13,
+                          memo=memo)
+        steps.append(race)
+        if race.finished or race.allowance == have:
+            return steps
+        have = dict(race.allowance)
+
+
+def _state(race):
+    return (race.rounds, race.allowance, race.racing, race.stopped_round, race.stop_reason,
+            [d.to_json() for d in race.duels])
+
+
+@pytest.mark.parametrize("entries", [100_000, 7])
+def test_the_look_memo_changes_no_decision_at_any_round(entries):
+    """The store's replays with the looks' tests kept in a memo (race_tests.LookMemo) decide
+    exactly as without it, at every round of every block (small, medium and no effects, ties,
+    failed runs, a memo so small it empties itself); the memo is used: later replays find the
+    past looks' tests, so each step tests only its own round's looks."""
+    from swarmpath.evidence.race_tests import LookMemo
+
+    rng = np.random.default_rng(33)
+    settings = RaceSettings(max_runs=300, **dict(LOOKS, looks=racing.EVERY_ROUND))
+    names = ["A", "B", "C", "R"]
+    memo = LookMemo(entries)
+    looked = 0
+    for shift in (0.0, 0.15, 0.3, 0.6):  # A, B and C better than R by 1, 2 and 3 shifts
+        values = {a: rng.normal(size=300) - shift * {"A": 1, "B": 2, "C": 3, "R": 0}[a]
+                  for a in names}
+        values["B"][::17] = np.inf  # runs without a number count as the worst
+        values["C"] = np.round(values["C"], 1)  # ties
+        with_memo = _stepped(values, names, settings, memo)
+        without = _stepped(values, names, settings, None)
+        assert [_state(r) for r in with_memo] == [_state(r) for r in without]
+        looked += sum(d.look is not None for d in without[-1].duels)
+    assert looked >= 2  # looks decided something
+    if entries > 7:
+        assert memo.hits > 4 * memo.misses > 0  # past looks found, not tested again
+    else:
+        assert len(memo) <= 7
+
+
+def test_a_memo_hit_is_the_test_s_own_result():
+    """A look read from the memo is the very (p, side) the test gives for those samples, whatever
+    else was tested with it in one vectorized call."""
+    from swarmpath.evidence.race_tests import LookMemo, rank_sum_tests
+
+    rng = np.random.default_rng(34)
+    pairs = [(rng.normal(size=n) - 0.2, rng.normal(size=n)) for n in (5, 40, 40, 120)]
+    memo = LookMemo()
+    assert memo.tests(pairs[:3]) == rank_sum_tests(pairs[:3])
+    assert memo.tests(pairs[::-1]) == [rank_sum_tests([p])[0] for p in pairs[::-1]]
+    assert (memo.hits, memo.misses) == (3, 4)
+    other = (pairs[1][0].copy(), pairs[1][1].copy())
+    other[0][-1] += 1e-12  # one value differs: another key
+    assert LookMemo.key(*other) != LookMemo.key(*pairs[1])

@@ -6,6 +6,8 @@ ICOOT paper's Table 2: replayed over full 1000-run studies, and over null studie
                                                           [--designs NAME,...]
     .venv/bin/python scripts/bench/racing_looks.py null [--studies 200] [--seed 1]
                                                         [--designs NAME,...]
+    .venv/bin/python scripts/bench/racing_looks.py step --full full.json [--function F2]
+                                                        [--repeats 5]
 
 Each design of :data:`DESIGNS` is a ``racing`` field (min_runs 10, batch 10, alpha 0.05,
 max_runs 1000). ``replay``: the race of Table 2 replayed over each full study's runs with the
@@ -16,7 +18,13 @@ and every +/=/- against the full study's (rank-sum, Holm over the table, alpha 0
 disagreements listed. ``null``: ``--studies`` studies of Table 2's shape (13 blocks of 6
 algorithms, 1000 independent standard normal runs a cell: nothing differs) raced by each design:
 the share of studies with any difference declared (each one false), at most alpha = 0.05 within
-its Monte Carlo error when the design is valid. Markdown to stdout, progress to stderr.
+its Monte Carlo error when the design is valid. ``step``: the cost of the store's race steps on
+one function of a full study: the block replayed once per completed round as the store does
+(race_block over each cell's runs so far), the whole race step by step, with the default design
+with the looks' memo (race_tests.LookMemo, one per race as the store keeps one), without it, and
+without looks ("plain"), the three alternating ``--repeats`` times; process CPU time, medians,
+per step and for the last 10 steps; the memo's decisions checked equal to the memo-less ones at
+every step. Markdown to stdout, progress to stderr.
 """
 
 from __future__ import annotations
@@ -25,6 +33,7 @@ import argparse
 import json
 import math
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -35,6 +44,7 @@ from racing import _bench_values, _verdicts, replayed_race
 from service import TABLE2_ALGORITHMS, TABLE2_FUNCTIONS, note
 
 from swarmpath.evidence.race_report import study_race
+from swarmpath.evidence.race_tests import LookMemo
 from swarmpath.evidence.racing import RaceSettings, race_block
 from swarmpath.service.racing import RacingSpec
 
@@ -145,6 +155,62 @@ def null(args: argparse.Namespace) -> None:
               f"({max(rate - half, 0):.3f}-{rate + half:.3f}) | {by_look[name]} |")
 
 
+def _steps(values: dict[str, np.ndarray], settings: RaceSettings, memo: LookMemo | None
+           ) -> tuple[list[float], list[Any]]:
+    """The store's steps over one block (one race_block per completed round, each cell at the
+    runs its allowance gave it): each step's CPU seconds and race."""
+    m = len(TABLE2_FUNCTIONS) * (len(TABLE2_ALGORITHMS) - 1)
+    have = dict.fromkeys(TABLE2_ALGORITHMS, settings.min_runs)
+    seconds, races = [], []
+    while True:
+        t = time.process_time()
+        race = race_block({a: values[a][:have[a]] for a in TABLE2_ALGORITHMS},
+                          TABLE2_ALGORITHMS, settings, m, memo=memo)
+        seconds.append(time.process_time() - t)
+        races.append((race.allowance, race.stop_reason, [d.to_json() for d in race.duels]))
+        if race.finished or race.allowance == have:
+            return seconds, races
+        have = dict(race.allowance)
+
+
+def step(args: argparse.Namespace) -> None:
+    doc = json.loads(Path(args.full[0]).read_text())
+    raw = _bench_values(doc)
+    values = {a: np.where(np.isnan(v := np.asarray(raw[(a, args.function)])), np.inf, v)
+              for a in TABLE2_ALGORITHMS}
+    settings = {"memo": settings_of("default"), "no memo": settings_of("default"),
+                "plain": settings_of("plain")}
+    for s in settings.values():
+        s.look_levels(65)  # the boundaries, once per process (cached), outside the timing
+    times: dict[str, list[list[float]]] = {k: [] for k in settings}
+    races: dict[str, list[Any]] = {}
+    for r in range(args.repeats):
+        for mode, s in settings.items():  # alternating: each repeat runs all three in turn
+            seconds, races[mode] = _steps(values, s, LookMemo() if mode == "memo" else None)
+            times[mode].append(seconds)
+        note(f"repeat {r + 1}: " + ", ".join(f"{k} {sum(v[-1]):.2f} s" for k, v in times.items()))
+    assert races["memo"] == races["no memo"], "the memo changed a decision"
+    steps = len(times["memo"][0])
+    common = min(steps, len(times["plain"][0]))
+    print(f"{args.function} of {args.full[0].name} (seed {doc['settings']['seed']}): the store's "
+          f"race steps (one replay per completed round; {steps} steps with the default design), "
+          f"{args.repeats} alternating repeats, process CPU time, median over repeats; the "
+          f"memo's decisions equal the memo-less ones at every step; rounds both designs "
+          f"have: the first {common}\n\n"
+          "| design | steps | race (all steps) | mean step | mean of the last 10 steps both "
+          "have | those / plain's (median of the repeats' ratios) |\n"
+          "| --- | ---: | ---: | ---: | ---: | ---: |")
+    for mode, runs in times.items():
+        total = float(np.median([sum(t) for t in runs]))
+        last = [float(np.mean(t[common - 10:common])) for t in runs]
+        ratio = np.median([x / float(np.mean(p[common - 10:common]))
+                           for x, p in zip(last, times["plain"], strict=True)])
+        name = {"memo": "default (looks every round), memo", "no memo": "default, no memo",
+                "plain": "plain (no looks)"}[mode]
+        print(f"| {name} | {len(runs[0])} | {total:.2f} s | {1000 * total / len(runs[0]):.0f} ms "
+              f"| {1000 * float(np.median(last)):.0f} ms | {ratio:.2f}x |")
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     sub = ap.add_subparsers(dest="what", required=True)
@@ -153,14 +219,18 @@ def main(argv: list[str] | None = None) -> int:
     n = sub.add_parser("null")
     n.add_argument("--studies", type=int, default=200)
     n.add_argument("--seed", type=int, default=1)
+    st = sub.add_parser("step")
+    st.add_argument("--full", type=Path, nargs=1, required=True, metavar="FILE")
+    st.add_argument("--function", default="F2", choices=TABLE2_FUNCTIONS)
+    st.add_argument("--repeats", type=int, default=5)
     for p in (r, n):
         p.add_argument("--designs", type=lambda v: v.split(","), default=list(DESIGNS),
                        help=f"names of DESIGNS, comma-separated: {', '.join(DESIGNS)}")
     args = ap.parse_args(argv)
-    unknown = [d for d in args.designs if d not in DESIGNS]
+    unknown = [d for d in getattr(args, "designs", ()) if d not in DESIGNS]
     if unknown:
         ap.error(f"--designs: unknown {unknown}")
-    {"replay": replay, "null": null}[args.what](args)
+    {"replay": replay, "null": null, "step": step}[args.what](args)
     return 0
 
 

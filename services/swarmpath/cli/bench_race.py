@@ -25,6 +25,7 @@ from swarmpath.cli.core import InputError
 from swarmpath.evidence import report
 from swarmpath.evidence.group_sequential import SPENDING
 from swarmpath.evidence.race_report import study_race
+from swarmpath.evidence.race_tests import LookMemo
 from swarmpath.evidence.racing import (
     CLOSING,
     EVERY_ROUND,
@@ -231,13 +232,14 @@ def run_race(
     blocks = race_blocks(spec)
     comparisons = sum(len(comparisons_per_block(b.names, settings.pairs)) for b in blocks)
     cells: dict[CellKey, report.Cell] = {}
+    memo = LookMemo()  # the looks' tests from one round's replay to the next
     round_ = 0
     with TaskPool(jobs) as pool:
         while True:
             ranges: dict[CellKey, tuple[int, int]] = {}
             for b in blocks:
                 values = {a: _values(cells.get((b.function, b.dim, a))) for a in b.names}
-                race = race_block(values, b.names, settings, comparisons)
+                race = race_block(values, b.names, settings, comparisons, memo=memo)
                 for a in b.names:
                     have = values[a].size
                     if race.allowance[a] > have:

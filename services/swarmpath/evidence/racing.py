@@ -60,6 +60,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from swarmpath.evidence.group_sequential import SPENDING, nominal_levels
+from swarmpath.evidence.race_tests import LookMemo, rank_sum_tests
 from swarmpath.evidence.sequential import PairDecision, decide, pair_scores, sign_test
 
 PAIRS = ("reference", "all")
@@ -312,13 +313,16 @@ def race_block(
     settings: RaceSettings,
     comparisons: int,
     intervals: bool = True,
+    memo: LookMemo | None = None,
 ) -> BlockRace:
     """Replay a block's race over the values available: ``values[name]`` holds the best values
     of that cell's runs 0, 1, ... in run order (NaN for a run that failed; only runs with a
     result, contiguous from run 0). ``algorithms`` are the block's names with the reference last
     (for ``pairs="reference"``); ``comparisons`` is the number of comparisons of the whole study
     (the Bonferroni divisor). ``intervals=False`` leaves the duels' confidence intervals out
-    (NaN; the costly part, which no decision uses: simulations of many races)."""
+    (NaN; the costly part, which no decision uses: simulations of many races). ``memo`` keeps
+    the planned looks' tests from one replay to the next (the same decisions, without testing
+    every past look again: :mod:`swarmpath.evidence.race_tests`)."""
     level, final_level = settings.levels(comparisons)
     look_at = settings.look_levels(comparisons)
     arrays = {name: np.asarray(values.get(name, ()), dtype=float) for name in algorithms}
@@ -349,7 +353,7 @@ def race_block(
                     looked.append((a, b, result))
                 elif settings.closing_alpha and need >= settings.max_runs:
                     # open with both cells at max_runs: the rank-sum look's p (module text)
-                    closing[(a, b)] = _rank_sum(arrays[a][:need], arrays[b][:need])
+                    closing[(a, b)] = rank_sum_tests([(arrays[a][:need], arrays[b][:need])])[0]
                 elif final_level and need >= settings.max_runs:
                     # open with both cells at max_runs: the one fixed-n look (module text)
                     better = sign_test(z, final_level)
@@ -359,7 +363,8 @@ def race_block(
                             math.nan), round_, final=True)
         # a planned look: the rank-sum test at its nominal level (module text), all the open
         # comparisons of the round in one vectorized call (they have the same run count)
-        tests = _rank_sums([(arrays[a][:need], arrays[b][:need]) for a, b, _ in looked])
+        samples = [(arrays[a][:need], arrays[b][:need]) for a, b, _ in looked]
+        tests = rank_sum_tests(samples) if memo is None else memo.tests(samples)
         for (a, b, result), (look_p, lean) in zip(looked, tests, strict=True):
             if look_p < look_at[need] and lean is not None:
                 decided[(a, b)] = Duel(a, b, PairDecision(
@@ -387,31 +392,6 @@ def race_block(
             p, side = closing.get((a, b), (None, None))
             duels.append(Duel(a, b, _open(result), None, closing_p=p, closing_better=side))
     return BlockRace(round_, allowance, racing, stopped, reason, duels)
-
-
-def _rank_sum(a: np.ndarray, b: np.ndarray) -> tuple[float, str | None]:
-    """The full study's test of one comparison (:func:`swarmpath.evidence.compare.rank_sum`,
-    NaN dropped): its two-sided p and the side whose runs tend lower."""
-    return _rank_sums([(a, b)])[0]
-
-
-def _rank_sums(samples: Sequence[tuple[np.ndarray, np.ndarray]]
-               ) -> list[tuple[float, str | None]]:
-    """:func:`_rank_sum` of each pair of samples, the large ones in one vectorized call
-    (:func:`swarmpath.evidence.compare.rank_sum_many`: the same p as one call each)."""
-    if not samples:
-        return []
-    from swarmpath.evidence.compare import rank_sum_many  # scipy.stats: only when a look happens
-
-    out: list[tuple[float, str | None]] = []
-    for (a, b), res in zip(samples, rank_sum_many(samples), strict=True):
-        if res is None:
-            out.append((1.0, None))
-            continue
-        u, p = res
-        half = np.count_nonzero(~np.isnan(a)) * np.count_nonzero(~np.isnan(b)) / 2.0
-        out.append((p, None if u == half else ("a" if u < half else "b")))
-    return out
 
 
 def closing_rejections(pvalues: Sequence[float], family: int, alpha: float) -> list[bool]:

@@ -12,6 +12,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Self
 
+from swarmpath.evidence.race_tests import LookMemo
 from swarmpath.service.protocol import (
     BenchmarkCell,
     JobState,
@@ -238,6 +239,8 @@ class StoreBase:
         self._record_contexts: dict[str, tuple[int, int, str, int, dict[int, Any]]] = {}
         # job seq -> its race settings and blocks, or None (RacesMixin)
         self._race_contexts: dict[int, Any] = {}
+        # the planned looks' tests by the samples tested, kept across a race's replays
+        self._look_memo = LookMemo()
         self._closed = False
         #: () -> {live worker: what it advertised, or None}; set by the coordinator: a job's
         #: status then says when no live worker can run it (store.extensions)

@@ -78,7 +78,8 @@ class RacesMixin(StoreBase):
         names = blocks.names(block)
         by_name = {name: values[i] for i, name in members}
         try:
-            race = race_block(by_name, names, settings, blocks.comparisons)
+            race = race_block(by_name, names, settings, blocks.comparisons,
+                              memo=self._look_memo)
         except Exception:  # a result must never be lost to a bug here: stop racing the block
             log.exception("race of job %s block %s failed; its cells stop", seq, block)
             race = None
