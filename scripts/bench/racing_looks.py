@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 import time
 from pathlib import Path
@@ -143,16 +142,23 @@ def null(args: argparse.Namespace) -> None:
             by_look[name] += any(d["look"] is not None for d in duels)
         if (s + 1) % 5 == 0:
             note(f"{s + 1} studies: " + ", ".join(f"{v}" for v in false.values()))
+    from scipy import stats
+
+    # the claim "at most alpha" fails when more studies err than a design erring at exactly
+    # alpha gives with probability 0.95 (one-sided binomial test at 5 %)
+    bound = int(stats.binom.ppf(0.95, args.studies, 0.05))
     print(f"{args.studies} null studies (13 blocks x 6 algorithms, {MAX_RUNS} standard normal "
           f"runs a cell, seed {args.seed}), raced by the product's code: studies with a false "
-          "difference (95 % Monte Carlo interval; valid: at most 0.05 within it)\n\n"
-          "| design | studies with a false difference | rate | of them at a look |\n"
-          "| --- | ---: | --- | ---: |")
+          "difference, the rate with its 95 % Clopper-Pearson interval; the claim (at most "
+          f"alpha = 0.05) fails above {bound} of {args.studies} (a design erring at exactly "
+          f"0.05 exceeds it with probability {stats.binom.sf(bound, args.studies, 0.05):.3f})"
+          "\n\n| design | studies with a false difference | rate (95 % interval) | of them at "
+          "a look | at most alpha |\n| --- | ---: | --- | ---: | --- |")
     for name in args.designs:
-        rate = false[name] / args.studies
-        half = 1.96 * math.sqrt(max(rate * (1 - rate), 0.05 * 0.95) / args.studies)
-        print(f"| {describe(name)} | {false[name]}/{args.studies} | {rate:.3f} "
-              f"({max(rate - half, 0):.3f}-{rate + half:.3f}) | {by_look[name]} |")
+        ci = stats.binomtest(false[name], args.studies).proportion_ci()
+        print(f"| {describe(name)} | {false[name]}/{args.studies} | "
+              f"{false[name] / args.studies:.3f} ({ci.low:.3f}-{ci.high:.3f}) | "
+              f"{by_look[name]} | {'holds' if false[name] <= bound else 'FAILS'} |")
 
 
 def _steps(values: dict[str, np.ndarray], settings: RaceSettings, memo: LookMemo | None
