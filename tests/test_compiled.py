@@ -31,6 +31,7 @@ from swarmpath.optimizers.compiled.streams import (
     open_stream,
     random_into,
 )
+from swarmpath.optimizers.compiled.warm import warm
 from swarmpath.optimizers.problem import BenchmarkProblem
 from swarmpath.optimizers.streams import RunStreams, run_generator
 
@@ -209,6 +210,7 @@ def test_the_numpy_backend_never_imports_numba():
 def test_auto_runs_the_kernels_where_the_study_has_them_and_numpy_elsewhere(monkeypatch):
     kw = dict(dim=3, agents=5, iterations=6, run_ids=[2, 0], seed=4)
     algo = WITH_KERNEL[0]
+    warm([algo], ["F8"])  # compiled: auto runs them (numpy before, test_compiled_background.py)
     auto = minimize(algo, "F8", transform="shift", **kw)  # the default backend
     assert (auto.backend, auto.tolerance) == ("numba", 0.0)
     assert_same(minimize(algo, "F8", transform="shift", backend="numpy", **kw), auto, 0.0)

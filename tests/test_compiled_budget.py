@@ -22,6 +22,7 @@ from swarmpath.optimizers.budget import (
 )
 from swarmpath.optimizers.compiled import find_kernel
 from swarmpath.optimizers.compiled import run as compiled_run
+from swarmpath.optimizers.compiled.warm import warm
 from swarmpath.service.jobspec import parse_job_spec
 
 FIELDS = ("best_fitness", "best_position", "curve", "evaluations", "shifts")
@@ -46,6 +47,7 @@ def _settings(algo):
 @pytest.mark.parametrize("algo", WITH_KERNEL)
 def test_auto_runs_a_study_budget_compiled_with_the_reference_numbers(algo):
     budget, agents, dim = 150, 6, 4
+    warm([algo], FUNCTIONS)  # auto runs compiled kernels (numpy before: test_compiled_background)
     for k, params in enumerate(_settings(algo)):
         t = iterations_for_budget(algo, budget, agents, dim, params)
         kw = dict(dim=dim, agents=agents, iterations=t, run_ids=[3, 0], seed=5 + k,
@@ -63,6 +65,7 @@ def test_auto_runs_a_study_budget_compiled_with_the_reference_numbers(algo):
 @pytest.mark.parametrize("algo", WITH_KERNEL)
 def test_a_budget_that_ends_runs_early_is_compiled_only_where_the_kernel_counts_it(algo):
     agents, dim, iterations = 6, 3, 12
+    warm([algo], FUNCTIONS)  # auto runs compiled kernels (numpy before: test_compiled_background)
     kw = dict(dim=dim, agents=agents, iterations=iterations, run_ids=[1, 4], seed=2)
     free = min(r.evaluations.min() for r in minimize_many(algo, FUNCTIONS, backend="numpy",
                                                           **kw))

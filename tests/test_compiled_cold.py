@@ -64,9 +64,10 @@ def test_the_install_warm_up_fills_the_cache_that_later_processes_load(tmp_path)
     # the install's warm-up again (a refresh of .venv): nothing to do, nothing printed
     again = cli(tmp_path, "warmup", "--if-cold", "-a", "SSA", "-f", "F4")
     assert again.stdout == "" and again.stderr == ""
-    # a study's first run compiles only what the cache lacks (GWO), in one line that says so
+    # a study's first run on backend numba compiles only what the cache lacks (GWO), in one
+    # line that says so (backend auto runs numpy meanwhile: tests/test_compiled_background.py)
     study = ("bench", "-a", "SSA,GWO", "-f", "F4", "-d", "2", "--runs", "1", "--agents", "10",
-             "--iterations", "2", "-j", "1")
+             "--iterations", "2", "-j", "1", "--backend", "numba")
     hints = [line for line in cli(tmp_path, *study).stderr.splitlines() if HINT in line]
     assert len(hints) == 1 and "GWO" in hints[0] and "SSA" not in hints[0], hints
     assert HINT not in cli(tmp_path, *study).stderr  # the first run marked what it compiled
@@ -86,20 +87,6 @@ def test_a_piece_is_cold_again_once_the_compiled_sources_change(monkeypatch):
     done = warm_module.warm(["SSA"], ["F4"], cold_only=True)
     assert [(w.kind, w.name) for w in done] == wanted and warm_module.cold(wanted) == []
     assert warm_module.warm(["SSA"], ["F4"], cold_only=True) == []
-
-
-def test_plan_compiles_the_map_kernels_once_before_its_worker_processes(tmp_path):
-    """Two worker processes, a cold cache: the parent compiles the map kernels (one line says
-    so) before the runs start, and the piece is ready for every later process."""
-    fast = json.dumps({"OMPL-RRTstar": {"iterations": 300}})
-    study = ("plan", "-p", "OMPL-RRTstar", "-m", "mfb-static", "--runs", "2", "-j", "2",
-             "--params", fast)
-    hints = [line for line in cli(tmp_path, *study).stderr.splitlines() if HINT in line]
-    assert len(hints) == 1 and "clearance" in hints[0], hints
-    check = ("from swarmpath.optimizers.compiled.warm import cold, pieces;"
-             "print(cold(pieces([], [], True)))")
-    assert run(tmp_path, "-c", check).stdout.strip() == "[]"
-    assert HINT not in cli(tmp_path, *study).stderr
 
 
 def test_the_install_warm_up_leaves_the_suites_to_their_first_study(monkeypatch):

@@ -168,3 +168,12 @@ def _same_runs_on_both_backends(algorithm, name, kw):
     assert np.array_equal(out.best_fitness, ref.best_fitness), (algorithm, name)
     assert np.array_equal(out.curve, ref.curve), (algorithm, name)
     assert np.array_equal(out.best_position, ref.best_position), (algorithm, name)
+
+
+def test_every_objective_auto_may_run_is_compared_with_its_reference_bit_for_bit():
+    """Backend "auto" runs a compiled objective or the numpy function as their compile allows
+    (tests/test_compiled_background.py): each registered objective is one of those compared
+    above (BBOB, CEC) or in test_compiled.py (the registry's built-in functions)."""
+    from swarmpath.functions import list_functions
+
+    assert set(objectives.compiled_names()) == set(list_functions()) | set(BBOB) | set(CEC)

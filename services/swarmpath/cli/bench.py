@@ -163,11 +163,13 @@ def _compute(job: tuple[BenchSpec, Task], report_rows: Callable[[int], None]) ->
 
 
 def compile_first(spec: BenchSpec, note: Callable[[str], None] | None = None) -> None:
-    """Compile the kernels the study will run (backend auto or numba) that this tree's numba
-    cache lacks, in this process, before the tasks go to other processes: they then load them
-    from the cache instead of each compiling the same kernels side by side (seconds of CPU per
-    kernel in a fresh environment). ``note`` gets one line first when anything compiles
-    (:func:`swarmpath.optimizers.compiled.warm.compile_cold`)."""
+    """The kernels the study would run that this tree's numba cache lacks: with backend
+    "numba", compiled in this process before the tasks go to other processes (they then load
+    them from the cache instead of each compiling the same kernels side by side: seconds of CPU
+    per kernel in a fresh environment; :func:`swarmpath.optimizers.compiled.warm.compile_cold`);
+    with "auto", asked for in the background, the study running the numpy reference for them
+    until they are ready (:func:`~swarmpath.optimizers.compiled.warm.request_cold`). ``note``
+    gets one line when anything is missing."""
     if spec.backend == "numpy":
         return
     from swarmpath.optimizers.api import resolve_backend
@@ -178,10 +180,10 @@ def compile_first(spec: BenchSpec, note: Callable[[str], None] | None = None) ->
                         iterations=spec.iterations_for(a, d), dim=d) == "numba"
         for d in spec.dims)]
     if compiled:
-        from swarmpath.optimizers.compiled.warm import compile_cold
+        from swarmpath.optimizers.compiled.warm import compile_cold, request_cold
 
-        compile_cold(compiled, list(dict.fromkeys(spec.functions)), False,
-                     note or (lambda _text: None))
+        make = compile_cold if spec.backend == "numba" else request_cold
+        make(compiled, list(dict.fromkeys(spec.functions)), False, note or (lambda _text: None))
 
 
 def auto_jobs(spec: BenchSpec) -> int:
@@ -208,6 +210,7 @@ def _cell(algorithm: str, function: str, dim: int, results: list[Any]) -> report
         params=dict(results[-1].params or {}),
         curves=[row.tolist() for res in results for row in res.curve],
         cpu_seconds=report.cpu_total(res.cpu_seconds for res in results),
+        backends=report.count_backends((res.backend, len(res.run_ids)) for res in results),
     )
 
 

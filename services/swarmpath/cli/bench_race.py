@@ -214,7 +214,8 @@ def _merge(old: report.Cell | None, new: report.Cell) -> report.Cell:
         run_ids=old.run_ids + new.run_ids, best_fitness=old.best_fitness + new.best_fitness,
         evaluations=old.evaluations + new.evaluations, seconds=old.seconds + new.seconds,
         params=new.params, curves=old.curves + new.curves,
-        cpu_seconds=report.cpu_total((old.cpu_seconds, new.cpu_seconds)))
+        cpu_seconds=report.cpu_total((old.cpu_seconds, new.cpu_seconds)),
+        backends=report.count_backends([*old.backends.items(), *new.backends.items()]))
 
 
 def run_race(

@@ -55,14 +55,15 @@ def apply_backend(backend: str | None, planners: Sequence[str],
 
 
 def compile_first(note: Callable[[str], None]) -> None:
-    """Compile the world's clearance and sensing kernels, which every map run calls (backend
-    auto: where numba is installed), in this process when this tree's numba cache lacks them,
-    before the runs go to worker processes: each of them would otherwise compile the same
-    kernels side by side (about 5 s of CPU each). ``note`` gets one line first when anything
-    compiles. A planner's own ``backend: numba`` compiles its decision in its runs."""
+    """The world's clearance and sensing kernels, which every map run calls (backend auto:
+    where numba is installed), when this tree's numba cache lacks them: asked for in the
+    background once, here, before the runs go to worker processes, which run the numpy
+    reference (the same numbers) until the kernels are ready
+    (:func:`swarmpath.optimizers.compiled.warm.request_cold`). ``note`` gets one line when
+    they are missing. A planner's own ``backend: numba`` compiles its decision in its runs."""
     from swarmpath.world.clearance import compiled_available
 
     if compiled_available():
-        from swarmpath.optimizers.compiled.warm import compile_cold
+        from swarmpath.optimizers.compiled.warm import request_cold
 
-        compile_cold([], [], True, note)
+        request_cold([], [], True, note)

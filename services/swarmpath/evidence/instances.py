@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from swarmpath.evidence.report import Cell, assign_ranks, cpu_total
+from swarmpath.evidence.report import Cell, assign_ranks, count_backends, cpu_total
 from swarmpath.functions.suites.base import split_instance
 
 
@@ -40,6 +40,7 @@ def pool_instances(cells: Sequence[Cell]) -> list[Cell]:
             params=dict(members[-1].params),
             curves=[c for m in members for c in m.curves],
             cpu_seconds=cpu_total(m.cpu_seconds for m in members),
+            backends=count_backends(b for m in members for b in m.backends.items()),
         ))
     assign_ranks(out)
     return out

@@ -64,6 +64,9 @@ class Cell:
     #: CPU seconds of the runs (the computing threads', ``Result.cpu_seconds``) beside the wall
     #: ``seconds``; None when a part of the cell was not measured (see :func:`cpu_total`)
     cpu_seconds: float | None = None
+    #: runs per backend that computed them (``Result.backend``: "numpy" or "numba"; backend
+    #: "auto" runs numpy while the kernels are not compiled yet); empty when not known
+    backends: dict[str, int] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         self.stats = describe(self.best_fitness)
@@ -78,6 +81,15 @@ def cpu_total(values: Iterable[float | None]) -> float | None:
             return None
         total += float(v)
     return total
+
+
+def count_backends(parts: Iterable[tuple[str, int]]) -> dict[str, int]:
+    """Runs per backend from (backend, runs) pairs, in sorted order (one cell's parts, or the
+    cells merged into one)."""
+    out: dict[str, int] = {}
+    for backend, runs in parts:
+        out[backend] = out.get(backend, 0) + runs
+    return dict(sorted(out.items()))
 
 
 def assign_ranks(cells: Iterable[Cell]) -> None:
@@ -252,6 +264,7 @@ def cell_to_json(
         "rank": c.rank,
         "seconds": c.seconds,
         "cpu_seconds": c.cpu_seconds,
+        "backends": c.backends,
         "evaluations": sum(c.evaluations),
         "params": c.params,
         "run_ids": c.run_ids,

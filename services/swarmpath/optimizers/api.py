@@ -29,8 +29,8 @@ CHUNK_ELEMENTS = 100_000
 #: Ways of computing a study: ``numpy`` is the reference; ``numba`` runs the compiled kernels of
 #: :mod:`swarmpath.optimizers.compiled`; ``auto`` (the default) runs the kernels where numba is
 #: installed and the study has kernels that give the reference's numbers to the last bit (every
-#: kernel does: tolerance 0.0), numpy otherwise (:func:`resolve_backend`). Each Result records the
-#: backend that computed it.
+#: kernel does: tolerance 0.0), compiled already (:mod:`.compiled.ready`), numpy otherwise
+#: (:func:`resolve_backend`). Each Result records the backend that computed it.
 BACKENDS: tuple[str, ...] = ("auto", "numpy", "numba")
 #: The backends that compute (``auto`` picks one of them): a planner's ``backend`` parameter.
 COMPUTING_BACKENDS: tuple[str, ...] = ("numpy", "numba")
@@ -158,7 +158,10 @@ def minimize_many(
     the GIL for the same work: docs/benchmarks.md, Table 2).
 
     ``backend="auto"`` (the default) is ``"numba"`` when :func:`resolve_backend` finds kernels
-    for the whole study, else ``"numpy"``: the same numbers either way, faster where it can.
+    for the whole study and they are compiled (in this process, or in the tree's numba cache:
+    :mod:`swarmpath.optimizers.compiled.ready`), else ``"numpy"``: the same numbers either way,
+    faster where it can. Kernels not compiled yet are compiled by a background process
+    meanwhile, never in this call.
     ``backend="numba"`` computes each run with its algorithm's compiled kernel
     (:mod:`swarmpath.optimizers.compiled`), the same numbers as the reference (``"numpy"``)
     within the kernel's ``tolerance`` (recorded in each Result; 0.0 is equal to the last bit). An
@@ -204,8 +207,11 @@ def minimize_many(
     if isinstance(elements, bool) or not isinstance(elements, int | np.integer) or elements < 0:
         raise ParameterError(f"chunk_elements must be an integer >= 0, got {elements!r}")
     cls = get_optimizer(algorithm)
+    asked = backend
     backend = _resolve(backend, cls.name, fns, kind, params,
                        _Budget(max_evaluations, agents, iterations, dim))
+    if backend == "numba" and asked == "auto" and not _compiled_now(cls.name, fns):
+        backend = "numpy"  # the same numbers, no compile in this call
     if backend == "numba":  # run by run: one call per distinct run list, progress spread
         if all(ids == cell_ids[0] for ids in cell_ids):
             groups = [(fns, cell_ids[0])]
@@ -293,7 +299,8 @@ def resolve_backend(
     last bit (the algorithm with these ``params`` and ``transform``, each function, and under
     ``max_evaluations`` with these ``agents``, ``iterations`` and ``dim``:
     ``compiled.run.check_budget``), else ``"numpy"``. Never an error for ``"auto"``: what the
-    kernels do not cover runs on the reference."""
+    kernels do not cover runs on the reference. Whether they are compiled yet is not asked:
+    until they are, ``minimize_many``'s auto runs the reference (the same numbers)."""
     if backend not in BACKENDS:
         raise ParameterError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
     fns = [get_function(f) if isinstance(f, str) else f for f in functions]
@@ -329,6 +336,16 @@ def _resolve(backend: str, algorithm: str, fns: Sequence[BenchmarkFunction], tra
     except ParameterError:
         return "numpy"
     return "numba" if kernel.tolerance == 0.0 else "numpy"
+
+
+def _compiled_now(algorithm: str, fns: Sequence[BenchmarkFunction]) -> bool:
+    """Whether backend "auto" runs the kernels of a study they cover now: its kernel and
+    objectives are compiled (in this process, or in the tree's cache by any process);
+    otherwise they are asked for in the background (:mod:`swarmpath.optimizers.compiled.ready`)
+    and the reference runs."""
+    from swarmpath.optimizers.compiled.ready import ready_for_auto, study_pieces
+
+    return ready_for_auto(study_pieces(algorithm, fns))
 
 
 def check_backend(
@@ -382,6 +399,9 @@ def _minimize_compiled(
         algorithm, fns, dim, agents, iterations, ids, seed, params, kind, on_iteration,
         max_evaluations,
     )
+    from swarmpath.optimizers.compiled.ready import made_ready, study_pieces
+
+    made_ready(study_pieces(algorithm, fns), mark=True)  # compiled or loaded: auto may run them
     return [
         Result(algorithm=algorithm, function=fn.name, dim=dim, agents=agents,
                iterations=iterations, seed=seed, run_ids=list(ids), transform=kind,

@@ -11,15 +11,18 @@
 
 ``backend``: ``"numpy"`` (the reference), ``"numba"`` (:mod:`swarmpath.world.clearance_compiled`:
 only the polygons a query can reach are visited, each distance with the reference's operations,
-so every result is the same double) or ``"auto"`` (numba when it is installed, else numpy). The
-results do not depend on the choice, so ``"auto"`` keeps a run the same on any worker; numba
-only saves time (docs/benchmarks.md, "Large maps").
+so every result is the same double) or ``"auto"`` (numba when it is installed and its kernels
+are compiled, else numpy: a cold cache compiles them in the background meanwhile,
+:mod:`swarmpath.optimizers.compiled.ready`). The results do not depend on the choice, so
+``"auto"`` keeps a run the same on any worker; numba only saves time (docs/benchmarks.md,
+"Large maps").
 """
 
 from __future__ import annotations
 
 import itertools
 import math
+import time
 import weakref
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -48,10 +51,27 @@ def resolve(backend: str) -> str:
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
     if backend == "auto":
-        return "numba" if compiled_available() else "numpy"
+        return "numba" if compiled_available() and _kernels_ready() else "numpy"
     if backend == "numba" and not compiled_available():
         raise ValueError("backend 'numba' needs numba installed (pip install 'swarmpath[fast]')")
     return backend
+
+
+_READY = [False, 0.0]  # the kernels are compiled; when to look again if not
+
+
+def _kernels_ready() -> bool:
+    """Whether the clearance and sensing kernels are compiled (the piece ``("map",
+    "clearance")`` of :mod:`swarmpath.optimizers.compiled.ready`): asked at most once every two
+    seconds while they are not (every query resolves its backend), then remembered."""
+    if _READY[0]:
+        return True
+    now = time.monotonic()
+    if now >= _READY[1]:
+        from swarmpath.optimizers.compiled.ready import MAP_PIECE, ready_for_auto
+
+        _READY[0], _READY[1] = ready_for_auto([MAP_PIECE]), now + 2.0
+    return bool(_READY[0])
 
 
 @dataclass(eq=False)

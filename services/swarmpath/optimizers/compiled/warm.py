@@ -65,8 +65,13 @@ def functions_with_objectives(functions: Sequence[str] | None) -> list[str]:
 def pieces(algorithms: Sequence[str] | None = None, functions: Sequence[str] | None = None,
            maps: bool | None = None) -> list[tuple[str, str]]:
     """The pieces :func:`warm` makes ready for these arguments, as ``(kind, name)``, functions
-    first (KeyError as :func:`algorithms_with_kernels` and :func:`functions_with_objectives`)."""
-    out = [("function", n) for n in functions_with_objectives(functions)]
+    first (KeyError as :func:`algorithms_with_kernels` and :func:`functions_with_objectives`);
+    an instance of a suite function is its base's objective (``bbob:f3@i7`` -> ``bbob:f3``)."""
+    from swarmpath.optimizers.compiled.objectives import _population_name
+
+    names = dict.fromkeys(_population_name(get_function(n))
+                          for n in functions_with_objectives(functions))
+    out = [("function", n) for n in names]
     out += [("algorithm", a) for a in algorithms_with_kernels(algorithms)]
     if maps or (maps is None and algorithms is None and functions is None):
         out.append(("map", "clearance"))
@@ -94,6 +99,7 @@ def warm(algorithms: Sequence[str] | None = None,
     evaluates it), and the pieces after the first function are taken in turn from position
     ``start`` (processes starting at different positions compile different pieces at once)."""
     from swarmpath.optimizers.api import minimize
+    from swarmpath.optimizers.compiled.ready import made_ready
     from swarmpath.optimizers.registry import get_optimizer
 
     wanted = pieces(algorithms, functions, maps)
@@ -129,9 +135,11 @@ def warm(algorithms: Sequence[str] | None = None,
             if not held:
                 return False
             if cold_only and _is_marked(kind, name, stamp):
+                made_ready([(kind, name)])
                 return True
             makers[kind](name)
             _mark(kind, name, stamp)
+            made_ready([(kind, name)])
         out.append(Warmed(kind, name, time.process_time() - started))
         return True
 
@@ -199,6 +207,31 @@ def compile_cold(algorithms: Sequence[str], functions: Sequence[str], maps: bool
     note(f"compiling the numba kernels this study needs ({names}): once per installed tree, "
          "seconds of CPU each; `swarmpath warmup` compiles every kernel ahead")
     return warm(algorithms, functions, maps=maps, cold_only=True)
+
+
+def request_cold(algorithms: Sequence[str], functions: Sequence[str], maps: bool,
+                 note: Callable[[str], None]) -> list[tuple[str, str]]:
+    """A study with backend "auto" in a tree whose cache lacks some of its pieces: ask for them
+    in the background (:mod:`.ready`: the study runs the numpy reference for them, the same
+    numbers, while a low-priority process compiles them for later runs) and tell ``note`` once.
+    Returns the pieces asked for. Where the cache cannot be written, :func:`compile_cold` (each
+    process would compile them: once here, before the study's worker processes)."""
+    from swarmpath.optimizers.compiled import ready
+
+    missing = ready.missing(pieces(algorithms, functions, maps))
+    if not missing:
+        return []
+    if not ready.cache_writable():
+        compile_cold(algorithms, functions, maps, note)
+        return []
+    started = ready.request(missing) is not None
+    names = ", ".join(name for _kind, name in missing[:6]) + (", ..." if len(missing) > 6 else "")
+    how = ("a low-priority background process compiles them for later runs" if started else
+           "a background compile is under way" if os.environ.get(ready.BACKGROUND_ENV) != "0" else
+           f"{ready.BACKGROUND_ENV}=0: nothing compiles them")
+    note(f"the numba kernels of {names} are not compiled yet: the numpy reference runs them "
+         f"(the same numbers); {how}; `swarmpath warmup` compiles every kernel ahead")
+    return missing
 
 
 def cold(wanted: Sequence[tuple[str, str]]) -> list[tuple[str, str]]:
