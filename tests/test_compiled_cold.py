@@ -1,7 +1,8 @@
 """A fresh environment's first study does not compile: ``swarmpath warmup --if-cold`` (what
 scripts/_venv.sh runs after an install) fills the tree's numba cache, a later process loads
-every kernel from it, and ``bench``/``plan`` compile only what the cache lacks, in the parent,
-after one line that says so.
+every kernel from it, ``bench --backend numba`` compiles only what the cache lacks, in the
+parent, after one line that says so (backend auto compiles nothing in the study:
+tests/test_compiled_background.py), and ``warmup --prune`` removes other versions' caches.
 
 Each test runs the CLI in subprocesses on a numba cache of its own (``NUMBA_CACHE_DIR``), so
 "cold" is really cold; the kernels are the cheap ones (SSA, GWO, F4). No timing is asserted:
@@ -149,3 +150,47 @@ def test_no_registered_objective_is_a_closure():
     closures = [name for name, population in objectives._POPULATIONS.items()
                 if population.__closure__]
     assert closures == [], closures
+
+
+def test_warmup_prune_removes_the_cache_directories_of_other_versions_only(tmp_path, monkeypatch):
+    """Each version of the compiled sources caches in a directory of its own; ``--prune`` (and
+    ``--if-cold`` in the package's own __pycache__) removes the others, not one in use (a
+    warm-up's lock held), nor anything else there."""
+    import fcntl
+
+    from numba.core import config
+    from typer.testing import CliRunner
+
+    from swarmpath.cli import app
+    from swarmpath.optimizers.compiled import warm as warm_module
+
+    current, old, busy, other = (tmp_path / name for name in (
+        "swarmpath-0123456789abcdef", "swarmpath-aaaaaaaaaaaaaaaa", "swarmpath-bbbbbbbbbbbbbbbb",
+        "notes"))
+    for directory in (current, busy, other):
+        directory.mkdir()
+    monkeypatch.setattr(config, "CACHE_DIR", str(current))
+    monkeypatch.setattr(warm_module, "warm_in_processes", lambda *_a, **_kw: [])
+    monkeypatch.setattr(warm_module, "cold", lambda wanted: [])  # nothing to compile
+    fd = os.open(busy / ".warm-function-F1.lock", os.O_RDWR | os.O_CREAT)
+    fcntl.flock(fd, fcntl.LOCK_EX)  # a warm-up of that version is running
+    try:
+        for args, env, removed in ((["--prune", "-a", "SSA", "-f", "F4"], "/elsewhere", True),
+                                   (["--if-cold"], None, True),  # the package's __pycache__
+                                   (["--if-cold"], "/elsewhere", False)):  # maybe shared
+            old.mkdir()
+            (old / "kernel.nbc").write_bytes(b"x" * 2_000_000)
+            if env is None:
+                monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+            else:
+                monkeypatch.setenv("NUMBA_CACHE_DIR", env)
+            out = CliRunner().invoke(app, ["warmup", *args])
+            assert out.exit_code == 0, out.output
+            assert old.exists() is not removed, args
+            assert ("removed 1 cache directories" in out.stderr) is removed, out.stderr
+            assert current.is_dir() and busy.is_dir() and other.is_dir()
+            if not removed:
+                (old / "kernel.nbc").unlink()
+                old.rmdir()
+    finally:
+        os.close(fd)

@@ -3,8 +3,13 @@ so that no study pays for it at its first run."""
 
 from __future__ import annotations
 
+import fcntl
 import json
+import os
+import re
+import shutil
 import sys
+from pathlib import Path
 from typing import Annotated
 
 import typer
@@ -40,6 +45,13 @@ def warmup(
         int, typer.Option("--jobs", "-j", min=1, help="Processes compiling at once, each piece "
                           "by one of them (scripts/_venv.sh: 2).")
     ] = 1,
+    prune: Annotated[
+        bool, typer.Option("--prune", help="First remove the other trees' numba cache "
+                           "directories beside this tree's (swarmpath-<hash>: one per version of "
+                           "the compiled sources; in use ones kept). --if-cold does it by itself "
+                           "in the package's own __pycache__ (without NUMBA_CACHE_DIR, which "
+                           "other trees may share).")
+    ] = False,
     as_json: Annotated[bool, typer.Option("--json", help="One JSON document.")] = False,
 ) -> None:
     """Compile (or load from numba's cache) the compiled kernels and objectives that backend
@@ -69,6 +81,14 @@ def warmup(
         raise InputError("--functions", str(exc.args[0] if exc.args else exc)) from None
     if functions is None and not suites:
         names = [n for n in names if ":" not in n]  # a suite's functions are "suite:name"
+    if prune or (if_cold and not os.environ.get("NUMBA_CACHE_DIR")):
+        from numba.core import config
+
+        removed = prune_cache_dirs(str(config.CACHE_DIR))  # type: ignore[attr-defined]
+        if removed and not as_json:
+            typer.echo(f"swarmpath warmup: removed {len(removed)} cache directories of other "
+                       f"versions of the compiled sources ({sum(removed.values()) / 1e6:.0f} MB)",
+                       err=True)
     # the map runs' kernels with a warm-up of everything (not with a list of pieces)
     maps = algorithms is None and functions is None
     if if_cold and not as_json:
@@ -90,3 +110,40 @@ def warmup(
     for w in done:
         typer.echo(f"{w.kind:9} {w.name:10} {w.seconds:7.2f} s CPU")
     typer.echo(f"{'total':20} {sum(w.seconds for w in done):7.2f} s CPU")
+
+
+def prune_cache_dirs(current: str) -> dict[str, int]:
+    """Remove the directories beside ``current`` (this tree's numba cache directory,
+    ``versioned_cache_dir``) that another version of the compiled sources made
+    (``swarmpath-<16 hex digits>``), except those in use (a warm-up's or a background compile's
+    lock held in them); returns the bytes each removed one held. Every edit of the compiled
+    sources makes a new one (a full cache is about 100 MB), and nothing else removes them."""
+    here = Path(current)
+    removed: dict[str, int] = {}
+    if not here.parent.is_dir():
+        return removed
+    for old in sorted(here.parent.iterdir()):
+        if (old.name == here.name or not old.is_dir()
+                or not re.fullmatch(r"swarmpath-[0-9a-f]{16}", old.name) or _in_use(old)):
+            continue
+        size = sum(f.stat().st_size for f in old.rglob("*") if f.is_file())
+        shutil.rmtree(old, ignore_errors=True)
+        if not old.exists():
+            removed[old.name] = size
+    return removed
+
+
+def _in_use(directory: Path) -> bool:
+    """Whether a process holds one of the warm-up's locks in ``directory``."""
+    for lock in directory.glob(".warm-*.lock"):
+        try:
+            fd = os.open(lock, os.O_RDWR)
+        except OSError:
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            return True
+        finally:
+            os.close(fd)
+    return False
