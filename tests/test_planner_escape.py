@@ -26,7 +26,10 @@ def _run(planner: str, seed: int, **params):
 @pytest.mark.parametrize("seed", SEEDS)
 @pytest.mark.parametrize("planner", SWARM)
 def test_every_swarm_planner_passes_the_thin_wall(planner, seed):
-    out = _run(planner, seed)
+    # seed 1 on the default backend (the numpy reference), seeds 2-5 on the compiled kernels
+    # (equal to the reference's runs to the last bit: tests/test_planner_compiled.py; 2.5-7
+    # times less CPU)
+    out = _run(planner, seed, **({} if seed == 1 else {"backend": "numba"}))
     assert out.success, out.reason
     assert out.collisions == 0
     assert out.length >= out.optimum  # ends on the goal, never shorter than the optimum
