@@ -90,7 +90,7 @@ def test_a_piece_is_cold_again_once_the_compiled_sources_change(monkeypatch):
     assert warm_module.warm(["SSA"], ["F4"], cold_only=True) == []
 
 
-def test_the_install_warm_up_leaves_the_suites_to_their_first_study(monkeypatch):
+def test_the_install_warm_up_leaves_the_suites_to_their_first_study(monkeypatch, tmp_path):
     """scripts/_venv.sh runs ``warmup --if-cold --no-suites``: every kernel, the built-in
     functions' objectives and the map kernels, not the 60-odd BBOB and CEC objectives (a suite
     study compiles the ones it runs); a plain ``warmup`` makes every piece."""
@@ -108,6 +108,8 @@ def test_the_install_warm_up_leaves_the_suites_to_their_first_study(monkeypatch)
 
     monkeypatch.setattr(warm_module, "warm", record)
     monkeypatch.setattr(warm_module, "cold", lambda wanted: list(wanted))
+    # a cache of its own: --if-cold in the package's __pycache__ would prune this tree's others
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
     line = Path(__file__).parents[1].joinpath("scripts", "_venv.sh").read_text()
     assert "swarmpath warmup --if-cold --no-suites" in line
     for args in (["--if-cold", "--no-suites"], []):
