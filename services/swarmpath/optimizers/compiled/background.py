@@ -1,12 +1,14 @@
 """The background compile that backend "auto" starts for the pieces a cold cache lacks
 (:func:`swarmpath.optimizers.compiled.ready.request`).
 
-``python -m swarmpath.optimizers.compiled.background kind:name ...``: at the lowest
-CPU priority (nice 19 and, on Linux, ``SCHED_IDLE``: it takes only CPU time nothing else wants),
-it makes the pieces ready as the install's warm-up does (:func:`.warm.warm`, ``cold_only``, under
-each piece's lock: a piece another process is making, or has marked, is not compiled twice) and
-marks each one. It inherits the tree's background lock from the process that started it (an
-open file, locked): held until it exits, so that one such process runs at a time.
+``python -m swarmpath.optimizers.compiled.background kind:name ...``: at the lowest CPU priority
+(nice 19 and, on Linux, ``SCHED_IDLE``: it takes only CPU time nothing else wants), it makes the
+pieces ready as the install's warm-up does (:func:`.warm.warm`, ``cold_only``: a piece marked
+since, by any process, is skipped) and marks each one. It takes none of the pieces' locks: a
+worker slot warming at the same time would otherwise wait for a piece this process compiles
+at idle priority (at worst, one piece is compiled by both). It inherits the tree's background
+lock from the process that started it (an open file, locked): held until it exits, so that one
+such process runs at a time.
 """
 
 from __future__ import annotations
@@ -39,7 +41,7 @@ def main(argv: list[str] | None = None) -> int:
 
     done = warm([name for kind, name in wanted if kind == "algorithm"],
                 [name for kind, name in wanted if kind == "function"],
-                maps=("map", "clearance") in wanted, shared=True, cold_only=True)
+                maps=("map", "clearance") in wanted, cold_only=True)
     print(f"compiled {len(done)} of {len(wanted)} pieces in {sum(w.seconds for w in done):.1f} s "
           "of CPU", file=sys.stderr)
     return 0

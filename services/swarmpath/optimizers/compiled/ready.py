@@ -15,7 +15,7 @@ Otherwise auto runs the numpy reference, the same numbers to the last bit (auto 
 kernels and objectives of tolerance 0.0, each compared with the reference bit for bit:
 tests/test_compiled.py, test_compiled_suites.py, test_clearance_compiled.py), and asks
 :func:`request` for the missing pieces: one detached process at the lowest priority
-(:mod:`.background`) compiles them under the warm-up's locks and marks them, so that the later
+(:mod:`.background`) compiles them and marks them as the warm-up does, so that the later
 calls of this process and every later process run them compiled. ``backend="numba"`` still
 compiles on demand, and ``swarmpath up``'s slots still warm every piece before their first
 lease (:func:`swarmpath.service.worker.slots.warm_compiled`).
