@@ -36,7 +36,7 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
-from scipy import optimize, special
+from scipy import special
 
 # The normal tail, quantile and density from scipy.special (what scipy.stats.norm computes
 # them with), so that a race with looks does not import scipy.stats: a one-planner `plan`
@@ -117,6 +117,10 @@ def _excess(b: float, density: np.ndarray, x: np.ndarray, sd: float, target: flo
 @functools.lru_cache(maxsize=256)
 def _bounds(looks: tuple[int, ...], level: float, kind: str) -> tuple[float, ...]:
     """Boundaries c_k on the Z scale (inf: the look spends nothing)."""
+    # imported here, at the first boundaries: scipy.optimize costs about 0.4 s of CPU to import,
+    # and every `swarmpath` process imports this module (bench's racing options)
+    from scipy.optimize import brentq
+
     t = _times(looks)
     budget = [spent(kind, level, float(x)) for x in t]
     c = [float(_norm_isf(budget[0] / 2.0))]
@@ -134,7 +138,7 @@ def _bounds(looks: tuple[int, ...], level: float, kind: str) -> tuple[float, ...
             hi = x[-1] + 12.0 * sd + 12.0
             if _excess(0.0, *args) <= 0.0:  # rejecting everything spends less: never the case
                 raise ValueError("the spending asks for more than the continuation region holds")
-            b = float(optimize.brentq(_excess, 0.0, hi, args=args, xtol=1e-12, rtol=1e-12))
+            b = float(brentq(_excess, 0.0, hi, args=args, xtol=1e-12, rtol=1e-12))
             c.append(b / math.sqrt(t[k]))
         if k + 1 < len(t):
             if not math.isfinite(b):  # no rejection here: W's density widens, kept on a range
