@@ -247,17 +247,19 @@ def test_plan_of_one_planner_leaves_scipy_stats_unloaded():
     assert out.stdout.strip().splitlines()[-1] == "False False"
 
 
-def test_the_command_line_leaves_scipy_optimize_unloaded():
+def test_the_command_line_leaves_scipy_optimize_and_special_unloaded():
     """Every ``swarmpath`` process (a worker, its slots, each command) imports the cli package;
-    scipy.optimize (about 0.4 s of CPU) loads only where it is used: a race's group-sequential
-    boundaries (evidence.group_sequential), not at the import of bench's racing options."""
+    scipy.optimize and scipy.special (about 0.8 s of CPU) load only where they are used: a
+    race's group-sequential boundaries (evidence.group_sequential), not at the import of
+    bench's racing options."""
     import subprocess
     import sys
 
-    code = "import sys, swarmpath.cli\nprint('scipy.optimize' in sys.modules)\n"
+    code = ("import sys, swarmpath.cli\n"
+            "print('scipy.optimize' in sys.modules, 'scipy.special' in sys.modules)\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          timeout=120, check=True)
-    assert out.stdout.strip().splitlines()[-1] == "False"
+    assert out.stdout.strip().splitlines()[-1] == "False False"
 
 
 def test_plan_workers_import_no_command_line():

@@ -36,18 +36,23 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
-from scipy import special
 
 # The normal tail, quantile and density from scipy.special (what scipy.stats.norm computes
 # them with), so that a race with looks does not import scipy.stats: a one-planner `plan`
-# never loads it (tests/test_cli_plan.py), and the racing module is on its import path.
+# never loads it (tests/test_cli_plan.py), and the racing module is on its import path. scipy
+# itself (special here, optimize in _bounds) is imported at its first use: every `swarmpath`
+# process imports this module (bench's racing options), and the two cost about 0.8 s of CPU.
 
 
 def _norm_sf(x: float) -> float:
+    from scipy import special
+
     return float(special.ndtr(-x))
 
 
 def _norm_isf(p: float) -> float:
+    from scipy import special
+
     return float(-special.ndtri(p))
 
 
@@ -84,6 +89,8 @@ def _times(looks: Sequence[int]) -> np.ndarray:
 
 def _tails(u: np.ndarray, b: float, sd: float) -> np.ndarray:
     """P(|u + N(0, sd^2)| >= b) for each u."""
+    from scipy import special
+
     return special.ndtr((u - b) / sd) + special.ndtr((-b - u) / sd)
 
 
@@ -117,9 +124,7 @@ def _excess(b: float, density: np.ndarray, x: np.ndarray, sd: float, target: flo
 @functools.lru_cache(maxsize=256)
 def _bounds(looks: tuple[int, ...], level: float, kind: str) -> tuple[float, ...]:
     """Boundaries c_k on the Z scale (inf: the look spends nothing)."""
-    # imported here, at the first boundaries: scipy.optimize costs about 0.4 s of CPU to import,
-    # and every `swarmpath` process imports this module (bench's racing options)
-    from scipy.optimize import brentq
+    from scipy.optimize import brentq  # at first use (above)
 
     t = _times(looks)
     budget = [spent(kind, level, float(x)) for x in t]
