@@ -54,10 +54,7 @@ def study_pieces(algorithm: str, functions: Iterable[object]) -> list[Piece]:
     :class:`~swarmpath.functions.BenchmarkFunction` objects with objectives) runs: each
     function's objective (by the name it is registered under: an instance of a suite function
     shares its base's) and the algorithm's kernel."""
-    from swarmpath.optimizers.compiled.objectives import _population_name
-
-    names = dict.fromkeys(_population_name(fn) for fn in functions)  # type: ignore[arg-type]
-    return [("function", n) for n in names] + [("algorithm", algorithm)]
+    return [*_warm.objective_pieces(functions), ("algorithm", algorithm)]
 
 
 def stamp() -> str:

@@ -14,7 +14,7 @@ import hashlib
 import os
 import re
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 
 from swarmpath.functions import get_function
@@ -62,16 +62,21 @@ def functions_with_objectives(functions: Sequence[str] | None) -> list[str]:
     return list(functions)
 
 
+def objective_pieces(functions: Iterable[object]) -> list[tuple[str, str]]:
+    """The objective pieces of these registered functions, each once, by the name its compiled
+    objective is cached under (an instance of a suite function shares its base's)."""
+    from swarmpath.optimizers.compiled.objectives import _population_name
+
+    names = dict.fromkeys(_population_name(fn) for fn in functions)  # type: ignore[arg-type]
+    return [("function", n) for n in names]
+
+
 def pieces(algorithms: Sequence[str] | None = None, functions: Sequence[str] | None = None,
            maps: bool | None = None) -> list[tuple[str, str]]:
     """The pieces :func:`warm` makes ready for these arguments, as ``(kind, name)``, functions
     first (KeyError as :func:`algorithms_with_kernels` and :func:`functions_with_objectives`);
     an instance of a suite function is its base's objective (``bbob:f3@i7`` -> ``bbob:f3``)."""
-    from swarmpath.optimizers.compiled.objectives import _population_name
-
-    names = dict.fromkeys(_population_name(get_function(n))
-                          for n in functions_with_objectives(functions))
-    out = [("function", n) for n in names]
+    out = objective_pieces(get_function(n) for n in functions_with_objectives(functions))
     out += [("algorithm", a) for a in algorithms_with_kernels(algorithms)]
     if maps or (maps is None and algorithms is None and functions is None):
         out.append(("map", "clearance"))
