@@ -10,13 +10,24 @@ fi
 stamp="$venv/.installed-${extras:-base}"
 # Reinstall only when pyproject changed since the last install with these extras.
 if [[ ! -f "$stamp" || "$repo/pyproject.toml" -nt "$stamp" ]]; then
-    "$venv/bin/python" -m pip install --quiet --upgrade pip
     spec="$repo"
     [[ -n "$extras" ]] && spec="$repo[$extras]"
-    "$venv/bin/python" -m pip install --quiet -e "$spec"
+    # uv (Astral's installer, one wheel from PyPI) resolves the same versions as pip and
+    # installs the test extras in about 7 s of wall where pip takes 85 s (docs/benchmarks.md,
+    # "Test time"); pip stays the fallback (no network to PyPI, an unsupported platform).
+    if ! { "$venv/bin/python" -m pip install --quiet uv \
+            && "$venv/bin/uv" pip install --quiet --python "$venv/bin/python" -e "$spec"; }; then
+        echo "== uv could not install: installing with pip"
+        "$venv/bin/python" -m pip install --quiet --upgrade pip
+        "$venv/bin/python" -m pip install --quiet -e "$spec"
+    fi
     touch "$stamp"
 fi
 export PATH="$venv/bin:$PATH"
+# Bytecode is written at first import (uv does not compile at install, as pip does): where
+# PYTHONDONTWRITEBYTECODE is set, every process this venv starts (the tests start hundreds:
+# coordinators, workers, slots, CLI runs) would compile numpy, scipy and the package again.
+unset PYTHONDONTWRITEBYTECODE
 # Compile the numba kernels once per installed tree, so that a first study does not
 # (docs/benchmarks.md, "Cold start"): every kernel, the built-in functions' objectives and the
 # map kernels (a suite's objective compiles at its first study, a few seconds); with the cache
