@@ -44,8 +44,9 @@ from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy import stats
 
+# scipy.stats (about 1 s to import) is imported by the functions that test: a coordinator
+# imports this module at its start, for summaries it computes only when asked.
 from swarmpath.evidence.effect import Shift, a12_from_u, a12_magnitude, hodges_lehmann
 from swarmpath.evidence.friedman import Friedman, cliques, friedman, nemenyi_cd
 from swarmpath.evidence.markers import ALPHA, BETTER, MARKERS, SAME, WORSE, holm
@@ -71,6 +72,7 @@ def rank_sum(x: ArrayLike, reference: ArrayLike) -> tuple[float, float] | None:
 
     U counts the pairs (x_i, ref_j) with x_i > ref_j, ties counting half (scipy's U1). NaN values
     are dropped; None when either sample is then empty. Identical samples give (n m / 2, 1.0)."""
+    from scipy import stats
     a, b = _clean(x), _clean(reference)
     if a.size == 0 or b.size == 0:
         return None
@@ -93,6 +95,7 @@ def rank_sum_many(
     values are tested together, one vectorized ``mannwhitneyu`` call per pair of sizes (the
     normal approximation either way, so the values are those of single calls); the others one
     by one."""
+    from scipy import stats
     out: list[tuple[float, float] | None] = [None] * len(pairs)
     batches: dict[tuple[int, int], list[tuple[int, np.ndarray, np.ndarray]]] = {}
     for i, (x, ref) in enumerate(pairs):
@@ -258,6 +261,7 @@ def compare_success(
     """Fisher's exact test (two-sided) of every algorithm's success rate against the reference's
     in every cell (cell key -> algorithm -> (successes, runs)), Holm-adjusted over the table.
     ``+`` = a significantly higher success rate than the reference."""
+    from scipy import stats
     algos = tuple(algorithms)
     ref = resolve_reference(algos, reference) if algos else ""
     raw: list[PairTest] = []

@@ -31,7 +31,9 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy import stats
+
+# scipy.stats (about 1 s to import) is imported by the functions that test: a coordinator
+# imports this module at its start, for summaries it computes only when asked.
 
 __all__ = ["Shift", "a12", "a12_from_u", "a12_magnitude", "hodges_lehmann", "u_null_cdf"]
 
@@ -55,6 +57,7 @@ def a12_from_u(u: float, n: int, m: int, lower_is_better: bool = True) -> float:
 
 def a12(x: ArrayLike, reference: ArrayLike, lower_is_better: bool = True) -> float | None:
     """Vargha-Delaney A12 of ``x`` against ``reference`` (None when a sample is empty)."""
+    from scipy import stats
     a, b = _clean(x), _clean(reference)
     if a.size == 0 or b.size == 0:
         return None
@@ -107,6 +110,7 @@ def u_null_cdf(n: int, m: int) -> np.ndarray:
 
 def _critical_k(a: np.ndarray, b: np.ndarray, alpha: float) -> int:
     """The largest k with P(U <= k - 1) <= alpha / 2 (scipy's choice of exact or normal)."""
+    from scipy import stats
     n, m = a.size, b.size
     pooled = np.concatenate([a, b])
     _, tie_counts = np.unique(pooled, return_counts=True)

@@ -11,8 +11,9 @@ from dataclasses import dataclass
 from typing import Any, TypeVar
 
 import numpy as np
-from scipy import stats
 
+# scipy.stats (about 1 s to import) is imported by the functions that test: a coordinator
+# imports this module at its start, for summaries it computes only when asked.
 from swarmpath.evidence.markers import ALPHA, BETTER, SAME, WORSE, holm
 from swarmpath.evidence.stats import resolve_reference
 
@@ -24,6 +25,7 @@ K = TypeVar("K", bound=Hashable)
 
 def nemenyi_cd(k: int, n: int, alpha: float = ALPHA) -> float:
     """Nemenyi's critical difference of mean ranks for k algorithms over n blocks."""
+    from scipy import stats
     if k < 2 or n < 1:
         raise ValueError("the critical difference needs k >= 2 algorithms and n >= 1 blocks")
     q = float(stats.studentized_range.ppf(1.0 - alpha, k, np.inf)) / math.sqrt(2.0)
@@ -79,6 +81,7 @@ def friedman(
 ) -> Friedman:
     """Friedman test of ``algorithms`` over the blocks of ``values`` (block -> algorithm -> one
     value, e.g. the average best fitness of a function), with mean ranks and post-hoc tests."""
+    from scipy import stats
     algos = tuple(algorithms)
     ref = resolve_reference(algos, reference) if algos else ""
     k = len(algos)

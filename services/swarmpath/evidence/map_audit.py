@@ -27,8 +27,9 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy import stats
 
+# scipy.stats (about 1 s to import) is imported by the functions that test: a coordinator
+# imports this module at its start, for summaries it computes only when asked.
 from swarmpath.evidence.compare import rank_sum
 from swarmpath.evidence.markers import holm
 
@@ -109,6 +110,7 @@ def certify(planner: str, map_name: str, original: Sequence[Mapping[str, Any]],
             success_tolerance: float = SUCCESS_TOLERANCE) -> MapCertificate:
     """The certificate of ``planner`` on ``map_name`` from the runs on the original and on each
     copy (transform -> runs); see the module docstring."""
+    from scipy import stats
     base = _summary("none", original)
     base_gaps = _gaps(original)
     tests: list[CopyTest] = []
