@@ -190,3 +190,23 @@ def test_a_worker_process_runs_auto_on_the_kernels_only_once_it_compiled_them(mo
     monkeypatch.setattr(warm_module, "warm", lambda **_kw: [])
     slots.warm_compiled()
     assert execution.minimize_options(lease, spec)["backend"] == "auto"
+
+
+def test_algorithms_sharing_a_kernel_are_locked_as_one_piece():
+    """A shared warm-up locks an algorithm under the first one whose kernel it runs, so two
+    processes do not compile COOT's kernel at once for COOT and mCOOT."""
+    from swarmpath.optimizers.compiled.registry import find_kernel, kernel_names
+    from swarmpath.optimizers.compiled.warm import _compiled_as
+
+    assert _compiled_as("algorithm", "mCOOT") == _compiled_as("algorithm", "ICOOT") == "COOT"
+    assert _compiled_as("algorithm", "IHPO") == "HPO"
+    assert _compiled_as("algorithm", "HPSO-MFB") == "MFB"
+    assert _compiled_as("function", "F3") == "F3"
+    assert _compiled_as("map", "clearance") == "clearance"
+    names = kernel_names()
+    for name in names:
+        first = _compiled_as("algorithm", name)
+        assert find_kernel(first).run is find_kernel(name).run
+        assert names.index(first) <= names.index(name)
+        assert all(find_kernel(n).run is not find_kernel(name).run
+                   for n in names[:names.index(first)])
