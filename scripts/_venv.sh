@@ -12,9 +12,9 @@ stamp="$venv/.installed-${extras:-base}"
 if [[ ! -f "$stamp" || "$repo/pyproject.toml" -nt "$stamp" ]]; then
     spec="$repo"
     [[ -n "$extras" ]] && spec="$repo[$extras]"
-    # uv (Astral's installer, one wheel from PyPI) resolves the same versions as pip and
-    # installs the test extras in about 7 s of wall where pip takes 85 s (docs/benchmarks.md,
-    # "Test time"); pip stays the fallback (no network to PyPI, an unsupported platform).
+    # uv (Astral's installer, one wheel from PyPI) installs the same versions as pip in about
+    # 10 s of wall where pip takes 85-90 s (docs/benchmarks.md, "scripts/test on a fresh clone");
+    # pip stays the fallback (no network to PyPI, a platform uv has no wheel for).
     if ! { "$venv/bin/python" -m pip install --quiet uv \
             && "$venv/bin/uv" pip install --quiet --python "$venv/bin/python" -e "$spec"; }; then
         echo "== uv could not install: installing with pip"
