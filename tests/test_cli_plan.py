@@ -234,17 +234,14 @@ def test_bad_scenario_file_names_the_field(tmp_path):
 def test_plan_of_one_planner_leaves_scipy_stats_unloaded():
     """Start-up: the statistical tests (scipy.stats, the largest import) load only when there
     is a second planner to compare with; one planner's table needs none."""
-    import subprocess
-    import sys
+    from child_python import last_line
 
     code = ("import sys\n"
             "from swarmpath.cli import main\n"
             "sys.argv = ['swarmpath', 'plan', '-p', 'MFB', '--runs', '1']\n"
             "try:\n    main()\nexcept SystemExit as exc:\n    assert not exc.code, exc.code\n"
             "print('scipy.stats' in sys.modules, 'swarmpath.evidence.compare' in sys.modules)\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         timeout=300, check=True)
-    assert out.stdout.strip().splitlines()[-1] == "False False"
+    assert last_line(code, timeout=300) == "False False"
 
 
 def test_the_command_line_leaves_scipy_optimize_and_special_unloaded():
@@ -252,24 +249,18 @@ def test_the_command_line_leaves_scipy_optimize_and_special_unloaded():
     scipy.optimize and scipy.special (about 0.8 s of CPU) load only where they are used: a
     race's group-sequential boundaries (evidence.group_sequential), not at the import of
     bench's racing options."""
-    import subprocess
-    import sys
+    from child_python import last_line
 
     code = ("import sys, swarmpath.cli\n"
             "print('scipy.optimize' in sys.modules, 'scipy.special' in sys.modules)\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         timeout=120, check=True)
-    assert out.stdout.strip().splitlines()[-1] == "False False"
+    assert last_line(code) == "False False"
 
 
 def test_plan_workers_import_no_command_line():
     """``plan -j`` children unpickle swarmpath.parallel's child loop and plan_runs.episode_task:
     neither may pull in the cli package (typer and every command, ~0.3 s of CPU per child)."""
-    import subprocess
-    import sys
+    from child_python import last_line
 
     code = ("import sys, swarmpath.parallel, swarmpath.plan_runs\n"
             "print('typer' in sys.modules, 'swarmpath.cli' in sys.modules)\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         timeout=120, check=True)
-    assert out.stdout.strip() == "False False"
+    assert last_line(code) == "False False"

@@ -121,8 +121,7 @@ def test_statistics_lines_of_a_map_summary() -> None:
 def test_a_coordinator_starts_without_scipy_stats_and_summarizes_with_it():
     """scipy.stats (about 1 s of CPU) loads at the first summary that tests, not at a
     coordinator's start: the tests' and a farm's hundreds of coordinator starts skip it."""
-    import subprocess
-    import sys
+    from child_python import last_line
 
     code = ("import sys\n"
             "import swarmpath.service.coordinator\n"
@@ -130,6 +129,4 @@ def test_a_coordinator_starts_without_scipy_stats_and_summarizes_with_it():
             "from swarmpath.evidence.compare import rank_sum\n"
             "u, p = rank_sum([1.0, 2.0, 3.0], [4.0, 5.0, 6.0])\n"
             "print(before, 'scipy.stats' in sys.modules, u, round(p, 3))\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         timeout=120, check=True)
-    assert out.stdout.strip().splitlines()[-1] == "False True 0.0 0.1"
+    assert last_line(code) == "False True 0.0 0.1"
