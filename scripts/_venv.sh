@@ -15,8 +15,12 @@ if [[ ! -f "$stamp" || "$repo/pyproject.toml" -nt "$stamp" ]]; then
     # uv (Astral's installer, one wheel from PyPI) installs the same versions as pip in about
     # 10 s of wall where pip takes 85-90 s (docs/benchmarks.md, "scripts/test on a fresh clone");
     # pip stays the fallback (no network to PyPI, a platform uv has no wheel for).
+    # uv reads neither pip's configuration nor its certificate settings: it gets the index pip
+    # uses (PIP_INDEX_URL, else pip.conf's index-url, else PyPI) and the system's trust store.
+    index="${PIP_INDEX_URL:-$("$venv/bin/python" -m pip config get global.index-url 2>/dev/null || true)}"
     if ! { "$venv/bin/python" -m pip install --quiet uv \
-            && "$venv/bin/uv" pip install --quiet --python "$venv/bin/python" -e "$spec"; }; then
+            && env UV_NATIVE_TLS=1 ${index:+UV_DEFAULT_INDEX="$index"} \
+                "$venv/bin/uv" pip install --quiet --python "$venv/bin/python" -e "$spec"; }; then
         echo "== uv could not install: installing with pip"
         "$venv/bin/python" -m pip install --quiet --upgrade pip
         "$venv/bin/python" -m pip install --quiet -e "$spec"
