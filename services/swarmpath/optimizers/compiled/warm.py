@@ -136,8 +136,8 @@ def warm(algorithms: Sequence[str] | None = None,
         """Make one piece ready; False (nothing done) when another process holds its lock and
         ``wait`` is false."""
         started = time.process_time()
-        lock = _compiled_as(kind, name)
-        with _piece_lock(kind, lock, wait) if shared else contextlib.nullcontext(True) as held:
+        with (_piece_lock(kind, _compiled_as(kind, name), wait) if shared
+              else contextlib.nullcontext(True)) as held:
             if not held:
                 return False
             if cold_only and _is_marked(kind, name, stamp):
