@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from swarmpath.evidence import racing
+from swarmpath.evidence import race_settings, racing
 from swarmpath.evidence.race_report import race_legend, race_line, study_race
 from swarmpath.evidence.racing import RaceSettings, race_block
 
@@ -45,7 +45,7 @@ def test_null_races_with_looks_keep_alpha_and_an_unspent_allocation_does_not(mon
     ours = _duels(samples, settings)
     assert _rate(ours) <= bound
     assert sum(d["look"] is not None for d, _ in ours) > 0.5 * 0.2 * len(samples)
-    monkeypatch.setattr(racing, "nominal_levels",
+    monkeypatch.setattr(race_settings, "nominal_levels",
                         lambda looks, level, kind: (level,) * len(looks))
     assert _rate(_duels(samples, settings)) > bound
 
