@@ -61,8 +61,9 @@ def test_bench_race_is_the_store_race_and_the_replay_over_direct_runs(raced, tmp
     assert raced["race_summary"]["runs"] == used < 6 * 60
     # the default design: the job spec's and --race's, Pocock-spent looks every round
     assert {k: race["settings"][k] for k in ("looks", "look_share", "sequence_share",
-                                             "spending")} == {
-        "looks": "every-round", "look_share": 0.8, "sequence_share": 0.05, "spending": "pocock"}
+                                             "spending", "futility")} == {
+        "looks": "every-round", "look_share": 0.8, "sequence_share": 0.05, "spending": "pocock",
+        "futility": 0.05}
     assert "looks every round from 20 (pocock)" in raced["race_summary"]["line"]
     assert raced["race_summary"]["unraced_runs"] == 6 * 60
     assert raced["settings"]["racing"]["max_runs"] == 60
@@ -74,10 +75,12 @@ def test_bench_race_is_the_store_race_and_the_replay_over_direct_runs(raced, tmp
      {"looks": [20, 30, 40], "look_share": 0.8, "sequence_share": 0.05,
       "spending": "obrien-fleming"}),
     (["--race-looks", "none"], {"looks": []}),  # the race without looks, the default before
-], ids=["looks", "none"])
+    (["--race-futility", "0.3"], {"futility": 0.3}),
+], ids=["looks", "none", "futility"])
 def test_bench_race_with_planned_looks_is_the_store_race(tmp_path, options, looks):
-    """--race-looks, --race-look-share, --race-sequence-share and --race-spending are the job
-    spec's racing fields: the same race document as the store's job with them."""
+    """--race-looks, --race-look-share, --race-sequence-share, --race-spending and
+    --race-futility are the job spec's racing fields: the same race document as the store's
+    job with them."""
     code, out, err = bench(*ARGS, "--json", *options)
     assert code == 0, err
     spec = {**SPEC, "backend": "numpy", "racing": {**SPEC["racing"], **looks}}
@@ -86,7 +89,9 @@ def test_bench_race_with_planned_looks_is_the_store_race(tmp_path, options, look
         drain(store, job)
         race = store.race(job)
     assert json.loads(out)["race"] == race
-    assert race["settings"]["looks"] == looks["looks"]
+    assert race["settings"]["looks"] == looks.get("looks", "every-round")
+    assert race["settings"]["futility"] == looks.get(
+        "futility", 0.0 if looks.get("looks") == [] else 0.05)  # no looks, no futility
 
 
 def test_the_markers_are_the_race_decisions_not_rank_sum_tests(raced):
@@ -173,6 +178,10 @@ BAD = [
     (["--race", "--race-looks", "every-other"], "--race-looks"),
     (["--race", "--race-looks", "20", "--race-look-share", "nan"], "--race-look-share"),
     (["--race", "--race-spending", "linear"], "--race-spending"),
+    (["--race-futility", "0.1"], "--race-futility"),  # without --race
+    (["--race", "--race-futility", "1"], "--race-futility"),
+    (["--race", "--race-futility", "nan"], "--race-futility"),
+    (["--race", "--race-looks", "none", "--race-futility", "0.1"], "--race-futility"),
     (["--race", "-a", "GWO"], "--algorithms"),
     (["--race", "-f", "bbob:f1", "--instances", "1-2", "--pool-instances"], "--pool-instances"),
 ]

@@ -25,15 +25,16 @@ sys.path.insert(0, str(Path(__file__).parent))
 from test_service_e2e import ENV, PY, Service
 
 # The default design (Pocock-spent rank-sum looks every round from 16 runs, written into the
-# stored spec): F1's comparisons and F5's SSA are decided at the looks at 16 and 24 runs, PSO
-# against GWO stays open to the end (8 rounds; the closing rank-sum look at 60 runs does not
-# decide it either): 192 of the 360 runs
+# stored spec) with futility 0.01 (the default 0.05 stops F5's PSO at 24 runs, before a kill
+# could land mid-race): F1's comparisons and F5's SSA are decided at the looks at 16 and 24
+# runs, PSO against GWO, open without futility to the end, stops as futile at the look at 48
+# runs (6 rounds): 168 of the 360 runs
 SPEC = {"kind": "benchmark", "algorithms": ["SSA", "PSO", "GWO"], "functions": ["F1", "F5"],
         "dims": [6], "runs": 60, "agents": 10, "iterations": 300, "seed": 4,
-        "racing": {"min_runs": 8, "batch": 8}}
-# the same study without looks (looks [], the default before): F1 is decided by the sequence
-# after two rounds, F5's SSA after four, PSO stays open: 200 runs
-PLAIN_SPEC = {**SPEC, "racing": {**SPEC["racing"], "looks": []}}
+        "racing": {"min_runs": 8, "batch": 8, "futility": 0.01}}
+# the same study without looks (looks [], the default before; so no futility): F1 is decided
+# by the sequence after two rounds, F5's SSA after four, PSO stays open: 200 runs
+PLAIN_SPEC = {**SPEC, "racing": {"min_runs": 8, "batch": 8, "looks": []}}
 
 
 @pytest.fixture(scope="module")
@@ -96,12 +97,14 @@ def test_a_raced_job_survives_kills_and_decides_as_the_replay(service, tmp_path)
     used = 0
     for block, expected in zip(race["blocks"], expected_race(race)["blocks"], strict=True):
         assert [c["runs"] for c in block["cells"]] == [c["runs"] for c in expected["cells"]]
-        assert [(d["decision"], d["final"], d["look"]) for d in block["duels"]] == [
-            (d["decision"], d["final"], d["look"]) for d in expected["duels"]]
+        assert [(d["decision"], d["final"], d["look"], d["power"]) for d in block["duels"]] == [
+            (d["decision"], d["final"], d["look"], d["power"]) for d in expected["duels"]]
         used += sum(c["runs"] for c in block["cells"])
     assert sorted(d["look"] for b in race["blocks"] for d in b["duels"] if d["look"]) == [
-        16, 16, 24]
-    assert status["runs_done"] == status["runs_total"] == used == 192
+        16, 16, 24, 48]
+    assert [(b["block"]["function"], d["a"]) for b in race["blocks"] for d in b["duels"]
+            if d["decision"] == "futile"] == [("F5", "PSO")]
+    assert status["runs_done"] == status["runs_total"] == used == 168
 
     runs = service.get(f"/jobs/{job}/runs", params={"limit": 1000}).json()["items"]
     assert len(runs) == used and {r["state"] for r in runs} == {"done"}

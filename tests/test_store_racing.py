@@ -69,7 +69,7 @@ def check_race_against_direct_runs(store: Store, job: str, raw: dict = SPEC) -> 
     for block, want in zip(race["blocks"], expected["blocks"], strict=True):
         assert block["rounds"] == want["rounds"] and block["finished"] == want["finished"]
         assert [c["runs"] for c in block["cells"]] == [c["runs"] for c in want["cells"]]
-        keys = ("decision", "better", "final", "closing_p", "look")
+        keys = ("decision", "better", "final", "closing_p", "look", "power")
         assert [[d.get(k) for k in keys] for d in block["duels"]] == [
             [d.get(k) for k in keys] for d in want["duels"]]
         for c in block["cells"]:
@@ -163,8 +163,9 @@ def test_a_raced_job_with_planned_looks_resumes_after_a_restart_with_its_decisio
     assert used(race) < used(without)
 
 
-#: The racing fields of the planned looks, which specs stored before them do not hold.
-LOOK_FIELDS = ("looks", "look_share", "sequence_share", "spending")
+#: The racing fields of the planned looks, which specs stored before them do not hold (nor
+#: futility, which came later).
+LOOK_FIELDS = ("looks", "look_share", "sequence_share", "spending", "futility")
 
 
 def _as_stored_by(path: Path, job: str, version: int, without: tuple[str, ...],
@@ -247,6 +248,63 @@ def test_a_job_stored_before_looks_every_round_resumes_with_its_decisions(tmp_pa
     assert by_default["blocks"] != race["blocks"]
 
 
+def test_a_raced_job_stops_a_futile_comparison_and_resumes_after_a_restart(tmp_path):
+    """The default design's futility (0.05) reaches the store, written into the spec: on F7
+    PSO against GWO (theta 0.43 after 30 runs) stops at the look at 30 runs, its predictive
+    power below 0.05; stopped mid-race and the store reopened, the job finishes as the replay
+    over the directly computed runs, with fewer runs than the same job with futility 0."""
+    spec = {**SPEC, "functions": ["F1", "F7"]}
+    with Store(tmp_path) as store:
+        job = store.create_job(spec, now=T0)
+        drain(store, job, stop_after=40)
+        before = store.race(job)
+        assert not all(b["finished"] for b in before["blocks"])
+    with Store(tmp_path) as store:
+        assert store.race(job) == before
+        drain(store, job)
+        assert store.job_status(job).state == "done"
+        race = check_race_against_direct_runs(store, job, spec)
+        stored = json.loads(store._db.execute("SELECT spec FROM jobs WHERE id = ?",
+                                              (job,)).fetchone()[0])["racing"]
+        never = store.create_job({**spec, "racing": {**SPEC["racing"], "futility": 0}}, now=T0)
+        drain(store, never)
+        without = store.race(never)
+    assert stored["futility"] == 0.05 and race["settings"]["futility"] == 0.05
+    futile = [(b["block"]["function"], d["a"], d["look"]) for b in race["blocks"]
+              for d in b["duels"] if d["decision"] == "futile"]
+    assert futile == [("F7", "PSO", 30)]
+    assert not any(d["decision"] == "futile" for b in without["blocks"] for d in b["duels"])
+
+    def used(r: dict) -> int:
+        return sum(c["runs"] for b in r["blocks"] for c in b["cells"])
+
+    assert used(race) < used(without)
+
+
+def test_a_job_stored_before_futility_resumes_with_its_decisions(tmp_path):
+    """A raced job stored by schema 6 (looks every round, no futility field: raced without
+    futility), half run, then the coordinator restarts with this code, whose default stops for
+    futility: the migration (schema 7) writes futility 0 into its spec, and it finishes as the
+    replay without futility. Without the migration it would end otherwise (the replay with the
+    default's futility differs on F7: the check can fail)."""
+    spec = {**SPEC, "functions": ["F1", "F7"], "racing": {**SPEC["racing"], "futility": 0}}
+    with Store(tmp_path) as store:
+        job = store.create_job(spec, now=T0)
+        drain(store, job, stop_after=40)
+        before = store.race(job)
+    _as_stored_by(tmp_path / "swarmpath.sqlite3", job, 6, ("futility",))
+    with Store(tmp_path) as store:
+        racing = store.job_spec(job).racing
+        assert (racing.futility, racing.looks) == (0.0, "every-round")
+        assert store.race(job) == before
+        drain(store, job)
+        race = check_race_against_direct_runs(store, job, spec)
+    names = {b["block"]["function"]: [c["algorithm"] for c in b["cells"]]
+             for b in race["blocks"]}
+    by_default = replay({**spec, "racing": SPEC["racing"]}, names, 4)
+    assert by_default["blocks"] != race["blocks"]
+
+
 def test_the_job_spec_offers_the_closing_looks_the_race_knows():
     from typing import get_args
 
@@ -281,6 +339,9 @@ def test_the_job_spec_offers_the_closing_looks_the_race_knows():
     ({"looks": "every-round", "final_test": "sign"}, ("racing", "looks")),
     ({"look_share": 1.0}, ("racing", "look_share")),
     ({"spending": "linear"}, ("racing", "spending")),
+    ({"futility": 1.0}, ("racing", "futility")),
+    ({"futility": 0.1, "looks": []}, ("racing", "futility")),
+    ({"futility": 0.1, "final_test": "none"}, ("racing", "futility")),
 ])
 def test_bad_racing_fields_are_named(racing, loc):
     with pytest.raises(ValidationError) as err:

@@ -71,7 +71,9 @@ NOTES: dict[str, str] = {
                   "decided) or max_runs (the cell reached the job's runs undecided)",
     "race_round": "the round (0 = the first, min_runs) in which the cell stopped",
     "race_decision": "the race's decision against the reference: different (the marker says "
-                     "which is better), equivalent (within the race's margin) or open",
+                     "which is better), equivalent (within the race's margin), futile "
+                     "(stopped at a look where the closing look would hardly call it: not a "
+                     "verdict) or open",
     "race_theta": "the share of paired runs (run r against the reference's run r) this "
                   "algorithm won, ties half: the race's estimate of P(its run beats the "
                   "reference's)",

@@ -194,6 +194,9 @@ def race_legend(race: Mapping[str, Any], reference: str) -> str:
     """What a raced table's markers and race rows mean (the terminal legend, LaTeX captions)."""
     s = race["settings"]
     equiv = f"equiv: within {s['margin']:g} of 1/2, " if s["margin"] else ""
+    if s.get("futility"):  # jobs stored before futility existed have no such setting
+        equiv += (f"futile: stopped at a look where the chance that the closing look calls "
+                  f"it (predictive power) was below {s['futility']:g}, = not a verdict, ")
     final = _closing_words(s)
     return (f"+/=/-: better / not decided different / worse than {reference} as the race "
             f"decided it (anytime-valid betting confidence sequence on the probability that a "
@@ -217,6 +220,8 @@ def race_line(race: Mapping[str, Any]) -> str:
         _closing(s), "")
     if _look_runs(s, ","):
         final += f", looks {_look_runs(s, ',')} ({s['spending']})"
+    if s.get("futility"):
+        final += f", futility below {s['futility']:g}"
     return (f"race (alpha {s['alpha']:g} over {race['comparisons']} comparisons, min_runs "
             f"{s['min_runs']}, batch {s['batch']}, margin {s['margin']:g}{final}): {stopped}/"
             f"{len(cells)} cells stopped ({decided} decided), {used} runs of {full} "

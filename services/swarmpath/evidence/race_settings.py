@@ -21,9 +21,11 @@ SEQUENCE_SHARE = 0.5
 EVERY_ROUND = "every-round"
 #: The design of a new race with the rank-sum closing look (docs/statistics.md, "Planned
 #: looks"): a Pocock-spent look every round, the shares of alpha sequence 0.05 / looks 0.8 /
-#: closing look 0.15 (the best of the designs replayed over Table 2, docs/benchmarks.md).
+#: closing look 0.15 (the best of the designs replayed over Table 2, docs/benchmarks.md), and a
+#: comparison stopped at a look where its predictive power is below 0.05 (``futility``).
 DEFAULT_DESIGN: dict[str, Any] = {"looks": EVERY_ROUND, "look_share": 0.8,
-                                  "sequence_share": 0.05, "spending": "pocock"}
+                                  "sequence_share": 0.05, "spending": "pocock",
+                                  "futility": 0.05}
 
 __all__ = ["CLOSING", "DEFAULT_DESIGN", "EVERY_ROUND", "PAIRS", "SEQUENCE_SHARE", "RaceSettings",
            "default_design"]
@@ -31,11 +33,13 @@ __all__ = ["CLOSING", "DEFAULT_DESIGN", "EVERY_ROUND", "PAIRS", "SEQUENCE_SHARE"
 
 def default_design(final_test: str, looks: Sequence[int] | str | None = None,
                    look_share: float | None = None, sequence_share: float | None = None,
-                   spending: str | None = None) -> dict[str, Any]:
-    """The planned looks and shares of a new race, those given kept (None: not given). With
-    the rank-sum closing look and no ``looks`` given: :data:`DEFAULT_DESIGN`; with the sign
-    look or none: no looks (those races are as they were). Looks given without shares get
-    the default design's; ``looks=[]`` is the race without looks (sequence share 0.5), as
+                   spending: str | None = None, futility: float | None = None
+                   ) -> dict[str, Any]:
+    """The planned looks, shares and futility threshold of a new race, those given kept (None:
+    not given). With the rank-sum closing look and no ``looks`` given: :data:`DEFAULT_DESIGN`;
+    with the sign look or none: no looks and no futility (those races are as they were).
+    Looks given without shares get the default design's, and with the rank-sum closing look
+    its futility; ``looks=[]`` is the race without looks (sequence share 0.5, no futility), as
     stored before the looks were the default."""
     if looks is None:
         looks = EVERY_ROUND if final_test == CLOSING[0] else ()
@@ -47,8 +51,11 @@ def default_design(final_test: str, looks: Sequence[int] | str | None = None,
                           else SEQUENCE_SHARE)
     if spending is None:  # without looks it spends nothing: what such races always stored
         spending = DEFAULT_DESIGN["spending"] if looked else SPENDING[0]
+    if futility is None:  # futility is judged at a look against the closing look's level
+        futility = DEFAULT_DESIGN["futility"] if looked and final_test == CLOSING[0] else 0.0
     return {"looks": looks if isinstance(looks, str) else tuple(looks),
-            "look_share": look_share, "sequence_share": sequence_share, "spending": spending}
+            "look_share": look_share, "sequence_share": sequence_share, "spending": spending,
+            "futility": futility}
 
 
 @dataclass(frozen=True)
@@ -73,6 +80,10 @@ class RaceSettings:
     sequence_share: float = SEQUENCE_SHARE
     #: how the looks' share is spent across them (:data:`SPENDING`)
     spending: str = SPENDING[0]
+    #: stop a comparison at a look where its predictive power (the chance, by its own trend,
+    #: that the closing look would call it: group_sequential.predictive_power) is below this;
+    #: 0 never (module text of swarmpath.evidence.racing)
+    futility: float = 0.0
 
     def __post_init__(self) -> None:
         if self.looks != EVERY_ROUND:
@@ -113,6 +124,11 @@ class RaceSettings:
             raise ValueError("looks need a look_share > 0 and a look_share needs looks")
         if self.looks and self.final_test == "sign":
             raise ValueError("looks go with final_test rank-sum or none, not sign")
+        if not 0.0 <= self.futility < 1.0:
+            raise ValueError(f"futility must be in [0, 1), got {self.futility}")
+        if self.futility and not (self.looks and self.final_test == "rank-sum"):
+            raise ValueError("futility is judged at planned looks against the rank-sum "
+                             "closing look: it needs looks and final_test rank-sum")
         if self.final_test == "rank-sum" and self.sequence_share + self.look_share >= 1.0:
             raise ValueError(f"sequence_share ({self.sequence_share}) + look_share "
                              f"({self.look_share}) must leave the closing look a share (< 1)")

@@ -46,6 +46,18 @@ is taken in the block's own replay (Bonferroni over the study: no block waits fo
 shares of alpha: the sequence ``sequence_share``, the looks ``look_share``, the rank-sum closing
 look the rest (``none``: the sequence gets all but the looks' share); by the union bound a false
 difference anywhere in the study has probability at most alpha.
+
+Futility (``futility``, with planned looks and the rank-sum closing look): at a look, a
+comparison the look did not decide stops (decision :data:`FUTILE`, marker =) when its predictive
+power is below ``futility``: the probability, by its own trend with a flat prior on the effect
+(:func:`swarmpath.evidence.group_sequential.predictive_power`), that the two-sided rank-sum test
+at ``max_runs`` rejects at the closing look's level ``alpha * closing share`` (Holm's largest
+threshold there, so the chance is not understated). It is not a verdict and the levels are not
+recomputed for it (a non-binding rule): stopping a comparison only takes away its later chances
+to be declared different, and in the closing look's Holm it counts as p = 1, which leaves every
+other comparison's adjusted p where it was or raises it. So the study's error rate stays at
+most alpha; what futility costs is power (a comparison stopped that the closing look would have
+called), measured in docs/benchmarks.md, Racing.
 """
 
 from __future__ import annotations
@@ -59,6 +71,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from swarmpath.evidence.group_sequential import predictive_power
 from swarmpath.evidence.race_settings import (
     CLOSING,
     DEFAULT_DESIGN,
@@ -71,9 +84,13 @@ from swarmpath.evidence.race_settings import (
 from swarmpath.evidence.race_tests import LookMemo, rank_sum_tests
 from swarmpath.evidence.sequential import PairDecision, decide, pair_scores, sign_test
 
-__all__ = ["CLOSING", "DEFAULT_DESIGN", "EVERY_ROUND", "PAIRS", "SEQUENCE_SHARE", "BlockRace",
-           "Duel", "RaceSettings", "closing_rejections", "comparisons_per_block",
+__all__ = ["CLOSING", "DEFAULT_DESIGN", "EVERY_ROUND", "FUTILE", "PAIRS", "SEQUENCE_SHARE",
+           "BlockRace", "Duel", "RaceSettings", "closing_rejections", "comparisons_per_block",
            "default_design", "race_block"]
+
+#: The decision of a comparison stopped for futility: not a verdict (its marker is =, as an
+#: open comparison's), only the end of its runs.
+FUTILE = "futile"
 
 
 def comparisons_per_block(algorithms: Sequence[str], pairs: str) -> list[tuple[str, str]]:
@@ -102,6 +119,8 @@ class Duel:
     closing_better: str | None = None
     #: decided by the planned look at this many runs (module text), not by the sequence
     look: int | None = None
+    #: stopped for futility: its predictive power at that look (module text)
+    power: float | None = None
 
     @property
     def marker(self) -> str:
@@ -119,7 +138,7 @@ class Duel:
                 "theta": _number(r.theta), "low": _number(r.low), "high": _number(r.high),
                 "final": self.final, "closing_p": self.closing_p, "closing_better":
                 None if self.closing_better is None else getattr(self, self.closing_better),
-                "look": self.look}
+                "look": self.look, "power": self.power}
 
 
 def _number(v: float) -> float | None:
@@ -210,6 +229,13 @@ def race_block(
                 decided[(a, b)] = Duel(a, b, PairDecision(
                     result.n, "different", lean, result.n, result.theta, math.nan, math.nan),
                     round_, look=need)
+            elif settings.futility:  # a comparison the closing look will hardly call stops
+                power = predictive_power(look_p, need / settings.max_runs,
+                                         settings.closing_alpha)
+                if power < settings.futility:
+                    decided[(a, b)] = Duel(a, b, PairDecision(
+                        result.n, FUTILE, None, result.n, result.theta, math.nan, math.nan),
+                        round_, look=need, power=power)
         for name in active:
             if mine[name] and all(p in decided for p in mine[name]):
                 racing[name], stopped[name], reason[name] = False, round_, "decided"
@@ -227,7 +253,7 @@ def race_block(
             result = PairDecision(result.n, d.decision, d.better, d.at, result.theta,
                                   result.low, result.high)
             duels.append(Duel(a, b, result, decided[(a, b)].round, decided[(a, b)].final,
-                              look=decided[(a, b)].look))
+                              look=decided[(a, b)].look, power=decided[(a, b)].power))
         else:  # a crossing inside an incomplete round waits for the round's end
             p, side = closing.get((a, b), (None, None))
             duels.append(Duel(a, b, _open(result), None, closing_p=p, closing_better=side))

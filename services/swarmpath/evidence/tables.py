@@ -37,7 +37,7 @@ EFFECT_ROWS = ("A12", "shift", "95% CI", "P(b/e/w)")
 RACE_ROWS = ("A12", "A paired", "P(b/e/w)", "race")
 #: Every row name that carries no location (no marks, no marker).
 NOTE_ROWS = frozenset(EFFECT_ROWS + RACE_ROWS)
-_DECISIONS = {"different": "diff", "equivalent": "equiv", "open": "open"}
+_DECISIONS = {"different": "diff", "equivalent": "equiv", "open": "open", "futile": "futile"}
 
 
 @dataclass(frozen=True)

@@ -59,7 +59,7 @@ class RacingSpec(Model):
     # default design (evidence.racing.default_design: with the rank-sum closing look a
     # Pocock-spent look every round, shares 0.05 / 0.8 / 0.15), written into the validated spec
     # so that a stored job keeps its design when a later default changes (store schema 6
-    # wrote the race without looks into the specs stored before).
+    # wrote the race without looks into the specs stored before, schema 7 no futility).
     looks: list[int] | Literal["every-round"] | None = Field(
         default=None, max_length=MAX_RUNS_PER_CELL, description="planned looks: run counts "
         "(each min_runs + k * batch, below max_runs, increasing), or 'every-round' (each "
@@ -76,6 +76,12 @@ class RacingSpec(Model):
     spending: Literal["obrien-fleming", "pocock"] | None = Field(
         default=None, description="how the looks' share is spent across them: Lan-DeMets "
         "O'Brien-Fleming or Pocock type. Default: pocock with looks")
+    futility: float | None = Field(
+        default=None, ge=0, lt=1, allow_inf_nan=False, description="stop a comparison at a "
+        "look where its predictive power (the chance, by its own trend, that the closing "
+        "rank-sum look calls it) is below this; 0 never. It costs power, never error "
+        "(docs/statistics.md, Racing). Default: 0.05 with looks and the rank-sum closing "
+        "look, else 0")
 
     @field_validator("looks", mode="before")
     @classmethod
@@ -91,7 +97,7 @@ class RacingSpec(Model):
         """The design's fields left out filled in (the default design), so that the stored
         spec names them."""
         design = default_design(self.final_test, self.looks, self.look_share,
-                                self.sequence_share, self.spending)
+                                self.sequence_share, self.spending, self.futility)
         design["looks"] = design["looks"] if isinstance(design["looks"], str) else list(
             design["looks"])
         for key, value in design.items():
@@ -114,7 +120,7 @@ class RacingSpec(Model):
 
     def settings(self, runs: int) -> RaceSettings:
         design = default_design(self.final_test, self.looks, self.look_share,
-                                self.sequence_share, self.spending)
+                                self.sequence_share, self.spending, self.futility)
         return RaceSettings(max_runs=runs, alpha=self.alpha, min_runs=self.min_runs,
                             batch=self.batch, pairs=self.pairs, margin=self.margin,
                             final_test=self.final_test, **design)

@@ -123,7 +123,9 @@ RACE_SCHEMA: dict[str, Any] = {
             "reason": {"type": "string"}}}},
         "duels": {"type": "array", "items": {"type": "object", "properties": {
             "a": {"type": "string"}, "b": {"type": "string"},
-            "decision": {"type": "string", "description": "different, equivalent or open"},
+            "decision": {"type": "string", "description": "different, equivalent, futile "
+                         "(stopped at a look: its predictive power was below the "
+                         "race's futility) or open"},
             "better": {"type": "string"}, "marker": {"type": "string"},
             "round": {"type": "integer"}, "pairs": {"type": "integer"},
             "decided_after": {"type": "integer"}, "theta": {"type": "number"},
@@ -134,7 +136,9 @@ RACE_SCHEMA: dict[str, Any] = {
                           "rank-sum look: the rank-sum test's two-sided p there"},
             "closing_better": {"type": "string", "description": "the side its runs lean to"},
             "look": {"type": "integer", "description": "decided by the planned look (the "
-                     "rank-sum test at a group-sequential level) at this many runs"}}}},
+                     "rank-sum test at a group-sequential level) at this many runs"},
+            "power": {"type": "number", "description": "stopped for futility: its "
+                      "predictive power at that look"}}}},
     },
 }
 

@@ -22,8 +22,9 @@ from swarmpath.service.protocol import (
 
 #: 2: leases.capability, leases.beat; 3: jobs.pins; 4: results.cpu_seconds; 5: a raced job's
 #: closing look written into its stored spec (the default changed: _keep_closing_looks); 6: its
-#: planned looks and shares of alpha written too (the default became looks every round)
-SCHEMA_VERSION = 6
+#: planned looks and shares of alpha written too (the default became looks every round); 7: its
+#: futility threshold written too (the default became 0.05)
+SCHEMA_VERSION = 7
 DB_NAME = "swarmpath.sqlite3"
 CACHE_KIB = 2048  # SQLite page cache of the connection, KiB (bounded; its default is 2,000)
 #: Page size of a new store file. A result row (a 500-point curve: ~4.3 KB) overflows a 4 KiB
@@ -185,15 +186,18 @@ def _safe(d: dict[str, Any]) -> dict[str, Any]:
 #: looks, the confidence sequence at half of alpha beside the rank-sum closing look.
 _UNLOOKED_RACE = {"looks": [], "look_share": 0.0, "sequence_share": 0.5,
                   "spending": "obrien-fleming"}
+#: ... and one stored before version 7: no comparison stopped for futility.
+_NO_FUTILITY = {"futility": 0.0}
 
 
 def _keep_closing_looks(db: sqlite3.Connection) -> None:
-    """Raced jobs stored before version 6 replay as they were decided. A spec without
+    """Raced jobs stored before version 7 replay as they were decided. A spec without
     ``racing.final_test`` was raced without a closing look, the default of the code that stored
     it (new jobs default to the rank-sum look); one with a boolean, by the sign look (true) or
     none (false). One without the planned looks' fields (stored before they existed) was raced
-    without looks (:data:`_UNLOOKED_RACE`; new jobs default to a look every round). Both are
-    written into the spec by name: stored specs are read without validation
+    without looks (:data:`_UNLOOKED_RACE`; new jobs default to a look every round), and one
+    without ``futility`` (stored before version 7) without futility stops (new jobs default to
+    0.05). All are written into the spec by name: stored specs are read without validation
     (``jobspec.load_job_spec``), so they must hold what the model holds."""
     for row in db.execute("SELECT seq, spec FROM jobs WHERE kind = 'benchmark'").fetchall():
         spec = json.loads(row["spec"])
@@ -201,7 +205,8 @@ def _keep_closing_looks(db: sqlite3.Connection) -> None:
         if not isinstance(racing, dict):
             continue
         look = racing.get("final_test")
-        written = {k: v for k, v in _UNLOOKED_RACE.items() if racing.get(k) is None}
+        written = {k: v for k, v in {**_UNLOOKED_RACE, **_NO_FUTILITY}.items()
+                   if racing.get(k) is None}
         if look not in ("rank-sum", "sign", "none"):
             written["final_test"] = "sign" if look is True else "none"
         if written:
@@ -265,7 +270,7 @@ class StoreBase:
                     "INSERT OR IGNORE INTO meta (key, value) VALUES (?, '0')",
                     [(f"counter.{c}",) for c in (*_COUNTERS, "lease_turn")],
                 )
-            elif int(row[0]) in (1, 2, 3, 4, 5):
+            elif int(row[0]) in (1, 2, 3, 4, 5, 6):
                 version = int(row[0])
                 if version == 1:  # leases granted before capabilities can prove nothing
                     db.execute("ALTER TABLE leases ADD COLUMN capability TEXT NOT NULL "
