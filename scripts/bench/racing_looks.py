@@ -8,6 +8,8 @@ ICOOT paper's Table 2: replayed over full 1000-run studies, and over null studie
                                                         [--designs NAME,...]
     .venv/bin/python scripts/bench/racing_looks.py step --full full.json [--function F2]
                                                         [--repeats 5]
+    .venv/bin/python scripts/bench/racing_looks.py power [--races 200] [--seed 1]
+                                                         [--designs NAME,...]
 
 Each design of :data:`DESIGNS` is a ``racing`` field (min_runs 10, batch 10, alpha 0.05,
 max_runs 1000). ``replay``: the race of Table 2 replayed over each full study's runs with the
@@ -24,7 +26,12 @@ one function of a full study: the block replayed once per completed round as the
 with the looks' memo (race_tests.LookMemo, one per race as the store keeps one), without it, and
 without looks ("plain"), the three alternating ``--repeats`` times; process CPU time, medians,
 per step and for the last 10 steps; the memo's decisions checked equal to the memo-less ones at
-every step. Markdown to stdout, progress to stderr.
+every step. ``power``: ``--races`` races of one comparison at the level of one of Table 2's 65
+(alpha 0.05 / 65, max_runs 1000) per theta = P(A's run beats B's) (normal runs, A shifted),
+each raced by every design over the same runs: how often each declares the right difference,
+stops as futile, stays open, and its runs; and the verdicts a design loses against the first
+design named (declared there, not here): futility's cost in power. Markdown to stdout, progress
+to stderr.
 """
 
 from __future__ import annotations
@@ -60,6 +67,9 @@ DESIGNS: dict[str, dict[str, Any]] = {
                       spending="pocock"),
     "pocock-rounds": dict(looks=EVERY_ROUND, look_share=0.8, sequence_share=0.05,
                           spending="pocock"),
+    # the default's looks and shares with other futility thresholds (pocock-rounds: none)
+    **{f"futility-{g:g}": dict(looks=EVERY_ROUND, look_share=0.8, sequence_share=0.05,
+                               spending="pocock", futility=g) for g in (0.02, 0.1, 0.2)},
 }
 MAX_RUNS = 1000
 
@@ -79,7 +89,7 @@ def describe(name: str) -> str:
                 f"{d.closing_alpha / d.alpha:.2g}")
     return (f"{name}: {d.spending}, looks {runs[0]}-{runs[-1]} ({len(runs)}), sequence "
             f"{d.sequence_share:g} / looks {d.look_share:g} / closing "
-            f"{d.closing_alpha / d.alpha:.2g}")
+            f"{d.closing_alpha / d.alpha:.2g}, futility {d.futility:g}")
 
 
 def _runs(race: dict[str, Any]) -> int:
@@ -92,10 +102,10 @@ def replay(args: argparse.Namespace) -> None:
     verdicts = [_verdicts(v, MAX_RUNS) for v in values]
     full = len(TABLE2_ALGORITHMS) * len(TABLE2_FUNCTIONS) * MAX_RUNS
     print("design: spending, looks (how many), shares of alpha (sequence / looks / closing "
-          f"rank-sum look)\n\n| design | full study | runs | fewer than {full:,} | at a look "
-          "| agree with its full study | with the other | disagreements (raced marker; full "
-          "study's) |\n"
-          "| --- | --- | ---: | ---: | ---: | ---: | ---: | --- |")
+          f"rank-sum look), futility\n\n| design | full study | runs | fewer than {full:,} | "
+          "decided at a look | futile | agree with its full study | with the other | "
+          "disagreements (raced marker (decision); full study's) |\n"
+          "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | --- |")
     for name in args.designs:
         settings = settings_of(name)
         for i, (doc, v) in enumerate(zip(docs, values, strict=True)):
@@ -111,7 +121,9 @@ def replay(args: argparse.Namespace) -> None:
             used = _runs(race)
             print(f"| {describe(name)} | seed {doc['settings']['seed']} | {used:,} | "
                   f"{full / used:.2f}x | "
-                  f"{sum(d['look'] is not None for _, d in duels)} | {agree[i]}/{len(duels)} | "
+                  f"{sum(d['look'] is not None and d['decision'] == 'different' for _, d in duels)}"
+                  f" | {sum(d['decision'] == 'futile' for _, d in duels)} | "
+                  f"{agree[i]}/{len(duels)} | "
                   f"{other} | {', '.join(wrong)} |", flush=True)
             note(f"{name}, seed {doc['settings']['seed']}: {used} runs")
 
@@ -159,6 +171,44 @@ def null(args: argparse.Namespace) -> None:
         print(f"| {describe(name)} | {false[name]}/{args.studies} | "
               f"{false[name] / args.studies:.3f} ({ci.low:.3f}-{ci.high:.3f}) | "
               f"{by_look[name]} | {'holds' if false[name] <= bound else 'FAILS'} |")
+
+
+def power(args: argparse.Namespace) -> None:
+    from scipy import stats
+
+    m = len(TABLE2_FUNCTIONS) * (len(TABLE2_ALGORITHMS) - 1)
+    print(f"{args.races} races per theta of one comparison at the level of one of Table 2's "
+          f"(alpha 0.05 / {m}, max_runs {MAX_RUNS}, min_runs 10, batch 10), normal runs with A "
+          f"shifted, seed {args.seed}; every design over the same runs. right: declared "
+          f"different, A better; lost: declared by {args.designs[0]} and not by this design\n\n"
+          "| theta | design | right | wrong | futile | open at max | lost | median runs | mean "
+          "runs |\n| ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    for theta in (0.5, 0.53, 0.55, 0.58, 0.6, 0.64):
+        rng = np.random.default_rng([args.seed, round(theta * 1000)])
+        shift = np.sqrt(2.0) * stats.norm.ppf(theta)
+        samples = [(rng.normal(size=MAX_RUNS) - shift, rng.normal(size=MAX_RUNS))
+                   for _ in range(args.races)]
+        first: list[bool] = []
+        for name in args.designs:
+            settings = settings_of(name)
+            duels, runs = [], []
+            for a, b in samples:
+                race = race_block({"A": a, "B": b}, ["A", "B"], settings, m, intervals=False)
+                doc = study_race(settings, m, [({}, race, [(0, "A"), (1, "B")])])
+                duels.append(doc["blocks"][0]["duels"][0])
+                runs.append(race.runs_used() / 2)
+            declared = [d["decision"] == "different" for d in duels]
+            first = first or declared
+            share = {k: sum(map(f, duels)) / args.races for k, f in (
+                ("right", lambda d: d["decision"] == "different" and d["better"] == "A"),
+                ("wrong", lambda d: d["decision"] == "different" and d["better"] != "A"),
+                ("futile", lambda d: d["decision"] == "futile"),
+                ("open", lambda d: d["decision"] == "open"))}
+            lost = sum(f and not d for f, d in zip(first, declared, strict=True)) / args.races
+            print(f"| {theta:g} | {name} | {share['right']:.3f} | {share['wrong']:.3f} | "
+                  f"{share['futile']:.3f} | {share['open']:.3f} | {lost:.3f} | "
+                  f"{np.median(runs):.0f} | {np.mean(runs):.0f} |", flush=True)
+        note(f"theta {theta} done")
 
 
 def _steps(values: dict[str, np.ndarray], settings: RaceSettings, memo: LookMemo | None
@@ -229,14 +279,17 @@ def main(argv: list[str] | None = None) -> int:
     st.add_argument("--full", type=Path, nargs=1, required=True, metavar="FILE")
     st.add_argument("--function", default="F2", choices=TABLE2_FUNCTIONS)
     st.add_argument("--repeats", type=int, default=5)
-    for p in (r, n):
+    pw = sub.add_parser("power")
+    pw.add_argument("--races", type=int, default=200)
+    pw.add_argument("--seed", type=int, default=1)
+    for p in (r, n, pw):
         p.add_argument("--designs", type=lambda v: v.split(","), default=list(DESIGNS),
                        help=f"names of DESIGNS, comma-separated: {', '.join(DESIGNS)}")
     args = ap.parse_args(argv)
     unknown = [d for d in getattr(args, "designs", ()) if d not in DESIGNS]
     if unknown:
         ap.error(f"--designs: unknown {unknown}")
-    {"replay": replay, "null": null, "step": step}[args.what](args)
+    {"replay": replay, "null": null, "step": step, "power": power}[args.what](args)
     return 0
 
 
