@@ -61,9 +61,9 @@ def test_bench_race_is_the_store_race_and_the_replay_over_direct_runs(raced, tmp
     assert raced["race_summary"]["runs"] == used < 6 * 60
     # the default design: the job spec's and --race's, Pocock-spent looks every round
     assert {k: race["settings"][k] for k in ("looks", "look_share", "sequence_share",
-                                             "spending", "futility")} == {
+                                             "spending", "futility", "recycle")} == {
         "looks": "every-round", "look_share": 0.8, "sequence_share": 0.05, "spending": "pocock",
-        "futility": 0.05}
+        "futility": 0.05, "recycle": True}
     assert "looks every round from 20 (pocock)" in raced["race_summary"]["line"]
     assert raced["race_summary"]["unraced_runs"] == 6 * 60
     assert raced["settings"]["racing"]["max_runs"] == 60
@@ -76,7 +76,8 @@ def test_bench_race_is_the_store_race_and_the_replay_over_direct_runs(raced, tmp
       "spending": "obrien-fleming"}),
     (["--race-looks", "none"], {"looks": []}),  # the race without looks, the default before
     (["--race-futility", "0.3"], {"futility": 0.3}),
-], ids=["looks", "none", "futility"])
+    (["--race-no-recycle"], {"recycle": False}),
+], ids=["looks", "none", "futility", "no-recycle"])
 def test_bench_race_with_planned_looks_is_the_store_race(tmp_path, options, looks):
     """--race-looks, --race-look-share, --race-sequence-share, --race-spending and
     --race-futility are the job spec's racing fields: the same race document as the store's
@@ -90,8 +91,9 @@ def test_bench_race_with_planned_looks_is_the_store_race(tmp_path, options, look
         race = store.race(job)
     assert json.loads(out)["race"] == race
     assert race["settings"]["looks"] == looks.get("looks", "every-round")
-    assert race["settings"]["futility"] == looks.get(
-        "futility", 0.0 if looks.get("looks") == [] else 0.05)  # no looks, no futility
+    looked = looks.get("looks") != []  # no looks: no futility, nothing to recycle
+    assert race["settings"]["futility"] == looks.get("futility", 0.05 if looked else 0.0)
+    assert race["settings"]["recycle"] is looks.get("recycle", looked)
 
 
 def test_the_markers_are_the_race_decisions_not_rank_sum_tests(raced):
@@ -182,6 +184,8 @@ BAD = [
     (["--race", "--race-futility", "1"], "--race-futility"),
     (["--race", "--race-futility", "nan"], "--race-futility"),
     (["--race", "--race-looks", "none", "--race-futility", "0.1"], "--race-futility"),
+    (["--race-no-recycle"], "--race-recycle"),  # without --race
+    (["--race", "--race-looks", "none", "--race-recycle"], "--race-recycle"),
     (["--race", "-a", "GWO"], "--algorithms"),
     (["--race", "-f", "bbob:f1", "--instances", "1-2", "--pool-instances"], "--pool-instances"),
 ]

@@ -4,6 +4,7 @@ the null: the spent allocation holds its level, an allocation that ignores the l
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -90,3 +91,16 @@ def test_rank_sum_looks_under_the_null_hold_the_spent_level_and_fail_without_spe
 def test_bad_designs_are_refused(looks, level, kind):
     with pytest.raises(ValueError):
         gs.nominal_levels(looks, level, kind)
+
+
+@pytest.mark.parametrize("kind", gs.SPENDING)
+def test_a_larger_level_lowers_the_boundary_at_every_look(kind):
+    """What recycling a share within a race's block relies on (docs/statistics.md, Racing): a
+    comparison tested at levels that rise from look to look, each at most L, crosses only where
+    the boundary of level L is crossed too, since every look's nominal level grows with the
+    level. Checked on the looks of Table 2's race (every round, 98) from the level of one of its
+    comparisons to a recycled block's share."""
+    looks = tuple(range(20, 1000, 10))
+    levels = [gs.nominal_levels(looks, level, kind) for level in (6e-5, 6e-4, 1.5e-3, 3e-3, 0.05)]
+    for lower, higher in itertools.pairwise(levels):
+        assert all(h > lo for lo, h in zip(lower, higher, strict=True) if lo > 0)

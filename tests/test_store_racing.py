@@ -164,8 +164,9 @@ def test_a_raced_job_with_planned_looks_resumes_after_a_restart_with_its_decisio
 
 
 #: The racing fields of the planned looks, which specs stored before them do not hold (nor
-#: futility, which came later).
-LOOK_FIELDS = ("looks", "look_share", "sequence_share", "spending", "futility")
+#: futility and recycle, which came later: LATER_FIELDS).
+LATER_FIELDS = ("futility", "recycle")
+LOOK_FIELDS = ("looks", "look_share", "sequence_share", "spending", *LATER_FIELDS)
 
 
 def _as_stored_by(path: Path, job: str, version: int, without: tuple[str, ...],
@@ -282,20 +283,21 @@ def test_a_raced_job_stops_a_futile_comparison_and_resumes_after_a_restart(tmp_p
 
 
 def test_a_job_stored_before_futility_resumes_with_its_decisions(tmp_path):
-    """A raced job stored by schema 6 (looks every round, no futility field: raced without
-    futility), half run, then the coordinator restarts with this code, whose default stops for
-    futility: the migration (schema 7) writes futility 0 into its spec, and it finishes as the
-    replay without futility. Without the migration it would end otherwise (the replay with the
-    default's futility differs on F7: the check can fail)."""
-    spec = {**SPEC, "functions": ["F1", "F7"], "racing": {**SPEC["racing"], "futility": 0}}
+    """A raced job stored by schema 6 (looks every round, no futility or recycle fields: raced
+    without either), half run, then the coordinator restarts with this code, whose default stops
+    for futility and recycles: the migration (schema 7) writes futility 0 and recycle false into
+    its spec, and it finishes as the replay without them. Without the migration it would end
+    otherwise (the replay with the default's futility differs on F7: the check can fail)."""
+    spec = {**SPEC, "functions": ["F1", "F7"],
+            "racing": {**SPEC["racing"], "futility": 0, "recycle": False}}
     with Store(tmp_path) as store:
         job = store.create_job(spec, now=T0)
         drain(store, job, stop_after=40)
         before = store.race(job)
-    _as_stored_by(tmp_path / "swarmpath.sqlite3", job, 6, ("futility",))
+    _as_stored_by(tmp_path / "swarmpath.sqlite3", job, 6, LATER_FIELDS)
     with Store(tmp_path) as store:
         racing = store.job_spec(job).racing
-        assert (racing.futility, racing.looks) == (0.0, "every-round")
+        assert (racing.futility, racing.recycle, racing.looks) == (0.0, False, "every-round")
         assert store.race(job) == before
         drain(store, job)
         race = check_race_against_direct_runs(store, job, spec)
@@ -342,6 +344,8 @@ def test_the_job_spec_offers_the_closing_looks_the_race_knows():
     ({"futility": 1.0}, ("racing", "futility")),
     ({"futility": 0.1, "looks": []}, ("racing", "futility")),
     ({"futility": 0.1, "final_test": "none"}, ("racing", "futility")),
+    ({"recycle": True, "looks": []}, ("racing", "recycle")),
+    ({"recycle": "yes"}, ("racing", "recycle")),
 ])
 def test_bad_racing_fields_are_named(racing, loc):
     with pytest.raises(ValidationError) as err:

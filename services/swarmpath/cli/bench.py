@@ -390,6 +390,7 @@ def bench(
     race_sequence_share: bench_race.RaceSequenceShareOpt = None,
     race_spending: bench_race.RaceSpendingOpt = None,
     race_futility: bench_race.RaceFutilityOpt = None,
+    race_recycle: bench_race.RaceRecycleOpt = None,
 ) -> None:
     """Run optimizers on benchmark functions; print min/max/avg/std (or median/IQR) per function
     and dimension, with Wilcoxon rank-sum markers, effect sizes and Bayesian probabilities
@@ -404,7 +405,7 @@ def bench(
     racing = bench_race.race_settings(spec, race, race_alpha, race_min_runs, race_batch,
                                       race_margin, race_pairs, race_final_test, race_looks,
                                       race_look_share, race_sequence_share, race_spending,
-                                      race_futility)
+                                      race_futility, race_recycle)
     if plot is not None:
         plot = plot_dir(plot, "--plot")
     stderr = Console(stderr=True)

@@ -79,6 +79,10 @@ RaceFutilityOpt = Annotated[float | None, typer.Option(
     "--race-futility", help="Stop a comparison at a look where its predictive power (the "
     "chance, by its own trend, that the closing rank-sum look calls it) is below this; 0 "
     "never. Costs power, never error. Default 0.05 with looks and the rank-sum closing look.")]
+RaceRecycleOpt = Annotated[bool | None, typer.Option(
+    "--race-recycle/--race-no-recycle", help="At a look, pass the looks' share of alpha of a "
+    "comparison declared different to the open comparisons of its block (Holm's step-down). "
+    "Default: on with looks.")]
 RacePairsOpt = Annotated[str | None, typer.Option(
     "--race-pairs", metavar="reference|all", help="Compare every algorithm with the reference "
     "(default) or every pair.")]
@@ -88,15 +92,16 @@ def race_settings(spec: BenchSpec, race: bool, alpha: float | None, min_runs: in
                   batch: int | None, margin: float | None, pairs: str | None,
                   final_test: str | None = None, looks: str | None = None,
                   look_share: float | None = None, sequence_share: float | None = None,
-                  spending: str | None = None, futility: float | None = None
-                  ) -> RaceSettings | None:
+                  spending: str | None = None, futility: float | None = None,
+                  recycle: bool | None = None) -> RaceSettings | None:
     """The race of ``--race`` and its options (None without ``--race``), ``--runs`` its
     ``max_runs``; :class:`InputError` naming the option that is wrong."""
     given = {"--race-alpha": alpha, "--race-min-runs": min_runs, "--race-batch": batch,
              "--race-margin": margin, "--race-pairs": pairs,
              "--race-final-test": final_test, "--race-looks": looks,
              "--race-look-share": look_share, "--race-sequence-share": sequence_share,
-             "--race-spending": spending, "--race-futility": futility}
+             "--race-spending": spending, "--race-futility": futility,
+             "--race-recycle": recycle}
     if not race:
         for option, value in given.items():
             if value is not None:
@@ -130,7 +135,7 @@ def race_settings(spec: BenchSpec, race: bool, alpha: float | None, min_runs: in
                          "mix its allowances: race without it")
     if futility is not None and not (math.isfinite(futility) and 0.0 <= futility < 1.0):
         raise InputError("--race-futility", f"must be in [0, 1), got {futility}")
-    plan = default_design(final_test, futility=futility,
+    plan = default_design(final_test, futility=futility, recycle=recycle,
                           **_planned_looks(looks, look_share, sequence_share, spending))
     try:
         return RaceSettings(max_runs=spec.runs, alpha=alpha, min_runs=min_runs, batch=batch,
@@ -138,7 +143,7 @@ def race_settings(spec: BenchSpec, race: bool, alpha: float | None, min_runs: in
     except ValueError as e:  # the looks or shares against the rest (RaceSettings says which)
         option = {"looks": "--race-looks", "look_share": "--race-look-share", "sequence_share":
                   "--race-sequence-share", "spending": "--race-spending",
-                  "futility": "--race-futility"}.get(
+                  "futility": "--race-futility", "recycle": "--race-recycle"}.get(
                       str(e).split(" ", 1)[0].rstrip(":"), "--race-looks")
         raise InputError(option, str(e)) from None
 

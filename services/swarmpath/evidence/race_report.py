@@ -220,6 +220,8 @@ def race_line(race: Mapping[str, Any]) -> str:
         _closing(s), "")
     if _look_runs(s, ","):
         final += f", looks {_look_runs(s, ',')} ({s['spending']})"
+    if s.get("recycle"):
+        final += ", shares recycled in blocks"
     if s.get("futility"):
         final += f", futility below {s['futility']:g}"
     return (f"race (alpha {s['alpha']:g} over {race['comparisons']} comparisons, min_runs "
@@ -251,6 +253,9 @@ def _closing_words(settings: Mapping[str, Any]) -> str:
         looks = (f"; {_look_runs(settings, ', ')} runs the rank-sum test of each open "
                  f"comparison, {settings['look_share']:g} of alpha spent across these looks "
                  f"({settings['spending']} type)")
+        if settings.get("recycle"):  # documents written before recycling have no such key
+            looks += (", the share of a comparison declared different passed to the open "
+                      "ones of its block (Holm)")
     if look == "rank-sum":
         return (f"{looks}; the comparisons still open at {runs} runs: the rank-sum test there, "
                 f"Holm at {RaceSettings(**settings).closing_alpha:g} over those not declared "

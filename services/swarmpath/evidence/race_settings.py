@@ -22,10 +22,12 @@ EVERY_ROUND = "every-round"
 #: The design of a new race with the rank-sum closing look (docs/statistics.md, "Planned
 #: looks"): a Pocock-spent look every round, the shares of alpha sequence 0.05 / looks 0.8 /
 #: closing look 0.15 (the best of the designs replayed over Table 2, docs/benchmarks.md), and a
-#: comparison stopped at a look where its predictive power is below 0.05 (``futility``).
+#: comparison stopped at a look where its predictive power is below 0.05 (``futility``), and
+#: the looks' share of a comparison declared different passed on within its block
+#: (``recycle``, Holm's step-down).
 DEFAULT_DESIGN: dict[str, Any] = {"looks": EVERY_ROUND, "look_share": 0.8,
                                   "sequence_share": 0.05, "spending": "pocock",
-                                  "futility": 0.05}
+                                  "futility": 0.05, "recycle": True}
 
 __all__ = ["CLOSING", "DEFAULT_DESIGN", "EVERY_ROUND", "PAIRS", "SEQUENCE_SHARE", "RaceSettings",
            "default_design"]
@@ -33,14 +35,14 @@ __all__ = ["CLOSING", "DEFAULT_DESIGN", "EVERY_ROUND", "PAIRS", "SEQUENCE_SHARE"
 
 def default_design(final_test: str, looks: Sequence[int] | str | None = None,
                    look_share: float | None = None, sequence_share: float | None = None,
-                   spending: str | None = None, futility: float | None = None
-                   ) -> dict[str, Any]:
-    """The planned looks, shares and futility threshold of a new race, those given kept (None:
-    not given). With the rank-sum closing look and no ``looks`` given: :data:`DEFAULT_DESIGN`;
-    with the sign look or none: no looks and no futility (those races are as they were).
-    Looks given without shares get the default design's, and with the rank-sum closing look
-    its futility; ``looks=[]`` is the race without looks (sequence share 0.5, no futility), as
-    stored before the looks were the default."""
+                   spending: str | None = None, futility: float | None = None,
+                   recycle: bool | None = None) -> dict[str, Any]:
+    """The planned looks, shares, futility threshold and recycling of a new race, those given
+    kept (None: not given). With the rank-sum closing look and no ``looks`` given:
+    :data:`DEFAULT_DESIGN`; with the sign look or none: no looks, no futility (those races are
+    as they were). Looks given without shares get the default design's, its recycling, and with
+    the rank-sum closing look its futility; ``looks=[]`` is the race without looks (sequence
+    share 0.5, no futility, nothing to recycle), as stored before the looks were the default."""
     if looks is None:
         looks = EVERY_ROUND if final_test == CLOSING[0] else ()
     looked = looks == EVERY_ROUND or bool(looks)
@@ -53,9 +55,11 @@ def default_design(final_test: str, looks: Sequence[int] | str | None = None,
         spending = DEFAULT_DESIGN["spending"] if looked else SPENDING[0]
     if futility is None:  # futility is judged at a look against the closing look's level
         futility = DEFAULT_DESIGN["futility"] if looked and final_test == CLOSING[0] else 0.0
+    if recycle is None:
+        recycle = DEFAULT_DESIGN["recycle"] if looked else False
     return {"looks": looks if isinstance(looks, str) else tuple(looks),
             "look_share": look_share, "sequence_share": sequence_share, "spending": spending,
-            "futility": futility}
+            "futility": futility, "recycle": recycle}
 
 
 @dataclass(frozen=True)
@@ -84,6 +88,10 @@ class RaceSettings:
     #: that the closing look would call it: group_sequential.predictive_power) is below this;
     #: 0 never (module text of swarmpath.evidence.racing)
     futility: float = 0.0
+    #: at a look, the looks' share of the comparisons of a block declared different goes to
+    #: the block's others (Holm's step-down within the block; module text of
+    #: swarmpath.evidence.racing); False: each keeps its own share (Bonferroni)
+    recycle: bool = False
 
     def __post_init__(self) -> None:
         if self.looks != EVERY_ROUND:
@@ -126,6 +134,8 @@ class RaceSettings:
             raise ValueError("looks go with final_test rank-sum or none, not sign")
         if not 0.0 <= self.futility < 1.0:
             raise ValueError(f"futility must be in [0, 1), got {self.futility}")
+        if self.recycle and not self.looks:
+            raise ValueError("recycle passes on the planned looks' share: it needs looks")
         if self.futility and not (self.looks and self.final_test == "rank-sum"):
             raise ValueError("futility is judged at planned looks against the rank-sum "
                              "closing look: it needs looks and final_test rank-sum")
@@ -175,13 +185,14 @@ class RaceSettings:
             return 0.0
         return self.alpha * (1.0 - self.sequence_share - self._look_share)
 
-    def look_levels(self, comparisons: int) -> dict[int, float]:
+    def look_levels(self, comparisons: int, weight: float = 1.0) -> dict[int, float]:
         """Each planned look's nominal level (the two-sided p to be below) for one comparison:
-        ``alpha * look_share / comparisons`` spent across the looks (module text)."""
+        ``alpha * look_share * weight / comparisons`` spent across the looks (module text);
+        ``weight`` > 1 is a comparison holding shares passed on to it (``recycle``)."""
         runs = self.look_runs
         if not runs:
             return {}
-        share = self.alpha * self.look_share / max(comparisons, 1)
+        share = self.alpha * self.look_share * weight / max(comparisons, 1)
         return dict(zip(runs, nominal_levels(runs, share, self.spending), strict=True))
 
     def allowance(self, round_: int) -> int:

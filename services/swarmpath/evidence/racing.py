@@ -47,6 +47,19 @@ shares of alpha: the sequence ``sequence_share``, the looks ``look_share``, the 
 look the rest (``none``: the sequence gets all but the looks' share); by the union bound a false
 difference anywhere in the study has probability at most alpha.
 
+Recycling (``recycle``, with planned looks): at a look, a comparison declared different (by the
+sequence or a look) passes its share of the looks' alpha to the comparisons of its block still
+open, Holm's step-down within the block: with D of the block's K comparisons declared, each open
+one is tested at the boundary of level ``alpha * look_share * K / ((K - D) * m)``, and a rejection
+at a look raises the others' level at the same look. Blocks keep their Bonferroni shares, so no
+block waits for another. Valid because, until a comparison that does not differ is declared,
+only comparisons that differ have passed shares on: each of the k0 that do not differ is tested
+at a level at most the block's looks' share / k0 at every look, and a boundary of a smaller
+level is higher (checked: tests/test_group_sequential.py), so a false difference at the looks of
+a block needs one of them to cross its boundary at that level, probability at most the block's
+share (Maurer and Bretz, Stat. Biopharm. Res. 5 (2013) 311-320, for graphical procedures of
+this kind); a false difference by the sequence is its own event, counted in its share.
+
 Futility (``futility``, with planned looks and the rank-sum closing look): at a look, a
 comparison the look did not decide stops (decision :data:`FUTILE`, marker =) when its predictive
 power is below ``futility``: the probability, by its own trend with a flat prior on the effect
@@ -224,12 +237,24 @@ def race_block(
         # comparisons of the round in one vectorized call (they have the same run count)
         samples = [(arrays[a][:need], arrays[b][:need]) for a, b, _ in looked]
         tests = rank_sum_tests(samples) if memo is None else memo.tests(samples)
-        for (a, b, result), (look_p, lean) in zip(looked, tests, strict=True):
-            if look_p < look_at[need] and lean is not None:
+        pending = list(zip(looked, tests, strict=True))
+        while pending:  # with recycle, Holm's step-down: each rejection raises the others' level
+            level_now = look_at[need]
+            if settings.recycle:
+                declared = sum(d.result.decision == "different" for d in decided.values())
+                level_now = settings.look_levels(
+                    comparisons, len(pairs) / max(len(pairs) - declared, 1))[need]
+            crossed = [(a, b, result, lean) for (a, b, result), (look_p, lean) in pending
+                       if look_p < level_now and lean is not None]
+            for a, b, result, lean in crossed:
                 decided[(a, b)] = Duel(a, b, PairDecision(
                     result.n, "different", lean, result.n, result.theta, math.nan, math.nan),
                     round_, look=need)
-            elif settings.futility:  # a comparison the closing look will hardly call stops
+            pending = [x for x in pending if x[0][:2] not in decided]
+            if not crossed or not settings.recycle:
+                break
+        for (a, b, result), (look_p, _lean) in pending:
+            if settings.futility:  # a comparison the closing look will hardly call stops
                 power = predictive_power(look_p, need / settings.max_runs,
                                          settings.closing_alpha)
                 if power < settings.futility:

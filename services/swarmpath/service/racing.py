@@ -59,7 +59,8 @@ class RacingSpec(Model):
     # default design (evidence.racing.default_design: with the rank-sum closing look a
     # Pocock-spent look every round, shares 0.05 / 0.8 / 0.15), written into the validated spec
     # so that a stored job keeps its design when a later default changes (store schema 6
-    # wrote the race without looks into the specs stored before, schema 7 no futility).
+    # wrote the race without looks into the specs stored before, schema 7 no futility and no
+    # recycling).
     looks: list[int] | Literal["every-round"] | None = Field(
         default=None, max_length=MAX_RUNS_PER_CELL, description="planned looks: run counts "
         "(each min_runs + k * batch, below max_runs, increasing), or 'every-round' (each "
@@ -82,6 +83,11 @@ class RacingSpec(Model):
         "rank-sum look calls it) is below this; 0 never. It costs power, never error "
         "(docs/statistics.md, Racing). Default: 0.05 with looks and the rank-sum closing "
         "look, else 0")
+    recycle: bool | None = Field(
+        default=None, strict=True, description="at a look, the looks' share of alpha of a "
+        "comparison declared different goes to the open comparisons of its block (Holm's "
+        "step-down within the block; docs/statistics.md, Racing); false: each keeps its own. "
+        "Default: true with looks")
 
     @field_validator("looks", mode="before")
     @classmethod
@@ -97,7 +103,8 @@ class RacingSpec(Model):
         """The design's fields left out filled in (the default design), so that the stored
         spec names them."""
         design = default_design(self.final_test, self.looks, self.look_share,
-                                self.sequence_share, self.spending, self.futility)
+                                self.sequence_share, self.spending, self.futility,
+                                self.recycle)
         design["looks"] = design["looks"] if isinstance(design["looks"], str) else list(
             design["looks"])
         for key, value in design.items():
@@ -120,7 +127,8 @@ class RacingSpec(Model):
 
     def settings(self, runs: int) -> RaceSettings:
         design = default_design(self.final_test, self.looks, self.look_share,
-                                self.sequence_share, self.spending, self.futility)
+                                self.sequence_share, self.spending, self.futility,
+                                self.recycle)
         return RaceSettings(max_runs=runs, alpha=self.alpha, min_runs=self.min_runs,
                             batch=self.batch, pairs=self.pairs, margin=self.margin,
                             final_test=self.final_test, **design)

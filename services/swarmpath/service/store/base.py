@@ -23,7 +23,7 @@ from swarmpath.service.protocol import (
 #: 2: leases.capability, leases.beat; 3: jobs.pins; 4: results.cpu_seconds; 5: a raced job's
 #: closing look written into its stored spec (the default changed: _keep_closing_looks); 6: its
 #: planned looks and shares of alpha written too (the default became looks every round); 7: its
-#: futility threshold written too (the default became 0.05)
+#: futility threshold and recycling written too (the defaults became 0.05 and true)
 SCHEMA_VERSION = 7
 DB_NAME = "swarmpath.sqlite3"
 CACHE_KIB = 2048  # SQLite page cache of the connection, KiB (bounded; its default is 2,000)
@@ -186,8 +186,8 @@ def _safe(d: dict[str, Any]) -> dict[str, Any]:
 #: looks, the confidence sequence at half of alpha beside the rank-sum closing look.
 _UNLOOKED_RACE = {"looks": [], "look_share": 0.0, "sequence_share": 0.5,
                   "spending": "obrien-fleming"}
-#: ... and one stored before version 7: no comparison stopped for futility.
-_NO_FUTILITY = {"futility": 0.0}
+#: ... and one stored before version 7: no comparison stopped for futility, no share recycled.
+_NO_FUTILITY = {"futility": 0.0, "recycle": False}
 
 
 def _keep_closing_looks(db: sqlite3.Connection) -> None:
@@ -196,9 +196,10 @@ def _keep_closing_looks(db: sqlite3.Connection) -> None:
     it (new jobs default to the rank-sum look); one with a boolean, by the sign look (true) or
     none (false). One without the planned looks' fields (stored before they existed) was raced
     without looks (:data:`_UNLOOKED_RACE`; new jobs default to a look every round), and one
-    without ``futility`` (stored before version 7) without futility stops (new jobs default to
-    0.05). All are written into the spec by name: stored specs are read without validation
-    (``jobspec.load_job_spec``), so they must hold what the model holds."""
+    without ``futility`` and ``recycle`` (stored before version 7) without futility stops or
+    recycled shares (new jobs default to 0.05 and true). All are written into the spec by
+    name: stored specs are read without validation (``jobspec.load_job_spec``), so they must
+    hold what the model holds."""
     for row in db.execute("SELECT seq, spec FROM jobs WHERE kind = 'benchmark'").fetchall():
         spec = json.loads(row["spec"])
         racing = spec.get("racing")
