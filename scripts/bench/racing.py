@@ -335,9 +335,17 @@ def seeds(args: argparse.Namespace) -> None:
         print(f"| {name} | {used} | {agree[0]}/{len(keys)} | {agree[1]}/{len(keys)} |")
 
 
+def _spec_settings(max_runs: int, margin: float, final_test: str) -> RaceSettings:
+    """The race a job spec's ``racing`` of :func:`table2_spec` runs with: the service's own path
+    (``RacingSpec.settings``), so the product's default design."""
+    from swarmpath.service.racing import RacingSpec
+
+    return RacingSpec(min_runs=10, batch=10, alpha=0.05, margin=margin,
+                      final_test=final_test).settings(max_runs)
+
+
 def table2(args: argparse.Namespace) -> None:
-    settings = RaceSettings(max_runs=args.max_runs, alpha=0.05, min_runs=10, batch=10,
-                            margin=args.margin, final_test=args.final_test)
+    settings = _spec_settings(args.max_runs, args.margin, args.final_test)
     if args.replay:
         doc = json.loads(Path(args.full).read_text())
         values = _bench_values(doc)
@@ -348,9 +356,9 @@ def table2(args: argparse.Namespace) -> None:
               f"{doc['settings']['seed']}, swarmpath {doc['swarmpath']}, "
               f"{doc['seconds']:.0f} s)\n")
         for margin in args.margins:
-            agreement(replayed_race(values, settings.__class__(
-                max_runs=args.max_runs, alpha=0.05, min_runs=10, batch=10, margin=margin,
-                final_test=args.final_test)), values, args.max_runs)
+            agreement(replayed_race(values, _spec_settings(args.max_runs, margin,
+                                                           args.final_test)),
+                      values, args.max_runs)
         return
     try:
         import numba  # noqa: F401

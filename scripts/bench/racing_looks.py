@@ -67,9 +67,15 @@ DESIGNS: dict[str, dict[str, Any]] = {
                       spending="pocock"),
     "pocock-rounds": dict(looks=EVERY_ROUND, look_share=0.8, sequence_share=0.05,
                           spending="pocock"),
-    # the default's looks and shares with other futility thresholds (pocock-rounds: none)
+    # the default's parts one at a time (pocock-rounds: neither) and its futility at other
+    # thresholds
+    "recycle": dict(looks=EVERY_ROUND, look_share=0.8, sequence_share=0.05, spending="pocock",
+                    recycle=True),
+    "futility": dict(looks=EVERY_ROUND, look_share=0.8, sequence_share=0.05, spending="pocock",
+                     futility=0.05),
     **{f"futility-{g:g}": dict(looks=EVERY_ROUND, look_share=0.8, sequence_share=0.05,
-                               spending="pocock", futility=g) for g in (0.02, 0.1, 0.2)},
+                               spending="pocock", futility=g, recycle=True)
+       for g in (0.02, 0.1, 0.2)},
 }
 MAX_RUNS = 1000
 
@@ -89,7 +95,8 @@ def describe(name: str) -> str:
                 f"{d.closing_alpha / d.alpha:.2g}")
     return (f"{name}: {d.spending}, looks {runs[0]}-{runs[-1]} ({len(runs)}), sequence "
             f"{d.sequence_share:g} / looks {d.look_share:g} / closing "
-            f"{d.closing_alpha / d.alpha:.2g}, futility {d.futility:g}")
+            f"{d.closing_alpha / d.alpha:.2g}, futility {d.futility:g}"
+            f"{', recycled' if d.recycle else ''}")
 
 
 def _runs(race: dict[str, Any]) -> int:
