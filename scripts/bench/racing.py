@@ -240,7 +240,7 @@ def agreement(race: dict[str, Any], values: dict[tuple[str, str], list[float]],
           f"**{used} runs of {full} ({full / used:.1f}x fewer)**, {decided}/{len(cells)} cells "
           f"decided")
     agree = n = 0
-    rows, kinds = [], {"different": 0, "equivalent": 0, "open": 0}
+    rows, kinds = [], {"different": 0, "equivalent": 0, "futile": 0, "open": 0}
     for b in race["blocks"]:
         f = b["block"]["function"]
         runs = {c["algorithm"]: c["runs"] for c in b["cells"]}
@@ -259,9 +259,9 @@ def agreement(race: dict[str, Any], values: dict[tuple[str, str], list[float]],
                             f"{t.p_holm if t is not None else float('nan'):.2g}) |")
     final = sum(d["final"] for b in race["blocks"] for d in b["duels"])
     print(f"decisions: {kinds['different']} different ({final} by the closing look "
-          f"{s.get('final_test')}), {kinds['equivalent']} equivalent, "
-          f"{kinds['open']} open at max_runs; **verdicts agreeing with the full {max_runs}-run "
-          f"study: {agree}/{n} ({100 * agree / n:.1f} %)**\n")
+          f"{s.get('final_test')}), {kinds['equivalent']} equivalent, {kinds['futile']} "
+          f"stopped as futile, {kinds['open']} open at max_runs; **verdicts agreeing with the "
+          f"full {max_runs}-run study: {agree}/{n} ({100 * agree / n:.1f} %)**\n")
     per_function = " | ".join(f"{b['block']['function']} {sum(c['runs'] for c in b['cells'])}"
                               for b in race["blocks"])
     print(f"runs per function (6 cells): {per_function}\n")
