@@ -126,16 +126,15 @@ def test_a_raced_job_with_a_closing_look_is_its_replay(tmp_path, look):
     assert finals == [("F5", "PSO", "PSO")]
 
 
-def test_a_raced_job_with_planned_looks_resumes_after_a_restart_with_its_decisions(tmp_path):
-    """A raced job's default design, group-sequential looks at every round (20, 30, 40, 50 runs
-    here), reaches the store, written into its spec: the job, stopped in the middle of its race
-    and the store reopened (a coordinator restart), finishes as the replay over the directly
-    computed runs, some comparisons decided at a look, and with fewer runs than the same job
-    without looks (looks [], the default before)."""
-    spec = {**SPEC, "functions": ["F1", "F5"]}
+def _restarted_beside(tmp_path: Path, spec: dict, other: dict, stop_after: int
+                      ) -> tuple[dict, dict, dict]:
+    """``spec``'s job stopped mid-race after ``stop_after`` runs, the store reopened (a
+    coordinator restart) and the job finished, checked against the replay over directly
+    computed runs; then a job with the racing field ``other`` beside it: the first job's race,
+    the other's, and the first job's stored racing spec."""
     with Store(tmp_path) as store:
         job = store.create_job(spec, now=T0)
-        drain(store, job, stop_after=110)
+        drain(store, job, stop_after=stop_after)
         before = store.race(job)
         assert not all(b["finished"] for b in before["blocks"])
     with Store(tmp_path) as store:
@@ -143,11 +142,21 @@ def test_a_raced_job_with_planned_looks_resumes_after_a_restart_with_its_decisio
         drain(store, job)
         assert store.job_status(job).state == "done"
         race = check_race_against_direct_runs(store, job, spec)
-        plain = store.create_job({**spec, "racing": {**SPEC["racing"], "looks": []}}, now=T0)
-        drain(store, plain)
-        without = store.race(plain)
+        beside = store.create_job({**spec, "racing": {**SPEC["racing"], **other}}, now=T0)
+        drain(store, beside)
         stored = json.loads(store._db.execute("SELECT spec FROM jobs WHERE id = ?",
                                               (job,)).fetchone()[0])["racing"]
+        return race, store.race(beside), stored
+
+
+def test_a_raced_job_with_planned_looks_resumes_after_a_restart_with_its_decisions(tmp_path):
+    """A raced job's default design, group-sequential looks at every round (20, 30, 40, 50 runs
+    here), reaches the store, written into its spec: the job, stopped in the middle of its race
+    and the store reopened (a coordinator restart), finishes as the replay over the directly
+    computed runs, some comparisons decided at a look, and with fewer runs than the same job
+    without looks (looks [], the default before)."""
+    spec = {**SPEC, "functions": ["F1", "F5"]}
+    race, without, stored = _restarted_beside(tmp_path, spec, {"looks": []}, 110)
     assert {k: stored[k] for k in ("looks", "look_share", "sequence_share", "spending")} == {
         "looks": "every-round", "look_share": 0.8, "sequence_share": 0.05, "spending": "pocock"}
     assert race["settings"]["looks"] == "every-round"
@@ -255,21 +264,7 @@ def test_a_raced_job_stops_a_futile_comparison_and_resumes_after_a_restart(tmp_p
     power below 0.05; stopped mid-race and the store reopened, the job finishes as the replay
     over the directly computed runs, with fewer runs than the same job with futility 0."""
     spec = {**SPEC, "functions": ["F1", "F7"]}
-    with Store(tmp_path) as store:
-        job = store.create_job(spec, now=T0)
-        drain(store, job, stop_after=40)
-        before = store.race(job)
-        assert not all(b["finished"] for b in before["blocks"])
-    with Store(tmp_path) as store:
-        assert store.race(job) == before
-        drain(store, job)
-        assert store.job_status(job).state == "done"
-        race = check_race_against_direct_runs(store, job, spec)
-        stored = json.loads(store._db.execute("SELECT spec FROM jobs WHERE id = ?",
-                                              (job,)).fetchone()[0])["racing"]
-        never = store.create_job({**spec, "racing": {**SPEC["racing"], "futility": 0}}, now=T0)
-        drain(store, never)
-        without = store.race(never)
+    race, without, stored = _restarted_beside(tmp_path, spec, {"futility": 0}, 40)
     assert stored["futility"] == 0.05 and race["settings"]["futility"] == 0.05
     futile = [(b["block"]["function"], d["a"], d["look"]) for b in race["blocks"]
               for d in b["duels"] if d["decision"] == "futile"]
