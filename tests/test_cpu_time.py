@@ -204,7 +204,7 @@ def test_an_old_store_opens_and_its_runs_show_cpu_as_missing_not_zero(tmp_path):
     with Store(data) as store:
         version = store._db.execute(
             "SELECT value FROM meta WHERE key = 'schema_version'").fetchone()[0]
-        assert int(version) == SCHEMA_VERSION == 6
+        assert int(version) == SCHEMA_VERSION == 7
         old = [i for i in store.runs(job, limit=100) if i["state"] == "done"]
         assert len(old) == 3 and all(i["cpu_seconds"] is None for i in old)
         assert all(i["seconds"] >= 0.0 for i in old)

@@ -65,22 +65,26 @@ def _decision(values: dict[str, np.ndarray], settings: RaceSettings) -> str:
 
 
 def error(args: argparse.Namespace) -> None:
-    """Each null race three times over the same runs: with each closing look at max_runs
-    (``final_test``: rank-sum, the default; sign; none, the confidence sequence alone)."""
-    looks = [RaceSettings(max_runs=args.max_runs, alpha=args.alpha, min_runs=10, batch=10,
-                          final_test=look) for look in CLOSING]
+    """Each null race four times over the same runs: with the job spec's default design (looks
+    every round, recycling, futility, the rank-sum closing look) and with each closing look at
+    max_runs alone (``final_test``: rank-sum; sign; none, the confidence sequence alone)."""
+    names = ["default", *CLOSING]
+    looks = [_spec_settings(args.max_runs, 0.0, CLOSING[0], args.alpha)] + [
+        RaceSettings(max_runs=args.max_runs, alpha=args.alpha, min_runs=10, batch=10,
+                     final_test=look) for look in CLOSING]
     functions = [f"F{i}" for i in range(1, 14)]
     print(f"{args.seeds} seed pairs x F1-F13 x {len(list_optimizers())} optimizers, max_runs "
           f"{args.max_runs}, min_runs 10, batch 10, alpha {args.alpha} per race; each race "
-          f"with each closing look (final_test: {', '.join(CLOSING)})\n")
+          f"with the default design and with each closing look alone, no planned looks "
+          f"(final_test: {', '.join(CLOSING)})\n")
     print("| optimizer | races | of them not all ties | "
-          + " | ".join(f"false differences, {look} | rate" for look in CLOSING)
-          + " |\n| --- | ---: | ---: | " + " | ".join("---: | ---:" for _ in CLOSING) + " |")
+          + " | ".join(f"false differences, {look} | rate" for look in names)
+          + " |\n| --- | ---: | ---: | " + " | ".join("---: | ---:" for _ in names) + " |")
     total = varied = 0
-    wrong = [0] * len(CLOSING)
+    wrong = [0] * len(names)
     for name in list_optimizers():
         races = live = 0
-        false = [0] * len(CLOSING)
+        false = [0] * len(names)
         for f in functions:
             for s in range(args.seeds):
                 a = minimize(name, f, 5, 10, 50, seed=1000 + s, runs=args.max_runs).best_fitness
@@ -94,7 +98,7 @@ def error(args: argparse.Namespace) -> None:
         print(f"| {name} | {races} | {live} | "
               + " | ".join(f"{x} | {x / races:.3f}" for x in false) + " |")
         note(f"{name}: " + ", ".join(f"{look} {x}/{races}"
-                                      for look, x in zip(CLOSING, false, strict=True)))
+                                      for look, x in zip(names, false, strict=True)))
     for label, n in (("all", total), ("not all ties", varied)):
         cols = []
         for w in wrong:
@@ -335,12 +339,13 @@ def seeds(args: argparse.Namespace) -> None:
         print(f"| {name} | {used} | {agree[0]}/{len(keys)} | {agree[1]}/{len(keys)} |")
 
 
-def _spec_settings(max_runs: int, margin: float, final_test: str) -> RaceSettings:
+def _spec_settings(max_runs: int, margin: float, final_test: str, alpha: float = 0.05
+                   ) -> RaceSettings:
     """The race a job spec's ``racing`` of :func:`table2_spec` runs with: the service's own path
     (``RacingSpec.settings``), so the product's default design."""
     from swarmpath.service.racing import RacingSpec
 
-    return RacingSpec(min_runs=10, batch=10, alpha=0.05, margin=margin,
+    return RacingSpec(min_runs=10, batch=10, alpha=alpha, margin=margin,
                       final_test=final_test).settings(max_runs)
 
 
