@@ -257,15 +257,17 @@ def test_benchmark_job_page_table_curves_and_boxes(server, jobs, browser):
     assert "/runs/" in browser.current_url
 
 
-# a raced job with the default design (looks every round; see test_store_racing)
-RACED = {"kind": "benchmark", "algorithms": ["FDO", "PSO", "GWO"], "functions": ["F1", "F10"],
+# a raced job with the default design (looks every round, recycling, futility; see
+# test_store_racing: F7's PSO against GWO stops as futile at the look at 30 runs)
+RACED = {"kind": "benchmark", "algorithms": ["FDO", "PSO", "GWO"], "functions": ["F1", "F7"],
          "dims": [5], "runs": 60, "agents": 8, "iterations": 30, "seed": 3,
          "racing": {"min_runs": 10, "batch": 10}}
 
 
 def test_raced_job_page_shows_the_race(server, browser):
-    """Per cell its runs, state and round, per pair its verdict, round, pairs and interval, the
-    runs spent against the unraced job's, and the table's markers are the race's decisions."""
+    """Per cell its runs, state and round, per pair its verdict, round, pairs and interval (a
+    futile one with its look and predictive power), the runs spent against the unraced job's,
+    and the table's markers are the race's decisions."""
     import httpx
 
     url, app = server
@@ -278,7 +280,7 @@ def test_raced_job_page_shows_the_race(server, browser):
     pairs = wait_for(browser, "#race-pairs tbody tr", 4)
     assert len(pairs) == sum(len(b["duels"]) for b in race["blocks"]) == 4
     shown = {row.get_attribute("data-pair"): row.text for row in pairs}
-    markers = {}
+    markers, futile = {}, []
     for b in race["blocks"]:
         f, d = b["block"]["function"], b["block"]["dim"]
         for duel in b["duels"]:
@@ -288,14 +290,20 @@ def test_raced_job_page_shows_the_race(server, browser):
             assert f"{duel['a']} vs {duel['b']}" in text and verdict in text
             assert f"r{duel['round']}" in text and f"{duel['theta']:.3f}" in text
             assert duel["b"] == "GWO"
+            if duel["decision"] == "futile":
+                futile.append((f, duel["a"]))
+                assert f"(look at {duel['look']} runs), predictive power {duel['power']:.3f}" \
+                    in text
             markers[(f, duel["a"])] = duel["marker"]
         row = browser.find_element(By.CSS_SELECTOR, f'#race-cells tr[data-block="{f}/{d}"]')
         for c in b["cells"]:
             cell = row.find_element(By.CSS_SELECTOR, f'td[data-algorithm="{c["algorithm"]}"]')
             assert cell.text == f"{c['runs']} · {c['reason']} r{c['stopped_round']}"
+    assert futile == [("F7", "PSO")]
     used = sum(c["runs"] for b in race["blocks"] for c in b["cells"])
     assert used < 6 * 60
-    assert f"{used} runs of {6 * 60}" in browser.find_element(By.ID, "race-line").text
+    line = browser.find_element(By.ID, "race-line").text
+    assert f"{used} runs of {6 * 60}" in line and "futility below 0.05" in line
     for row in browser.find_elements(By.CSS_SELECTOR, "#pivot tbody tr"):
         f = row.get_attribute("data-group").split("/")[0]
         cells = row.find_elements(By.CSS_SELECTOR, "td")[2:]

@@ -133,7 +133,10 @@
     const cells = r.blocks.flatMap((b) => b.cells);
     const used = cells.reduce((n, c) => n + c.runs, 0), full = s.max_runs * cells.length;
     const stopped = cells.filter((c) => !c.racing).length, decided = cells.filter((c) => c.reason === "decided").length;
-    let html = `<h2>Race</h2><p id="race-line">alpha ${s.alpha} over ${r.comparisons} comparisons (Bonferroni), min_runs ${s.min_runs}, batch ${s.batch}, margin ${s.margin}, closing look ${SP.esc(String(s.final_test))}, at most ${s.max_runs} runs a cell: ${stopped}/${cells.length} cells stopped (${decided} decided), <b>${used} runs of ${full}</b> (${(full / Math.max(used, 1)).toFixed(1)}x fewer)</p>`;
+    /* the planned looks, recycling and futility (documents of older jobs lack some of them) */
+    const looks = s.looks === "every-round" ? `, looks every round (${SP.esc(String(s.spending))})` : (Array.isArray(s.looks) && s.looks.length ? `, looks at ${s.looks.join(",")} (${SP.esc(String(s.spending))})` : "");
+    const design = looks + (s.recycle ? ", shares recycled in blocks" : "") + (s.futility ? `, futility below ${s.futility}` : "");
+    let html = `<h2>Race</h2><p id="race-line">alpha ${s.alpha} over ${r.comparisons} comparisons (Bonferroni), min_runs ${s.min_runs}, batch ${s.batch}, margin ${s.margin}, closing look ${SP.esc(String(s.final_test))}${design}, at most ${s.max_runs} runs a cell: ${stopped}/${cells.length} cells stopped (${decided} decided), <b>${used} runs of ${full}</b> (${(full / Math.max(used, 1)).toFixed(1)}x fewer)</p>`;
     html += `<table id="race-cells"><thead><tr><th class="l">function</th><th>dim</th>` + algs.map((a) => `<th>${SP.esc(a)}</th>`).join("") + `<th>rounds</th></tr></thead><tbody>`;
     for (const b of r.blocks) {
       const by = {}; for (const c of b.cells) by[c.algorithm] = c;
