@@ -49,8 +49,17 @@ from scipy import stats
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from service import TABLE2_ALGORITHMS, TABLE2_FUNCTIONS, Up, elapsed, note
+from table2_race import (
+    agreement,
+    bench_values,
+    full_verdicts,
+    race_decisions,
+    replayed_race,
+    save_full,
+    spec_settings,
+    table2_spec,
+)
 
-from swarmpath.evidence import report
 from swarmpath.evidence.race_report import study_race
 from swarmpath.evidence.racing import CLOSING, RaceSettings, race_block
 from swarmpath.evidence.sequential import rejection_times
@@ -69,7 +78,7 @@ def error(args: argparse.Namespace) -> None:
     every round, recycling, futility, the rank-sum closing look) and with each closing look at
     max_runs alone (``final_test``: rank-sum; sign; none, the confidence sequence alone)."""
     names = ["default", *CLOSING]
-    looks = [_spec_settings(args.max_runs, 0.0, CLOSING[0], args.alpha)] + [
+    looks = [spec_settings(args.max_runs, 0.0, CLOSING[0], args.alpha)] + [
         RaceSettings(max_runs=args.max_runs, alpha=args.alpha, min_runs=10, batch=10,
                      final_test=look) for look in CLOSING]
     functions = [f"F{i}" for i in range(1, 14)]
@@ -181,15 +190,6 @@ def needed(args: argparse.Namespace) -> None:
               f"{p_lo:.2f} / {p_hi:.2f} | {min(agree):.2f}-{max(agree):.2f} |")
 
 
-def table2_spec(max_runs: int, margin: float, seed: int, backend: str,
-                final_test: str = CLOSING[0]) -> dict[str, Any]:
-    return {"kind": "benchmark", "algorithms": TABLE2_ALGORITHMS, "functions": TABLE2_FUNCTIONS,
-            "dims": [30], "agents": 30, "iterations": 500, "runs": max_runs, "seed": seed,
-            "backend": backend,
-            "racing": {"min_runs": 10, "batch": 10, "alpha": 0.05, "margin": margin,
-                       "final_test": final_test}}
-
-
 def _full_values_from_up(up: Up, job: str) -> dict[tuple[str, str], list[float]]:
     out: dict[tuple[str, str], list[float]] = {}
     offset = 0
@@ -204,114 +204,13 @@ def _full_values_from_up(up: Up, job: str) -> dict[tuple[str, str], list[float]]
         offset += len(items)
 
 
-def replayed_race(values: dict[tuple[str, str], list[float]], settings: RaceSettings
-                  ) -> dict[str, Any]:
-    """The race of Table 2 replayed over the full study's runs (run r of a cell is the same run
-    raced or not, and a raced job's race is this replay: tests/test_service_racing.py,
-    tests/test_bench_race.py), as ``GET /jobs/{id}/race`` shows a job's."""
-    comparisons = len(TABLE2_FUNCTIONS) * (len(TABLE2_ALGORITHMS) - 1)
-    blocks = []
-    for f in TABLE2_FUNCTIONS:
-        per = {a: np.where(np.isnan(v := np.asarray(values[(a, f)], dtype=float)), np.inf, v)
-               for a in TABLE2_ALGORITHMS}
-        blocks.append(({"function": f, "dim": 30},
-                       race_block(per, TABLE2_ALGORITHMS, settings, comparisons),
-                       list(enumerate(TABLE2_ALGORITHMS))))
-    return study_race(settings, comparisons, blocks)
-
-
-def _decisions(race: dict[str, Any]) -> list[Any]:
-    """A race's allowances, stops and duels per function (what a replay must reproduce)."""
-    return [(b["block"]["function"],
-             sorted((c["algorithm"], c["runs"], c["reason"], c["stopped_round"])
-                    for c in b["cells"]), b["duels"]) for b in race["blocks"]]
-
-
-def agreement(race: dict[str, Any], values: dict[tuple[str, str], list[float]],
-              max_runs: int) -> None:
-    """Runs used, and every raced +/=/- against the full study's (rank-sum, Holm over the
-    table, alpha 0.05, what ``swarmpath bench`` prints), the disagreements listed."""
-    samples = {(a, f, 30): values[(a, f)][:max_runs] for a in TABLE2_ALGORITHMS
-               for f in TABLE2_FUNCTIONS}
-    tests = report.benchmark_tests(samples, TABLE2_ALGORITHMS, None)
-    cells = [c for b in race["blocks"] for c in b["cells"]]
-    used = sum(c["runs"] for c in cells)
-    full = len(cells) * max_runs
-    s = race["settings"]
-    decided = sum(c["reason"] == "decided" for c in cells)
-    print(f"race: alpha {s['alpha']} over {race['comparisons']} comparisons, min_runs "
-          f"{s['min_runs']}, batch {s['batch']}, margin {s['margin']}, max_runs {max_runs}: "
-          f"**{used} runs of {full} ({full / used:.1f}x fewer)**, {decided}/{len(cells)} cells "
-          f"decided")
-    agree = n = 0
-    rows, kinds = [], {"different": 0, "equivalent": 0, "futile": 0, "open": 0}
-    for b in race["blocks"]:
-        f = b["block"]["function"]
-        runs = {c["algorithm"]: c["runs"] for c in b["cells"]}
-        for d in b["duels"]:
-            t = tests.comparison.get((f, 30), d["a"])
-            full_marker = t.marker if t is not None else None
-            n += 1
-            kinds[d["decision"]] += 1
-            agree += d["marker"] == full_marker
-            if d["marker"] != full_marker:
-                interval = ("" if d["theta"] is None else
-                            f", theta {d['theta']:.3f} [{d['low']:.3f}, {d['high']:.3f}]")
-                rows.append(f"| {f} | {d['a']} | {d['marker']} ({d['decision']}, "
-                            f"{runs[d['a']]} runs{interval}) | {full_marker} (A12 "
-                            f"{t.a12 if t is not None else float('nan'):.3f}, p_holm "
-                            f"{t.p_holm if t is not None else float('nan'):.2g}) |")
-    final = sum(d["final"] for b in race["blocks"] for d in b["duels"])
-    print(f"decisions: {kinds['different']} different ({final} by the closing look "
-          f"{s.get('final_test')}), {kinds['equivalent']} equivalent, {kinds['futile']} "
-          f"stopped as futile, {kinds['open']} open at max_runs; **verdicts agreeing with the "
-          f"full {max_runs}-run study: {agree}/{n} ({100 * agree / n:.1f} %)**\n")
-    per_function = " | ".join(f"{b['block']['function']} {sum(c['runs'] for c in b['cells'])}"
-                              for b in race["blocks"])
-    print(f"runs per function (6 cells): {per_function}\n")
-    if rows:
-        print("| function | algorithm vs ICOOT | raced | full study |\n| --- | --- | --- | --- |")
-        print("\n".join(rows))
-    print()
-
-
-def _bench_values(doc: dict[str, Any]) -> dict[tuple[str, str], list[float]]:
-    """Each cell's best values of a ``swarmpath bench --json`` document (null: NaN)."""
-    return {(c["algorithm"], c["function"]): [math.nan if v is None else float(v)
-                                              for v in c["best_fitness"]] for c in doc["cells"]}
-
-
-def _save_full(path: Path, spec: dict[str, Any], values: dict[tuple[str, str], list[float]],
-               seconds: float) -> None:
-    """The full job's runs as the cells of a ``swarmpath bench --json`` document (what
-    ``--full`` and ``seeds`` read)."""
-    from swarmpath import __version__
-
-    settings = {k: v for k, v in spec.items() if k not in ("kind", "racing")}
-    cells = [{"algorithm": a, "function": f, "dim": 30,
-              "best_fitness": [None if math.isnan(v) else v for v in values[(a, f)]]}
-             for f in TABLE2_FUNCTIONS for a in TABLE2_ALGORITHMS]
-    path.write_text(json.dumps({"swarmpath": __version__, "seconds": seconds,
-                                "settings": settings, "cells": cells}))
-
-
-def _verdicts(values: dict[tuple[str, str], list[float]], max_runs: int) -> dict[Any, Any]:
-    """(function, algorithm) -> the full study's test against ICOOT (rank-sum, Holm over the
-    table, alpha 0.05: what ``swarmpath bench`` prints)."""
-    samples = {(a, f, 30): values[(a, f)][:max_runs] for a in TABLE2_ALGORITHMS
-               for f in TABLE2_FUNCTIONS}
-    tests = report.benchmark_tests(samples, TABLE2_ALGORITHMS, None)
-    return {(f, a): tests.comparison.get((f, 30), a) for f in TABLE2_FUNCTIONS
-            for a in TABLE2_ALGORITHMS[:-1]}
-
-
 def seeds(args: argparse.Namespace) -> None:
     """Two full studies of Table 2 on other seeds: how many of their +/=/- verdicts they share
     (the comparison's own reproducibility, the ceiling of any racing agreement), and the race
     replayed over each, against both."""
     docs = [json.loads(Path(f).read_text()) for f in args.full]
-    values = [_bench_values(d) for d in docs]
-    verdicts = [_verdicts(v, args.max_runs) for v in values]
+    values = [bench_values(d) for d in docs]
+    verdicts = [full_verdicts(v, args.max_runs) for v in values]
     names = [f"seed {d['settings']['seed']}" for d in docs]
     keys = list(verdicts[0])
     same = [k for k in keys if verdicts[0][k].marker == verdicts[1][k].marker]
@@ -339,21 +238,11 @@ def seeds(args: argparse.Namespace) -> None:
         print(f"| {name} | {used} | {agree[0]}/{len(keys)} | {agree[1]}/{len(keys)} |")
 
 
-def _spec_settings(max_runs: int, margin: float, final_test: str, alpha: float = 0.05
-                   ) -> RaceSettings:
-    """The race a job spec's ``racing`` of :func:`table2_spec` runs with: the service's own path
-    (``RacingSpec.settings``), so the product's default design."""
-    from swarmpath.service.racing import RacingSpec
-
-    return RacingSpec(min_runs=10, batch=10, alpha=alpha, margin=margin,
-                      final_test=final_test).settings(max_runs)
-
-
 def table2(args: argparse.Namespace) -> None:
-    settings = _spec_settings(args.max_runs, args.margin, args.final_test)
+    settings = spec_settings(args.max_runs, args.margin, args.final_test)
     if args.replay:
         doc = json.loads(Path(args.full).read_text())
-        values = _bench_values(doc)
+        values = bench_values(doc)
         short = [k for k, v in values.items() if len(v) < args.max_runs]
         if short:
             raise SystemExit(f"--full has fewer than {args.max_runs} runs in {short[:3]}")
@@ -361,7 +250,7 @@ def table2(args: argparse.Namespace) -> None:
               f"{doc['settings']['seed']}, swarmpath {doc['swarmpath']}, "
               f"{doc['seconds']:.0f} s)\n")
         for margin in args.margins:
-            agreement(replayed_race(values, _spec_settings(args.max_runs, margin,
+            agreement(replayed_race(values, spec_settings(args.max_runs, margin,
                                                            args.final_test)),
                       values, args.max_runs)
         return
@@ -378,7 +267,7 @@ def table2(args: argparse.Namespace) -> None:
             note(f"the full study (max {args.max_runs} runs per cell, {backend}) ...")
             plain = {k: v for k, v in spec.items() if k != "racing"}
             alone = up.run_job(plain, timeout=86400)
-            _save_full(args.save_full, spec, _full_values_from_up(up, alone["id"]),
+            save_full(args.save_full, spec, _full_values_from_up(up, alone["id"]),
                        elapsed(alone))
             print(f"full through swarmpath up --workers {args.workers}: {alone['runs_total']} "
                   f"runs, {elapsed(alone):.0f} s, load {alone['load'][0]:.1f} -> "
@@ -396,12 +285,12 @@ def table2(args: argparse.Namespace) -> None:
             full_status = up.run_job(plain, timeout=86400)
             full_values = _full_values_from_up(up, full_status["id"])
             if args.save_full is not None:
-                _save_full(args.save_full, spec, full_values, elapsed(full_status))
+                save_full(args.save_full, spec, full_values, elapsed(full_status))
             if args.again:  # raced, full, raced: the first job's warm-up shows as a difference
                 note("the raced job again ...")
                 again = up.run_job(spec, timeout=86400)
         if args.full is not None:
-            from_file = _bench_values(json.loads(Path(args.full).read_text()))
+            from_file = bench_values(json.loads(Path(args.full).read_text()))
             if args.full_up:
                 same_runs = all(np.array_equal(np.asarray(v, dtype=float),
                                                np.asarray(from_file[k][:args.max_runs],
@@ -416,7 +305,7 @@ def table2(args: argparse.Namespace) -> None:
             print(f"{label} through swarmpath up --workers {args.workers}: "
                   f"{status['runs_total']} of {full_runs} runs, {elapsed(status):.0f} s, "
                   f"load {status['load'][0]:.1f} -> {status['load'][1]:.1f}")
-    same = _decisions(race) == _decisions(replayed_race(full_values, settings))
+    same = race_decisions(race) == race_decisions(replayed_race(full_values, settings))
     print(f"the job's race equals its replay over the full study's runs: {same}\n")
     agreement(race, full_values, args.max_runs)
 

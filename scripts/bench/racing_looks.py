@@ -13,7 +13,7 @@ ICOOT paper's Table 2: replayed over full 1000-run studies, and over null studie
 
 Each design of :data:`DESIGNS` is a ``racing`` field (min_runs 10, batch 10, alpha 0.05,
 max_runs 1000). ``replay``: the race of Table 2 replayed over each full study's runs with the
-product's own code (``racing.py``'s ``replayed_race``: :func:`swarmpath.evidence.racing.
+product's own code (``table2_race.replayed_race``: :func:`swarmpath.evidence.racing.
 race_block` per function and the study's closing look, what the store runs as results arrive;
 run r of a cell is the same run raced or not), its runs against the 78,000 of the full study,
 and every +/=/- against the full study's (rank-sum, Holm over the table, alpha 0.05), the
@@ -49,8 +49,8 @@ from typing import Any
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from racing import _bench_values, _verdicts, replayed_race
 from service import TABLE2_ALGORITHMS, TABLE2_FUNCTIONS, note
+from table2_race import bench_values, full_verdicts, replayed_race
 
 from swarmpath.evidence.race_report import study_race
 from swarmpath.evidence.race_tests import LookMemo
@@ -108,8 +108,8 @@ def _runs(race: dict[str, Any]) -> int:
 
 def replay(args: argparse.Namespace) -> None:
     docs = [json.loads(Path(f).read_text()) for f in args.full]
-    values = [_bench_values(d) for d in docs]
-    verdicts = [_verdicts(v, MAX_RUNS) for v in values]
+    values = [bench_values(d) for d in docs]
+    verdicts = [full_verdicts(v, MAX_RUNS) for v in values]
     full = len(TABLE2_ALGORITHMS) * len(TABLE2_FUNCTIONS) * MAX_RUNS
     print("design: spending, looks (how many), shares of alpha (sequence / looks / closing "
           f"rank-sum look), futility\n\n| design | full study | runs | fewer than {full:,} | "
@@ -250,7 +250,7 @@ def _steps(values: dict[str, np.ndarray], settings: RaceSettings, memo: LookMemo
 
 def step(args: argparse.Namespace) -> None:
     doc = json.loads(Path(args.full[0]).read_text())
-    raw = _bench_values(doc)
+    raw = bench_values(doc)
     values = {a: np.where(np.isnan(v := np.asarray(raw[(a, args.function)])), np.inf, v)
               for a in TABLE2_ALGORITHMS}
     settings = {"memo": settings_of("default"), "no memo": settings_of("default"),

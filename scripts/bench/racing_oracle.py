@@ -43,8 +43,8 @@ from typing import Any
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from racing import _bench_values, _verdicts  # scripts/bench/racing.py
 from service import TABLE2_ALGORITHMS, TABLE2_FUNCTIONS, note
+from table2_race import bench_values, full_verdicts
 
 from swarmpath.evidence.compare import rank_sum_many
 from swarmpath.evidence.markers import holm
@@ -182,8 +182,8 @@ def designs(args: argparse.Namespace, grid: list[int]) -> None:
     for path in args.full:
         doc = json.loads(path.read_text())
         values = {k: [np.inf if np.isnan(x) else x for x in v]
-                  for k, v in _bench_values(doc).items()}
-        verdicts = _verdicts(_bench_values(doc), args.max_runs)
+                  for k, v in bench_values(doc).items()}
+        verdicts = full_verdicts(bench_values(doc), args.max_runs)
         for name, design in DESIGNS.items():
             when, marker = design_replay(values, design, grid)
             runs = sum(sum(when[(f, a)] for a in TABLE2_ALGORITHMS[:-1])
@@ -247,8 +247,8 @@ def main(argv: list[str] | None = None) -> int:
           + " | ".join("---:" for _ in range(args.disagree)) + " | --- |")
     for path in args.full:
         doc = json.loads(path.read_text())
-        values = _bench_values(doc)
-        verdicts = _verdicts(values, args.max_runs)
+        values = bench_values(doc)
+        verdicts = full_verdicts(values, args.max_runs)
         for rule in args.levels.split(","):
             note(f"{path.name}, level {rule} ...")
             settled = settled_at(values, verdicts, levels(verdicts, rule), grid)
