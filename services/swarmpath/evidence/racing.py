@@ -197,6 +197,9 @@ def race_block(
     every past look again: :mod:`swarmpath.evidence.race_tests`)."""
     level, final_level = settings.levels(comparisons)
     look_at = settings.look_levels(comparisons)
+    # with recycle: the looks' levels per number of the block's comparisons declared (one dict
+    # per count, built once per replay, not once per look)
+    recycled: dict[int, dict[int, float]] = {0: look_at}
     arrays = {name: np.asarray(values.get(name, ()), dtype=float) for name in algorithms}
     pairs = comparisons_per_block(algorithms, settings.pairs)
     mine = {name: [p for p in pairs if name in p] for name in algorithms}
@@ -242,8 +245,10 @@ def race_block(
             level_now = look_at[need]
             if settings.recycle:
                 declared = sum(d.result.decision == "different" for d in decided.values())
-                level_now = settings.look_levels(
-                    comparisons, len(pairs) / max(len(pairs) - declared, 1))[need]
+                if declared not in recycled:
+                    recycled[declared] = settings.look_levels(
+                        comparisons, len(pairs) / max(len(pairs) - declared, 1))
+                level_now = recycled[declared][need]
             crossed = [(a, b, result, lean) for (a, b, result), (look_p, lean) in pending
                        if look_p < level_now and lean is not None]
             for a, b, result, lean in crossed:
