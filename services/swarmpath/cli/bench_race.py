@@ -133,8 +133,6 @@ def race_settings(spec: BenchSpec, race: bool, alpha: float | None, min_runs: in
     if spec.pool_instances:
         raise InputError("--pool-instances", "a race decides per instance; pooled rows would "
                          "mix its allowances: race without it")
-    if futility is not None and not (math.isfinite(futility) and 0.0 <= futility < 1.0):
-        raise InputError("--race-futility", f"must be in [0, 1), got {futility}")
     plan = default_design(final_test, futility=futility, recycle=recycle,
                           **_planned_looks(looks, look_share, sequence_share, spending))
     try:
